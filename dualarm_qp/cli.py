@@ -1,0 +1,141 @@
+"""Command-line interface: ``dualarm-qp run | reproduce | solvers``.
+
+Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
+input (configuration, arguments, missing solver).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+
+from . import __version__
+from .errors import DualArmError
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _err(msg: str) -> None:
+    print(f"dualarm-qp: error: {msg}", file=sys.stderr)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .experiments.config import load_config
+    from .experiments.run import run_experiment
+    from .experiments.setup import build_experiment
+
+    exp = build_experiment(load_config(args.config), str(args.config), solver=args.solver)
+    exp.controller()  # fail early (exit 2) on an unknown or missing solver
+    out = Path(args.out) if args.out else Path("runs") / exp.name / exp.solver_name.replace(
+        ":", "_")
+    outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
+                             plots=not args.no_plots)
+    s = outcome.summary
+    print(f"{exp.name}: solver {exp.solver_name}, {s['samples']} samples, "
+          f"{'completed' if outcome.ok else 'FAILED'}")
+    print(f"  closure error max: {s['closure_pos_err_max_m']:.3g} m, "
+          f"{s['closure_rot_err_max_rad']:.3g} rad")
+    print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
+          f"smallest follower joint margin {s['margin_qf_min_rad']:.4f} rad")
+    print(f"  statuses: {s['status_counts']}; step time median "
+          f"{s['step_time_median_s'] * 1e6:.0f} us")
+    print(f"  outputs: {out}/")
+    if not outcome.ok:
+        _err(s["message"])
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from .experiments.reproduce import reproduce
+
+    rep = reproduce(args.out, config_dir=args.configs, progress=None if not args.quiet else False)
+    print(f"Reproduction of Suh & Shin (1988), Sec. 4 -> {args.out}/")
+    for label, run in rep.runs.items():
+        c = rep.checks[label]
+        s = run.summary
+        print(f"  case ({label}) {s['experiment']:<28} q3 in [{c['q3_min_deg']:7.2f}, "
+              f"{c['q3_max_deg']:7.2f}] deg, samples outside range: "
+              f"{c['q3_samples_outside']:4d}, grasp {s['grasp_start_m'] * 1e3:.1f} -> "
+              f"{s['grasp_end_m'] * 1e3:.1f} mm"
+              + ("" if run.ok else "  [FAILED]"))
+    for claim, held in rep.checks["claims"].items():
+        print(f"  {'yes' if held else 'NO '}  {claim.replace('_', ' ')}")
+    print("  figures: fig5_joint3.png, fig6_grasp.png; details in reproduce.json")
+    return EXIT_OK if rep.ok else EXIT_FAILED
+
+
+def _cmd_solvers(args: argparse.Namespace) -> int:
+    from .solvers import list_solvers
+
+    rows = list_solvers()
+    width = max(len(r.name) for r in rows)
+    for r in rows:
+        if r.available:
+            state = "available"
+        else:
+            state = f"not installed: pip install 'dualarm-qp[{r.extra}]'" if r.extra else \
+                "not available"
+        bounds = "hard bounds" if r.hard_bounds else "bounds not enforced"
+        print(f"{r.name:<{width}}  {state:<44} {bounds:<20} {r.description}")
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser (exposed for documentation and tests)."""
+    p = argparse.ArgumentParser(
+        prog="dualarm-qp",
+        description="Coordinate two arms carrying one object with a sliding follower grasp "
+                    "(Suh & Shin 1988): run experiments, reproduce the paper, compare solvers.",
+    )
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    p.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    r = sub.add_parser("run", help="run one experiment from a YAML file")
+    r.add_argument("config", type=Path, help="experiment YAML file")
+    r.add_argument("--solver", help="override the file's solver (see 'dualarm-qp solvers')")
+    r.add_argument("--out", help="output folder (default runs/<name>/<solver>)")
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+
+    rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases, draw Figs. 5-6")
+    rp.add_argument("--out", default="reproduction", help="output folder (default reproduction)")
+    rp.add_argument("--configs", type=Path, default=None,
+                    help="folder with the three YAML files (default: the bundled copies)")
+    rp.add_argument("--quiet", action="store_true", help="no progress bar")
+    rp.set_defaults(func=_cmd_reproduce)
+
+    s = sub.add_parser("solvers", help="list the solvers and whether they are installed")
+    s.set_defaults(func=_cmd_solvers)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``dualarm-qp`` command."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "func", None) is None:
+        parser.print_help()
+        return EXIT_BAD_INPUT
+    try:
+        return int(args.func(args))
+    except DualArmError as err:
+        _err(str(err))
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+    except Exception as err:  # an internal error: say so plainly, no traceback by default
+        if args.debug:
+            traceback.print_exc()
+        _err(f"internal error: {type(err).__name__}: {err} (rerun with --debug for details)")
+        return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

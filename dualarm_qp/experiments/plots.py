@@ -1,0 +1,99 @@
+"""PNG plots of a run: joints against their limits, the grasp, the closure error."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..control.rollout import Trace
+from ..kinematics.arm import SerialArm
+from ..task.surfaces import GraspSurface
+from .outputs import atomic_write_with
+
+
+def _save(fig: Any, path: Path) -> None:
+    atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def plot_joints(path: Path, trace: Trace, leader: SerialArm, follower: SerialArm,
+                title: str = "") -> None:
+    """Both arms' joints [deg] against time with their ranges shaded out."""
+    n = max(leader.n, follower.n)
+    fig, axes = plt.subplots(2, n, figsize=(2.6 * n, 5.2), sharex=True, squeeze=False)
+    for row, (arm, q, label) in enumerate(((leader, trace.q_l, "leader"),
+                                           (follower, trace.q_f, "follower"))):
+        for j in range(n):
+            ax = axes[row][j]
+            if j >= arm.n:
+                ax.set_visible(False)
+                continue
+            ax.plot(trace.t, np.rad2deg(q[:, j]), color="C0" if row else "C2", lw=1.2)
+            for lim in (arm.q_min[j], arm.q_max[j]):
+                if np.isfinite(lim):
+                    ax.axhline(np.rad2deg(lim), color="C3", ls="--", lw=0.9)
+            ax.set_title(f"{label} q{j + 1}", fontsize=9)
+            ax.tick_params(labelsize=7)
+            if row == 1:
+                ax.set_xlabel("t [s]", fontsize=8)
+        axes[row][0].set_ylabel("[deg]", fontsize=8)
+    fig.suptitle(title or "joints against their ranges (dashed)", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def plot_grasp(path: Path, trace: Trace, surface: GraspSurface, title: str = "") -> None:
+    """Grasp coordinate [mm] and sliding speed [mm/s] against time."""
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    ax1.plot(trace.t, trace.grasp * 1e3, color="C0")
+    for lim in (surface.sigma_min, surface.sigma_max):
+        ax1.axhline(lim * 1e3, color="C3", ls="--", lw=0.9)
+    ax1.set_ylabel("grasp [mm]")
+    ax2.plot(trace.t, trace.m * 1e3, color="C1")
+    ax2.set_ylabel("m [mm/s]")
+    ax2.set_xlabel("t [s]")
+    fig.suptitle(title or "follower grasp position along the bar", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def plot_closure(path: Path, trace: Trace, title: str = "") -> None:
+    """Grasp closure error (Eq. 15) against time, log scale."""
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    floor = 1e-16
+    ax.semilogy(trace.t, np.maximum(trace.closure_pos_err, floor), label="position [m]")
+    ax.semilogy(trace.t, np.maximum(trace.closure_rot_err, floor), label="rotation [rad]")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("closure error")
+    ax.legend(fontsize=8)
+    ax.set_title(title or "grasp closure error", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def plot_compare(path: Path, traces: Sequence[tuple[str, Trace]], column: str,
+                 *, joint: int | None = None, limits: tuple[float, float] | None = None,
+                 ylabel: str = "", title: str = "", scale: float = 1.0) -> None:
+    """One quantity of several runs on one axis (e.g. the paper's Figs. 5 and 6)."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for label, tr in traces:
+        y = getattr(tr, column)
+        if joint is not None:
+            y = y[:, joint]
+        ax.plot(tr.t, y * scale, label=label)
+    if limits is not None:
+        for lim in limits:
+            ax.axhline(lim * scale, color="C3", ls="--", lw=0.9)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)

@@ -1,0 +1,284 @@
+"""Turn a validated :class:`ExperimentConfig` into library objects, in SI units."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..control.controller import DualArmController
+from ..errors import ConfigError, DualArmError
+from ..kinematics.arm import DHTable, SerialArm
+from ..kinematics.puma560 import puma560
+from ..se3 import make_pose, rot_x, rot_y, rot_z
+from ..solvers.policy import Policy
+from ..solvers.registry import get_solver
+from ..step.build import DualArmState, StepOptions
+from ..task.scene import DualArmTask
+from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
+from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
+from .config import ANGLE_SCALE, LENGTH_SCALE, TIME_SCALE, ArmSpec, ExperimentConfig, PoseSpec
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Scales:
+    """File units to SI: multiply a file number by these."""
+
+    length: float
+    angle: float
+    time: float
+
+
+@dataclass
+class Experiment:
+    """A ready-to-run experiment.
+
+    Attributes
+    ----------
+    name : str
+        Experiment name from the file.
+    path : str
+        File it was read from.
+    task : DualArmTask
+        Arms, object, surface and path in SI units.
+    initial : DualArmState
+        Initial joints and grasp.
+    options : StepOptions
+        Step-problem settings.
+    solver_name : str
+        Registry name of the solver.
+    solver_options : dict
+        Options handed to the solver's factory.
+    leader_gain : float
+        Leader tracking gain [1/s].
+    policy : str
+        Infeasible-step policy.
+    duration : float
+        Run length [s].
+    notes : dict
+        Reconstruction facts worth reporting (leader IK branch, follower base, ...).
+    """
+
+    name: str
+    path: str
+    task: DualArmTask
+    initial: DualArmState
+    options: StepOptions
+    solver_name: str
+    solver_options: dict[str, Any]
+    leader_gain: float
+    policy: Policy
+    duration: float
+    notes: dict[str, Any] = field(default_factory=dict)
+
+    def controller(self) -> DualArmController:
+        """Return a fresh controller with the configured solver."""
+        solver = get_solver(self.solver_name, **self.solver_options)
+        return DualArmController(self.task, solver, self.options,
+                                 leader_gain=self.leader_gain, policy=self.policy)
+
+
+def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
+    if spec.rotation is not None:
+        R = np.asarray(spec.rotation, dtype=float)
+        # Re-orthonormalise what the file rounded (checked to 1e-6 on load).
+        u, _, vt = np.linalg.svd(R)
+        R = u @ vt
+    elif spec.rpy is not None:
+        r, p, y = (v * sc.angle for v in spec.rpy)
+        R = rot_z(y) @ rot_y(p) @ rot_x(r)
+    else:
+        R = np.eye(3)
+    return make_pose(R, np.asarray(spec.position, dtype=float) * sc.length)
+
+
+def _vec(values: list[float] | None, scale: float, n: int, key: str, path: str) -> Any:
+    if values is None:
+        return None
+    if len(values) != n:
+        raise ConfigError(f"needs {n} values, got {len(values)}", path=path, key=key)
+    return np.asarray(values, dtype=float) * scale
+
+
+def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: str) -> SerialArm:
+    tool = None if spec.tool is None else _pose(spec.tool, sc)
+    if spec.preset == "puma560":
+        arm = puma560(base=base, tool=tool, name=f"{role} puma560")
+        n = 6
+        dh = arm.dh
+    else:
+        assert spec.dh is not None  # guaranteed by the model validator
+        rows = np.asarray(spec.dh.rows, dtype=float)
+        scale = np.array([sc.length, sc.angle, sc.length, sc.angle][: rows.shape[1]])
+        dh = DHTable.from_rows(rows * scale, spec.dh.convention)
+        n = dh.n
+        arm = SerialArm(dh, base=base, tool=tool, name=role)
+    q_min = _vec(spec.q_min, sc.angle, n, f"{role}.q_min", path)
+    q_max = _vec(spec.q_max, sc.angle, n, f"{role}.q_max", path)
+    qd_max = _vec(spec.qd_max, sc.angle / sc.time, n, f"{role}.qd_max", path)
+    if q_min is None and q_max is None and qd_max is None:
+        return arm
+    return SerialArm(
+        dh,
+        q_min=arm.q_min if q_min is None else q_min,
+        q_max=arm.q_max if q_max is None else q_max,
+        qd_max=arm.qd_max if qd_max is None else qd_max,
+        base=arm.base,
+        tool=arm.tool,
+        name=arm.name,
+    )
+
+
+def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
+    s = cfg.object.surface
+    r_min = np.asarray(s.r_min, dtype=float) * sc.length
+    r_max = np.asarray(s.r_max, dtype=float) * sc.length
+    if s.type == "plane_bar":
+        return PlaneBar(r_min=r_min, r_max=r_max)
+    if s.radius is None:
+        raise ConfigError(f"a {s.type} surface needs 'radius'", key="object.surface.radius")
+    radius = s.radius * sc.length
+    lo, hi = float(r_min[2]), float(r_max[2])
+    if s.type == "cylinder":
+        azimuth = 0.0 if s.azimuth is None else s.azimuth * sc.angle
+        return CylinderSurface(radius, azimuth=azimuth, sigma_min=lo, sigma_max=hi)
+    return CurvedBar(radius, sigma_min=lo, sigma_max=hi)
+
+
+def _trajectory(cfg: ExperimentConfig, sc: Scales, duration: float) -> Trajectory:
+    tr = cfg.trajectory
+    if tr.type == "linear":
+        assert tr.start is not None and tr.velocity is not None
+        T0 = _pose(tr.start, sc)
+        v = np.asarray(tr.velocity, dtype=float) * (sc.length / sc.time)
+        return LinearTrajectory(T0[:3, 3], v, R0=T0[:3, :3], t0=0.0, tf=duration)
+    assert tr.waypoints is not None
+    times = [w.t * sc.time for w in tr.waypoints]
+    poses = [_pose(w.pose, sc) for w in tr.waypoints]
+    return WaypointTrajectory(times, poses)
+
+
+def build_experiment(
+    cfg: ExperimentConfig,
+    path: str = "<config>",
+    *,
+    solver: str | None = None,
+) -> Experiment:
+    """Build the task, initial state and controller settings of an experiment.
+
+    Parameters
+    ----------
+    cfg : ExperimentConfig
+        A validated configuration.
+    path : str
+        File name, for error messages.
+    solver : str, optional
+        Override of the configured solver name.
+
+    Raises
+    ------
+    ConfigError
+        Inconsistent values that the schema cannot catch (wrong number of joints,
+        an IK branch that does not exist, ...), naming the file and key.
+    """
+    try:
+        return _build(cfg, path, solver)
+    except ConfigError as err:
+        if err.path is None:
+            raise ConfigError(str(err), path=path) from None
+        raise
+    except DualArmError as err:
+        raise ConfigError(str(err), path=path) from None
+
+
+def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
+    sc = Scales(LENGTH_SCALE[cfg.units.length], ANGLE_SCALE[cfg.units.angle],
+                TIME_SCALE[cfg.units.time])
+    c = cfg.controller
+    dt, duration = c.dt * sc.time, c.duration * sc.time
+    notes: dict[str, Any] = {}
+    surface = _surface(cfg, sc)
+    trajectory = _trajectory(cfg, sc, duration)
+    H1 = _pose(cfg.object.H1, sc)
+    sigma0 = cfg.object.grasp_initial * sc.length
+
+    if cfg.leader.base == "auto":
+        raise ConfigError("'auto' is only supported for the follower's base", path=path,
+                          key="leader.base")
+    leader = _arm(cfg.leader, sc, "leader", _pose(cfg.leader.base, sc), path)
+
+    # Follower: its base may be recovered from the grasp closure at t0 (the paper's case).
+    f_spec = cfg.follower
+    follower = _arm(f_spec, sc, "follower", None, path)
+    if f_spec.initial.joints is None:
+        raise ConfigError("the follower's initial state must be given as 'joints'",
+                          path=path, key="follower.initial")
+    q_f0 = _vec(f_spec.initial.joints, sc.angle, follower.n, "follower.initial.joints", path)
+    if f_spec.base == "auto":
+        T_base_tool = follower.fk(q_f0)
+        base_f = trajectory.pose(trajectory.t0) @ surface.pose(sigma0) @ np.linalg.inv(
+            T_base_tool)
+        notes["follower_base_m"] = base_f[:3, 3].tolist()
+        notes["follower_base_rotation"] = base_f[:3, :3].round(12).tolist()
+    else:
+        base_f = _pose(f_spec.base, sc)
+    follower = follower.with_base(base_f)
+
+    task = DualArmTask(leader, follower, H1, surface, trajectory)
+    q_l0 = _leader_initial(cfg, task, sc, path, notes)
+    options = StepOptions(
+        dt=dt,
+        joint_weights=np.broadcast_to(np.asarray(c.weights.joints, dtype=float),
+                                      (follower.n,)).copy(),
+        grasp_weight=c.weights.grasp / sc.length**2,
+        velocity_limits=c.velocity_limits,
+        grasp_speed_max=math.inf if c.grasp_speed_max is None
+        else c.grasp_speed_max * sc.length / sc.time,
+        correction_gain=c.correction_gain / sc.time,
+        recovery_fraction=c.recovery_fraction,
+        exact_orientation=c.exact_orientation,
+    )
+    return Experiment(
+        name=cfg.name,
+        path=path,
+        task=task,
+        initial=DualArmState(trajectory.t0, q_l0, q_f0, sigma0),
+        options=options,
+        solver_name=solver or cfg.solver.name,
+        solver_options=dict(cfg.solver.options),
+        leader_gain=c.leader_gain / sc.time,
+        policy=c.policy,
+        duration=duration,
+        notes=notes,
+    )
+
+
+def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
+                    notes: dict[str, Any]) -> FloatArray:
+    spec = cfg.leader.initial
+    leader = task.leader
+    if spec.joints is not None:
+        q = _vec(spec.joints, sc.angle, leader.n, "leader.initial.joints", path)
+        return np.asarray(q)
+    assert spec.ik_branch is not None
+    if cfg.leader.preset != "puma560":
+        raise ConfigError("ik_branch needs the puma560 preset; give 'joints' for a DH arm",
+                          path=path, key="leader.initial.ik_branch")
+    from ..kinematics.puma_ik import ik_branch, puma560_ik
+
+    T = task.leader_target(task.trajectory.t0)
+    b = spec.ik_branch
+    try:
+        sol = ik_branch(leader, T, b.arm, b.elbow, b.wrist)
+    except DualArmError as err:
+        valid = [f"arm={s.arm} elbow={s.elbow} wrist={s.wrist}" for s in puma560_ik(leader, T)]
+        raise ConfigError(f"the leader's IK branch is not valid at D(t0): {err}", path=path,
+                          key="leader.initial.ik_branch", valid=valid) from None
+    notes["leader_ik_branch"] = {"arm": b.arm, "elbow": b.elbow, "wrist": b.wrist}
+    notes["leader_q0_deg"] = np.rad2deg(sol.q).round(6).tolist()
+    return np.asarray(sol.q)

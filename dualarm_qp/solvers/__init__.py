@@ -1,0 +1,41 @@
+"""Step solvers: every redundancy-resolution method behind one interface and a registry.
+
+Importing this package registers every solver module:
+
+``reference``      the paper's Eq. 29 (pseudoinverse + optimal null-space term), no bounds
+``fixed_grasp``    Zheng and Luh: the grasp does not slide, no bounds
+``nullspace``      exact QP solution by null-space parametrisation (fast for 6 x 7)
+``qp:<backend>``   the QP of Eq. 37 through qpsolvers (osqp, proxsuite, daqp, ...)
+``sns``            Saturation in the Null Space with task scaling (hard bounds, not a QP)
+
+and :func:`solve_step` applies an infeasible-step policy around any of them.
+"""
+
+from . import fixed_grasp, nullspace, qp, reference, sns  # noqa: F401  (registration)
+from .base import Status, StepSolution, StepSolver, Tolerance, verify
+from .policy import POLICIES, Policy, solve_step
+from .registry import (
+    SolverInfo,
+    available_solvers,
+    get_solver,
+    list_solvers,
+    register,
+    solver_info,
+)
+
+__all__ = [
+    "POLICIES",
+    "Policy",
+    "SolverInfo",
+    "StepSolution",
+    "StepSolver",
+    "Status",
+    "Tolerance",
+    "available_solvers",
+    "get_solver",
+    "list_solvers",
+    "register",
+    "solve_step",
+    "solver_info",
+    "verify",
+]

@@ -1,0 +1,59 @@
+"""The paper's reference step (Eq. 29 with the z-hat formula after Eq. 40).
+
+    x    = A^+ b + (I - A^+ A) zhat,            A^+ = A^T (A A^T)^-1
+    zhat = [P S P]^+ P S (c - A^+ b),           P = I - A^+ A
+
+This is the exact minimiser of Eq. 37 on the affine set ``A x = b`` and it ignores the
+bounds (Eqs. 33-34 only enter through the centre ``c``). It is implemented as the paper
+writes it, pseudoinverses included, to serve as the reference; see ``nullspace`` for
+an exact solver that also meets the bounds.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..step.problem import StepProblem
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed, verify
+from .registry import register
+
+
+class ReferenceSolver:
+    """Suh and Shin's pseudoinverse step; bound violations are reported as VIOLATION.
+
+    Parameters
+    ----------
+    tol : Tolerance
+        Tolerances used by :func:`~.base.verify`.
+    """
+
+    name = "reference"
+
+    def __init__(self, *, tol: Tolerance = DEFAULT_TOLERANCE) -> None:
+        self.tol = tol
+
+    def solve(self, problem: StepProblem) -> StepSolution:
+        """Evaluate Eq. 29 with the optimal ``zhat``; never enforces the bounds."""
+        start = time.perf_counter()
+        A, b = problem.A, problem.b
+        S = np.diag(problem.weights)
+        try:
+            A_pinv = A.T @ np.linalg.inv(A @ A.T)  # J_f^+ = J_f^T (J_f J_f^T)^-1
+        except np.linalg.LinAlgError as err:
+            return failed(problem, Status.ERROR, self.name,
+                          f"A A^T is singular, J_f^+ undefined: {err}",
+                          time.perf_counter() - start)
+        P = np.eye(problem.n) - A_pinv @ A  # projector onto the null space of A
+        x_min_norm = A_pinv @ b
+        zhat = np.linalg.pinv(P @ S @ P) @ P @ S @ (problem.center - x_min_norm)
+        x = x_min_norm + P @ zhat
+        elapsed = time.perf_counter() - start
+        return verify(problem, StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+                                            solve_time=elapsed), self.tol, claims_bounds=False)
+
+
+register("reference", ReferenceSolver,
+         description="Suh-Shin 1988 Eq. 29: pseudoinverse + optimal null-space term, no bounds",
+         hard_bounds=False)

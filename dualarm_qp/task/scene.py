@@ -1,0 +1,90 @@
+"""The dual-arm task: two arms, the carried object, the grasps and the path D(t).
+
+Frames (all poses are 4x4 homogeneous matrices, metres):
+
+- ``T_world_leader = leader.fk(q_l)``: the leader's tool (the paper's T_B^n(q^l));
+- ``H1 = T_leader_object``: the object frame in the leader's tool frame (Eq. 14),
+  constant because the leader grasps rigidly;
+- ``H2(sigma) = T_object_follower``: the follower's grasp frame on the object surface
+  (Eq. 16), a function of the grasp coordinate ``sigma`` [m] along the sliding path;
+- the grasp closure (Eq. 15): ``leader.fk(q_l) @ H1 @ H2(sigma) == follower.fk(q_f)``;
+- the desired object path ``D(t) = T_world_object(t)`` (Eq. 14).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._validate import as_pose
+from ..errors import InvalidInputError
+from ..kinematics.arm import SerialArm
+from ..se3 import inv_pose, log_so3
+from .surfaces import GraspSurface
+from .trajectory import Trajectory
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class DualArmTask:
+    """Everything that defines a leader-follower carrying task.
+
+    Parameters
+    ----------
+    leader, follower : SerialArm
+        The two arms, each with its base pose in the common world frame.
+    H1 : ndarray, shape (4, 4)
+        ``T_leader_object``: object frame in the leader's tool frame [m].
+    surface : GraspSurface
+        The object surface and the follower's sliding path on it.
+    trajectory : Trajectory
+        Desired object pose ``D(t)`` in the world.
+    """
+
+    leader: SerialArm
+    follower: SerialArm
+    H1: FloatArray
+    surface: GraspSurface
+    trajectory: Trajectory
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "H1", as_pose(self.H1, "H1"))
+        if not isinstance(self.leader, SerialArm) or not isinstance(self.follower, SerialArm):
+            raise InvalidInputError("leader and follower must be SerialArm instances")
+
+    @property
+    def H1_inv(self) -> FloatArray:
+        """``T_object_leader``."""
+        return inv_pose(self.H1)
+
+    def leader_target(self, t: float) -> FloatArray:
+        """Pose the leader's tool must take for the object to be at ``D(t)``."""
+        return self.trajectory.pose(t) @ inv_pose(self.H1)
+
+    def object_pose(self, q_l: FloatArray) -> FloatArray:
+        """``T_world_object`` carried by the leader at joints ``q_l``."""
+        return self.leader.fk(q_l) @ self.H1
+
+    def follower_target(self, q_l: FloatArray, sigma: float) -> FloatArray:
+        """Pose the follower's tool must take: ``T_l(q_l) H1 H2(sigma)`` (Eq. 15)."""
+        return self.leader.fk(q_l) @ self.H1 @ self.surface.pose(sigma)
+
+    def closure_error(self, q_l: FloatArray, q_f: FloatArray, sigma: float) -> tuple[float, float]:
+        """Grasp closure error ``(position [m], rotation [rad])`` of Eq. 15."""
+        T_target = self.follower_target(q_l, sigma)
+        T_f = self.follower.fk(q_f)
+        dp = float(np.linalg.norm(T_target[:3, 3] - T_f[:3, 3]))
+        dw = float(np.linalg.norm(log_so3(T_target[:3, :3] @ T_f[:3, :3].T)))
+        return dp, dw
+
+    def follower_base_from_grasp(self, q_f: FloatArray, sigma: float, t: float) -> FloatArray:
+        """Return the base pose that puts the follower's tool on the grasp at time ``t``.
+
+        ``T_world_base_f = D(t) H2(sigma) (T_base_f_tool(q_f))^-1``: how the paper's
+        unstated follower base is recovered from Table 2 (see docs/reproduction.md).
+        """
+        T_base_tool = self.follower.with_base(np.eye(4)).fk(q_f)
+        return self.trajectory.pose(t) @ self.surface.pose(sigma) @ inv_pose(T_base_tool)

@@ -1,0 +1,188 @@
+"""Forward kinematics and Jacobians of DH arms (both conventions) and of the PUMA 560."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dualarm_qp.kinematics import DHTable, SerialArm, puma560
+from dualarm_qp.se3 import exp_so3, log_so3, make_pose, rot_x, rot_z
+
+SETTINGS = settings(max_examples=60, deadline=None)
+
+
+def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
+    return make_pose(exp_so3(rng.normal(size=3)), scale * rng.normal(size=3))
+
+
+def trans(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
+    return make_pose(None, np.array([x, y, z]))
+
+
+def reference_link(row: np.ndarray, q: float, convention: str) -> np.ndarray:
+    """The link transform written straight from the textbook formula."""
+    a, alpha, d, offset = row
+    theta = q + offset
+    Rz, Rx = make_pose(rot_z(theta)), make_pose(rot_x(alpha))
+    if convention == "standard":  # Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)
+        return Rz @ trans(z=d) @ trans(x=a) @ Rx
+    return Rx @ trans(x=a) @ Rz @ trans(z=d)  # Rot_x(alpha) Trans_x(a) Rot_z(theta) Trans_z(d)
+
+
+def reference_fk(arm: SerialArm, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
+    T = arm.base.copy()
+    for row, qi in zip(rows, q, strict=True):
+        T = T @ reference_link(row, qi, arm.dh.convention)
+    return T @ arm.tool
+
+
+def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
+    """Central differences: position, and log(R(q+h) R(q-h)^T) / 2h for rotation."""
+    J = np.empty((6, arm.n))
+    for i in range(arm.n):
+        dq = np.zeros(arm.n)
+        dq[i] = h
+        Tp, Tm = arm.fk(q + dq), arm.fk(q - dq)
+        J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
+        J[3:, i] = log_so3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+    return J
+
+
+# Link twists: exact special values (handled by dedicated code paths) and generic ones.
+alphas = st.one_of(
+    st.sampled_from([0.0, np.pi / 2, -np.pi / 2, np.pi]),
+    st.floats(-np.pi, np.pi, allow_nan=False),
+)
+lengths = st.one_of(st.just(0.0), st.floats(-1.0, 1.0, allow_nan=False))
+rows_strategy = st.integers(1, 8).flatmap(
+    lambda n: st.lists(st.tuples(lengths, alphas, lengths, st.floats(-np.pi, np.pi)),
+                       min_size=n, max_size=n)
+)
+
+
+@st.composite
+def dh_arms(draw: st.DrawFn) -> tuple[SerialArm, np.ndarray, np.ndarray]:
+    rows = np.array(draw(rows_strategy), dtype=float)
+    convention = draw(st.sampled_from(["standard", "modified"]))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    base = random_pose(rng) if draw(st.booleans()) else None
+    tool = random_pose(rng, 0.3) if draw(st.booleans()) else None
+    arm = SerialArm(DHTable.from_rows(rows, convention), base=base, tool=tool)
+    q = rng.uniform(-np.pi, np.pi, size=arm.n)
+    return arm, rows, q
+
+
+@SETTINGS
+@given(dh_arms())
+def test_fk_matches_textbook_formula(case: tuple[SerialArm, np.ndarray, np.ndarray]) -> None:
+    arm, rows, q = case
+    np.testing.assert_allclose(arm.fk(q), reference_fk(arm, rows, q), atol=1e-12)
+
+
+@SETTINGS
+@given(dh_arms())
+def test_jacobian_matches_finite_differences(
+    case: tuple[SerialArm, np.ndarray, np.ndarray],
+) -> None:
+    arm, _, q = case
+    T, J = arm.fk_jacobian(q)
+    np.testing.assert_allclose(T, arm.fk(q), atol=1e-14)
+    np.testing.assert_allclose(J, arm.jacobian(q), atol=0)
+    np.testing.assert_allclose(J, fd_jacobian(arm, q), atol=1e-7)
+    assert J.shape == (6, arm.n) and J.flags.c_contiguous
+
+
+@SETTINGS
+@given(dh_arms())
+def test_link_frames_end_at_fk(case: tuple[SerialArm, np.ndarray, np.ndarray]) -> None:
+    arm, _, q = case
+    F = arm.link_frames(q)
+    assert F.shape == (arm.n + 1, 4, 4)
+    np.testing.assert_allclose(F[0], arm.base, atol=0)
+    np.testing.assert_allclose(F[-1] @ arm.tool, arm.fk(q), atol=1e-12)
+
+
+@SETTINGS
+@given(dh_arms())
+def test_joint_axes_are_the_frame_z_axes(case: tuple[SerialArm, np.ndarray, np.ndarray]) -> None:
+    """Standard DH: joint i turns about z of frame i-1; modified: about z of frame i."""
+    arm, _, q = case
+    F = arm.link_frames(q)
+    axes = F[:-1] if arm.dh.convention == "standard" else F[1:]
+    np.testing.assert_allclose(arm.jacobian(q)[3:], axes[:, :3, 2].T, atol=1e-12)
+
+
+@SETTINGS
+@given(rows_strategy, st.integers(0, 2**32 - 1))
+def test_standard_equals_shifted_modified(rows: list, seed: int) -> None:
+    """Standard Z1 X1 ... Zn Xn == modified X0 Z1 X1 ... Zn (X0 = I) with tool Xn."""
+    rows_std = np.array(rows, dtype=float)
+    rng = np.random.default_rng(seed)
+    base = random_pose(rng)
+    rows_mod = rows_std.copy()
+    rows_mod[:, :2] = np.vstack([[0.0, 0.0], rows_std[:-1, :2]])
+    a_n, alpha_n = rows_std[-1, :2]
+    std = SerialArm(DHTable.from_rows(rows_std, "standard"), base=base)
+    mod = SerialArm(DHTable.from_rows(rows_mod, "modified"), base=base,
+                    tool=trans(x=a_n) @ make_pose(rot_x(alpha_n)))
+    q = rng.uniform(-np.pi, np.pi, size=std.n)
+    T_s, J_s = std.fk_jacobian(q)
+    T_m, J_m = mod.fk_jacobian(q)
+    np.testing.assert_allclose(T_s, T_m, atol=1e-12)
+    np.testing.assert_allclose(J_s, J_m, atol=1e-12)
+
+
+def test_planar_arm_same_in_both_conventions() -> None:
+    lengths = [0.5, 0.4, 0.3]
+    std = SerialArm(DHTable.from_rows([[a, 0.0, 0.0] for a in lengths], "standard"))
+    mod = SerialArm(DHTable.from_rows([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.4, 0.0, 0.0]],
+                                      "modified"), tool=trans(x=0.3))
+    q = np.array([0.3, -1.1, 0.7])
+    s1, s12, s123 = np.sin(q[0]), np.sin(q[:2].sum()), np.sin(q.sum())
+    c1, c12, c123 = np.cos(q[0]), np.cos(q[:2].sum()), np.cos(q.sum())
+    expected = np.array([0.5 * c1 + 0.4 * c12 + 0.3 * c123, 0.5 * s1 + 0.4 * s12 + 0.3 * s123, 0])
+    for arm in (std, mod):
+        np.testing.assert_allclose(arm.fk(q)[:3, 3], expected, atol=1e-14)
+        np.testing.assert_allclose(arm.fk(q)[:3, :3], rot_z(q.sum()), atol=1e-14)
+    np.testing.assert_allclose(std.jacobian(q), mod.jacobian(q), atol=1e-14)
+
+
+def test_puma_jacobian_with_random_base_and_tool() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        arm = puma560(base=random_pose(rng), tool=random_pose(rng, 0.2))
+        q = rng.uniform(arm.q_min, arm.q_max)
+        np.testing.assert_allclose(arm.jacobian(q), fd_jacobian(arm, q), atol=1e-8)
+
+
+def test_puma_table1_reference_pose() -> None:
+    """At q = 0 (Fu-Gonzalez-Lee frames) the flange is at (a2 + a3, d2, d4 + d6)."""
+    T = puma560().fk(np.zeros(6))
+    np.testing.assert_allclose(T[:3, 3], [0.4318 - 0.02032, 0.14909, 0.43307 + 0.05625],
+                               atol=1e-15)
+    np.testing.assert_allclose(T[:3, :3], np.eye(3), atol=1e-15)
+
+
+def test_base_and_tool_are_applied_and_reassignable() -> None:
+    rng = np.random.default_rng(3)
+    base, tool = random_pose(rng), random_pose(rng, 0.1)
+    arm = puma560()
+    q = rng.uniform(arm.q_min, arm.q_max)
+    T0 = arm.fk(q)
+    placed = puma560(base=base, tool=tool)
+    np.testing.assert_allclose(placed.fk(q), base @ T0 @ tool, atol=1e-12)
+    arm.base, arm.tool = base, tool  # the cached base/tool follow an assignment
+    np.testing.assert_allclose(arm.fk(q), base @ T0 @ tool, atol=1e-12)
+    np.testing.assert_allclose(puma560().with_base(base).fk(q), base @ T0, atol=1e-12)
+    with pytest.raises(ValueError):  # in-place edits would bypass the cache
+        arm.base[0, 3] = 1.0
+
+
+def test_accepts_lists_and_integer_arrays() -> None:
+    arm = puma560()
+    q = [0, 1, 0, 1, 0, 1]
+    np.testing.assert_allclose(arm.fk(q), arm.fk(np.array(q, dtype=float)), atol=0)
+    np.testing.assert_allclose(arm.jacobian(np.array(q)), arm.jacobian(q), atol=0)

@@ -1,0 +1,136 @@
+"""Damped-least-squares inverse kinematics (any DH arm)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dualarm_qp.errors import IKError, InvalidInputError
+from dualarm_qp.kinematics import DHTable, IKResult, SerialArm, ik_dls, puma560
+from dualarm_qp.kinematics.ik import _pose_error
+from dualarm_qp.se3 import exp_so3, make_pose, pose_error, rot_z
+
+
+def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
+    return make_pose(exp_so3(rng.normal(size=3)), scale * rng.normal(size=3))
+
+
+def interior(arm: SerialArm, rng: np.random.Generator, margin: float = 0.2) -> np.ndarray:
+    return rng.uniform(arm.q_min + margin, arm.q_max - margin)
+
+
+def assert_solved(arm: SerialArm, res: IKResult, T: np.ndarray) -> None:
+    assert res.success
+    e = pose_error(T, arm.fk(res.q))
+    assert np.linalg.norm(e[:3]) <= 1e-10 and np.linalg.norm(e[3:]) <= 1e-10
+    assert res.position_error == pytest.approx(np.linalg.norm(e[:3]), abs=1e-15)
+    assert arm.within_limits(res.q)
+
+
+def test_converges_from_perturbed_starts_puma() -> None:
+    rng = np.random.default_rng(0)
+    arm = puma560(base=random_pose(rng), tool=random_pose(rng, 0.1))
+    for _ in range(100):
+        q = interior(arm, rng)
+        T = arm.fk(q)
+        res = ik_dls(arm, T, q + rng.normal(scale=0.1, size=6))
+        assert_solved(arm, res, T)
+        assert res.iterations <= 15
+
+
+def test_converges_for_redundant_modified_dh_arm() -> None:
+    rng = np.random.default_rng(1)
+    rows = np.column_stack([rng.uniform(0.1, 0.4, 7), rng.choice([-np.pi / 2, np.pi / 2], 7),
+                            rng.uniform(0.0, 0.2, 7)])
+    arm = SerialArm(DHTable.from_rows(rows, "modified"), q_min=-2.5, q_max=2.5)
+    for _ in range(30):
+        q = interior(arm, rng)
+        T = arm.fk(q)
+        assert_solved(arm, ik_dls(arm, T, q + rng.normal(scale=0.2, size=7)), T)
+
+
+def test_quadratic_convergence_near_a_solution() -> None:
+    """The drift-correction use: from 1e-3 rad away, at most three iterations reach
+    1e-10, and each iteration squares the error (up to a constant)."""
+    rng = np.random.default_rng(2)
+    arm = puma560()
+    for _ in range(50):
+        q = interior(arm, rng)
+        T = arm.fk(q)
+        q0 = q + rng.normal(scale=1e-3, size=6)
+        res = ik_dls(arm, T, q0)
+        assert_solved(arm, res, T)
+        assert res.iterations <= 3
+        errors = [ik_dls(arm, T, q0, max_iter=k, raise_on_failure=False) for k in (0, 1)]
+        e0, e1 = (r.position_error + r.rotation_error for r in errors)
+        assert e1 <= 1e4 * e0**2
+    assert ik_dls(arm, T, q).iterations == 0  # already solved: no linear solve at all
+
+
+def test_unreachable_target_reports_failure() -> None:
+    arm = puma560()
+    q0 = np.zeros(6)
+    far = make_pose(None, np.array([3.0, 0.0, 0.5]))
+    with pytest.raises(IKError) as info:
+        ik_dls(arm, far, q0)
+    assert info.value.position_error > 2.0 and np.isfinite(info.value.rotation_error)
+    res = ik_dls(arm, far, q0, raise_on_failure=False)
+    assert not res.success and res.position_error == pytest.approx(info.value.position_error)
+    assert res.iterations < 200  # stalls instead of burning every iteration
+    assert arm.within_limits(res.q)
+
+
+def test_limits_are_respected() -> None:
+    arm = puma560()
+    q_target = np.deg2rad([170.0, -30.0, 100.0, 0.0, 45.0, 0.0])  # joint 1 beyond 160 deg
+    T = arm.fk(q_target)
+    res = ik_dls(arm, T, np.deg2rad([150.0, -30.0, 100.0, 0.0, 45.0, 0.0]),
+                 raise_on_failure=False)
+    assert arm.within_limits(res.q)
+    free = ik_dls(arm, T, np.deg2rad([150.0, -30.0, 100.0, 0.0, 45.0, 0.0]),
+                  respect_limits=False)
+    assert free.success
+
+
+def test_start_outside_limits_is_clipped() -> None:
+    arm = puma560()
+    q = np.deg2rad([150.0, -30.0, 100.0, 0.0, 45.0, 0.0])
+    res = ik_dls(arm, arm.fk(q), q + np.deg2rad([20.0, 0, 0, 0, 0, 0]))
+    assert_solved(arm, res, arm.fk(q))
+
+
+def test_max_iter_zero_only_checks() -> None:
+    arm = puma560()
+    q = np.full(6, 0.3)
+    assert ik_dls(arm, arm.fk(q), q, max_iter=0).success
+    with pytest.raises(IKError, match="0 iterations"):
+        ik_dls(arm, arm.fk(q), q + 0.1, max_iter=0)
+
+
+def test_bad_options() -> None:
+    arm = puma560()
+    T = arm.fk(np.zeros(6))
+    for kwargs in ({"damping": 0.0}, {"tol_pos": -1.0}, {"max_iter": -1}, {"max_iter": 1.5}):
+        with pytest.raises(InvalidInputError):
+            ik_dls(arm, T, np.zeros(6), **kwargs)
+    with pytest.raises(InvalidInputError):
+        ik_dls(arm, T, np.zeros(5))
+    with pytest.raises(InvalidInputError):
+        ik_dls(arm, make_pose(2 * np.eye(3)), np.zeros(6))
+
+
+def test_scalar_pose_error_matches_se3() -> None:
+    rng = np.random.default_rng(4)
+    for k in range(500):
+        A = random_pose(rng)
+        if k % 3 == 0:
+            B = A @ make_pose(rot_z(np.pi - rng.uniform(0, 1e-3)))  # near pi
+        elif k % 3 == 1:
+            B = A @ make_pose(exp_so3(rng.normal(size=3) * 1e-8))  # near zero
+        else:
+            B = random_pose(rng)
+        e, ep, er = _pose_error(A, B)
+        ref = pose_error(A, B)
+        np.testing.assert_allclose(e, ref, atol=1e-12)
+        assert ep == pytest.approx(np.linalg.norm(ref[:3]))
+        assert er == pytest.approx(np.linalg.norm(ref[3:]), abs=1e-12)

@@ -1,0 +1,101 @@
+"""Registry look-ups, error messages, options and verification of claimed solutions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from solver_cases import random_problem
+
+from dualarm_qp.errors import InvalidInputError, SolverNotFoundError
+from dualarm_qp.solvers import (
+    Status,
+    StepSolution,
+    StepSolver,
+    available_solvers,
+    get_solver,
+    list_solvers,
+    register,
+    verify,
+)
+from dualarm_qp.solvers import registry as registry_module
+
+
+def test_every_solver_module_is_registered() -> None:
+    names = {info.name for info in list_solvers()}
+    assert {"reference", "fixed_grasp", "nullspace", "sns", "qp:osqp", "qp:proxsuite",
+            "qp:daqp", "qp:clarabel", "qp:piqp", "qp:highs", "qp:quadprog"} <= names
+    for info in list_solvers():
+        if info.name.startswith("qp:"):
+            assert info.extra is not None
+
+
+@pytest.mark.parametrize("name", available_solvers())
+def test_available_solvers_follow_the_protocol(name: str) -> None:
+    solver = get_solver(name)
+    assert isinstance(solver, StepSolver)
+    assert solver.name == name
+
+
+def test_unknown_name_lists_the_available_solvers() -> None:
+    with pytest.raises(SolverNotFoundError) as info:
+        get_solver("qp:nonexistent")
+    assert "unknown solver 'qp:nonexistent'" in str(info.value)
+    assert "nullspace" in str(info.value)
+    assert "nullspace" in info.value.available
+
+
+def test_unavailable_solver_names_its_pip_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(registry_module, "_REGISTRY", dict(registry_module._REGISTRY))
+    register("qp:fake", lambda **_: get_solver("nullspace"), description="fake",
+             available=False, extra="fakebackend")
+    assert "qp:fake" not in available_solvers()
+    with pytest.raises(SolverNotFoundError) as info:
+        get_solver("qp:fake")
+    assert "pip install 'dualarm-qp[fakebackend]'" in str(info.value)
+    assert info.value.extra == "fakebackend"
+
+
+def test_proxqp_alias() -> None:
+    if "qp:proxsuite" not in available_solvers():
+        pytest.skip("proxsuite not installed")
+    assert get_solver("qp:proxqp").name == "qp:proxsuite"
+
+
+def test_backend_options_override_the_profile() -> None:
+    if "qp:osqp" not in available_solvers():
+        pytest.skip("osqp not installed")
+    solver = get_solver("qp:osqp", eps_abs=1e-5, max_iter=7)
+    assert solver.options["eps_abs"] == 1e-5  # type: ignore[attr-defined]
+    assert solver.options["max_iter"] == 7  # type: ignore[attr-defined]
+    assert solver.options["polishing"] is True  # type: ignore[attr-defined]
+
+
+def test_bad_backend_option_is_an_error_status_not_an_exception() -> None:
+    if "qp:daqp" not in available_solvers():
+        pytest.skip("daqp not installed")
+    sol = get_solver("qp:daqp", no_such_option=1).solve(
+        random_problem(np.random.default_rng(0)))
+    assert sol.status is Status.ERROR
+    assert "daqp" in sol.message
+
+
+def test_bad_solver_option_is_invalid_input() -> None:
+    with pytest.raises(InvalidInputError, match="nullspace"):
+        get_solver("nullspace", no_such_option=1)
+
+
+def test_verify_downgrades_a_false_claim() -> None:
+    problem = random_problem(np.random.default_rng(1))
+    good = get_solver("nullspace").solve(problem)
+    off_task = verify(problem, StepSolution(x=good.x + 0.1, status=Status.OPTIMAL))
+    assert off_task.status is Status.VIOLATION
+    assert "equality residual" in off_task.message
+    out_of_box = problem.upper + 1.0
+    fake = StepSolution(x=out_of_box, status=Status.OPTIMAL)
+    assert verify(problem, fake).status is Status.VIOLATION
+    nan = verify(problem, StepSolution(x=np.full(7, np.nan), status=Status.OPTIMAL))
+    assert nan.status is Status.ERROR
+    assert np.array_equal(nan.x, np.zeros(7))
+    honest = verify(problem, good)
+    assert honest.status is Status.OPTIMAL
+    assert honest.objective == pytest.approx(problem.objective(good.x))

@@ -1,0 +1,148 @@
+"""The velocity relation J_f x = J_l ql_dot (Eqs. 25-27) against finite differences."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dualarm_qp import puma560
+from dualarm_qp.se3 import exp_so3, inv_pose, make_pose, pose_error
+from dualarm_qp.step.build import DualArmState, StepOptions, build_step, grasp_rate_range
+from dualarm_qp.task.scene import DualArmTask
+from dualarm_qp.task.surfaces import CurvedBar, CylinderSurface, PlaneBar
+from dualarm_qp.task.trajectory import LinearTrajectory
+
+RNG = np.random.default_rng(7)
+
+
+def random_task(surface, rng):
+    """A leader at a random pose, a follower whose base closes the grasp at q_f."""
+    leader = puma560(base=make_pose(exp_so3(rng.normal(size=3) * 0.3), rng.normal(size=3) * 0.2))
+    q_l = rng.uniform(leader.q_min, leader.q_max) * 0.6
+    q_f = rng.uniform(leader.q_min, leader.q_max) * 0.6
+    sigma = rng.uniform(surface.sigma_min, surface.sigma_max)
+    H1 = make_pose(exp_so3(rng.normal(size=3)), rng.normal(size=3) * 0.1)
+    target = leader.fk(q_l) @ H1 @ surface.pose(sigma)
+    follower_local = puma560()
+    base_f = target @ inv_pose(follower_local.fk(q_f))
+    follower = puma560(base=base_f)
+    traj = LinearTrajectory(np.zeros(3), np.zeros(3), tf=1.0)
+    task = DualArmTask(leader, follower, H1, surface, traj)
+    return task, q_l, q_f, sigma
+
+
+def closure(task, q_l, q_f, sigma):
+    return pose_error(task.follower_target(q_l, sigma), task.follower.fk(q_f))
+
+
+SURFACES = {
+    "plane_bar": lambda: PlaneBar(),
+    "cylinder": lambda: CylinderSurface(0.05, azimuth=0.7, sigma_min=-0.2, sigma_max=0.3),
+    "curved_bar": lambda: CurvedBar(0.5, sigma_min=-0.2, sigma_max=0.3),
+}
+
+
+@pytest.mark.parametrize("surface_name", sorted(SURFACES))
+@pytest.mark.parametrize("seed", range(5))
+def test_closure_is_kept_to_second_order(surface_name, seed):
+    rng = np.random.default_rng(seed)
+    surface = SURFACES[surface_name]()
+    task, q_l, q_f, sigma = random_task(surface, rng)
+    assert np.abs(closure(task, q_l, q_f, sigma)).max() < 1e-12
+    ql_dot = rng.normal(size=6) * 0.5
+    opts = StepOptions(dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0,
+                       velocity_limits=False, exact_orientation=True)
+    state = DualArmState(0.0, q_l, q_f, sigma)
+    build = build_step(task, state, ql_dot, opts, leader_kin=task.leader.fk_jacobian(q_l),
+                       follower_kin=task.follower.fk_jacobian(q_f))
+    A, b = build.problem.A, build.problem.b
+    # Any solution of the equality: a particular one plus a random null-space motion.
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    z = np.linalg.svd(A)[2][-1]
+    x = x + rng.normal() * 0.3 * z
+    assert np.abs(A @ x - b).max() < 1e-10
+    errs = []
+    for h in (1e-3, 5e-4):
+        e = closure(task, q_l + h * ql_dot, q_f + h * x[:6], sigma + h * x[6])
+        errs.append(np.abs(e).max())
+    # First-order terms cancel: the error is O(h^2), so halving h quarters it.
+    assert errs[0] < 1e-4
+    assert errs[0] / errs[1] == pytest.approx(4.0, rel=0.05)
+
+
+def test_without_sliding_column_the_closure_breaks_at_first_order():
+    """Sanity check that the test above can fail: drop m's column and the error is O(h)."""
+    rng = np.random.default_rng(3)
+    task, q_l, q_f, sigma = random_task(PlaneBar(), rng)
+    ql_dot = rng.normal(size=6)
+    opts = StepOptions(dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0)
+    build = build_step(task, DualArmState(0.0, q_l, q_f, sigma), ql_dot, opts,
+                       leader_kin=task.leader.fk_jacobian(q_l),
+                       follower_kin=task.follower.fk_jacobian(q_f))
+    A, b = build.problem.A, build.problem.b
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    errs = []
+    for h in (1e-3, 5e-4):
+        # Move the grasp the wrong way: the closure breaks at first order.
+        e = closure(task, q_l + h * ql_dot, q_f + h * x[:6], sigma - h * x[6])
+        errs.append(np.abs(e).max())
+    if abs(x[6]) > 1e-3:
+        assert errs[0] / errs[1] == pytest.approx(2.0, rel=0.1)
+
+
+def test_paper_frozen_orientation_differs_on_curved_bar_only():
+    rng = np.random.default_rng(11)
+    for surface, curved in ((PlaneBar(), False), (CurvedBar(0.5, sigma_max=0.3), True)):
+        task, q_l, q_f, sigma = random_task(surface, rng)
+        kw = dict(leader_kin=task.leader.fk_jacobian(q_l),
+                  follower_kin=task.follower.fk_jacobian(q_f))
+        state = DualArmState(0.0, q_l, q_f, sigma)
+        a = build_step(task, state, np.ones(6), StepOptions(
+            dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0, exact_orientation=True), **kw)
+        b = build_step(task, state, np.ones(6), StepOptions(
+            dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0), **kw)
+        diff = np.abs(a.problem.A[3:, 6] - b.problem.A[3:, 6]).max()
+        assert (diff > 1e-3) == curved
+
+
+def test_grasp_rate_range_matches_eqs_30_31():
+    # Paper bar: s* = z, r in [0, 400] mm, r* = 100 mm, dT = 31 ms.
+    lo, hi = grasp_rate_range(np.array([0, 0, 0.1]), np.array([0, 0, 1.0]),
+                              np.zeros(3), np.array([0, 0, 0.4]), 0.031)
+    assert lo == pytest.approx(-0.1 / 0.031)
+    assert hi == pytest.approx(0.3 / 0.031)
+    # A negative component swaps the candidates; zero components are skipped.
+    lo, hi = grasp_rate_range(np.array([0.1, 0, 0.1]), np.array([-0.6, 0, 0.8]),
+                              np.zeros(3), np.full(3, 0.4), 1.0)
+    assert lo == pytest.approx(max(-0.3 / 0.6, -0.1 / 0.8))
+    assert hi == pytest.approx(min(0.1 / 0.6, 0.3 / 0.8))
+
+
+def test_closure_correction_term_is_gain_times_error():
+    rng = np.random.default_rng(5)
+    task, q_l, q_f, sigma = random_task(PlaneBar(), rng)
+    q_f_off = q_f + 1e-3
+    kw = dict(leader_kin=task.leader.fk_jacobian(q_l),
+              follower_kin=task.follower.fk_jacobian(q_f_off))
+    state = DualArmState(0.0, q_l, q_f_off, sigma)
+    plain = build_step(task, state, np.zeros(6), StepOptions(
+        dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0), **kw)
+    corr = build_step(task, state, np.zeros(6), StepOptions(
+        dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0, correction_gain=20.0), **kw)
+    np.testing.assert_allclose(corr.problem.b - plain.problem.b, 20.0 * corr.closure_error)
+    np.testing.assert_allclose(corr.closure_error, closure(task, q_l, q_f_off, sigma))
+
+
+def test_start_outside_box_is_recovering_and_never_moves_further_out():
+    from dualarm_qp.step.build import rate_bounds
+
+    x = np.array([-1.0, 0.5, 2.0])
+    lo, hi, c, rec = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, 4.0), 0.1, 0.5)
+    assert rec.tolist() == [True, False, True]
+    assert lo[0] > 0 and hi[2] < 0  # can only move back inside
+    assert lo[0] == pytest.approx(2.0) and hi[2] == pytest.approx(-2.0)  # 0.5 * speed limit
+    assert lo[1] == pytest.approx(-4.0) and hi[1] == pytest.approx(4.0)
+    np.testing.assert_allclose(c, (0.5 - x) / 0.1)
+    # Unlimited speed: return all the way in one step.
+    lo, hi, _, _ = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, np.inf), 0.1, 0.5)
+    assert lo[0] == pytest.approx(10.0) and hi[2] == pytest.approx(-10.0)

@@ -1,0 +1,198 @@
+"""Desired object trajectories D(t): exact twists against finite differences, waypoints."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
+from dualarm_qp.se3 import exp_so3, log_so3, make_pose, rot_x, rot_z
+from dualarm_qp.task import (
+    PAPER_R0,
+    LinearTrajectory,
+    Trajectory,
+    WaypointTrajectory,
+    min_jerk,
+    paper_trajectory,
+)
+
+H = 1e-6
+
+
+def fd_twist(traj: Trajectory, t: float, h: float = H) -> np.ndarray:
+    Tp, Tm = traj.pose(t + h), traj.pose(t - h)
+    out = np.empty(6)
+    out[:3] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
+    out[3:] = log_so3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+    return out
+
+
+def fd_acceleration(traj: Trajectory, t: float, h: float = 1e-5) -> np.ndarray:
+    return (traj.twist(t + h) - traj.twist(t - h)) / (2 * h)
+
+
+# --- LinearTrajectory ----------------------------------------------------------------------
+
+
+def test_paper_trajectory_values() -> None:
+    traj = paper_trajectory(duration=2.0)
+    # D(t) of Section 4: d_x(t) = t/31 - 0.3 [mm, t in ms].
+    for t_ms in (0.0, 31.0, 620.0, 1550.0):
+        T = traj.pose(t_ms / 1000.0)
+        np.testing.assert_allclose(
+            T[:3, 3], np.array([t_ms / 31.0 - 0.3, 690.0, 260.4]) / 1000.0, atol=1e-15
+        )
+        np.testing.assert_array_equal(T[:3, :3], PAPER_R0)
+    np.testing.assert_allclose(traj.twist(0.5), [0.0322580645, 0, 0, 0, 0, 0], atol=1e-10)
+    assert (traj.t0, traj.tf, traj.duration) == (0.0, 2.0, 2.0)
+
+
+def test_linear_twist_matches_finite_differences() -> None:
+    traj = LinearTrajectory([0.1, -0.2, 0.3], [0.05, -0.01, 0.02], R0=rot_z(0.4), tf=3.0)
+    for t in (0.1, 1.0, 2.9):
+        np.testing.assert_allclose(traj.twist(t), fd_twist(traj, t), atol=1e-9)
+        np.testing.assert_array_equal(traj.acceleration(t), np.zeros(6))
+
+
+def test_linear_clamps_outside_interval() -> None:
+    traj = LinearTrajectory([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], t0=1.0, tf=2.0)
+    np.testing.assert_array_equal(traj.pose(0.0), traj.pose(1.0))
+    np.testing.assert_array_equal(traj.pose(5.0), traj.pose(2.0))
+    assert traj.pose(5.0)[0, 3] == 1.0
+    np.testing.assert_array_equal(traj.twist(0.5), np.zeros(6))
+    np.testing.assert_array_equal(traj.twist(2.5), np.zeros(6))
+    np.testing.assert_array_equal(traj.twist(2.0), [1, 0, 0, 0, 0, 0])  # closed interval
+    # Returned arrays are fresh: mutating them does not change the trajectory.
+    traj.pose(1.5)[0, 3] = 99.0
+    traj.twist(1.5)[0] = 99.0
+    assert traj.pose(1.5)[0, 3] == 0.5 and traj.twist(1.5)[0] == 1.0
+
+
+def test_linear_bad_inputs() -> None:
+    with pytest.raises(InvalidInputError, match="tf"):
+        LinearTrajectory([0, 0, 0], [1, 0, 0], tf=0.0)
+    with pytest.raises(ShapeError):
+        LinearTrajectory([0, 0], [1, 0, 0], tf=1.0)
+    with pytest.raises(NonFiniteError):
+        LinearTrajectory([0, 0, math.nan], [1, 0, 0], tf=1.0)
+    with pytest.raises(InvalidInputError, match="proper rotation"):
+        LinearTrajectory([0, 0, 0], [1, 0, 0], R0=np.diag([1.0, 1.0, -1.0]), tf=1.0)
+    with pytest.raises(NonFiniteError):
+        paper_trajectory(duration=math.inf)
+    traj = paper_trajectory(duration=1.0)
+    with pytest.raises(NonFiniteError):
+        traj.pose(math.nan)
+    with pytest.raises(NonFiniteError):
+        traj.twist(math.nan)
+
+
+# --- WaypointTrajectory --------------------------------------------------------------------
+
+
+def test_min_jerk_boundary_conditions() -> None:
+    assert min_jerk(0.0) == (0.0, 0.0, 0.0)
+    s, ds, dds = min_jerk(1.0)
+    assert (s, ds, dds) == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
+    for tau in (0.1, 0.5, 0.8):
+        h = 1e-6
+        assert min_jerk(tau)[1] == pytest.approx(
+            (min_jerk(tau + h)[0] - min_jerk(tau - h)[0]) / (2 * h), abs=1e-8
+        )
+        assert min_jerk(tau)[2] == pytest.approx(
+            (min_jerk(tau + h)[1] - min_jerk(tau - h)[1]) / (2 * h), abs=1e-7
+        )
+
+
+def _three_waypoints() -> WaypointTrajectory:
+    poses = [
+        make_pose(np.eye(3), np.array([0.0, 0.0, 0.0])),
+        make_pose(rot_z(1.0) @ rot_x(0.5), np.array([0.3, -0.1, 0.2])),
+        make_pose(rot_x(-2.5), np.array([0.1, 0.4, 0.0])),
+    ]
+    return WaypointTrajectory([0.5, 1.5, 3.5], poses)
+
+
+def test_waypoints_are_reached_at_rest() -> None:
+    traj = _three_waypoints()
+    for tk, Tk in zip(traj.times, traj.waypoints, strict=True):
+        np.testing.assert_allclose(traj.pose(tk), Tk, atol=1e-12)
+        np.testing.assert_allclose(traj.twist(tk), np.zeros(6), atol=1e-12)
+        np.testing.assert_allclose(traj.acceleration(tk), np.zeros(6), atol=1e-12)
+        # Continuous across the waypoint.
+        np.testing.assert_allclose(traj.pose(tk - 1e-9), traj.pose(tk + 1e-9), atol=1e-8)
+
+
+def test_waypoint_twist_and_acceleration_match_finite_differences() -> None:
+    traj = _three_waypoints()
+    for t in np.linspace(0.51, 3.49, 23):
+        np.testing.assert_allclose(traj.twist(t), fd_twist(traj, t), atol=1e-7)
+        np.testing.assert_allclose(traj.acceleration(t), fd_acceleration(traj, t), atol=1e-6)
+
+
+def test_waypoint_clamps_outside_interval() -> None:
+    traj = _three_waypoints()
+    np.testing.assert_allclose(traj.pose(-1.0), traj.waypoints[0])
+    np.testing.assert_allclose(traj.pose(10.0), traj.waypoints[-1])
+    np.testing.assert_array_equal(traj.twist(10.0), np.zeros(6))
+    np.testing.assert_array_equal(traj.acceleration(-1.0), np.zeros(6))
+
+
+rotvec = st.tuples(*[st.floats(-2.0, 2.0)] * 3)
+position = st.tuples(*[st.floats(-1.0, 1.0)] * 3)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    w=st.lists(rotvec, min_size=2, max_size=4),
+    p=st.lists(position, min_size=4, max_size=4),
+    dts=st.lists(st.floats(0.05, 3.0), min_size=3, max_size=3),
+    frac=st.floats(0.02, 0.98),
+)
+def test_waypoint_properties(
+    w: list[tuple[float, float, float]],
+    p: list[tuple[float, float, float]],
+    dts: list[float],
+    frac: float,
+) -> None:
+    n = len(w)
+    poses = [make_pose(exp_so3(np.array(w[i])), np.array(p[i])) for i in range(n)]
+    times = np.concatenate([[0.0], np.cumsum(dts[: n - 1])])
+    traj = WaypointTrajectory(times, poses)
+    for k in range(n):
+        np.testing.assert_allclose(traj.pose(times[k]), poses[k], atol=1e-9)
+        np.testing.assert_allclose(traj.twist(times[k]), 0.0, atol=1e-9)
+    t = frac * traj.tf
+    T = traj.pose(t)
+    np.testing.assert_allclose(T[:3, :3].T @ T[:3, :3], np.eye(3), atol=1e-12)
+    h = 1e-6 * min(dts)
+    np.testing.assert_allclose(traj.twist(t), fd_twist(traj, t, h), atol=2e-5, rtol=1e-5)
+
+
+def test_waypoint_bad_inputs() -> None:
+    T = np.eye(4)
+    with pytest.raises(InvalidInputError, match="strictly increasing"):
+        WaypointTrajectory([0.0, 1.0, 1.0], [T, T, T])
+    with pytest.raises(InvalidInputError, match="at least two"):
+        WaypointTrajectory([0.0], [T])
+    with pytest.raises(ShapeError):
+        WaypointTrajectory([0.0, 1.0], [T, T, T])
+    with pytest.raises(ShapeError):
+        WaypointTrajectory([[0.0, 1.0]], [T, T])
+    with pytest.raises(NonFiniteError):
+        WaypointTrajectory([0.0, math.nan], [T, T])
+    bad = T.copy()
+    bad[:3, :3] = np.diag([1.0, -1.0, 1.0])  # a reflection
+    with pytest.raises(InvalidInputError, match="proper rotation"):
+        WaypointTrajectory([0.0, 1.0], [T, bad])
+    nan = T.copy()
+    nan[0, 3] = math.nan
+    with pytest.raises(NonFiniteError):
+        WaypointTrajectory([0.0, 1.0], [T, nan])
+    with pytest.raises(InvalidInputError):
+        WaypointTrajectory([0.0, 1.0], "not poses")
+    with pytest.raises(NonFiniteError):
+        _three_waypoints().pose(math.nan)
