@@ -179,16 +179,29 @@ class WeightsSpec(_Model):
     """Diagonal of S (Eq. 37).
 
     ``joints`` weighs follower joint rates in (rad/s)^-2 whatever the file's angle unit;
-    ``grasp`` (the paper's s7) weighs the sliding speed in (length unit / s)^-2 of
-    this file, so ``grasp: 100`` with ``length: mm`` is 1e8 in SI.
+    ``grasp`` (the paper's s7) weighs the sliding speed in (grasp_unit / s)^-2, where
+    ``grasp_unit`` defaults to the file's length unit: ``grasp: 100`` with
+    ``grasp_unit: mm`` is 1e8 in SI, with ``grasp_unit: m`` it is 100.
     """
 
     joints: float | list[float] = 1.0
     grasp: float = 1.0
+    grasp_unit: Literal["m", "mm"] | None = None
+
+    @model_validator(mode="after")
+    def _positive(self) -> WeightsSpec:
+        joints = self.joints if isinstance(self.joints, list) else [self.joints]
+        if not all(math.isfinite(w) and w > 0 for w in [*joints, self.grasp]):
+            raise ValueError("weights must be finite and > 0")
+        return self
 
 
 class ControllerSpec(_Model):
-    """Sampling, limits, weights and gains of the controller."""
+    """Sampling, limits, weights and gains of the controller.
+
+    ``correction_gain`` and ``leader_gain`` are in 1/(time unit); ``projection`` turns on
+    the rollout's position-level drift correction after each step.
+    """
 
     dt: float
     duration: float
@@ -200,6 +213,7 @@ class ControllerSpec(_Model):
     recovery_fraction: float = 0.5
     policy: Literal["scale", "relax", "stop"] = "scale"
     exact_orientation: bool = False
+    projection: bool = True
 
     @model_validator(mode="after")
     def _positive(self) -> ControllerSpec:

@@ -83,7 +83,7 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
                  limits=(follower.q_min[2], follower.q_max[2]), scale=180.0 / np.pi,
                  ylabel="follower q3 [deg]",
                  title="Fig. 5: follower joint 3 (dashed: its range)")
-    plot_compare(out / "fig6_grasp.png", traces[1:] + traces[:1], "grasp", scale=1e3,
+    plot_compare(out / "fig6_grasp.png", traces, "grasp", scale=1e3,
                  ylabel="grasp r2_z [mm]", title="Fig. 6: follower grasp position")
     checks: dict[str, Any] = {k: _joint3_excursion(r) for k, r in runs.items()}
     for k in ("b", "c"):

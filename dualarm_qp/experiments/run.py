@@ -86,7 +86,8 @@ def run_experiment(
     bar, update = _progress_bar(steps, exp.name) if progress else (None, None)
     t0 = time.perf_counter()
     try:
-        result = rollout(controller, exp.initial, duration=exp.duration, progress=update)
+        result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
+                         progress=update)
     finally:
         if bar is not None:
             bar.close()
@@ -119,6 +120,7 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
             "correction_gain_1_s": opts.correction_gain,
             "leader_gain_1_s": exp.leader_gain,
             "exact_orientation": opts.exact_orientation,
+            "closure_projection": exp.project,
         },
         "reconstruction": exp.notes,
         **result.summary(),

@@ -60,6 +60,8 @@ class Experiment:
         Infeasible-step policy.
     duration : float
         Run length [s].
+    project : bool
+        Position-level drift correction in the rollout.
     notes : dict
         Reconstruction facts worth reporting (leader IK branch, follower base, ...).
     """
@@ -74,6 +76,7 @@ class Experiment:
     leader_gain: float
     policy: Policy
     duration: float
+    project: bool = True
     notes: dict[str, Any] = field(default_factory=dict)
 
     def controller(self) -> DualArmController:
@@ -235,7 +238,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         dt=dt,
         joint_weights=np.broadcast_to(np.asarray(c.weights.joints, dtype=float),
                                       (follower.n,)).copy(),
-        grasp_weight=c.weights.grasp / sc.length**2,
+        grasp_weight=c.weights.grasp / LENGTH_SCALE[c.weights.grasp_unit or cfg.units.length]**2,
         velocity_limits=c.velocity_limits,
         grasp_speed_max=math.inf if c.grasp_speed_max is None
         else c.grasp_speed_max * sc.length / sc.time,
@@ -254,6 +257,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         leader_gain=c.leader_gain / sc.time,
         policy=c.policy,
         duration=duration,
+        project=c.projection,
         notes=notes,
     )
 

@@ -1,0 +1,120 @@
+"""The paper's PUMA beam task end to end: closure, limits and solver agreement."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dualarm_qp.control.rollout import rollout
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.solvers import available_solvers, get_solver
+from dualarm_qp.step.build import build_step
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+
+
+def experiment(name="puma_beam_sliding_s7_100", solver=None, **options):
+    exp = build_experiment(load_config(CONFIGS / f"{name}.yaml"), solver=solver)
+    if options:
+        exp.options = dataclasses.replace(exp.options, **options)
+    return exp
+
+
+@pytest.mark.parametrize(("config", "solver"), [
+    ("puma_beam_fixed", "fixed_grasp"),
+    ("puma_beam_sliding_s7_100", "reference"),
+    ("puma_beam_sliding_s7_1000", "reference"),
+])
+def test_closure_stays_below_1e6_with_correction(config, solver):
+    exp = experiment(config, solver)
+    res = rollout(exp.controller(), exp.initial, duration=exp.duration, project=exp.project)
+    assert res.completed
+    assert np.max(res.trace.closure_pos_err) < 1e-6
+    assert np.max(res.trace.closure_rot_err) < 1e-6
+
+
+def test_drift_without_correction_is_measured_and_feedback_alone_bounds_it():
+    exp = experiment("puma_beam_fixed", correction_gain=0.0)
+    exp.leader_gain = 0.0
+    free = rollout(exp.controller(), exp.initial, duration=exp.duration, project=False).trace
+    # Euler integration drifts: about a millimetre over the task.
+    assert 1e-4 < np.max(free.closure_pos_err) < 1e-2
+    assert free.closure_pos_err[-1] > free.closure_pos_err[10]
+    exp.options = dataclasses.replace(exp.options, correction_gain=1 / exp.options.dt)
+    exp.leader_gain = 1 / exp.options.dt
+    fb = rollout(exp.controller(), exp.initial, duration=exp.duration, project=False).trace
+    # Closure feedback alone keeps the error at the per-step integration error (~dt^2).
+    assert np.max(fb.closure_pos_err) < 1e-5
+    assert np.max(fb.closure_pos_err) < np.max(free.closure_pos_err) / 100
+
+
+def test_reference_with_grasp_held_is_the_fixed_grasp_answer():
+    """m = 0: when the fixed-grasp rates are the centre, the reference step returns them."""
+    exp = experiment()
+    ctrl = exp.controller()
+    task, st = exp.task, exp.initial
+    lk, fk = task.leader.fk_jacobian(st.q_l), task.follower.fk_jacobian(st.q_f)
+    ql_dot, _ = ctrl.leader_rates(st.t, *lk)
+    prob = build_step(task, st, ql_dot, exp.options, leader_kin=lk, follower_kin=fk).problem
+    fixed = get_solver("fixed_grasp").solve(prob).x
+    assert fixed[6] == 0.0
+    prob_c = dataclasses.replace(prob, center=fixed)
+    ref = get_solver("reference").solve(prob_c).x
+    np.testing.assert_allclose(ref, fixed, rtol=0, atol=1e-12)
+    # And as s7 grows with the grasp centre at 0, the reference tends to the fixed grasp.
+    gaps = []
+    for s7 in (1e4, 1e8):
+        w = prob.weights.copy()
+        w[6] = s7
+        c = prob.center.copy()
+        c[6] = 0.0
+        x = get_solver("reference").solve(dataclasses.replace(prob, weights=w, center=c)).x
+        gaps.append(np.abs(x - fixed).max())
+    assert gaps[1] < gaps[0] * 1e-3
+
+
+HARD = [s for s in ("nullspace", "sns", "qp:daqp", "qp:osqp", "qp:proxsuite", "qp:quadprog")
+        if s in available_solvers()]
+
+
+@pytest.fixture(scope="module")
+def limited_runs():
+    runs = {}
+    for solver in HARD:
+        exp = experiment(solver=solver, velocity_limits=True, grasp_speed_max=0.1)
+        runs[solver] = (exp, rollout(exp.controller(), exp.initial, duration=exp.duration,
+                                     project=exp.project))
+    return runs
+
+
+@pytest.mark.parametrize("solver", HARD)
+def test_hard_bound_solvers_on_the_paper_beam(limited_runs, solver):
+    exp, res = limited_runs[solver]
+    tr = res.trace
+    follower = exp.task.follower
+    assert res.completed, res.message
+    # Never further outside: a joint outside its range only moves back toward it.
+    m = tr.margin_qf
+    for k in range(1, len(tr)):
+        out = m[k - 1] < 0
+        assert np.all(m[k][out] >= m[k - 1][out] - 1e-9), (k, m[k - 1], m[k])
+    g = tr.margin_grasp
+    assert np.all(np.diff(g)[g[:-1] < 0] >= -1e-9)
+    # Ends with every joint and the grasp inside.
+    assert np.all(m[-1] >= -1e-9) and g[-1] >= -1e-9
+    # Joint and sliding speed limits at every sample.
+    assert np.all(np.abs(tr.qf_dot) <= follower.qd_max + 1e-7)
+    assert np.all(np.abs(tr.m) <= 0.1 + 1e-7)
+    assert np.max(tr.closure_pos_err) < 1e-6
+
+
+def test_exact_solvers_trajectories_agree(limited_runs):
+    exact = [s for s in ("nullspace", "qp:daqp", "qp:quadprog") if s in limited_runs]
+    ref = limited_runs[exact[0]][1].trace
+    for s in exact[1:]:
+        tr = limited_runs[s][1].trace
+        np.testing.assert_allclose(tr.q_f, ref.q_f, atol=1e-6, err_msg=s)
+        np.testing.assert_allclose(tr.grasp, ref.grasp, atol=1e-7, err_msg=s)

@@ -1,0 +1,150 @@
+"""The command line: outputs, exit codes and messages."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from dualarm_qp.cli import main
+from dualarm_qp.experiments.outputs import atomic_open
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+PAPER = CONFIGS / "puma_beam_sliding_s7_100.yaml"
+
+REQUIRED_COLUMNS = [
+    "t", *(f"ql{i}" for i in range(1, 7)), *(f"qf{i}" for i in range(1, 7)), "grasp", "m",
+    "closure_pos_err", "closure_rot_err", "solve_time_s", "status",
+]
+
+
+def short_config(tmp_path: Path, **controller) -> Path:
+    d = yaml.safe_load(PAPER.read_text())
+    d["controller"]["duration"] = 0.31  # 10 steps
+    d["controller"].update(controller)
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump(d))
+    return path
+
+
+def test_run_writes_outputs(tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["run", str(short_config(tmp_path)), "--out", str(out), "--quiet"])
+    assert code == 0
+    for name in ("summary.json", "trajectory.csv", "joints.png", "grasp.png", "closure.png"):
+        assert (out / name).is_file(), name
+    with (out / "trajectory.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 11
+    assert all(c in rows[0] for c in REQUIRED_COLUMNS)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] is True
+    assert summary["samples"] == 11
+    assert summary["closure_pos_err_max_m"] < 1e-6
+    assert "completed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("solver", ["nullspace", "qp:daqp", "fixed_grasp"])
+def test_run_with_solver_override(tmp_path, solver):
+    out = tmp_path / "o"
+    assert main(["run", str(short_config(tmp_path)), "--solver", solver, "--out", str(out),
+                 "--quiet", "--no-plots"]) == 0
+    assert json.loads((out / "summary.json").read_text())["solver"] == solver
+
+
+def test_unknown_key_exit_2_one_clear_line(tmp_path, capsys):
+    d = yaml.safe_load(PAPER.read_text())
+    d["controller"]["gian"] = 1
+    path = tmp_path / "typo.yaml"
+    path.write_text(yaml.safe_dump(d))
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert str(path) in err and "controller.gian" in err and "correction_gain" in err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_missing_file_and_unknown_solver_exit_2(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "missing.yaml")]) == 2
+    assert "file not found" in capsys.readouterr().err
+    assert main(["run", str(short_config(tmp_path)), "--solver", "qp:nope"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown solver 'qp:nope'" in err and "nullspace" in err
+
+
+def test_uninstalled_backend_names_the_pip_extra(tmp_path, capsys):
+    from dualarm_qp.solvers import list_solvers
+
+    missing = [s for s in list_solvers() if not s.available and s.extra]
+    if not missing:
+        pytest.skip("every registered backend is installed here")
+    assert main(["run", str(short_config(tmp_path)), "--solver", missing[0].name]) == 2
+    assert f"dualarm-qp[{missing[0].extra}]" in capsys.readouterr().err
+
+
+def test_failed_run_exit_1_and_partial_outputs(tmp_path, capsys):
+    # Joint speed limits far too low for the object speed, and policy "stop":
+    # the first infeasible step stops the run; what completed is still written.
+    d = yaml.safe_load(short_config(tmp_path).read_text())
+    d["controller"].update(velocity_limits=True, policy="stop")
+    d["solver"] = {"name": "nullspace"}
+    d["follower"]["qd_max"] = [0.01] * 6
+    path = tmp_path / "slow.yaml"
+    path.write_text(yaml.safe_dump(d))
+    out = tmp_path / "o"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    assert "conflicting bounds" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] is False
+    assert "conflicting bounds" in summary["message"]
+    assert (out / "trajectory.csv").is_file()
+
+
+def test_solvers_lists_everything(capsys):
+    assert main(["solvers"]) == 0
+    out = capsys.readouterr().out
+    for name in ("reference", "fixed_grasp", "nullspace", "sns", "qp:osqp", "qp:proxsuite",
+                 "qp:daqp"):
+        assert name in out
+
+
+def test_no_command_prints_help_exit_2(capsys):
+    assert main([]) == 2
+    assert "usage" in capsys.readouterr().out
+
+
+def test_atomic_write_keeps_old_file_on_failure(tmp_path):
+    target = tmp_path / "f.txt"
+    target.write_text("old")
+    with pytest.raises(RuntimeError), atomic_open(target) as fh:
+        fh.write("half")
+        raise RuntimeError("boom")
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["f.txt"]
+
+
+def test_console_script_entry_point(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "dualarm_qp.cli", "--version"],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 0 and "dualarm-qp" in proc.stdout
+
+
+@pytest.mark.slow
+def test_reproduce_shows_the_papers_claims(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path), "--quiet"]) == 0
+    rep = json.loads((tmp_path / "reproduce.json").read_text())
+    claims = rep["checks"]["claims"]
+    assert claims["case_a_leaves_joint3_range"]
+    assert claims["case_b_joint3_inside"] and claims["case_c_joint3_inside"]
+    for fig in ("fig5_joint3.png", "fig6_grasp.png"):
+        assert (tmp_path / fig).stat().st_size > 1000
+    for case in ("a", "b", "c"):
+        assert rep["cases"][case]["closure_pos_err_max_m"] < 1e-6
+        assert rep["cases"][case]["closure_rot_err_max_rad"] < 1e-6

@@ -1,0 +1,116 @@
+"""Experiment files: unit conversion on load and clear errors for bad input."""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dualarm_qp.errors import ConfigError
+from dualarm_qp.experiments import build_experiment, load_config, parse_config
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+PAPER = CONFIGS / "puma_beam_sliding_s7_100.yaml"
+
+
+def paper_dict():
+    return yaml.safe_load(PAPER.read_text())
+
+
+def test_paper_config_converts_to_si():
+    exp = build_experiment(load_config(PAPER), str(PAPER))
+    assert exp.options.dt == pytest.approx(0.031)
+    assert exp.duration == pytest.approx(15.5)
+    np.testing.assert_allclose(exp.initial.q_f[:3], np.deg2rad([-164.1774, 32.065, -30.9446]))
+    assert exp.initial.sigma == pytest.approx(0.45)
+    assert exp.task.surface.r_max[2] == pytest.approx(0.4)
+    assert exp.options.grasp_weight == pytest.approx(100.0)  # grasp_unit: m
+    D0 = exp.task.trajectory.pose(0.0)
+    np.testing.assert_allclose(D0[:3, 3], [-0.0003, 0.690, 0.2604])
+    v = exp.task.trajectory.twist(1.0)[:3]
+    np.testing.assert_allclose(v, [1 / 31, 0, 0])  # 1 mm per 31 ms
+    # The follower base is recovered as a near-pure translation of about (300, 1380, 0) mm.
+    base = exp.task.follower.base
+    np.testing.assert_allclose(base[:3, 3], [0.3, 1.38, 0.0], atol=1e-3)
+    assert np.allclose(base[:3, :3], np.eye(3), atol=1e-4)
+    # The closure holds at t0 by construction.
+    dp, dw = exp.task.closure_error(exp.initial.q_l, exp.initial.q_f, exp.initial.sigma)
+    assert dp < 1e-12 and dw < 1e-12
+
+
+def test_grasp_weight_follows_its_unit():
+    d = paper_dict()
+    d["controller"]["weights"] = {"joints": 1, "grasp": 100, "grasp_unit": "mm"}
+    assert build_experiment(parse_config(d)).options.grasp_weight == pytest.approx(1e8)
+    d["controller"]["weights"] = {"joints": 1, "grasp": 100}  # the file's unit: mm
+    assert build_experiment(parse_config(d)).options.grasp_weight == pytest.approx(1e8)
+
+
+def test_units_in_metres_and_radians_give_the_same_experiment():
+    d = paper_dict()
+    m = copy.deepcopy(d)
+    m["units"] = {"length": "m", "angle": "rad", "time": "s"}
+    mm, deg = 1e-3, math.pi / 180
+    m["follower"]["initial"]["joints"] = [q * deg for q in d["follower"]["initial"]["joints"]]
+    m["object"]["surface"]["r_max"] = [v * mm for v in d["object"]["surface"]["r_max"]]
+    m["object"]["grasp_initial"] = d["object"]["grasp_initial"] * mm
+    m["trajectory"]["start"]["position"] = [v * mm for v in d["trajectory"]["start"]["position"]]
+    m["trajectory"]["velocity"] = [v * mm for v in d["trajectory"]["velocity"]]
+    a, b = build_experiment(parse_config(d)), build_experiment(parse_config(m))
+    np.testing.assert_allclose(a.task.follower.base, b.task.follower.base, atol=1e-12)
+    np.testing.assert_allclose(a.initial.q_l, b.initial.q_l, atol=1e-12)
+    assert a.options.dt == b.options.dt
+    assert a.options.grasp_weight == pytest.approx(b.options.grasp_weight)
+    np.testing.assert_allclose(a.initial.q_f, b.initial.q_f, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("mutate", "key", "fragment"),
+    [
+        (lambda d: d["controller"].update(dtt=0.1), "controller.dtt", "valid: dt, duration"),
+        (lambda d: d.update(solvr={}), "solvr", "valid: name, description, units"),
+        (lambda d: d["leader"].update(preset="puma"), "leader.preset", "valid: puma560"),
+        (lambda d: d["controller"].update(dt="fast"), "controller.dt", "valid number"),
+        (lambda d: d.pop("object"), "object", "missing"),
+        (lambda d: d["units"].update(length="inch"), "units.length", "valid: m, mm"),
+        (lambda d: d["controller"].update(dt=-1), "controller", "positive"),
+        (lambda d: d["controller"]["weights"].update(grasp=0), "controller.weights", "> 0"),
+        (lambda d: d["follower"]["initial"].update(joints=[0, 0]), "follower.initial.joints",
+         "6 values"),
+    ],
+)
+def test_bad_config_names_file_and_key(tmp_path, mutate, key, fragment):
+    d = paper_dict()
+    mutate(d)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError) as info:
+        build_experiment(load_config(path), str(path))
+    msg = str(info.value)
+    assert str(path) in msg
+    assert f"'{key}'" in msg or key in msg
+    assert fragment in msg
+
+
+def test_missing_file_and_bad_yaml(tmp_path):
+    with pytest.raises(ConfigError, match="file not found"):
+        load_config(tmp_path / "nope.yaml")
+    bad = tmp_path / "broken.yaml"
+    bad.write_text("controller: [1, 2\n")
+    with pytest.raises(ConfigError, match="not valid YAML at line"):
+        load_config(bad)
+    top = tmp_path / "list.yaml"
+    top.write_text("- 1\n- 2\n")
+    with pytest.raises(ConfigError, match="mapping"):
+        load_config(top)
+
+
+def test_invalid_leader_branch_lists_the_valid_ones():
+    d = paper_dict()
+    d["leader"]["initial"]["ik_branch"] = {"arm": -1, "elbow": -1, "wrist": -1}
+    with pytest.raises(ConfigError, match="valid: arm="):
+        build_experiment(parse_config(d), "x.yaml")
