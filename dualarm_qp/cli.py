@@ -1,4 +1,4 @@
-"""Command-line interface: ``dualarm-qp run | reproduce | solvers``.
+"""Command-line interface: ``dualarm-qp run | reproduce | bench | solvers``.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
 input (configuration, arguments, missing solver).
@@ -84,6 +84,32 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from .bench.report import format_table, write_report
+    from .bench.runner import BenchSettings, run_bench
+    from .experiments.reproduce import CASES, bundled_config
+    from .solvers import available_solvers
+
+    configs = args.configs or [bundled_config(name) for _, name in CASES]
+    solvers = [s.strip() for s in args.solvers.split(",") if s.strip()] if args.solvers \
+        else available_solvers()
+    settings = BenchSettings(repeat=args.repeat, duration=args.duration)
+    out = Path(args.out)
+    result = run_bench(configs, solvers, out, settings=settings,
+                       log=None if args.quiet else lambda line: print(line, file=sys.stderr))
+    meta = {"machine": result.machine, "settings": settings.as_dict(),
+            "configs": [str(c) for c in configs], "solvers": solvers,
+            "jobs_computed_this_run": result.computed}
+    rows = write_report(out, result.records, meta, plots=not args.no_plots)
+    print(format_table(rows))
+    print(f"outputs: {out}/bench.json, bench.csv" + ("" if args.no_plots else ", bench.png")
+          + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
+    if not result.ok:
+        _err("some jobs failed; see the 'error' column")
+        return EXIT_FAILED
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for documentation and tests)."""
     p = argparse.ArgumentParser(
@@ -109,6 +135,20 @@ def build_parser() -> argparse.ArgumentParser:
                     help="folder with the three YAML files (default: the bundled copies)")
     rp.add_argument("--quiet", action="store_true", help="no progress bar")
     rp.set_defaults(func=_cmd_reproduce)
+
+    b = sub.add_parser("bench", help="run every config with every solver, compare them")
+    b.add_argument("configs", nargs="*", type=Path, metavar="CONFIG",
+                   help="experiment YAML files (default: the paper's three cases)")
+    b.add_argument("--solvers", help="comma-separated solver names (default: all available)")
+    b.add_argument("--out", default="bench_out", help="output folder (default bench_out); "
+                   "finished jobs stored there are reused, so a bench resumes")
+    b.add_argument("--repeat", type=int, default=1,
+                   help="rollouts per job; their step timings are pooled (default 1)")
+    b.add_argument("--duration", type=float, default=None,
+                   help="override every config's run length [s] (e.g. for a quick check)")
+    b.add_argument("--no-plots", action="store_true", help="skip bench.png")
+    b.add_argument("--quiet", action="store_true", help="no per-job progress lines")
+    b.set_defaults(func=_cmd_bench)
 
     s = sub.add_parser("solvers", help="list the solvers and whether they are installed")
     s.set_defaults(func=_cmd_solvers)

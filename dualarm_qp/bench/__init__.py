@@ -1,0 +1,25 @@
+"""Benchmarks: every configuration with every solver, and the step-instance suite.
+
+This package sits at the top of the library beside :mod:`dualarm_qp.experiments`: it
+may import from everything below it, and nothing below imports it.
+
+* :mod:`.runner`: (configuration x solver) rollouts and replays, stored one JSON line
+  per finished pair so that an interrupted bench resumes;
+* :mod:`.suite`: scoring of solvers on a file of recorded step problems, the way
+  qpbenchmark scores QP solvers;
+* :mod:`.report`: table, CSV, JSON and plot.
+"""
+
+from .report import COLUMNS, format_table, objective_gaps, write_report
+from .runner import BenchResult, BenchSettings, run_bench, run_job
+
+__all__ = [
+    "COLUMNS",
+    "BenchResult",
+    "BenchSettings",
+    "format_table",
+    "objective_gaps",
+    "run_bench",
+    "run_job",
+    "write_report",
+]

@@ -1,0 +1,229 @@
+"""Bench report: rows with the objective gap, then a table, CSV, JSON and a plot.
+
+The objective gap of a solver on a configuration compares its objective (Eq. 37) with
+the smallest objective any benched solver reached, step by step over the canonical
+steps (see :mod:`.runner`), on the steps both solved within tolerance.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .runner import STATUSES
+from .store import jsonable
+
+#: Columns of ``bench.csv``, in order.
+COLUMNS: tuple[str, ...] = (
+    "config", "experiment", "solver", "completed", "success_rate", "steps", "steps_run",
+    *(f"status_{s}" for s in STATUSES), "status_not_run",
+    "step_time_median_s", "step_time_p99_s",
+    "kinematics_time_median_s", "kinematics_time_p99_s",
+    "assembly_time_median_s", "assembly_time_p99_s",
+    "solve_time_median_s", "solve_time_p99_s",
+    "verify_time_median_s", "verify_time_p99_s",
+    "bound_violation_max", "eq_residual_max",
+    "closure_pos_err_max_m", "closure_rot_err_max_rad",
+    "margin_qf_min_rad", "margin_ql_min_rad", "margin_grasp_min_m",
+    "objective_gap_max", "objective_gap_median", "objective_gap_rel_max",
+    "objective_gap_steps",
+    "replay_success_rate", "replay_solve_time_median_s", "bare_solve_time_median_s",
+    "solve_over_bare", "timed_samples", "wall_time_s", "key", "error",
+)
+
+
+def objective_gaps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Copies of ``records`` with ``objective_gap_*`` filled in, per configuration.
+
+    ``objective_gap_max`` and ``objective_gap_median`` are ``objective - best`` over the
+    canonical steps where this solver and at least one solver were within tolerance
+    (``best`` is the smallest such objective); ``objective_gap_rel_max`` divides each
+    step's gap by ``max(1, |best|)``; ``objective_gap_steps`` counts the steps.
+    """
+    by_cfg: dict[str, list[dict[str, Any]]] = {}
+    for rec in records:
+        by_cfg.setdefault(str(rec.get("config")), []).append(rec)
+    best: dict[str, np.ndarray] = {}
+    for cfg, recs in by_cfg.items():
+        objs = [_objectives(r) for r in recs]
+        objs = [o for o in objs if o is not None]
+        if objs and len({o.size for o in objs}) == 1:
+            with np.errstate(all="ignore"):
+                stack = np.vstack(objs)
+                best[cfg] = np.where(np.isnan(stack).all(axis=0), np.nan,
+                                     np.nanmin(np.where(np.isnan(stack), np.inf, stack), axis=0))
+    out = []
+    for rec in records:
+        row = {k: v for k, v in rec.items() if k != "replay_objective"}
+        obj = _objectives(rec)
+        b = best.get(str(rec.get("config")))
+        gap_max = gap_med = gap_rel = float("nan")
+        n = 0
+        if obj is not None and b is not None and obj.size == b.size:
+            both = ~np.isnan(obj) & ~np.isnan(b)
+            n = int(both.sum())
+            if n:
+                gap = obj[both] - b[both]
+                gap_max, gap_med = float(gap.max()), float(np.median(gap))
+                gap_rel = float((gap / np.maximum(1.0, np.abs(b[both]))).max())
+        row.update(objective_gap_max=gap_max, objective_gap_median=gap_med,
+                   objective_gap_rel_max=gap_rel,
+                   objective_gap_steps=n)
+        out.append(row)
+    return out
+
+
+def _objectives(rec: dict[str, Any]) -> np.ndarray | None:
+    vals = rec.get("replay_objective")
+    if not isinstance(vals, list):
+        return None
+    return np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
+
+
+def _fmt(value: Any, kind: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    if kind == "us":
+        return f"{float(value) * 1e6:.0f}"
+    if kind == "rate":
+        return f"{float(value):.3f}"
+    if kind == "ratio":
+        return f"{float(value):.2f}"
+    if kind == "sci":
+        return f"{float(value):.1e}"
+    return str(value)
+
+
+#: (header, column, format) of the printed table.
+TABLE: tuple[tuple[str, str, str], ...] = (
+    ("config", "experiment", "str"),
+    ("solver", "solver", "str"),
+    ("success", "success_rate", "rate"),
+    ("step med us", "step_time_median_s", "us"),
+    ("step p99 us", "step_time_p99_s", "us"),
+    ("kin med", "kinematics_time_median_s", "us"),
+    ("asm med", "assembly_time_median_s", "us"),
+    ("solve med", "solve_time_median_s", "us"),
+    ("verify med", "verify_time_median_s", "us"),
+    ("solve/bare", "solve_over_bare", "ratio"),
+    ("bound viol", "bound_violation_max", "sci"),
+    ("eq resid", "eq_residual_max", "sci"),
+    ("closure m", "closure_pos_err_max_m", "sci"),
+    ("margin rad", "margin_qf_min_rad", "sci"),
+    ("obj gap rel", "objective_gap_rel_max", "sci"),
+)
+
+
+def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> str:
+    """The rows as a text table (or a Markdown table); times in microseconds."""
+    cells = [[h for h, _, _ in TABLE]]
+    for r in rows:
+        if r.get("error"):
+            cells.append([str(r.get("experiment")), str(r.get("solver")), "ERROR"]
+                         + [""] * (len(TABLE) - 3))
+            continue
+        cells.append([_fmt(r.get(col), kind) for _, col, kind in TABLE])
+    if markdown:
+        lines = ["| " + " | ".join(cells[0]) + " |",
+                 "|" + "|".join("---" for _ in TABLE) + "|"]
+        lines += ["| " + " | ".join(c) + " |" for c in cells[1:]]
+        return "\n".join(lines)
+    widths = [max(len(row[i]) for row in cells) for i in range(len(TABLE))]
+    return "\n".join("  ".join(c.rjust(w) if i > 1 else c.ljust(w)
+                               for i, (c, w) in enumerate(zip(row, widths, strict=True)))
+                     for row in cells)
+
+
+def _atomic_text(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:
+    """One row per (configuration, solver); SI units; empty cells for missing values."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(COLUMNS)
+    for r in rows:
+        out = []
+        for col in COLUMNS:
+            v = jsonable(r.get(col))
+            out.append("" if v is None else repr(v) if isinstance(v, float) else str(v))
+        w.writerow(out)
+    _atomic_text(path, buf.getvalue())
+
+
+def write_json(path: Path, rows: Sequence[dict[str, Any]], meta: dict[str, Any]) -> None:
+    """``{"meta": ..., "rows": [...]}`` with non-finite numbers as null."""
+    doc = {"meta": meta, "columns": list(COLUMNS),
+           "rows": [{k: r.get(k) for k in COLUMNS} for r in rows]}
+    _atomic_text(path, json.dumps(jsonable(doc), indent=2) + "\n")
+
+
+def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
+    """Median step time split per solver (stacked bars), p99 as a tick, per config."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    good = [r for r in rows if not r.get("error")]
+    configs = list(dict.fromkeys(str(r["experiment"]) for r in good)) or ["(none)"]
+    height = 0.8 * len(configs) + 0.35 * max(len(good), 1) + 0.8
+    fig, axes = plt.subplots(len(configs), 1, figsize=(8, height), squeeze=False)
+    parts = (("kinematics", "kinematics_time_median_s"), ("assembly", "assembly_time_median_s"),
+             ("solve", "solve_time_median_s"), ("verify", "verify_time_median_s"))
+    for ax, cfg in zip(axes[:, 0], configs, strict=True):
+        rs = [r for r in good if r["experiment"] == cfg]
+        y = np.arange(len(rs))
+        left = np.zeros(len(rs))
+        for label, col in parts:
+            w = np.array([max(float(r.get(col) or 0.0), 0.0) * 1e6 for r in rs])
+            ax.barh(y, w, left=left, label=label)
+            left += w
+        p99 = [float(r.get("step_time_p99_s") or np.nan) * 1e6 for r in rs]
+        ax.plot(p99, y, "k|", markersize=12, label="step p99")
+        ax.set_yticks(y, [f"{r['solver']} ({r['success_rate']:.2f})" for r in rs])
+        ax.set_xscale("log")
+        ax.set_title(cfg, fontsize=9)
+        ax.invert_yaxis()
+    axes[-1, 0].set_xlabel("controller step time [us] (median split; | = p99); "
+                           "(success rate)")
+    axes[0, 0].legend(fontsize=7, loc="lower right", ncol=5)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        Path(tmp).unlink(missing_ok=True)
+
+
+def write_report(out_dir: Path, records: Sequence[dict[str, Any]], meta: dict[str, Any],
+                 *, plots: bool = True) -> list[dict[str, Any]]:
+    """Write ``bench.json``, ``bench.csv`` and (optionally) ``bench.png``; return the rows."""
+    rows = objective_gaps(records)
+    write_json(out_dir / "bench.json", rows, meta)
+    write_csv(out_dir / "bench.csv", rows)
+    if plots:
+        plot(out_dir / "bench.png", rows)
+    return rows
