@@ -134,13 +134,41 @@ class ArmSpec(_Model):
 
 
 class SurfaceSpec(_Model):
-    """The object surface and the follower's sliding path on it."""
+    """The object surface and the follower's sliding path on it.
+
+    ``plane_bar`` (the paper's bar): the grasp slides along object z on the plane x = 0,
+    inside the box ``r_min``..``r_max`` (Eq. 3). ``cylinder`` (radius, azimuth) and
+    ``curved_bar`` (radius of the arc, ``side``) take the grasp range ``grasp_range``
+    (arc length along the path).
+    """
 
     type: Literal["plane_bar", "cylinder", "curved_bar"] = "plane_bar"
-    r_min: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
-    r_max: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.4])
+    r_min: Vec3 | None = None
+    r_max: Vec3 | None = None
     radius: float | None = None
     azimuth: float | None = None
+    side: Literal["outer", "inner"] | None = None
+    grasp_range: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+
+    @model_validator(mode="after")
+    def _fields(self) -> SurfaceSpec:
+        if self.type == "plane_bar":
+            extra = [k for k in ("radius", "azimuth", "side", "grasp_range")
+                     if getattr(self, k) is not None]
+            if extra:
+                raise ValueError(f"a plane_bar takes r_min and r_max, not {', '.join(extra)}")
+        else:
+            if self.radius is None or not (math.isfinite(self.radius) and self.radius > 0):
+                raise ValueError(f"a {self.type} needs a positive 'radius'")
+            if self.grasp_range is None:
+                raise ValueError(f"a {self.type} needs 'grasp_range: [min, max]'")
+            if self.r_min is not None or self.r_max is not None:
+                raise ValueError(f"a {self.type} takes grasp_range, not r_min / r_max")
+            if self.type == "cylinder" and self.side is not None:
+                raise ValueError("'side' is for a curved_bar")
+            if self.type == "curved_bar" and self.azimuth is not None:
+                raise ValueError("'azimuth' is for a cylinder")
+        return self
 
 
 class ObjectSpec(_Model):

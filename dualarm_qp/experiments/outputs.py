@@ -23,6 +23,12 @@ import numpy as np
 from ..control.rollout import Trace
 
 
+def _umask_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 @contextmanager
 def atomic_open(path: Path) -> Iterator[IO[str]]:
     """Open a temporary text file beside ``path``; rename it onto ``path`` on success."""
@@ -31,6 +37,7 @@ def atomic_open(path: Path) -> Iterator[IO[str]]:
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
             yield fh
+        os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
         try:
@@ -47,6 +54,7 @@ def atomic_write_with(path: Path, writer: Callable[[str], None]) -> None:
     os.close(fd)
     try:
         writer(tmp)
+        os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
         try:

@@ -139,18 +139,18 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
 
 def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
     s = cfg.object.surface
-    r_min = np.asarray(s.r_min, dtype=float) * sc.length
-    r_max = np.asarray(s.r_max, dtype=float) * sc.length
     if s.type == "plane_bar":
+        r_min = np.zeros(3) if s.r_min is None else np.asarray(s.r_min, dtype=float) * sc.length
+        r_max = (np.array([0.0, 0.0, 0.4]) if s.r_max is None
+                 else np.asarray(s.r_max, dtype=float) * sc.length)
         return PlaneBar(r_min=r_min, r_max=r_max)
-    if s.radius is None:
-        raise ConfigError(f"a {s.type} surface needs 'radius'", key="object.surface.radius")
+    assert s.radius is not None and s.grasp_range is not None  # checked by the schema
     radius = s.radius * sc.length
-    lo, hi = float(r_min[2]), float(r_max[2])
+    lo, hi = (v * sc.length for v in s.grasp_range)
     if s.type == "cylinder":
         azimuth = 0.0 if s.azimuth is None else s.azimuth * sc.angle
         return CylinderSurface(radius, azimuth=azimuth, sigma_min=lo, sigma_max=hi)
-    return CurvedBar(radius, sigma_min=lo, sigma_max=hi)
+    return CurvedBar(radius, side=s.side or "outer", sigma_min=lo, sigma_max=hi)
 
 
 def _trajectory(cfg: ExperimentConfig, sc: Scales, duration: float) -> Trajectory:
