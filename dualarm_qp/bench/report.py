@@ -42,7 +42,7 @@ COLUMNS: tuple[str, ...] = (
 
 
 def objective_gaps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Copies of ``records`` with ``objective_gap_*`` filled in, per configuration.
+    """Return copies of ``records`` with ``objective_gap_*`` filled in, per configuration.
 
     ``objective_gap_max`` and ``objective_gap_median`` are ``objective - best`` over the
     canonical steps where this solver and at least one solver were within tolerance
@@ -54,8 +54,7 @@ def objective_gaps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         by_cfg.setdefault(str(rec.get("config")), []).append(rec)
     best: dict[str, np.ndarray] = {}
     for cfg, recs in by_cfg.items():
-        objs = [_objectives(r) for r in recs]
-        objs = [o for o in objs if o is not None]
+        objs = [o for o in (_objectives(r) for r in recs) if o is not None]
         if objs and len({o.size for o in objs}) == 1:
             with np.errstate(all="ignore"):
                 stack = np.vstack(objs)
@@ -124,7 +123,7 @@ TABLE: tuple[tuple[str, str, str], ...] = (
 
 
 def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> str:
-    """The rows as a text table (or a Markdown table); times in microseconds."""
+    """Format the rows as a text table (or a Markdown table); times in microseconds."""
     cells = [[h for h, _, _ in TABLE]]
     for r in rows:
         if r.get("error"):

@@ -169,7 +169,7 @@ def check_solvers(names: Sequence[str]) -> list[str]:
 
 
 def machine_info() -> dict[str, Any]:
-    """The machine and its load, for the report."""
+    """Describe the machine and its load, for the report."""
     cpu = platform.processor() or ""
     try:
         with open("/proc/cpuinfo", encoding="utf-8") as fh:
@@ -222,7 +222,7 @@ def canonical_steps(config: BenchConfig, settings: BenchSettings) -> list[StepPr
 
 
 def _opts(exp: Experiment) -> dict[str, Any]:
-    """The configured solver options, when the configured solver is the canonical one."""
+    """Return the configured solver options if the configured solver is the canonical one."""
     return dict(exp.solver_options) if exp.solver_name == CANONICAL_SOLVER else {}
 
 
