@@ -1,0 +1,74 @@
+"""Infeasible steps in a whole run: the object too fast for the follower's speed limits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dualarm_qp.control.controller import DualArmController
+from dualarm_qp.control.rollout import rollout
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.kinematics.arm import SerialArm
+from dualarm_qp.solvers import get_solver
+from dualarm_qp.task.scene import DualArmTask
+
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_sliding_s7_100.yaml"
+QD_SLOW = np.array([0.05, 0.05, 0.05, 0.1, 0.1, 0.1])  # rad/s: too slow for 32 mm/s at times
+
+
+def slow_experiment():
+    exp = build_experiment(load_config(CONFIG))
+    f = exp.task.follower
+    slow = SerialArm(f.dh, q_min=f.q_min, q_max=f.q_max, qd_max=QD_SLOW, base=f.base,
+                     tool=f.tool, name=f.name)
+    exp.task = DualArmTask(exp.task.leader, slow, exp.task.H1, exp.task.surface,
+                           exp.task.trajectory)
+    import dataclasses
+
+    exp.options = dataclasses.replace(exp.options, velocity_limits=True, grasp_speed_max=0.05)
+    return exp
+
+
+@pytest.mark.parametrize("solver", ["nullspace", "qp:daqp", "sns"])
+def test_scale_policy_slows_the_object(solver):
+    exp = slow_experiment()
+    ctrl = DualArmController(exp.task, get_solver(solver), exp.options,
+                             leader_gain=exp.leader_gain, policy="scale")
+    res = rollout(ctrl, exp.initial, duration=3.0)
+    tr = res.trace
+    assert res.completed, res.message
+    assert "scaled" in tr.status
+    summary = res.summary()
+    assert summary["time_lost_to_scaling_s"] > 0.0
+    # The path time lags the wall time by exactly the time lost to scaling.
+    assert tr.t[-1] - tr.tau[-1] == pytest.approx(summary["time_lost_to_scaling_s"], abs=1e-9)
+    for name in ("q_f", "q_l", "grasp", "m", "qf_dot", "scale"):
+        assert np.isfinite(getattr(tr, name)).all(), name
+    assert np.all(np.abs(tr.qf_dot) <= QD_SLOW + 1e-7)
+    assert np.all((tr.scale >= 0) & (tr.scale <= 1))
+    assert np.max(tr.closure_pos_err) < 1e-6
+
+
+def test_relax_policy_keeps_bounds_and_reports_relaxed():
+    exp = slow_experiment()
+    ctrl = DualArmController(exp.task, get_solver("nullspace"), exp.options,
+                             leader_gain=exp.leader_gain, policy="relax")
+    res = rollout(ctrl, exp.initial, duration=3.0)
+    tr = res.trace
+    assert res.completed, res.message
+    assert "relaxed" in tr.status
+    assert np.all(np.abs(tr.qf_dot) <= QD_SLOW + 1e-7)
+    assert np.isfinite(tr.q_f).all()
+    assert np.all(tr.tau == tr.t)  # relax never slows the object
+
+
+def test_stop_policy_stops_with_the_conflicting_bounds():
+    exp = slow_experiment()
+    ctrl = DualArmController(exp.task, get_solver("nullspace"), exp.options,
+                             leader_gain=exp.leader_gain, policy="stop")
+    res = rollout(ctrl, exp.initial, duration=3.0)
+    assert not res.completed
+    assert "conflicting bounds" in res.message
+    assert np.isfinite(res.trace.q_f).all()
