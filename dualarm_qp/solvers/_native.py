@@ -1,0 +1,188 @@
+"""Native osqp and proxsuite solver objects kept across steps (private).
+
+Each step of a rollout has the same shape (6 x 7) and the same sparsity, so one native
+solver object is set up once and then only updated with the new data; a new setup is
+done when the shape changes or the previous call failed. Every call keeps the profile's
+iteration (and, for osqp, time) limit. The QP is the shifted one of :mod:`.qp`:
+``min 1/2 y^T S y  s.t.  A y = b - A c,  lower - c <= y <= upper - c``.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..step.problem import StepProblem
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class BackendAnswer:
+    """What one backend call returned, in the shifted variable ``y = x - c``.
+
+    Attributes
+    ----------
+    x : ndarray or None
+        The backend's last iterate (None when it returned none).
+    solved : bool
+        The backend says it met its tolerances.
+    infeasible : bool
+        The backend says the constraints are inconsistent (primal infeasible).
+    status : str
+        The backend's status, as text.
+    iterations : int or None
+        Iterations used, where the backend reports them.
+    """
+
+    x: FloatArray | None
+    solved: bool
+    infeasible: bool
+    status: str
+    iterations: int | None = None
+
+
+class NativeQP(Protocol):
+    """A native backend object that solves a sequence of step QPs."""
+
+    def solve(self, problem: StepProblem) -> BackendAnswer:
+        """Update (or set up) the backend with ``problem`` and solve it."""
+        ...
+
+
+def _box(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Shifted data ``(b - A c, lower - c, upper - c)``."""
+    c = problem.center
+    return problem.b - problem.A @ c, problem.lower - c, problem.upper - c
+
+
+class OSQPNative:
+    """One ``osqp.OSQP`` object; the equality rows come first, then the identity (box).
+
+    The constraint matrix is stored with a fixed, dense pattern (zeros kept as explicit
+    entries), so a new ``A`` is always an update of the values, never a new setup.
+    """
+
+    def __init__(self, options: dict[str, Any]) -> None:
+        import osqp
+
+        self._osqp = osqp
+        self.options = dict(options)
+        self._solver: Any = None
+        self._shape: tuple[int, int] | None = None
+        self._weights: FloatArray | None = None
+        self._zero_y: FloatArray | None = None
+
+    def solve(self, problem: StepProblem) -> BackendAnswer:
+        import scipy.sparse as sp
+
+        m, n = problem.A.shape
+        beq, lo, up = _box(problem)
+        l_all = np.concatenate([beq, lo])
+        u_all = np.concatenate([beq, up])
+        # Values of [A; I] in csc order: per column, the m entries of A then the 1.
+        ax = np.vstack([problem.A, np.ones((1, n))]).T.ravel()
+        if self._solver is None or self._shape != (m, n):
+            # Pattern: every entry of A and the diagonal of I; in csc order column j
+            # holds A[:, j] then I[j, j], which is the order of ``ax``.
+            mat = sp.csc_matrix(np.vstack([np.ones((m, n)), np.eye(n)]))
+            mat.sort_indices()
+            mat.data = ax.copy()
+            solver = self._osqp.OSQP()
+            solver.setup(P=sp.diags(problem.weights, format="csc"), q=np.zeros(n), A=mat,
+                         l=l_all, u=u_all, verbose=False, **self.options)
+            self._solver, self._shape = solver, (m, n)
+            self._weights = problem.weights.copy()
+            self._zero_y = np.zeros(m + n)
+        else:
+            upd: dict[str, Any] = {"Ax": ax, "l": l_all, "u": u_all}
+            if self._weights is None or not np.array_equal(self._weights, problem.weights):
+                upd["Px"] = problem.weights.copy()
+                self._weights = problem.weights.copy()
+            self._solver.update(**upd)
+        if problem.x_prev is not None:
+            self._solver.warm_start(x=problem.x_prev - problem.center)
+        else:  # no neighbouring step: a cold start
+            self._solver.warm_start(x=np.zeros(n), y=self._zero_y)
+        res = self._solver.solve(raise_error=False)
+        st = self._osqp.SolverStatus
+        status = res.info.status_val
+        solved = status == st.OSQP_SOLVED
+        infeasible = status in (st.OSQP_PRIMAL_INFEASIBLE, st.OSQP_PRIMAL_INFEASIBLE_INACCURATE)
+        x = None if res.x is None else np.array(res.x, dtype=np.float64)
+        if not solved:
+            self._solver = None  # a failed state is not a good warm start: set up anew
+        return BackendAnswer(x, bool(solved), bool(infeasible), str(res.info.status),
+                             int(res.info.iter))
+
+
+class ProxQPNative:
+    """One ``proxsuite.proxqp.dense.QP`` with native box constraints."""
+
+    #: Options passed to ``init`` rather than set on ``settings``.
+    INIT_ONLY = ("compute_preconditioner",)
+
+    def __init__(self, options: dict[str, Any]) -> None:
+        from proxsuite import proxqp
+
+        self._proxqp = proxqp
+        self.options = dict(options)
+        self._qp: Any = None
+        self._shape: tuple[int, int] | None = None
+        self._weights: FloatArray | None = None
+
+    def _setup(self, problem: StepProblem, beq: FloatArray, lo: FloatArray,
+               up: FloatArray) -> None:
+        m, n = problem.A.shape
+        qp = self._proxqp.dense.QP(n, m, 0, True)
+        for key, value in self.options.items():
+            if key not in self.INIT_ONLY:
+                setattr(qp.settings, key, value)
+        qp.settings.verbose = False
+        qp.init(np.diag(problem.weights), np.zeros(n), problem.A, beq, None, None, None,
+                lo, up, compute_preconditioner=bool(
+                    self.options.get("compute_preconditioner", True)))
+        self._qp, self._shape = qp, (m, n)
+        self._weights = problem.weights.copy()
+
+    def solve(self, problem: StepProblem) -> BackendAnswer:
+        beq, lo, up = _box(problem)
+        m, n = problem.A.shape
+        if self._qp is None or self._shape != (m, n):
+            self._setup(problem, beq, lo, up)
+        else:
+            H = None
+            if self._weights is None or not np.array_equal(self._weights, problem.weights):
+                H = np.diag(problem.weights)
+                self._weights = problem.weights.copy()
+            self._qp.update(H, None, problem.A, beq, None, None, None, lo, up,
+                            update_preconditioner=bool(
+                                self.options.get("compute_preconditioner", True)))
+        guess = self._proxqp.InitialGuess
+        if problem.x_prev is not None:
+            self._qp.settings.initial_guess = guess.WARM_START
+            self._qp.solve(problem.x_prev - problem.center, None, None)
+        else:
+            self._qp.settings.initial_guess = guess.NO_INITIAL_GUESS
+            self._qp.solve()
+        info = self._qp.results.info
+        out = self._proxqp.QPSolverOutput
+        solved = info.status == out.PROXQP_SOLVED
+        infeasible = info.status == out.PROXQP_PRIMAL_INFEASIBLE
+        x = np.array(self._qp.results.x, dtype=np.float64)
+        if not solved:
+            self._qp = None
+        return BackendAnswer(x, bool(solved), bool(infeasible), str(info.status),
+                             int(info.iter))
+
+
+#: qpsolvers backend name -> native class, for the installed backends that have one.
+NATIVE: dict[str, type[OSQPNative] | type[ProxQPNative]] = {
+    name: cls for name, module, cls in (("osqp", "osqp", OSQPNative),
+                                        ("proxqp", "proxsuite", ProxQPNative))
+    if importlib.util.find_spec(module) is not None
+}
