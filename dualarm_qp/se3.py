@@ -76,22 +76,7 @@ def log_so3(R: FloatArray) -> FloatArray:
 
     Accurate near zero and near pi (where the axis is read off the symmetric part).
     """
-    cos_theta = max(-1.0, min(1.0, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)))
-    vee = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    sin_theta = 0.5 * math.sqrt(float(vee @ vee))
-    theta = math.atan2(sin_theta, cos_theta)
-    if theta < 1e-6:
-        return 0.5 * (1.0 + theta**2 / 6.0) * vee
-    if math.pi - theta > 1e-4:
-        return (theta / (2.0 * math.sin(theta))) * vee
-    # Near pi: R = 2 u u^T - I + O(pi - theta); take the largest column of (R + I)/2.
-    B = 0.5 * (R + np.eye(3))
-    i = int(np.argmax(np.diag(B)))
-    u = B[:, i] / math.sqrt(max(B[i, i], 1e-300))
-    u /= np.linalg.norm(u)
-    if float(u @ vee) < 0.0:
-        u = -u
-    return theta * u
+    return np.array(_log_rows(R.tolist()))
 
 
 def rotation_error(R_target: FloatArray, R_actual: FloatArray) -> FloatArray:
@@ -100,15 +85,77 @@ def rotation_error(R_target: FloatArray, R_actual: FloatArray) -> FloatArray:
     ``exp_so3(e) @ R_actual == R_target``; to first order ``e`` is the angular
     displacement the actual frame must make.
     """
-    return log_so3(R_target @ R_actual.T)
+    return np.array(_log_rows(_mul_transposed(*R_target.tolist(), *R_actual.tolist())))
 
 
 def pose_error(T_target: FloatArray, T_actual: FloatArray) -> FloatArray:
     """6-vector ``[dp; dw]``: position error [m] and world rotation error [rad]."""
-    e = np.empty(6)
-    e[:3] = T_target[:3, 3] - T_actual[:3, 3]
-    e[3:] = rotation_error(T_target[:3, :3], T_actual[:3, :3])
-    return e
+    return np.array(pose_error_rows(T_target.tolist(), T_actual.tolist()))
+
+
+#: A matrix as nested Python lists, row by row (what ``ndarray.tolist()`` returns).
+Rows = list[list[float]]
+
+
+def pose_error_rows(target: Rows, actual: Rows) -> list[float]:
+    """:func:`pose_error` on the rows of two poses (3x4 or 4x4), as six Python floats.
+
+    Scalar math: for one 4x4 pose numpy's per-call overhead costs more than the
+    arithmetic. Used by the per-step code, which keeps its small matrices as lists.
+    """
+    a0, a1, a2 = target[0], target[1], target[2]
+    b0, b1, b2 = actual[0], actual[1], actual[2]
+    return [a0[3] - b0[3], a1[3] - b1[3], a2[3] - b2[3],
+            *_log_rows(_mul_transposed(a0, a1, a2, b0, b1, b2))]
+
+
+def compose_rows(a: Rows, b: Rows) -> Rows:
+    """Rows 0-2 of the pose ``A B``, for poses given by their rows (3x4 or 4x4) [m]."""
+    b00, b01, b02, b03 = b[0][0], b[0][1], b[0][2], b[0][3]
+    b10, b11, b12, b13 = b[1][0], b[1][1], b[1][2], b[1][3]
+    b20, b21, b22, b23 = b[2][0], b[2][1], b[2][2], b[2][3]
+    out = []
+    for r0, r1, r2, r3 in (a[0], a[1], a[2]):
+        out.append([r0 * b00 + r1 * b10 + r2 * b20, r0 * b01 + r1 * b11 + r2 * b21,
+                    r0 * b02 + r1 * b12 + r2 * b22, r0 * b03 + r1 * b13 + r2 * b23 + r3])
+    return out
+
+
+def _mul_transposed(a0: list[float], a1: list[float], a2: list[float],
+                    b0: list[float], b1: list[float], b2: list[float]) -> Rows:
+    """Rows of ``A B^T`` for the 3x3 blocks of ``A`` and ``B`` given by their rows."""
+    out = []
+    for x in (a0, a1, a2):
+        x0, x1, x2 = x[0], x[1], x[2]
+        out.append([x0 * b0[0] + x1 * b0[1] + x2 * b0[2], x0 * b1[0] + x1 * b1[1] + x2 * b1[2],
+                    x0 * b2[0] + x1 * b2[1] + x2 * b2[2]])
+    return out
+
+
+def _log_rows(r: Rows) -> list[float]:
+    """:func:`log_so3` of the rotation with rows ``r``, as three Python floats."""
+    r0, r1, r2 = r[0], r[1], r[2]
+    cos_theta = max(-1.0, min(1.0, 0.5 * (r0[0] + r1[1] + r2[2] - 1.0)))
+    v0, v1, v2 = r2[1] - r1[2], r0[2] - r2[0], r1[0] - r0[1]  # vee(R - R^T)
+    sin_theta = 0.5 * math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    theta = math.atan2(sin_theta, cos_theta)
+    if theta < 1e-6:
+        k = 0.5 * (1.0 + theta**2 / 6.0)
+        return [k * v0, k * v1, k * v2]
+    if math.pi - theta > 1e-4:
+        k = theta / (2.0 * math.sin(theta))
+        return [k * v0, k * v1, k * v2]
+    # Near pi: R = 2 u u^T - I + O(pi - theta); take the largest column of (R + I)/2.
+    diag = (r0[0], r1[1], r2[2])
+    i = max(range(3), key=diag.__getitem__)  # first of equal maxima, as np.argmax
+    b_ii = 0.5 * (diag[i] + 1.0)
+    u = [0.5 * (row[i] + (1.0 if j == i else 0.0)) for j, row in enumerate((r0, r1, r2))]
+    s = math.sqrt(max(b_ii, 1e-300))
+    u = [ui / s for ui in u]
+    norm = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    if u[0] * v0 + u[1] * v1 + u[2] * v2 < 0.0:
+        norm = -norm
+    return [theta * u[0] / norm, theta * u[1] / norm, theta * u[2] / norm]
 
 
 def log_se3(T: FloatArray) -> FloatArray:

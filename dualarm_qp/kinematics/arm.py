@@ -219,13 +219,15 @@ class SerialArm:
                 return values
         return self.check_q(q, name).tolist()
 
-    def _chain(self, qs: list[float]) -> tuple[list[Frame], list[Axis]]:
+    def _chain(self, qs: list[float], *, all_frames: bool = True
+               ) -> tuple[list[Frame], list[Axis]]:
         """Walk the kinematic chain at joint angles ``qs`` [rad].
 
         Returns
         -------
         frames : list of Frame
-            World frames 0..n (frame 0 is the base; no tool).
+            World frames 0..n (frame 0 is the base; no tool); only frame n when
+            ``all_frames`` is False.
         axes : list of Axis
             For each joint, its axis ``z`` and a point ``o`` on it, as ``(z, o)``
             (the z axis and origin of frame i-1 in standard DH; in modified DH the z
@@ -275,8 +277,10 @@ class SerialArm:
                     t = v * y2 + w * z2
                     z2 = v * z2 - w * y2
                     y2 = t
-            if record:
+            if record and all_frames:
                 frames.append((x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2))
+        if not all_frames:
+            frames = [(x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2)]
         return frames, axes
 
     def _tool_pose(self, flange: Frame) -> Frame:
@@ -296,7 +300,7 @@ class SerialArm:
 
         With the default identity tool this is the flange (frame n).
         """
-        frames, _ = self._chain(self._joint_values(q))
+        frames, _ = self._chain(self._joint_values(q), all_frames=False)
         return np.array(_matrix_rows(self._tool_pose(frames[-1]))).reshape(4, 4)
 
     def jacobian(self, q: Any) -> FloatArray:
@@ -317,7 +321,7 @@ class SerialArm:
         J : ndarray, shape (6, n)
             Geometric Jacobian, see :meth:`jacobian`.
         """
-        frames, axes = self._chain(self._joint_values(q))
+        frames, axes = self._chain(self._joint_values(q), all_frames=False)
         tool = self._tool_pose(frames[-1])
         t0, t1, t2 = tool[9], tool[10], tool[11]
         # Column i: [z_i x (p_tool - o_i); z_i] for joint axis z_i through point o_i.
