@@ -18,15 +18,17 @@ step (Sec. 3.3); ``exact_orientation=True`` keeps the curvature term instead.
 
 from __future__ import annotations
 
+import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._validate import as_array
-from ..errors import InvalidInputError
-from ..se3 import pose_error
+from ..errors import InvalidInputError, NonFiniteError, ShapeError
+from ..se3 import compose_rows, pose_error_rows
 from ..task.scene import DualArmTask
 from .problem import StepProblem
 
@@ -157,43 +159,199 @@ def rate_bounds(
     recovering : ndarray of bool
         Positions outside their box.
     """
-    lo = (x_min - x) / dt
-    hi = (x_max - x) / dt
-    with np.errstate(invalid="ignore"):
-        center = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), 0.0)
-    lower = np.maximum(lo, -v_max)
-    upper = np.minimum(hi, v_max)
-    below = lo > 0.0
-    above = hi < 0.0
-    recovering = below | above
-    if recovering.any():
-        rec = recovery_fraction * v_max
-        lower = np.where(below, np.minimum(lo, rec), lower)
-        upper = np.where(above, np.maximum(hi, -rec), upper)
+    lo = np.asarray((np.asarray(x_min) - x) / dt, dtype=np.float64)
+    hi = np.asarray((np.asarray(x_max) - x) / dt, dtype=np.float64)
+    v = np.broadcast_to(np.asarray(v_max, dtype=np.float64), lo.shape)
+    lower, upper, center, recovering = _clip_rates(
+        lo.ravel().tolist(), hi.ravel().tolist(), v.ravel().tolist(), recovery_fraction
+    )
+    shape = lo.shape
+    return (np.array(lower).reshape(shape), np.array(upper).reshape(shape),
+            np.array(center).reshape(shape), np.array(recovering, dtype=bool).reshape(shape))
+
+
+def _clip_rates(
+    lo: list[float], hi: list[float], v_max: list[float], recovery_fraction: float
+) -> tuple[list[float], list[float], list[float], list[bool]]:
+    """:func:`rate_bounds` from the position-derived rate range ``[lo, hi]``.
+
+    Python floats: for a handful of variables numpy's per-call cost exceeds the work.
+    """
+    lower, upper, center, recovering = [], [], [], []
+    inf = math.inf
+    for lo_i, hi_i, v_i in zip(lo, hi, v_max, strict=True):
+        center.append(0.5 * (lo_i + hi_i) if -inf < lo_i < inf and -inf < hi_i < inf else 0.0)
+        if lo_i > 0.0:  # below the box: must move up, at least at the recovery speed
+            lower.append(min(lo_i, recovery_fraction * v_i))
+        else:
+            lower.append(max(lo_i, -v_i))
+        if hi_i < 0.0:  # above the box: must move down
+            upper.append(max(hi_i, -(recovery_fraction * v_i)))
+        else:
+            upper.append(min(hi_i, v_i))
+        recovering.append(lo_i > 0.0 or hi_i < 0.0)
     return lower, upper, center, recovering
 
 
 def grasp_rate_range(
-    surface_r: FloatArray,
-    s_star: FloatArray,
-    r_min: FloatArray,
-    r_max: FloatArray,
+    surface_r: Sequence[float] | FloatArray,
+    s_star: Sequence[float] | FloatArray,
+    r_min: Sequence[float] | FloatArray,
+    r_max: Sequence[float] | FloatArray,
     dt: float,
 ) -> tuple[float, float]:
     """``(rho_min, rho_max)`` of Eqs. 30-31 [m/s].
 
-    Components with ``s*_i == 0`` do not move along axis i and are skipped.
+    Components with ``s*_i == 0`` do not move along axis i and are skipped. The
+    arguments are 3-vectors (arrays or lists of floats).
     """
-    rho_min, rho_max = -np.inf, np.inf
+    rho_min, rho_max = -math.inf, math.inf
     for i in range(3):
-        si = s_star[i]
+        si = float(s_star[i])
         if abs(si) < 1e-12:
             continue
-        a = (r_min[i] - surface_r[i]) / (si * dt)
-        b = (r_max[i] - surface_r[i]) / (si * dt)
+        a = (float(r_min[i]) - float(surface_r[i])) / (si * dt)
+        b = (float(r_max[i]) - float(surface_r[i])) / (si * dt)
         rho_min = max(rho_min, min(a, b))
         rho_max = min(rho_max, max(a, b))
-    return float(rho_min), float(rho_max)
+    return rho_min, rho_max
+
+
+class StepBuilder:
+    """Builds the step problems of one task under fixed options (Eqs. 25-40).
+
+    What does not change from step to step (variable names, the weights, the
+    follower's limits, the surface's box) is prepared once here; :meth:`build` then
+    does only the per-step work, in Python floats where numpy's per-call cost would
+    dominate. The builder reads ``task`` and ``options`` when it is created: make a
+    new one if either changes. :func:`build_step` is the one-off form.
+
+    Parameters
+    ----------
+    task : DualArmTask
+        Arms, object, surface and path.
+    options : StepOptions
+        Weights, limits and gains.
+
+    Raises
+    ------
+    InvalidInputError
+        ``options.joint_weights`` has neither 1 nor ``task.follower.n`` entries.
+    """
+
+    def __init__(self, task: DualArmTask, options: StepOptions) -> None:
+        follower, surface = task.follower, task.surface
+        n_f = follower.n
+        if options.joint_weights.shape[0] not in (1, n_f):
+            raise InvalidInputError(
+                f"joint_weights has {options.joint_weights.shape[0]} entries, follower has {n_f}"
+            )
+        self.task = task
+        self.options = options
+        self.n = n_f + 1
+        self.names: tuple[str, ...] = (*(f"qf{i + 1}" for i in range(n_f)), "m")
+        weights = np.empty(n_f + 1)
+        weights[:n_f] = options.joint_weights
+        weights[n_f] = options.grasp_weight
+        weights.flags.writeable = False  # shared by every problem this builder makes
+        self.weights = weights
+        # The object frame is often the leader's tool frame: skip composing with I.
+        self._H1 = None if np.array_equal(task.H1, np.eye(4)) else task.H1.tolist()
+        self._q_min = follower.q_min.tolist()
+        self._q_max = follower.q_max.tolist()
+        v_max = follower.qd_max.tolist() if options.velocity_limits else [math.inf] * n_f
+        m_max = options.grasp_speed_max if options.velocity_limits else math.inf
+        self._v_max = [*v_max, m_max]
+        self._r_min = surface.r_min.tolist()
+        self._r_max = surface.r_max.tolist()
+
+    def build(
+        self,
+        state: DualArmState,
+        ql_dot: FloatArray,
+        *,
+        leader_kin: tuple[FloatArray, FloatArray],
+        follower_kin: tuple[FloatArray, FloatArray],
+        x_prev: FloatArray | None = None,
+    ) -> StepBuild:
+        """Build the step problem for the current state; see :func:`build_step`."""
+        t_start = time.perf_counter()
+        task, options = self.task, self.options
+        surface = task.surface
+        n_f = self.n - 1
+        T_l, J_l = leader_kin
+        T_f, J_fq = follower_kin
+        sigma = state.sigma
+        dt = options.dt
+
+        # Follower target T_l H1 H2(sigma) (Eq. 15), as rows of Python floats.
+        # H2 = surface.pose(sigma), from its parts: cheaper than the 4x4 array.
+        R2 = surface.frame(sigma).tolist()
+        r2 = surface.point(sigma).tolist()
+        H2 = [[*R2[0], r2[0]], [*R2[1], r2[1]], [*R2[2], r2[2]]]
+        l_rows = T_l.tolist()
+        object_rows = l_rows if self._H1 is None else compose_rows(l_rows, self._H1)
+        target = compose_rows(object_rows, H2)
+        # R_o s* is the target's x axis (R_o = R_l R_H1, s* = R_H2 e_x).
+        column = [-target[0][0], -target[1][0], -target[2][0]]
+        if options.exact_orientation:
+            R_o = T_l[:3, :3] @ task.H1[:3, :3]
+            column += (-(R_o @ surface.angular_rate(sigma))).tolist()
+        else:
+            column += (0.0, 0.0, 0.0)
+        if not math.isfinite(sum(column)):
+            raise NonFiniteError("A")
+        # Eq. 27: leader side, J_l ql_dot with L1 + L2 = -[d]x Ja_l, d = p_target - p_l.
+        v0, v1, v2, w0, w1, w2 = (J_l @ ql_dot).tolist()
+        d0 = target[0][3] - l_rows[0][3]
+        d1 = target[1][3] - l_rows[1][3]
+        d2 = target[2][3] - l_rows[2][3]
+        rhs = [v0 + (w1 * d2 - w2 * d1), v1 + (w2 * d0 - w0 * d2), v2 + (w0 * d1 - w1 * d0),
+               w0, w1, w2]
+        err = pose_error_rows(target, T_f.tolist())
+        gain = options.correction_gain
+        b = [r + gain * e for r, e in zip(rhs, err, strict=True)] if gain > 0 else rhs
+        if not math.isfinite(sum(b)):
+            raise NonFiniteError("b")
+
+        # Eqs. 34-36 for the joints; Eqs. 30-33 for the grasp, also kept inside the
+        # path's own range; Eqs. 39-40 for the centre.
+        q = state.q_f.tolist()
+        lo = [(lo_i - q_i) / dt for lo_i, q_i in zip(self._q_min, q, strict=True)]
+        hi = [(hi_i - q_i) / dt for hi_i, q_i in zip(self._q_max, q, strict=True)]
+        s_star = (R2[0][0], R2[1][0], R2[2][0])
+        rho_min, rho_max = grasp_rate_range(r2, s_star, self._r_min, self._r_max, dt)
+        lo.append(max(rho_min, (surface.sigma_min - sigma) / dt))
+        hi.append(min(rho_max, (surface.sigma_max - sigma) / dt))
+        lower, upper, center, recovering = _clip_rates(
+            lo, hi, self._v_max, options.recovery_fraction
+        )
+
+        A = np.empty((6, n_f + 1))
+        A[:, :n_f] = J_fq
+        A[:, n_f] = column
+        # One conversion for every float output, then views of it.
+        n = self.n
+        values = np.array(b + center + lower + upper + err + rhs)
+        problem = StepProblem.trusted(
+            A, values[:6], self.weights, values[6:6 + n], values[6 + n:6 + 2 * n],
+            values[6 + 2 * n:6 + 3 * n],
+            names=self.names, x_prev=_checked_x_prev(x_prev, n),
+            build_time=time.perf_counter() - t_start,
+        )
+        e0 = 6 + 3 * n
+        return StepBuild(problem, np.array(recovering), values[e0:e0 + 6], values[e0 + 6:])
+
+
+def _checked_x_prev(x_prev: FloatArray | None, n: int) -> FloatArray | None:
+    """``x_prev`` as a float (n,) array, as :class:`StepProblem` would check it."""
+    if x_prev is None or (isinstance(x_prev, np.ndarray) and x_prev.dtype == np.float64
+                          and x_prev.shape == (n,)):
+        return x_prev
+    xp = np.asarray(x_prev, dtype=np.float64)
+    if xp.shape != (n,):
+        raise ShapeError("x_prev", (n,), xp.shape)
+    return xp
 
 
 def build_step(
@@ -207,6 +365,8 @@ def build_step(
     x_prev: FloatArray | None = None,
 ) -> StepBuild:
     """Build the step problem of Eqs. 25-40 for the current state.
+
+    One-off form of :class:`StepBuilder` (a controller keeps a builder instead).
 
     Parameters
     ----------
@@ -227,82 +387,12 @@ def build_step(
     Returns
     -------
     StepBuild
+
+    Raises
+    ------
+    NonFiniteError
+        The problem would hold NaN or infinity (e.g. a non-finite ``ql_dot``).
     """
-    t_start = time.perf_counter()
-    follower, surface = task.follower, task.surface
-    n_f = follower.n
-    if options.joint_weights.shape[0] not in (1, n_f):
-        raise InvalidInputError(
-            f"joint_weights has {options.joint_weights.shape[0]} entries, follower has {n_f}"
-        )
-    T_l, J_l = leader_kin
-    T_f, J_fq = follower_kin
-    sigma = state.sigma
-    dt = options.dt
-
-    R_o = T_l[:3, :3] @ task.H1[:3, :3]
-    H2 = surface.pose(sigma)
-    T_target = T_l @ task.H1 @ H2
-    s_star = H2[:3, 0]
-    d = T_target[:3, 3] - T_l[:3, 3]
-
-    # Eq. 26: follower side, 6 x (n_f + 1).
-    A = np.empty((6, n_f + 1))
-    A[:, :n_f] = J_fq
-    A[:3, n_f] = -(R_o @ s_star)
-    A[3:, n_f] = -(R_o @ surface.angular_rate(sigma)) if options.exact_orientation else 0.0
-
-    # Eq. 27: leader side, J_l ql_dot with L1 + L2 = -[d]x Ja_l.
-    v_l = J_l[:3] @ ql_dot
-    w_l = J_l[3:] @ ql_dot
-    rhs = np.empty(6)
-    rhs[:3] = v_l + np.array([w_l[1] * d[2] - w_l[2] * d[1],
-                              w_l[2] * d[0] - w_l[0] * d[2],
-                              w_l[0] * d[1] - w_l[1] * d[0]])
-    rhs[3:] = w_l
-    err = pose_error(T_target, T_f)
-    b = rhs + options.correction_gain * err if options.correction_gain > 0 else rhs
-
-    # Eqs. 34-36 and 39 for the joints.
-    v_max = follower.qd_max if options.velocity_limits else np.full(n_f, np.inf)
-    lo_q, hi_q, c_q, rec_q = rate_bounds(
-        state.q_f, follower.q_min, follower.q_max, v_max, dt, options.recovery_fraction
+    return StepBuilder(task, options).build(
+        state, ql_dot, leader_kin=leader_kin, follower_kin=follower_kin, x_prev=x_prev
     )
-    # Eqs. 30-33 and 40 for the grasp, also kept inside the path's own range.
-    r2 = H2[:3, 3]
-    rho_min, rho_max = grasp_rate_range(r2, s_star, surface.r_min, surface.r_max, dt)
-    rho_min = max(rho_min, (surface.sigma_min - sigma) / dt)
-    rho_max = min(rho_max, (surface.sigma_max - sigma) / dt)
-    m_max = options.grasp_speed_max if options.velocity_limits else np.inf
-    lo_m, hi_m, c_m, rec_m = rate_bounds(
-        np.zeros(1), np.array([rho_min]), np.array([rho_max]), np.array([m_max]), 1.0,
-        options.recovery_fraction,
-    )
-
-    weights = np.empty(n_f + 1)
-    weights[:n_f] = options.joint_weights
-    weights[n_f] = options.grasp_weight
-    problem = StepProblem(
-        A=A,
-        b=b,
-        weights=weights,
-        center=np.concatenate((c_q, c_m)),
-        lower=np.concatenate((lo_q, lo_m)),
-        upper=np.concatenate((hi_q, hi_m)),
-        n_grasp=1,
-        x_prev=x_prev,
-        names=_names(n_f),
-        build_time=time.perf_counter() - t_start,
-    )
-    return StepBuild(problem, np.concatenate((rec_q, rec_m)), err, rhs)
-
-
-_NAME_CACHE: dict[int, tuple[str, ...]] = {}
-
-
-def _names(n_f: int) -> tuple[str, ...]:
-    names = _NAME_CACHE.get(n_f)
-    if names is None:
-        names = (*(f"qf{i + 1}" for i in range(n_f)), "m")
-        _NAME_CACHE[n_f] = names
-    return names

@@ -18,6 +18,7 @@ Zheng and Luh holds them at zero.
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -105,6 +106,46 @@ class StepProblem:
         elif len(self.names) != n:
             raise ShapeError("names", (n,), (len(self.names),))
 
+    @classmethod
+    def trusted(
+        cls,
+        A: FloatArray,
+        b: FloatArray,
+        weights: FloatArray,
+        center: FloatArray,
+        lower: FloatArray,
+        upper: FloatArray,
+        *,
+        names: tuple[str, ...],
+        n_grasp: int = 1,
+        x_prev: FloatArray | None = None,
+        task_scale_max: float = 1.0,
+        build_time: float = 0.0,
+    ) -> StepProblem:
+        """Build a problem without the constructor's checks (for step builders only).
+
+        The constructor converts and checks every field, which costs more than a whole
+        fast solve. A builder that guarantees what it checks may skip it: every array
+        float64 of the shape listed above, ``A``, ``b``, ``weights`` and ``center``
+        finite, the bounds free of NaN, ``weights > 0``, ``0 <= n_grasp <= n`` and
+        ``len(names) == n``. The result is then equal to ``StepProblem(...)`` with the
+        same arguments. Anything else: use the constructor.
+        """
+        problem = object.__new__(cls)
+        set_field = object.__setattr__  # the dataclass is frozen
+        set_field(problem, "A", A)
+        set_field(problem, "b", b)
+        set_field(problem, "weights", weights)
+        set_field(problem, "center", center)
+        set_field(problem, "lower", lower)
+        set_field(problem, "upper", upper)
+        set_field(problem, "n_grasp", n_grasp)
+        set_field(problem, "x_prev", x_prev)
+        set_field(problem, "names", names)
+        set_field(problem, "task_scale_max", task_scale_max)
+        set_field(problem, "build_time", build_time)
+        return problem
+
     @property
     def n(self) -> int:
         """Number of variables."""
@@ -117,8 +158,10 @@ class StepProblem:
 
     def objective(self, x: FloatArray) -> float:
         """Value of Eq. 37, ``(x - c)^T S (x - c)``, at ``x``."""
-        d = x - self.center
-        return float(d @ (self.weights * d))
+        # Python floats: for a handful of variables cheaper than three numpy calls.
+        d = list(map(operator.sub, np.asarray(x, dtype=np.float64).tolist(),
+                     self.center.tolist()))
+        return float(sum(map(operator.mul, self.weights.tolist(), map(operator.mul, d, d))))
 
     def empty_bounds(self) -> tuple[str, ...]:
         """Names of the variables whose box is empty (``lower > upper``)."""
