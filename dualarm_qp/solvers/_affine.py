@@ -69,19 +69,15 @@ def affine_solutions(A: FloatArray, b: FloatArray, *, robust: bool = False
     """
     m, n = A.shape
     if n == m + 1 and not robust:
-        rhs = np.empty((m, 2))
-        rhs[:, 0] = A[:, m]
-        rhs[:, 1] = b
-        # LAPACK gesv directly: np.linalg.solve costs twice as much at this size.
-        sol, info = lapack.dgesv(A[:, :m], rhs)[2:]
+        # LAPACK gesv directly: np.linalg.solve costs twice as much at this size. The
+        # right-hand sides [a_last, b] are stacked as rows and transposed, which gives
+        # the column-major array gesv works on without a copy.
+        sol, info = lapack.dgesv(A[:, :m], np.array((A[:, m], b)).T)[2:]
         if info == 0:  # info > 0: the block is exactly singular
-            N = np.empty((n, 1))
-            N[:m, 0] = -sol[:, 0]
-            N[m, 0] = 1.0
-            x0 = np.empty(n)
-            x0[:m] = sol[:, 1]
-            x0[m] = 0.0
-            return AffineSet(x0, N, True)
+            w, x0 = sol.T.tolist()  # at this size building from lists beats slicing
+            z = [-wi for wi in w]
+            z.append(1.0)
+            return AffineSet(np.array([*x0, 0.0]), np.array(z)[:, None], True)
     U, sv, Vt = np.linalg.svd(A, full_matrices=True)
     rank = int(np.count_nonzero(sv > max(m, n) * np.finfo(float).eps * sv[0])) if m else 0
     x0 = Vt[:rank].T @ ((U[:, :rank].T @ b) / sv[:rank])

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field, replace
+import operator
+from dataclasses import dataclass, field, fields
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -50,7 +51,9 @@ class Status(str, enum.Enum):
     @property
     def usable(self) -> bool:
         """Whether ``x`` may be integrated."""
-        return self in (Status.OPTIMAL, Status.SCALED, Status.RELAXED, Status.RECOVERING)
+        # Identity tests: ``in`` on a tuple compares str-enum members as strings, slowly.
+        return (self is Status.OPTIMAL or self is Status.SCALED or self is Status.RELAXED
+                or self is Status.RECOVERING)
 
 
 @dataclass(frozen=True)
@@ -103,6 +106,10 @@ class StepSolution:
         Human-readable explanation for non-optimal outcomes.
     extras : dict
         Backend-specific details (iterations, backend status, ...).
+    verified_with : Tolerance or None
+        The tolerances :func:`verify` checked this solution against; None when it was
+        never verified. Only :func:`verify` sets it: a caller holding a solution
+        verified with its own tolerances need not verify it again.
     """
 
     x: FloatArray
@@ -118,6 +125,7 @@ class StepSolution:
     solver: str = ""
     message: str = ""
     extras: dict[str, Any] = field(default_factory=dict)
+    verified_with: Tolerance | None = None
 
     @property
     def success(self) -> bool:
@@ -137,21 +145,33 @@ class StepSolver(Protocol):
     name: str
 
     def solve(self, problem: StepProblem) -> StepSolution:
-        """Solve one step problem and return a verified solution."""
+        """Solve one step problem and return a solution passed through :func:`verify`."""
         ...
 
 
 def residuals(problem: StepProblem, x: FloatArray, scale: float = 1.0) -> tuple[float, float]:
     """Return ``(equality residual, bound violation)`` of ``x`` for ``problem``."""
-    # Python max over .tolist(): a numpy reduction costs microseconds at this size.
+    eq, viol, _ = _residuals(problem, x, x.tolist(), scale)
+    return eq, viol
+
+
+def _residuals(problem: StepProblem, x: FloatArray, xs: list[float], scale: float
+               ) -> tuple[float, float, list[list[float]]]:
+    """:func:`residuals`, and the signed bound gaps ``[lower - x, x - upper]``.
+
+    ``xs`` is ``x.tolist()``. Python floats with C-level ``map``: at this size each
+    numpy call costs more than the arithmetic.
+    """
     eq = 0.0
     if problem.m:
-        r = problem.A @ x
-        r -= problem.b if scale == 1.0 else scale * problem.b
-        rs = r.tolist()
-        eq = max(max(rs), -min(rs))
-    viol = max(0.0, max(np.maximum(problem.lower - x, x - problem.upper).tolist()))
-    return eq, viol
+        b = problem.b.tolist()
+        if scale != 1.0:
+            b = [scale * bi for bi in b]
+        eq = max(map(abs, map(operator.sub, (problem.A @ x).tolist(), b)))
+    gaps = [list(map(operator.sub, problem.lower.tolist(), xs)),
+            list(map(operator.sub, xs, problem.upper.tolist()))]
+    viol = max([0.0, *gaps[0], *gaps[1]])
+    return eq, viol, gaps
 
 
 def verify(
@@ -178,55 +198,89 @@ def verify(
     Returns
     -------
     StepSolution
-        A copy with residuals, objective and active sets filled in. A usable status
-        whose residuals exceed ``tol`` becomes VIOLATION; a non-finite ``x`` becomes
-        ERROR with ``x`` set to zero.
+        A copy with residuals, objective and active sets filled in, and
+        ``verified_with = tol``. A usable status whose residuals exceed ``tol`` becomes
+        VIOLATION; a non-finite ``x`` becomes ERROR with ``x`` set to zero.
     """
-    x = solution.x
-    n = problem.n
-    # A finite sum is the cheap common case (NaN and inf propagate through it).
-    if x.shape != (n,) or (not math.isfinite(sum(x.tolist())) and not np.isfinite(x).all()):
-        return replace(
-            solution,
-            x=np.zeros(n),
-            status=Status.ERROR if solution.status.usable else solution.status,
-            message=solution.message or "solver returned a non-finite or misshaped x",
-            build_time=problem.build_time,
-            active_lower=np.zeros(n, dtype=bool),
-            active_upper=np.zeros(n, dtype=bool),
-        )
-    eq, viol = residuals(problem, x, solution.scale)
-    status = solution.status
-    message = solution.message
-    scale_eq = tol.equality * max(1.0, max(map(abs, problem.b.tolist()), default=0.0))
-    if status.usable and status is not Status.RELAXED and eq > scale_eq:
-        status = Status.VIOLATION
-        message = message or f"equality residual {eq:.3g} exceeds tolerance {scale_eq:.3g}"
-    if status.usable and viol > tol.bounds:
-        status = Status.VIOLATION
-        worst = int(np.argmax(np.maximum(problem.lower - x, x - problem.upper)))
-        message = message or (
-            f"{problem.names[worst]} = {x[worst]:.6g} outside "
-            f"[{problem.lower[worst]:.6g}, {problem.upper[worst]:.6g}]"
-            + ("" if claims_bounds else " (this method ignores the bounds)")
-        )
-    act_tol = max(tol.bounds, 1e-9)
-    # Built field by field: dataclasses.replace costs ~5 us, a third of a fast solve.
-    return StepSolution(
-        x=x,
-        status=status,
-        objective=problem.objective(x),
-        eq_residual=eq,
-        bound_violation=viol,
-        active_lower=x <= problem.lower + act_tol,
-        active_upper=x >= problem.upper - act_tol,
-        scale=solution.scale,
-        solve_time=solution.solve_time,
-        build_time=problem.build_time,
-        solver=solution.solver,
-        message=message,
-        extras=solution.extras,
+    return verified_solution(
+        problem, solution.x, solution.status, tol=tol, claims_bounds=claims_bounds,
+        scale=solution.scale, solve_time=solution.solve_time, solver=solution.solver,
+        message=solution.message, extras=solution.extras,
     )
+
+
+def verified_solution(
+    problem: StepProblem,
+    x: FloatArray,
+    status: Status,
+    *,
+    solver: str,
+    tol: Tolerance = DEFAULT_TOLERANCE,
+    claims_bounds: bool = True,
+    scale: float = 1.0,
+    solve_time: float = 0.0,
+    message: str = "",
+    extras: dict[str, Any] | None = None,
+) -> StepSolution:
+    """Verify a solver's answer ``x`` with the ``status`` it claims; what solvers return.
+
+    Equal to ``verify(problem, StepSolution(x=x, status=status, ...), tol)`` (the
+    keywords are the :class:`StepSolution` fields of the same names), without building
+    the unverified solution first.
+    """
+    n = problem.n
+    extras = {} if extras is None else extras
+    xs: list[float] = x.tolist() if isinstance(x, np.ndarray) and x.shape == (n,) else []
+    # A finite sum is the cheap common case (NaN and inf propagate through it).
+    if len(xs) != n or (not math.isfinite(sum(xs)) and not np.isfinite(x).all()):
+        return _solution(
+            x=np.zeros(n), status=Status.ERROR if status.usable else status,
+            objective=math.nan, eq_residual=math.nan, bound_violation=math.nan,
+            active_lower=np.zeros(n, dtype=bool), active_upper=np.zeros(n, dtype=bool),
+            scale=scale, solve_time=solve_time, build_time=problem.build_time,
+            solver=solver, message=message or "solver returned a non-finite or misshaped x",
+            extras=extras, verified_with=tol,
+        )
+    eq, viol, gaps = _residuals(problem, x, xs, scale)
+    if status.usable:
+        scale_eq = tol.equality * max(1.0, max(map(abs, problem.b.tolist()), default=0.0))
+        if status is not Status.RELAXED and eq > scale_eq:
+            status = Status.VIOLATION
+            message = message or f"equality residual {eq:.3g} exceeds tolerance {scale_eq:.3g}"
+        if viol > tol.bounds:
+            status = Status.VIOLATION
+            worst = int(np.argmax(np.maximum(problem.lower - x, x - problem.upper)))
+            message = message or (
+                f"{problem.names[worst]} = {x[worst]:.6g} outside "
+                f"[{problem.lower[worst]:.6g}, {problem.upper[worst]:.6g}]"
+                + ("" if claims_bounds else " (this method ignores the bounds)")
+            )
+    # A bound is active when x is within act_tol of it (or beyond): its gap >= -act_tol.
+    active = np.array(gaps) >= -max(tol.bounds, 1e-9)
+    return _solution(
+        x=x, status=status, objective=problem.objective(x), eq_residual=eq,
+        bound_violation=viol, active_lower=active[0], active_upper=active[1], scale=scale,
+        solve_time=solve_time, build_time=problem.build_time, solver=solver,
+        message=message, extras=extras, verified_with=tol,
+    )
+
+
+_SOLUTION_FIELDS = frozenset(f.name for f in fields(StepSolution))
+
+
+def _solution(**values: Any) -> StepSolution:
+    """``StepSolution(**values)`` for values of every field, built at once.
+
+    The frozen dataclass's ``__init__`` sets its 14 fields one ``object.__setattr__``
+    call at a time, which costs more than a fast solve's arithmetic. The class has no
+    ``__post_init__`` and no slots, so filling ``__dict__`` gives the same object.
+    """
+    if values.keys() != _SOLUTION_FIELDS:
+        raise TypeError(f"StepSolution fields missing or unknown: "
+                        f"{sorted(_SOLUTION_FIELDS.symmetric_difference(values))}")
+    solution = object.__new__(StepSolution)
+    solution.__dict__.update(values)
+    return solution
 
 
 def failed(problem: StepProblem, status: Status, solver: str, message: str,

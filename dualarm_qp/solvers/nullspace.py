@@ -14,6 +14,7 @@ INFEASIBLE with the conflicting bounds in ``message`` and ``extras["conflicts"]`
 
 from __future__ import annotations
 
+import operator
 import time
 from typing import Any
 
@@ -23,7 +24,14 @@ from numpy.typing import NDArray
 from ..step.problem import StepProblem
 from ._affine import PIVOT_GROWTH_LIMIT, AffineSet, affine_solutions, max_task_scale
 from ._util import bound_label, empty_box_failure
-from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed, verify
+from .base import (
+    DEFAULT_TOLERANCE,
+    Status,
+    StepSolution,
+    Tolerance,
+    failed,
+    verified_solution,
+)
 from .registry import register
 
 FloatArray = NDArray[np.float64]
@@ -54,7 +62,9 @@ class NullspaceSolver:
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve one step exactly; see the module docstring."""
         start = time.perf_counter()
-        empty = empty_box_failure(problem, self.name)
+        lower, upper = problem.lower.tolist(), problem.upper.tolist()
+        empty = (empty_box_failure(problem, self.name)
+                 if any(map(operator.gt, lower, upper)) else None)
         if empty is not None:
             return empty
         extras: dict[str, Any] = {}
@@ -69,7 +79,7 @@ class NullspaceSolver:
                               time.perf_counter() - start, conflicts=())
             growth = 0.0
             if aff.N.shape[1] <= 1:
-                x, conflicts, growth = self._interval(problem, aff)
+                x, conflicts, growth = self._interval(problem, aff, lower, upper)
             else:
                 x, conflicts, extras["iterations"] = self._active_set(problem)
             # The pivoted x0 may be large and cancel in x0 + t z: redo with the SVD.
@@ -86,19 +96,19 @@ class NullspaceSolver:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "no x meets A x = b within the bounds; conflicting bounds: "
                           + ", ".join(conflicts), elapsed, conflicts=conflicts, **extras)
-        return verify(problem, StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
-                                            solve_time=elapsed, extras=extras), self.tol)
+        return verified_solution(problem, x, Status.OPTIMAL, solver=self.name, tol=self.tol,
+                                 solve_time=elapsed, extras=extras)
 
-    def _interval(self, problem: StepProblem, aff: AffineSet
-                  ) -> tuple[FloatArray | None, tuple[str, ...], float]:
+    def _interval(self, problem: StepProblem, aff: AffineSet, los: list[float],
+                  ups: list[float]) -> tuple[FloatArray | None, tuple[str, ...], float]:
         """Minimise over ``x = x0 + t z``: clamp the scalar minimiser to the bound interval.
 
-        Returns ``(x or None, conflicts, growth)`` with ``growth = max|x0| / max|x|``.
-        Plain Python floats: at n = 7 each numpy call costs more than the arithmetic.
+        ``los`` and ``ups`` are the bounds as lists. Returns ``(x or None, conflicts,
+        growth)`` with ``growth = max|x0| / max|x|``. Plain Python floats: at n = 7
+        each numpy call costs more than the arithmetic.
         """
         xs = aff.x0.tolist()
         zs = aff.N[:, 0].tolist() if aff.N.shape[1] else [0.0] * len(xs)
-        los, ups = problem.lower.tolist(), problem.upper.tolist()
         z_max = max(max(zs), -min(zs))
         z_tiny = 1e-13 * z_max
         tol = self.feasibility_tol
