@@ -238,7 +238,7 @@ class ControllerSpec(_Model):
     grasp_speed_max: float | None = None
     correction_gain: float = 0.0
     leader_gain: float = 0.0
-    recovery_fraction: float = 0.5
+    recovery_fraction: float = 0.0
     policy: Literal["scale", "relax", "stop"] = "scale"
     exact_orientation: bool = False
     projection: bool = True

@@ -77,8 +77,11 @@ class StepOptions:
         ``b = J_l ql_dot + K e``; 0 disables it. ``1/dt`` removes the whole error in one
         step (to first order).
     recovery_fraction : float
-        A variable that starts outside its range must move back at least at this
-        fraction of its speed limit (or all the way in one step when unlimited).
+        A variable that starts outside its range may never move further out; its
+        centre (Eq. 39/40) pulls it back. With ``recovery_fraction > 0`` it must also
+        move back at least at this fraction of its speed limit (or all the way in one
+        step when unlimited). Default 0: a forced return rate can make a step
+        infeasible (the box then excludes every motion the equality allows).
     exact_orientation : bool
         Keep the curvature term of the grasp frame in J_f (see module docstring).
     """
@@ -89,7 +92,7 @@ class StepOptions:
     velocity_limits: bool = True
     grasp_speed_max: float = float("inf")
     correction_gain: float = 0.0
-    recovery_fraction: float = 0.5
+    recovery_fraction: float = 0.0
     exact_orientation: bool = False
 
     def __post_init__(self) -> None:
@@ -103,8 +106,8 @@ class StepOptions:
             raise InvalidInputError("grasp_speed_max must be positive")
         if not (np.isfinite(self.correction_gain) and self.correction_gain >= 0):
             raise InvalidInputError("correction_gain must be a finite number >= 0 [1/s]")
-        if not 0 < self.recovery_fraction <= 1:
-            raise InvalidInputError("recovery_fraction must be in (0, 1]")
+        if not 0 <= self.recovery_fraction <= 1:
+            raise InvalidInputError("recovery_fraction must be in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -181,12 +184,15 @@ def _clip_rates(
     inf = math.inf
     for lo_i, hi_i, v_i in zip(lo, hi, v_max, strict=True):
         center.append(0.5 * (lo_i + hi_i) if -inf < lo_i < inf and -inf < hi_i < inf else 0.0)
-        if lo_i > 0.0:  # below the box: must move up, at least at the recovery speed
-            lower.append(min(lo_i, recovery_fraction * v_i))
+        # Below the box: may not move further down; with a recovery fraction it must
+        # move up at least at that share of its speed limit. Above the box: mirrored.
+        rec = recovery_fraction * v_i if recovery_fraction > 0.0 else 0.0
+        if lo_i > 0.0:
+            lower.append(min(lo_i, rec))
         else:
             lower.append(max(lo_i, -v_i))
-        if hi_i < 0.0:  # above the box: must move down
-            upper.append(max(hi_i, -(recovery_fraction * v_i)))
+        if hi_i < 0.0:
+            upper.append(max(hi_i, -rec))
         else:
             upper.append(min(hi_i, v_i))
         recovering.append(lo_i > 0.0 or hi_i < 0.0)

@@ -15,7 +15,7 @@ from dualarm_qp.solvers import get_solver
 from dualarm_qp.task.scene import DualArmTask
 
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_sliding_s7_100.yaml"
-QD_SLOW = np.array([0.05, 0.05, 0.05, 0.1, 0.1, 0.1])  # rad/s: too slow for 32 mm/s at times
+QD_SLOW = np.array([0.02, 0.02, 0.02, 0.05, 0.05, 0.05])  # rad/s: too slow for 32 mm/s
 
 
 def slow_experiment():

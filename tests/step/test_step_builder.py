@@ -116,7 +116,7 @@ def _rate_bounds_vectorised(x, x_min, x_max, v_max, dt, recovery_fraction):
     lower = np.maximum(lo, -v_max)
     upper = np.minimum(hi, v_max)
     below, above = lo > 0.0, hi < 0.0
-    rec = recovery_fraction * v_max
+    rec = recovery_fraction * v_max if recovery_fraction > 0 else np.zeros_like(v_max)
     lower = np.where(below, np.minimum(lo, rec), lower)
     upper = np.where(above, np.maximum(hi, -rec), upper)
     return lower, upper, center, below | above
@@ -130,11 +130,12 @@ def test_rate_bounds_match_the_vectorised_formula(seed):
     x_min = np.where(rng.random(n) < 0.2, -np.inf, rng.normal(size=n) - 1.0)
     x_max = np.where(rng.random(n) < 0.2, np.inf, rng.normal(size=n) + 1.0)
     v_max = np.where(rng.random(n) < 0.3, np.inf, rng.uniform(0.5, 3.0, n))
-    got = rate_bounds(x, x_min, x_max, v_max, 0.05, 0.5)
-    want = _rate_bounds_vectorised(x, x_min, x_max, v_max, 0.05, 0.5)
-    for g, w in zip(got, want, strict=True):
-        assert g.shape == w.shape and g.dtype == w.dtype
-        np.testing.assert_array_equal(g, w)
+    for fraction in (0.0, 0.5):
+        got = rate_bounds(x, x_min, x_max, v_max, 0.05, fraction)
+        want = _rate_bounds_vectorised(x, x_min, x_max, v_max, 0.05, fraction)
+        for g, w in zip(got, want, strict=True):
+            assert g.shape == w.shape and g.dtype == w.dtype
+            np.testing.assert_array_equal(g, w)
 
 
 def test_row_helpers_match_numpy():
