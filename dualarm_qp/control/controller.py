@@ -196,7 +196,7 @@ class DualArmController:
         t4 = time.perf_counter()
 
         status = solution.status
-        if status is Status.OPTIMAL and build.recovering.any():
+        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovering.any():
             status = Status.RECOVERING
             solution = replace(solution, status=status)
         if not self._hard_bounds and status is Status.VIOLATION:

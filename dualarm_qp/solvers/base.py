@@ -22,15 +22,20 @@ class Status(str, enum.Enum):
     OPTIMAL
         ``A x = b`` and the bounds hold within tolerance, and ``x`` minimises Eq. 37
         (for the reference solver: over the equality alone).
+    FEASIBLE
+        ``A x = b`` and the bounds hold within tolerance, but ``x`` is not claimed to
+        minimise Eq. 37 (SNS; the fixed-grasp method, which holds ``m = 0``).
     SCALED
-        The full task was infeasible; ``A x = scale * b`` holds with the largest
-        ``scale`` in [0, 1] for which the bounds can be met.
+        The full task was infeasible; ``A x = scale * b`` holds while the bounds hold.
+        The exact solvers under the "scale" policy use the largest such ``scale`` in
+        [0, 1]; SNS uses the scale its saturation sequence reaches.
     RELAXED
         The full task was infeasible; the equality was met in weighted least squares
         while the bounds hold.
     RECOVERING
-        The state started outside a box; the solution moves it back toward the box at
-        a bounded rate (set by the step builder, reported by the controller).
+        The state started outside a box; the solution never moves it further out and
+        the range centres pull it back (set by the step builder, reported by the
+        controller in place of OPTIMAL or FEASIBLE).
     VIOLATION
         The solver returned a point that breaks a bound (or the equality) beyond
         tolerance. The reference method does this by design: it ignores the bounds.
@@ -41,6 +46,7 @@ class Status(str, enum.Enum):
     """
 
     OPTIMAL = "optimal"
+    FEASIBLE = "feasible"
     SCALED = "scaled"
     RELAXED = "relaxed"
     RECOVERING = "recovering"
@@ -52,8 +58,8 @@ class Status(str, enum.Enum):
     def usable(self) -> bool:
         """Whether ``x`` may be integrated."""
         # Identity tests: ``in`` on a tuple compares str-enum members as strings, slowly.
-        return (self is Status.OPTIMAL or self is Status.SCALED or self is Status.RELAXED
-                or self is Status.RECOVERING)
+        return (self is Status.OPTIMAL or self is Status.FEASIBLE or self is Status.SCALED
+                or self is Status.RELAXED or self is Status.RECOVERING)
 
 
 @dataclass(frozen=True)

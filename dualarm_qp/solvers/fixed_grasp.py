@@ -44,7 +44,7 @@ class FixedGraspSolver:
         x = np.zeros(problem.n)
         x[:q] = c + inv_sqrt * y
         elapsed = time.perf_counter() - start
-        return verify(problem, StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+        return verify(problem, StepSolution(x=x, status=Status.FEASIBLE, solver=self.name,
                                             solve_time=elapsed, extras={"grasp_fixed": True}),
                       self.tol, claims_bounds=False)
 

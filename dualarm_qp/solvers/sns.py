@@ -84,7 +84,14 @@ class SNSSolver:
                           "no task scale in [0, task_scale_max] meets the bounds; "
                           f"saturated: {', '.join(saturated) or 'none'}",
                           elapsed, conflicts=saturated)
-        status = Status.OPTIMAL if scale >= 1.0 else Status.SCALED
+        # Nothing saturated while centring: SNS then returns the weighted least-distance
+        # point itself, the minimiser of Eq. 37; otherwise it only claims feasibility.
+        if scale < 1.0:
+            status = Status.SCALED
+        elif centring and not saturated:
+            status = Status.OPTIMAL
+        else:
+            status = Status.FEASIBLE
         return verify(problem, StepSolution(
             x=np.clip(x, problem.lower, problem.upper), status=status, scale=scale,
             solver=self.name, solve_time=elapsed,

@@ -83,7 +83,9 @@ def test_pinched_grasp_gives_the_fixed_grasp_step(name: str) -> None:
         pinched = StepProblem(A=p.A, b=p.b, weights=p.weights, center=p.center,
                               lower=lower, upper=upper)
         sol = get_solver(name).solve(pinched)
-        assert sol.status is Status.OPTIMAL, sol.message
+        # SNS saturates m at 0 and then only claims feasibility (the point is the same).
+        expected = Status.FEASIBLE if name == "sns" else Status.OPTIMAL
+        assert sol.status is expected, sol.message
         assert relative_error(sol.x, x_fixed) < 1e-6
 
 
@@ -94,11 +96,13 @@ def test_sns_never_claims_a_wrong_point(
     for problem, ref in instances:
         sol = solver.solve(problem)
         if sol.status.usable:
-            assert sol.status in (Status.OPTIMAL, Status.SCALED)
+            assert sol.status in (Status.OPTIMAL, Status.FEASIBLE, Status.SCALED)
             assert sol.bound_violation <= 1e-9
             assert sol.eq_residual <= 1e-9
-            if sol.status is Status.OPTIMAL:  # same constraints as the QP: not better
+            if sol.status is Status.FEASIBLE:  # same constraints as the QP: not better
                 assert problem.objective(sol.x) >= problem.objective(ref) * (1 - 1e-9)
+            if sol.status is Status.OPTIMAL:  # claims the optimum: it is the optimum
+                assert relative_error(sol.x, ref) < 1e-6
         else:
             assert sol.status is Status.INFEASIBLE
             assert np.isfinite(sol.x).all()
@@ -117,11 +121,11 @@ def test_sns_meets_the_full_task_when_the_state_is_inside_its_limits() -> None:
         problem = StepProblem(A=p.A, b=p.b, weights=p.weights, center=p.center,
                               lower=np.minimum(p.lower, 0.0), upper=np.maximum(p.upper, 0.0))
         sol = solver.solve(problem)
-        assert sol.status in (Status.OPTIMAL, Status.SCALED), sol.message
+        assert sol.status in (Status.OPTIMAL, Status.FEASIBLE, Status.SCALED), sol.message
         assert sol.bound_violation <= 1e-9
         assert sol.eq_residual <= 1e-9
         assert sol.scale <= lp_max_scale(problem) + 1e-9
-        full += sol.status is Status.OPTIMAL
+        full += sol.status is not Status.SCALED
     assert full >= 0.7 * N_INSTANCES
 
 
