@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dualarm_qp._io import jsonable
 from dualarm_qp.bench.runner import machine_info
-from dualarm_qp.bench.store import jsonable
 from dualarm_qp.bench.suite import (
     PROFILES,
     format_suite_table,

@@ -9,18 +9,16 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._io import atomic_write_with, jsonable, write_text
+from .._io import write_json as _write_json_file
 from .runner import STATUSES
-from .store import jsonable
 
 #: Columns of ``bench.csv``, in order.
 COLUMNS: tuple[str, ...] = (
@@ -142,18 +140,6 @@ def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> s
                      for row in cells)
 
 
-def _atomic_text(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:
     """One row per (configuration, solver); SI units; empty cells for missing values."""
     buf = io.StringIO()
@@ -165,14 +151,14 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:
             v = jsonable(r.get(col))
             out.append("" if v is None else repr(v) if isinstance(v, float) else str(v))
         w.writerow(out)
-    _atomic_text(path, buf.getvalue())
+    write_text(path, buf.getvalue())
 
 
 def write_json(path: Path, rows: Sequence[dict[str, Any]], meta: dict[str, Any]) -> None:
     """``{"meta": ..., "rows": [...]}`` with non-finite numbers as null."""
     doc = {"meta": meta, "columns": list(COLUMNS),
            "rows": [{k: r.get(k) for k in COLUMNS} for r in rows]}
-    _atomic_text(path, json.dumps(jsonable(doc), indent=2) + "\n")
+    _write_json_file(path, doc)
 
 
 def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
@@ -206,15 +192,10 @@ def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
                            "(success rate)")
     axes[0, 0].legend(fontsize=7, loc="lower right", ncol=5)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
+        atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     finally:
         plt.close(fig)
-        Path(tmp).unlink(missing_ok=True)
 
 
 def write_report(out_dir: Path, records: Sequence[dict[str, Any]], meta: dict[str, Any],

@@ -9,30 +9,11 @@ from the file) so that the next append starts on a fresh line.
 from __future__ import annotations
 
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` with numpy types turned into Python ones and non-finite floats into None."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, (np.floating, float)):
-        f = float(value)
-        return f if math.isfinite(f) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
+from .._io import jsonable
 
 
 def append_result(path: Path, record: dict[str, Any]) -> None:

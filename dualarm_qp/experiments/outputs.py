@@ -1,91 +1,18 @@
-"""Writing run outputs: CSV trace, JSON summary, plots. Every file is written atomically.
-
-A file is written to a temporary name in the same folder and renamed into place, so a
-run that fails or is interrupted never leaves a half-written file behind: a reader sees
-either the previous complete file or the new complete one.
-"""
+"""Writing run outputs: the CSV trace and the JSON summary, each file atomically."""
 
 from __future__ import annotations
 
 import csv
 import io
-import json
-import math
-import os
-import tempfile
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 
+from .._io import atomic_open, atomic_write_with, write_json
 from ..control.rollout import Trace
 
-
-def _umask_mode() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
-@contextmanager
-def atomic_open(path: Path) -> Iterator[IO[str]]:
-    """Open a temporary text file beside ``path``; rename it onto ``path`` on success."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            yield fh
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def atomic_write_with(path: Path, writer: Callable[[str], None]) -> None:
-    """Let ``writer(tmp_path)`` write a file (e.g. a plot), then rename it onto ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        writer(tmp)
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, (np.floating, float)):
-        f = float(value)
-        return f if math.isfinite(f) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
-
-
-def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Write ``data`` as indented JSON (non-finite numbers become null)."""
-    text = json.dumps(_jsonable(data), indent=2, sort_keys=False)
-    with atomic_open(path) as fh:
-        fh.write(text + "\n")
+__all__ = ["atomic_open", "atomic_write_with", "trace_columns", "write_json", "write_trace_csv"]
 
 
 def trace_columns(trace: Trace) -> dict[str, Any]:
