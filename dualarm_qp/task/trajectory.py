@@ -323,26 +323,21 @@ class WaypointTrajectory(Trajectory):
 
     def twist(self, t: float) -> FloatArray:
         """``[s_dot dp; s_dot R_k w_k]`` [m/s; rad/s]; zero outside ``[t0, tf]``."""
-        loc = self._locate(_time(t, "t"))
-        out = np.zeros(6)
-        if loc is None:
-            return out
-        k, tau, dt = loc
-        _, dp, _, _, w_world, _ = self._segments[k]
-        sd = min_jerk(tau)[1] / dt
-        out[:3] = sd * dp
-        out[3:] = sd * w_world
-        return out
+        return self._derivative(t, 1)
 
     def acceleration(self, t: float) -> FloatArray:
         """``[s_ddot dp; s_ddot R_k w_k]`` [m/s^2; rad/s^2]; zero outside ``[t0, tf]``."""
+        return self._derivative(t, 2)
+
+    def _derivative(self, t: float, order: int) -> FloatArray:
+        """Return the ``order``-th time derivative (1 or 2) of the pose as a 6-vector."""
         loc = self._locate(_time(t, "t"))
         out = np.zeros(6)
         if loc is None:
             return out
         k, tau, dt = loc
         _, dp, _, _, w_world, _ = self._segments[k]
-        sdd = min_jerk(tau)[2] / (dt * dt)
-        out[:3] = sdd * dp
-        out[3:] = sdd * w_world
+        rate = min_jerk(tau)[order] / dt**order
+        out[:3] = rate * dp
+        out[3:] = rate * w_world
         return out
