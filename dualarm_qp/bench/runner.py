@@ -217,7 +217,8 @@ def canonical_steps(config: BenchConfig, settings: BenchSettings) -> list[StepPr
     ctrl = _RecordingController(exp.task, get_solver(CANONICAL_SOLVER, **_opts(exp)),
                                 exp.options, leader_gain=exp.leader_gain, policy=exp.policy,
                                 tolerance=settings.tolerance)
-    rollout(ctrl, exp.initial, duration=exp.duration)
+    rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
+            closure_tolerance=exp.closure_tolerance)
     return ctrl.problems
 
 
@@ -254,7 +255,8 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
         ctrl = DualArmController(exp.task, get_solver(solver, **opts), exp.options,
                                  leader_gain=exp.leader_gain, policy=exp.policy,
                                  tolerance=settings.tolerance)
-        runs.append(rollout(ctrl, exp.initial, duration=exp.duration))
+        runs.append(rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
+                            closure_tolerance=exp.closure_tolerance))
     first = runs[0]
     tr = first.trace
     counts = Counter(tr.status)

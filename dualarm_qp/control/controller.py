@@ -8,6 +8,7 @@ arms, the grasp coordinate and the path time; apply ``ql_dot`` to the leader,
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 
@@ -15,17 +16,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, NonFiniteError, SolverNotFoundError
 from ..se3 import compose_rows, pose_error_rows
 from ..solvers.base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, verify
-from ..solvers.policy import Policy, solve_step
+from ..solvers.policy import POLICIES, Policy, solve_step
 from ..solvers.registry import solver_info
 from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
 from ..task.scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
 
-POLICIES: tuple[Policy, ...] = ("scale", "relax", "stop")
 
 
 @dataclass(frozen=True)
@@ -97,8 +97,8 @@ class DualArmController:
         Any solver from the registry (``dualarm_qp.solvers.get_solver``).
     options : StepOptions
         Step-problem settings (dt, weights, limits, correction gain).
-    leader_gain : float
-        Feedback gain [1/s] of the leader's tracking of ``D(t)``.
+    leader_gain : float, optional
+        Feedback gain [1/s] of the leader's tracking of ``D(t)``; default ``1/dt``.
     policy : {"scale", "relax", "stop"}
         What to do with an infeasible step (see :func:`dualarm_qp.solvers.solve_step`).
     tolerance : Tolerance
@@ -111,12 +111,14 @@ class DualArmController:
         solver: StepSolver,
         options: StepOptions,
         *,
-        leader_gain: float = 0.0,
+        leader_gain: float | None = None,
         policy: Policy = "scale",
         tolerance: Tolerance = DEFAULT_TOLERANCE,
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
+        if leader_gain is None:
+            leader_gain = 1.0 / options.dt
         if not (np.isfinite(leader_gain) and leader_gain >= 0):
             raise InvalidInputError("leader_gain must be a finite number >= 0 [1/s]")
         self.task = task
@@ -127,7 +129,7 @@ class DualArmController:
         self.tolerance = tolerance
         try:
             self._hard_bounds = solver_info(solver.name).hard_bounds
-        except Exception:  # a solver not from the registry: assume it claims the bounds
+        except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
             self._hard_bounds = True
         self._builder = StepBuilder(task, options)
         # The object frame is often the leader's tool frame: skip composing with I.
@@ -170,14 +172,34 @@ class DualArmController:
             ql_dot = np.linalg.lstsq(J_l, twist, rcond=None)[0]
         return ql_dot, np.array(err)
 
+    def _checked(self, state: DualArmState) -> DualArmState:
+        """``state`` with float arrays of the right lengths, or a clear error."""
+        q_l = self.task.leader.check_q(state.q_l, "leader joints q_l")
+        q_f = self.task.follower.check_q(state.q_f, "follower joints q_f")
+        try:
+            t, sigma = float(state.t), float(state.sigma)
+        except (TypeError, ValueError) as err:
+            raise InvalidInputError(f"state t and sigma must be numbers: {err}") from err
+        if not (math.isfinite(t) and math.isfinite(sigma)):
+            raise NonFiniteError("state t or sigma")
+        if q_l is state.q_l and q_f is state.q_f and t is state.t and sigma is state.sigma:
+            return state
+        return DualArmState(t, q_l, q_f, sigma)
+
     def step(self, state: DualArmState) -> ControlOutput:
         """Compute one step's command from the measured ``state``.
 
         Never raises for an infeasible step under the "scale" and "relax" policies:
         the status says what happened. Under "stop" an infeasible step raises
         :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting bounds.
+
+        Raises
+        ------
+        ShapeError, NonFiniteError, InvalidInputError
+            A joint vector of the wrong length or with NaN, a non-finite grasp or time.
         """
         t0 = time.perf_counter()
+        state = self._checked(state)
         leader_kin = self.task.leader.fk_jacobian(state.q_l)
         follower_kin = self.task.follower.fk_jacobian(state.q_f)
         t1 = time.perf_counter()

@@ -169,9 +169,10 @@ def rollout(
     duration: float,
     reresolve_orientation: bool | None = None,
     project: bool = True,
+    closure_tolerance: tuple[float, float] = (1e-3, 1e-2),
     progress: Callable[[int, int], None] | None = None,
 ) -> RolloutResult:
-    """Run ``controller`` from ``initial`` for ``duration`` seconds of wall time.
+    """Run ``controller`` from ``initial`` for ``duration`` seconds of simulated time.
 
     Each sample: the controller computes the command from the current state; the
     leader integrates ``ql_dot * dt``, the follower ``qf_dot * dt`` and the grasp
@@ -200,6 +201,12 @@ def rollout(
         controller does not use the exact orientation Jacobian.
     project : bool
         Correct the integration drift of both arms after every step (see above).
+        Corrections that do not converge are counted in the summary
+        (``projection_failures``).
+    closure_tolerance : tuple of float
+        ``(position [m], rotation [rad])``: a sample whose grasp closure error exceeds
+        either stops the run as failed ("grasp closure lost"): the object would be
+        torn or dropped. Default (1 mm, 0.01 rad).
     progress : callable, optional
         Called as ``progress(done, total)`` after every sample.
 
@@ -227,8 +234,12 @@ def rollout(
             getattr(surface, "curved", False)
         )
         reresolve_orientation = curved and not controller.options.exact_orientation
+    tol_pos, tol_rot = closure_tolerance
+    if not (tol_pos > 0 and tol_rot > 0):
+        raise InvalidInputError(f"closure_tolerance must be positive, got {closure_tolerance}")
     controller.reset()
     completed, message = True, ""
+    projection_failures = 0
     k = 0
     for k in range(rows):
         state = DualArmState(tau, q_l, q_f, sigma)
@@ -238,6 +249,13 @@ def rollout(
             completed, message = False, f"step {k} at t = {t_wall:.4f} s: {err}"
             break
         _record(tr, k, t_wall, state, out, controller)
+        if tr.closure_pos_err[k] > tol_pos or tr.closure_rot_err[k] > tol_rot:
+            completed = False
+            message = (f"step {k} at t = {t_wall:.4f} s: grasp closure lost: "
+                       f"{tr.closure_pos_err[k]:.3g} m, {tr.closure_rot_err[k]:.3g} rad "
+                       f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
+            k += 1
+            break
         if not out.applied:
             completed = False
             message = (f"step {k} at t = {t_wall:.4f} s: solver status "
@@ -257,24 +275,27 @@ def rollout(
         if reresolve_orientation:
             q_f = _reresolve(controller, q_l, q_f, sigma)
         if project:
-            q_l = _project(leader, task.leader_target(tau), q_l)
-            q_f = _project(follower, task.follower_target(q_l, sigma), q_f)
+            q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
+            q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
+            projection_failures += (not ok_l) + (not ok_f)
     trace = tr if k >= rows else tr.truncate(k)
-    return RolloutResult(trace, completed and k >= rows, message, controller.solver.name, dt)
+    return RolloutResult(trace, completed and k >= rows, message, controller.solver.name, dt,
+                         extras={"projection": project,
+                                 "projection_failures": projection_failures,
+                                 "closure_tolerance_m_rad": list(closure_tolerance)})
 
 
-def _project(arm: SerialArm, T_target: FloatArray, q: FloatArray) -> FloatArray:
-    """Move ``q`` onto ``T_target`` by Gauss-Newton from the integrated guess.
+def _project(arm: SerialArm, T_target: FloatArray, q: FloatArray) -> tuple[FloatArray, bool]:
+    """Move ``q`` onto ``T_target`` by damped Gauss-Newton from the integrated guess.
 
     Joint limits are not imposed here: the step's bounds already kept the joints in
     range, and the correction is of the order of the integration error (``dt^2``).
-    A correction that does not converge (a singular arm) leaves ``q`` as it was.
+    Returns the corrected joints (never worse than ``q``: only steps that lower the
+    error are taken) and whether the correction converged to 1e-9 m and rad.
     """
     res = ik_dls(arm, T_target, q, tol_pos=1e-12, tol_rot=1e-12, max_iter=5,
                  respect_limits=False, raise_on_failure=False)
-    if res.position_error <= 1e-9 and res.rotation_error <= 1e-9:
-        return res.q
-    return q
+    return res.q, res.position_error <= 1e-9 and res.rotation_error <= 1e-9
 
 
 def _reresolve(controller: DualArmController, q_l: FloatArray, q_f: FloatArray,

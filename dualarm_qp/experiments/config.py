@@ -227,8 +227,11 @@ class WeightsSpec(_Model):
 class ControllerSpec(_Model):
     """Sampling, limits, weights and gains of the controller.
 
-    ``correction_gain`` and ``leader_gain`` are in 1/(time unit); ``projection`` turns on
-    the rollout's position-level drift correction after each step.
+    ``correction_gain`` and ``leader_gain`` are in 1/(time unit), default ``1/dt``;
+    ``centre_horizon`` (time unit, default ``dt``, the paper's) is how fast the range
+    centres pull; ``projection`` turns on the rollout's position-level drift correction
+    after each step; ``closure_tolerance: [length, angle]`` (default 1 mm and 0.01 rad)
+    stops a run whose grasp closure error exceeds it.
     """
 
     dt: float
@@ -236,22 +239,42 @@ class ControllerSpec(_Model):
     weights: WeightsSpec = Field(default_factory=WeightsSpec)
     velocity_limits: bool = True
     grasp_speed_max: float | None = None
-    correction_gain: float = 0.0
-    leader_gain: float = 0.0
+    correction_gain: float | None = None
+    leader_gain: float | None = None
+    centre_horizon: float | None = None
     recovery_fraction: float = 0.0
     policy: Literal["scale", "relax", "stop"] = "scale"
     exact_orientation: bool = False
     projection: bool = True
+    closure_tolerance: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
 
-    @model_validator(mode="after")
-    def _positive(self) -> ControllerSpec:
-        if not (math.isfinite(self.dt) and self.dt > 0):
-            raise ValueError("dt must be a positive number")
-        if not (math.isfinite(self.duration) and self.duration > 0):
-            raise ValueError("duration must be a positive number")
-        if self.correction_gain < 0 or self.leader_gain < 0:
-            raise ValueError("gains must be >= 0")
-        return self
+    @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max")
+    @classmethod
+    def _positive_time(cls, v: float | None) -> float | None:
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise ValueError("must be a positive number")
+        return v
+
+    @field_validator("correction_gain", "leader_gain")
+    @classmethod
+    def _non_negative(cls, v: float | None) -> float | None:
+        if v is not None and not (math.isfinite(v) and v >= 0):
+            raise ValueError("must be a finite number >= 0")
+        return v
+
+    @field_validator("recovery_fraction")
+    @classmethod
+    def _fraction(cls, v: float) -> float:
+        if not 0 <= v <= 1:
+            raise ValueError("must be in [0, 1]")
+        return v
+
+    @field_validator("closure_tolerance")
+    @classmethod
+    def _tolerance(cls, v: list[float] | None) -> list[float] | None:
+        if v is not None and not all(math.isfinite(x) and x > 0 for x in v):
+            raise ValueError("must be two positive numbers [length, angle]")
+        return v
 
 
 class SolverSpec(_Model):
@@ -317,7 +340,10 @@ def parse_config(data: Any, path: str = "<config>") -> ExperimentConfig:
     try:
         return ExperimentConfig.model_validate(data)
     except ValidationError as err:
-        first = err.errors()[0]
+        # An unknown key first (a misspelt required key is also "missing"), then bad
+        # values, then missing keys.
+        rank = {"extra_forbidden": 0, "missing": 2}
+        first = min(err.errors(), key=lambda e: rank.get(e["type"], 1))
         loc = tuple(first["loc"])
         # Drop pydantic's union/literal tags from the location.
         clean = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith(
@@ -335,7 +361,11 @@ def parse_config(data: Any, path: str = "<config>") -> ExperimentConfig:
                               valid=[s.strip(" '\"") for s in
                                      str(first["ctx"]["expected"]).replace(" or ", ",").split(",")]
                               ) from None
-        raise ConfigError(f"{msg} (got {first.get('input')!r})", path=path, key=key) from None
+        msg = msg.removeprefix("Value error, ")
+        got = first.get("input")
+        if not isinstance(got, (dict, list)):  # a whole section would drown the message
+            msg = f"{msg} (got {got!r})"
+        raise ConfigError(msg, path=path, key=key) from None
 
 
 def load_config(path: str | Path) -> ExperimentConfig:

@@ -87,6 +87,7 @@ def run_experiment(
     t0 = time.perf_counter()
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
+                         closure_tolerance=exp.closure_tolerance,
                          progress=update)
     finally:
         if bar is not None:
@@ -121,6 +122,7 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
             "leader_gain_1_s": exp.leader_gain,
             "exact_orientation": opts.exact_orientation,
             "closure_projection": exp.project,
+            "centre_horizon_s": opts.centre_horizon,
         },
         "reconstruction": exp.notes,
         **result.summary(),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,6 +13,7 @@ from ..control.controller import DualArmController
 from ..errors import ConfigError, DualArmError
 from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.puma560 import puma560
+from ..kinematics.puma_ik import ik_branch, puma560_ik
 from ..se3 import make_pose, rot_x, rot_y, rot_z
 from ..solvers.policy import Policy
 from ..solvers.registry import get_solver
@@ -62,6 +63,8 @@ class Experiment:
         Run length [s].
     project : bool
         Position-level drift correction in the rollout.
+    closure_tolerance : tuple of float
+        Largest grasp closure error ``(m, rad)`` a run may reach before it is stopped.
     notes : dict
         Reconstruction facts worth reporting (leader IK branch, follower base, ...).
     """
@@ -77,6 +80,7 @@ class Experiment:
     policy: Policy
     duration: float
     project: bool = True
+    closure_tolerance: tuple[float, float] = (1e-3, 1e-2)
     notes: dict[str, Any] = field(default_factory=dict)
 
     def controller(self) -> DualArmController:
@@ -100,12 +104,27 @@ def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
     return make_pose(R, np.asarray(spec.position, dtype=float) * sc.length)
 
 
+T = TypeVar("T")
+
+
+def _required(value: T | None, key: str, path: str | None = None) -> T:
+    """``value``, which the schema guarantees; a clear error if it is missing anyway."""
+    if value is None:
+        raise ConfigError("missing required key", path=path, key=key)
+    return value
+
+
 def _vec(values: list[float] | None, scale: float, n: int, key: str, path: str) -> Any:
     if values is None:
         return None
     if len(values) != n:
         raise ConfigError(f"needs {n} values, got {len(values)}", path=path, key=key)
-    return np.asarray(values, dtype=float) * scale
+    arr = np.asarray(values, dtype=float) * scale
+    if not np.isfinite(arr).all() and not key.endswith(("q_min", "q_max", "qd_max")):
+        raise ConfigError("values must be finite numbers", path=path, key=key)
+    if np.isnan(arr).any():
+        raise ConfigError("values must not be NaN", path=path, key=key)
+    return arr
 
 
 def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: str) -> SerialArm:
@@ -115,10 +134,10 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
         n = 6
         dh = arm.dh
     else:
-        assert spec.dh is not None  # guaranteed by the model validator
-        rows = np.asarray(spec.dh.rows, dtype=float)
+        dh_spec = _required(spec.dh, f"{role}.dh", path)
+        rows = np.asarray(dh_spec.rows, dtype=float)
         scale = np.array([sc.length, sc.angle, sc.length, sc.angle][: rows.shape[1]])
-        dh = DHTable.from_rows(rows * scale, spec.dh.convention)
+        dh = DHTable.from_rows(rows * scale, dh_spec.convention)
         n = dh.n
         arm = SerialArm(dh, base=base, tool=tool, name=role)
     q_min = _vec(spec.q_min, sc.angle, n, f"{role}.q_min", path)
@@ -144,9 +163,8 @@ def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
         r_max = (np.array([0.0, 0.0, 0.4]) if s.r_max is None
                  else np.asarray(s.r_max, dtype=float) * sc.length)
         return PlaneBar(r_min=r_min, r_max=r_max)
-    assert s.radius is not None and s.grasp_range is not None  # checked by the schema
-    radius = s.radius * sc.length
-    lo, hi = (v * sc.length for v in s.grasp_range)
+    radius = _required(s.radius, "object.surface.radius") * sc.length
+    lo, hi = (v * sc.length for v in _required(s.grasp_range, "object.surface.grasp_range"))
     if s.type == "cylinder":
         azimuth = 0.0 if s.azimuth is None else s.azimuth * sc.angle
         return CylinderSurface(radius, azimuth=azimuth, sigma_min=lo, sigma_max=hi)
@@ -156,13 +174,13 @@ def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
 def _trajectory(cfg: ExperimentConfig, sc: Scales, duration: float) -> Trajectory:
     tr = cfg.trajectory
     if tr.type == "linear":
-        assert tr.start is not None and tr.velocity is not None
-        T0 = _pose(tr.start, sc)
-        v = np.asarray(tr.velocity, dtype=float) * (sc.length / sc.time)
+        T0 = _pose(_required(tr.start, "trajectory.start"), sc)
+        v = np.asarray(_required(tr.velocity, "trajectory.velocity"), dtype=float) * (
+            sc.length / sc.time)
         return LinearTrajectory(T0[:3, 3], v, R0=T0[:3, :3], t0=0.0, tf=duration)
-    assert tr.waypoints is not None
-    times = [w.t * sc.time for w in tr.waypoints]
-    poses = [_pose(w.pose, sc) for w in tr.waypoints]
+    waypoints = _required(tr.waypoints, "trajectory.waypoints")
+    times = [w.t * sc.time for w in waypoints]
+    poses = [_pose(w.pose, sc) for w in waypoints]
     return WaypointTrajectory(times, poses)
 
 
@@ -242,10 +260,13 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         velocity_limits=c.velocity_limits,
         grasp_speed_max=math.inf if c.grasp_speed_max is None
         else c.grasp_speed_max * sc.length / sc.time,
-        correction_gain=c.correction_gain / sc.time,
+        correction_gain=None if c.correction_gain is None else c.correction_gain / sc.time,
         recovery_fraction=c.recovery_fraction,
         exact_orientation=c.exact_orientation,
+        centre_horizon=None if c.centre_horizon is None else c.centre_horizon * sc.time,
     )
+    closure_tolerance = (1e-3, 1e-2) if c.closure_tolerance is None else (
+        c.closure_tolerance[0] * sc.length, c.closure_tolerance[1] * sc.angle)
     return Experiment(
         name=cfg.name,
         path=path,
@@ -254,10 +275,11 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         options=options,
         solver_name=solver or cfg.solver.name,
         solver_options=dict(cfg.solver.options),
-        leader_gain=c.leader_gain / sc.time,
+        leader_gain=1.0 / dt if c.leader_gain is None else c.leader_gain / sc.time,
         policy=c.policy,
         duration=duration,
         project=c.projection,
+        closure_tolerance=closure_tolerance,
         notes=notes,
     )
 
@@ -269,14 +291,11 @@ def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: 
     if spec.joints is not None:
         q = _vec(spec.joints, sc.angle, leader.n, "leader.initial.joints", path)
         return np.asarray(q)
-    assert spec.ik_branch is not None
+    b = _required(spec.ik_branch, "leader.initial.ik_branch", path)
     if cfg.leader.preset != "puma560":
         raise ConfigError("ik_branch needs the puma560 preset; give 'joints' for a DH arm",
                           path=path, key="leader.initial.ik_branch")
-    from ..kinematics.puma_ik import ik_branch, puma560_ik
-
     T = task.leader_target(task.trajectory.t0)
-    b = spec.ik_branch
     try:
         sol = ik_branch(leader, T, b.arm, b.elbow, b.wrist)
     except DualArmError as err:

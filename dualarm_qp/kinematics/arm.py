@@ -202,6 +202,9 @@ class SerialArm:
         InvalidInputError
             ``q`` is not numeric.
         """
+        if (isinstance(q, np.ndarray) and q.shape == (self.n,) and q.dtype == np.float64
+                and math.isfinite(sum(q.tolist()))):
+            return q  # the common case, checked cheaply
         return as_array(q, name, (self.n,))
 
     def within_limits(self, q: FloatArray, tol: float = 0.0) -> bool:

@@ -47,11 +47,28 @@ class ReferenceSolver:
                           time.perf_counter() - start)
         P = np.eye(problem.n) - A_pinv @ A  # projector onto the null space of A
         x_min_norm = A_pinv @ b
-        zhat = np.linalg.pinv(P @ S @ P) @ P @ S @ (problem.center - x_min_norm)
+        zhat = _psd_pinv(P @ S @ P, problem.n - problem.m) @ P @ S @ (
+            problem.center - x_min_norm)
         x = x_min_norm + P @ zhat
         elapsed = time.perf_counter() - start
         return verify(problem, StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
                                             solve_time=elapsed), self.tol, claims_bounds=False)
+
+
+def _psd_pinv(M: np.ndarray, rank: int) -> np.ndarray:
+    """Pseudoinverse of the symmetric PSD ``M`` whose exact rank is known.
+
+    ``P S P`` has rank ``n - m`` (the null-space dimension of a full-rank ``A``); its
+    other eigenvalues are rounding noise of order ``eps |S|``. A pseudoinverse with a
+    relative cut-off (``np.linalg.pinv``'s default) inverts that noise when the null
+    space is small or ``S`` is large, and returns an arbitrary, huge ``zhat``: keep
+    exactly the ``rank`` largest eigenvalues instead.
+    """
+    if rank <= 0:
+        return np.zeros_like(M)
+    w, V = np.linalg.eigh(0.5 * (M + M.T))
+    Vk = V[:, -rank:]
+    return (Vk / w[-rank:]) @ Vk.T
 
 
 register("reference", ReferenceSolver,

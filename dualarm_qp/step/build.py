@@ -72,10 +72,15 @@ class StepOptions:
         limit (the paper's closing remark). Default True.
     grasp_speed_max : float
         Limit on ``|m|`` [m/s]; ``inf`` for none.
-    correction_gain : float
+    correction_gain : float, optional
         Gain ``K`` [1/s] of the closure-error feedback added to the right-hand side,
-        ``b = J_l ql_dot + K e``; 0 disables it. ``1/dt`` removes the whole error in one
-        step (to first order).
+        ``b = J_l ql_dot + K e``; 0 disables it. Default ``1/dt``, which removes the
+        whole error in one step (to first order).
+    centre_horizon : float, optional
+        Time [s] in which the range centres of Eqs. 39-40 ask each variable to reach the
+        middle of its range: the centre rate is ``(middle - x) / centre_horizon``.
+        Default ``dt``, the paper's choice; the centring pull per step then does not
+        shrink with ``dt``. A longer horizon makes the centring gentler.
     recovery_fraction : float
         A variable that starts outside its range may never move further out; its
         centre (Eq. 39/40) pulls it back. With ``recovery_fraction > 0`` it must also
@@ -91,9 +96,10 @@ class StepOptions:
     grasp_weight: float
     velocity_limits: bool = True
     grasp_speed_max: float = float("inf")
-    correction_gain: float = 0.0
+    correction_gain: float | None = None
     recovery_fraction: float = 0.0
     exact_orientation: bool = False
+    centre_horizon: float | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -104,8 +110,14 @@ class StepOptions:
         object.__setattr__(self, "joint_weights", w)
         if not self.grasp_speed_max > 0:
             raise InvalidInputError("grasp_speed_max must be positive")
-        if not (np.isfinite(self.correction_gain) and self.correction_gain >= 0):
+        if self.correction_gain is None:
+            object.__setattr__(self, "correction_gain", 1.0 / self.dt)
+        elif not (np.isfinite(self.correction_gain) and self.correction_gain >= 0):
             raise InvalidInputError("correction_gain must be a finite number >= 0 [1/s]")
+        if self.centre_horizon is None:
+            object.__setattr__(self, "centre_horizon", self.dt)
+        elif not (np.isfinite(self.centre_horizon) and self.centre_horizon > 0):
+            raise InvalidInputError("centre_horizon must be a positive number of seconds")
         if not 0 <= self.recovery_fraction <= 1:
             raise InvalidInputError("recovery_fraction must be in [0, 1]")
 
@@ -315,7 +327,7 @@ class StepBuilder:
         rhs = [v0 + (w1 * d2 - w2 * d1), v1 + (w2 * d0 - w0 * d2), v2 + (w0 * d1 - w1 * d0),
                w0, w1, w2]
         err = pose_error_rows(target, T_f.tolist())
-        gain = options.correction_gain
+        gain = float(options.correction_gain or 0.0)
         b = [r + gain * e for r, e in zip(rhs, err, strict=True)] if gain > 0 else rhs
         if not math.isfinite(sum(b)):
             raise NonFiniteError("b")
@@ -332,6 +344,10 @@ class StepBuilder:
         lower, upper, center, recovering = _clip_rates(
             lo, hi, self._v_max, options.recovery_fraction
         )
+        horizon = options.centre_horizon or dt
+        if horizon != dt:  # the centre rates were computed for dt
+            ratio = dt / horizon
+            center = [c * ratio for c in center]
 
         A = np.empty((6, n_f + 1))
         A[:, :n_f] = J_fq

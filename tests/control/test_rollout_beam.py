@@ -12,6 +12,7 @@ from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.solvers import available_solvers, get_solver
 from dualarm_qp.step.build import build_step
+from dualarm_qp.step.problem import StepProblem
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -51,19 +52,28 @@ def test_drift_without_correction_is_measured_and_feedback_alone_bounds_it():
     assert np.max(fb.closure_pos_err) < np.max(free.closure_pos_err) / 100
 
 
-def test_reference_with_grasp_held_is_the_fixed_grasp_answer():
-    """m = 0: when the fixed-grasp rates are the centre, the reference step returns them."""
+@pytest.mark.parametrize("seed", range(3))
+def test_reference_with_grasp_held_is_the_fixed_grasp_answer(seed):
+    """m = 0: the paper's step on Eq. 25 without the sliding column is Zheng-Luh's."""
     exp = experiment()
     ctrl = exp.controller()
     task, st = exp.task, exp.initial
-    lk, fk = task.leader.fk_jacobian(st.q_l), task.follower.fk_jacobian(st.q_f)
+    rng = np.random.default_rng(seed)
+    q_l = st.q_l + rng.normal(scale=0.05, size=6)
+    lk = task.leader.fk_jacobian(q_l)
+    fk = task.follower.fk_jacobian(st.q_f)
     ql_dot, _ = ctrl.leader_rates(st.t, *lk)
-    prob = build_step(task, st, ql_dot, exp.options, leader_kin=lk, follower_kin=fk).problem
+    prob = build_step(task, dataclasses.replace(st, q_l=q_l), ql_dot, exp.options,
+                      leader_kin=lk, follower_kin=fk).problem
     fixed = get_solver("fixed_grasp").solve(prob).x
     assert fixed[6] == 0.0
-    prob_c = dataclasses.replace(prob, center=fixed)
-    ref = get_solver("reference").solve(prob_c).x
-    np.testing.assert_allclose(ref, fixed, rtol=0, atol=1e-12)
+    held = StepProblem(A=prob.A[:, :6], b=prob.b, weights=prob.weights[:6],
+                       center=prob.center[:6], lower=prob.lower[:6], upper=prob.upper[:6],
+                       n_grasp=0)
+    ref = get_solver("reference").solve(held).x
+    np.testing.assert_allclose(ref, fixed[:6], rtol=1e-12, atol=1e-12)
+    # Independent check: the follower's own 6x6 Jacobian equation.
+    np.testing.assert_allclose(fk[1] @ fixed[:6], prob.b, atol=1e-10)
     # And as s7 grows with the grasp centre at 0, the reference tends to the fixed grasp.
     gaps = []
     for s7 in (1e4, 1e8):
@@ -118,3 +128,29 @@ def test_exact_solvers_trajectories_agree(limited_runs):
         tr = limited_runs[s][1].trace
         np.testing.assert_allclose(tr.q_f, ref.q_f, atol=1e-6, err_msg=s)
         np.testing.assert_allclose(tr.grasp, ref.grasp, atol=1e-7, err_msg=s)
+
+
+def test_lost_closure_stops_the_run_as_failed():
+    """The reference's first-sample jump without drift correction tears the grasp open."""
+    exp = experiment(correction_gain=0.0)
+    res = rollout(exp.controller(), exp.initial, duration=exp.duration, project=False,
+                  closure_tolerance=exp.closure_tolerance)
+    assert not res.completed
+    assert "grasp closure lost" in res.message
+    assert len(res.trace) == 2  # the start and the sample where the closure was lost
+    assert res.trace.closure_pos_err[-1] > 1e-3
+    # With the default correction the same run completes, and says how it corrected.
+    exp = experiment()
+    ok = rollout(exp.controller(), exp.initial, duration=exp.duration, project=exp.project,
+                 closure_tolerance=exp.closure_tolerance)
+    summary = ok.summary()
+    assert ok.completed and summary["projection"] is True
+    assert summary["projection_failures"] == 0
+
+
+def test_applied_joint_motion_respects_speed_limits(limited_runs):
+    """The joints actually applied (integration plus drift correction), not only commands."""
+    for solver, (exp, res) in limited_runs.items():
+        applied = np.diff(res.trace.q_f, axis=0) / exp.options.dt
+        assert np.all(np.abs(applied) <= exp.task.follower.qd_max + 1e-6), solver
+        assert np.all(np.abs(np.diff(res.trace.grasp)) / exp.options.dt <= 0.1 + 1e-9), solver

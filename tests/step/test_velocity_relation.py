@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from dualarm_qp import puma560
+from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.se3 import exp_so3, inv_pose, make_pose, pose_error
 from dualarm_qp.step.build import DualArmState, StepOptions, build_step, grasp_rate_range
 from dualarm_qp.task.scene import DualArmTask
@@ -126,11 +127,34 @@ def test_closure_correction_term_is_gain_times_error():
               follower_kin=task.follower.fk_jacobian(q_f_off))
     state = DualArmState(0.0, q_l, q_f_off, sigma)
     plain = build_step(task, state, np.zeros(6), StepOptions(
-        dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0), **kw)
+        dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0, correction_gain=0.0), **kw)
     corr = build_step(task, state, np.zeros(6), StepOptions(
         dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0, correction_gain=20.0), **kw)
     np.testing.assert_allclose(corr.problem.b - plain.problem.b, 20.0 * corr.closure_error)
     np.testing.assert_allclose(corr.closure_error, closure(task, q_l, q_f_off, sigma))
+    # The default gain is 1/dt: the whole error in one step, to first order.
+    default = build_step(task, state, np.zeros(6), StepOptions(
+        dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0), **kw)
+    np.testing.assert_allclose(default.problem.b - plain.problem.b, 100.0 * corr.closure_error)
+
+
+def test_centre_horizon_scales_the_centre_rates():
+    rng = np.random.default_rng(6)
+    task, q_l, q_f, sigma = random_task(PlaneBar(), rng)
+    kw = dict(leader_kin=task.leader.fk_jacobian(q_l),
+              follower_kin=task.follower.fk_jacobian(q_f))
+    state = DualArmState(0.0, q_l, q_f, sigma)
+    base = dict(dt=0.01, joint_weights=np.ones(6), grasp_weight=1.0)
+    paper = build_step(task, state, np.zeros(6), StepOptions(**base), **kw).problem
+    slow = build_step(task, state, np.zeros(6), StepOptions(**base, centre_horizon=0.5),
+                      **kw).problem
+    # Eq. 39: (middle - q) / dT; with a horizon H: (middle - q) / H.
+    middle = 0.5 * (task.follower.q_min + task.follower.q_max)
+    np.testing.assert_allclose(paper.center[:6], (middle - q_f) / 0.01)
+    np.testing.assert_allclose(slow.center, paper.center * 0.01 / 0.5)
+    np.testing.assert_array_equal(slow.lower, paper.lower)
+    with pytest.raises(InvalidInputError):
+        StepOptions(**base, centre_horizon=0.0)
 
 
 def test_start_outside_box_is_recovering_and_never_moves_further_out():

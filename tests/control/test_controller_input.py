@@ -1,0 +1,42 @@
+"""The controller used on its own: measured states are checked, not trusted."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dualarm_qp.errors import DualArmError, NonFiniteError, ShapeError
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.step.build import DualArmState
+
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_sliding_s7_100.yaml"
+
+
+@pytest.fixture(scope="module")
+def exp():
+    return build_experiment(load_config(CONFIG), solver="nullspace")
+
+
+def test_plain_lists_are_accepted(exp):
+    st = exp.initial
+    out = exp.controller().step(DualArmState(0, list(st.q_l), st.q_f.tolist(), 0.45))
+    ref = exp.controller().step(st)
+    np.testing.assert_array_equal(out.qf_dot, ref.qf_dot)
+    assert out.m == ref.m
+
+
+@pytest.mark.parametrize(("q_l", "q_f", "sigma", "error", "text"), [
+    (np.zeros(5), None, 0.45, ShapeError, "leader joints q_l"),
+    (None, np.zeros(7), 0.45, ShapeError, "follower joints q_f"),
+    (None, np.full(6, np.nan), 0.45, NonFiniteError, "follower joints q_f"),
+    (None, None, float("nan"), NonFiniteError, "sigma"),
+    (None, ["a"] * 6, 0.45, DualArmError, "follower joints q_f"),
+])
+def test_bad_states_raise_clear_errors(exp, q_l, q_f, sigma, error, text):
+    st = exp.initial
+    bad = DualArmState(0.0, st.q_l if q_l is None else q_l, st.q_f if q_f is None else q_f,
+                       sigma)
+    with pytest.raises(error, match=text):
+        exp.controller().step(bad)
