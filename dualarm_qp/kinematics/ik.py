@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import IKError, InvalidInputError
-from ..se3 import rotation_error
+from ..se3 import pose_error_rows
 from .arm import FloatArray, SerialArm, checked_pose
 
 #: Bounds on the adaptive damping factor ``mu`` (see the module docstring).
@@ -198,35 +198,7 @@ def ik_dls(
 
 
 def _pose_error(T_target: FloatArray, T: FloatArray) -> tuple[FloatArray, float, float]:
-    """``e = [p* - p; log(R* R^T)]`` and the norms of its two halves ([m], [rad]).
-
-    Equal to :func:`dualarm_qp.se3.pose_error`, written with scalar math because it runs
-    every iteration.
-    """
-    a = T_target.tolist()
-    b = T.tolist()
-    dp0, dp1, dp2 = a[0][3] - b[0][3], a[1][3] - b[1][3], a[2][3] - b[2][3]
-    # M = R* R^T: M_ij = sum_k a_ik b_jk.
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-
-    def dot3(x: list[float], y: list[float]) -> float:
-        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
-
-    m00, m11, m22 = dot3(a0, b0), dot3(a1, b1), dot3(a2, b2)
-    v0 = dot3(a2, b1) - dot3(a1, b2)  # M21 - M12
-    v1 = dot3(a0, b2) - dot3(a2, b0)  # M02 - M20
-    v2 = dot3(a1, b0) - dot3(a0, b1)  # M10 - M01
-    sin_t = 0.5 * math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    cos_t = 0.5 * (m00 + m11 + m22 - 1.0)
-    theta = math.atan2(sin_t, cos_t)
-    if theta < 1e-6:
-        k = 0.5 * (1.0 + theta * theta / 6.0)
-    elif math.pi - theta > 1e-4:
-        k = theta / (2.0 * sin_t)
-    else:  # near pi the antisymmetric part loses the axis: use the careful version
-        w = rotation_error(T_target[:3, :3], T[:3, :3])
-        e = np.array([dp0, dp1, dp2, w[0], w[1], w[2]])
-        return e, math.sqrt(dp0 * dp0 + dp1 * dp1 + dp2 * dp2), theta
-    e = np.array([dp0, dp1, dp2, k * v0, k * v1, k * v2])
-    return e, math.sqrt(dp0 * dp0 + dp1 * dp1 + dp2 * dp2), theta
+    """``e = [p* - p; log(R* R^T)]`` and the norms of its two halves ([m], [rad])."""
+    e = pose_error_rows(T_target.tolist(), T.tolist())
+    return (np.array(e), math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]),
+            math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))

@@ -10,7 +10,10 @@ solver's own failure (the solver is at fault, not the step). An infeasible step 
     (closed form for a one-dimensional null space, an LP otherwise), then the solver on
     the task ``s b``; status SCALED with ``solution.scale = s``. If the solver fails on
     that (degenerate) problem, the feasible point found with ``s`` is returned. If not
-    even ``s = 0`` is feasible, falls back to ``"relax"``.
+    even ``s = 0`` is feasible, falls back to ``"relax"``. The whole right-hand side is
+    scaled, so a closure-correction term in ``b`` is slowed with the task (at ``s = 0``
+    the step holds still and corrects nothing; the rollout's drift projection still
+    does).
 ``"relax"``
     ``min ||A x - b||^2 + eps ||x - c||_S^2 / max(S)`` over the box (bounded least
     squares, BVLS): the bounds hold, the task is met in least squares; status RELAXED.

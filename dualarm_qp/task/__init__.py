@@ -1,6 +1,7 @@
 """The task layer: surfaces, the sliding grasp path, Case 2 support and trajectories ``D(t)``.
 
-Sits above the kinematics and below the step problem; it needs no arm model.
+Sits above the kinematics and below the step problem. Surfaces, support and
+trajectories need no arm model; :mod:`.scene` ties them to the two arms.
 """
 
 from .support import (

@@ -114,3 +114,34 @@ def test_invalid_leader_branch_lists_the_valid_ones():
     d["leader"]["initial"]["ik_branch"] = {"arm": -1, "elbow": -1, "wrist": -1}
     with pytest.raises(ConfigError, match="valid: arm="):
         build_experiment(parse_config(d), "x.yaml")
+
+
+def test_misspelt_required_key_is_named_with_the_valid_keys(tmp_path):
+    d = paper_dict()
+    d["controller"]["dtt"] = d["controller"].pop("dt")
+    path = tmp_path / "typo.yaml"
+    path.write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert "controller.dtt" in str(info.value) and "valid: dt," in str(info.value)
+
+
+def test_nan_joints_and_bad_values_name_their_key(tmp_path):
+    d = paper_dict()
+    d["follower"]["initial"]["joints"][2] = float("nan")
+    with pytest.raises(ConfigError, match=r"follower\.initial\.joints"):
+        build_experiment(parse_config(d), "x.yaml")
+    d = paper_dict()
+    d["controller"]["dt"] = -0.031
+    with pytest.raises(ConfigError) as info:
+        parse_config(d, "x.yaml")
+    msg = str(info.value)
+    assert "controller.dt" in msg and "positive" in msg and "weights" not in msg
+
+
+def test_bundled_configs_are_the_repository_configs():
+    """`dualarm-qp reproduce` runs the package's copies: they must be these files."""
+    from dualarm_qp.experiments.reproduce import CASES, bundled_config
+
+    for _, name in CASES:
+        assert bundled_config(name).read_bytes() == (CONFIGS / name).read_bytes()
