@@ -13,13 +13,29 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from . import __version__
-from .errors import DualArmError
+from .errors import DualArmError, InvalidInputError
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def _err(msg: str) -> None:
     print(f"dualarm-qp: error: {msg}", file=sys.stderr)
+
+
+def _output_folder(path: str | Path) -> Path:
+    """Create the output folder, or say plainly why it cannot be (bad input, exit 2)."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".write-test"
+        probe.touch()
+        probe.unlink()
+    except OSError as err:
+        reason = err.strerror or str(err)
+        if isinstance(err, (FileExistsError, NotADirectoryError)):
+            reason = "a file is in the way"
+        raise InvalidInputError(f"cannot write the output folder {out}: {reason}") from None
+    return out
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -29,8 +45,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     exp = build_experiment(load_config(args.config), str(args.config), solver=args.solver)
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
-    out = Path(args.out) if args.out else Path("runs") / exp.name / exp.solver_name.replace(
-        ":", "_")
+    out = _output_folder(args.out if args.out else Path("runs") / exp.name
+                         / exp.solver_name.replace(":", "_"))
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                              plots=not args.no_plots)
     s = outcome.summary
@@ -38,8 +54,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
           f"{'completed' if outcome.ok else 'FAILED'}")
     print(f"  closure error max: {s['closure_pos_err_max_m']:.3g} m, "
           f"{s['closure_rot_err_max_rad']:.3g} rad")
+    start = s["margin_qf_start_rad"]
     print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
-          f"smallest follower joint margin {s['margin_qf_min_rad']:.4f} rad")
+          f"follower joint margin at start {start:.4f} rad"
+          + (" (starts outside its range)" if start < 0 else "")
+          + f", smallest after {s['margin_qf_min_after_start_rad']:.4f} rad")
     print(f"  statuses: {s['status_counts']}; step time median "
           f"{s['step_time_median_s'] * 1e6:.0f} us")
     print(f"  outputs: {out}/")
@@ -52,7 +71,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .experiments.reproduce import reproduce
 
-    rep = reproduce(args.out, config_dir=args.configs, progress=None if not args.quiet else False)
+    rep = reproduce(_output_folder(args.out), config_dir=args.configs,
+                    progress=None if not args.quiet else False)
     print(f"Reproduction of Suh & Shin (1988), Sec. 4 -> {args.out}/")
     for label, run in rep.runs.items():
         c = rep.checks[label]
@@ -71,16 +91,21 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 def _cmd_solvers(args: argparse.Namespace) -> int:
     from .solvers import list_solvers
 
-    rows = list_solvers()
-    width = max(len(r.name) for r in rows)
-    for r in rows:
-        if r.available:
-            state = "available"
-        else:
-            state = f"not installed: pip install 'dualarm-qp[{r.extra}]'" if r.extra else \
-                "not available"
-        bounds = "hard bounds" if r.hard_bounds else "bounds not enforced"
-        print(f"{r.name:<{width}}  {state:<44} {bounds:<20} {r.description}")
+    table = [("SOLVER", "INSTALLED", "BOUNDS", "METHOD")]
+    missing = []
+    for r in list_solvers():
+        table.append((r.name, "yes" if r.available else "no",
+                      "hard" if r.hard_bounds else "not enforced", r.description))
+        if not r.available:
+            missing.append(f"  {r.name:<14} pip install 'dualarm-qp[{r.extra}]'" if r.extra
+                           else f"  {r.name:<14} not available")
+    widths = [max(len(row[i]) for row in table) for i in range(3)]
+    for row in table:
+        print("  ".join(cell.ljust(w) for cell, w in zip(row[:3], widths, strict=True))
+              + "  " + row[3])
+    if missing:
+        print("\nTo install a missing backend:")
+        print("\n".join(missing))
     return EXIT_OK
 
 
@@ -94,7 +119,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     solvers = [s.strip() for s in args.solvers.split(",") if s.strip()] if args.solvers \
         else available_solvers()
     settings = BenchSettings(repeat=args.repeat, duration=args.duration)
-    out = Path(args.out)
+    out = _output_folder(args.out)
     result = run_bench(configs, solvers, out, settings=settings,
                        log=None if args.quiet else lambda line: print(line, file=sys.stderr))
     meta = {"machine": result.machine, "settings": settings.as_dict(),

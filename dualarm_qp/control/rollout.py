@@ -139,6 +139,8 @@ class RolloutResult:
             "grasp_min_m": fmin(tr.grasp),
             "grasp_max_m": fmax(tr.grasp),
             "margin_qf_min_rad": fmin(tr.margin_qf),
+            "margin_qf_start_rad": fmin(tr.margin_qf[:1]),
+            "margin_qf_min_after_start_rad": fmin(tr.margin_qf[1:]),
             "margin_qf_min_per_joint_rad": [fmin(tr.margin_qf[:, j])
                                             for j in range(tr.margin_qf.shape[1])],
             "margin_ql_min_rad": fmin(tr.margin_ql),
@@ -170,6 +172,7 @@ def rollout(
     reresolve_orientation: bool | None = None,
     project: bool = True,
     closure_tolerance: tuple[float, float] = (1e-3, 1e-2),
+    stall_time: float = 1.0,
     progress: Callable[[int, int], None] | None = None,
 ) -> RolloutResult:
     """Run ``controller`` from ``initial`` for ``duration`` seconds of simulated time.
@@ -207,6 +210,9 @@ def rollout(
         ``(position [m], rotation [rad])``: a sample whose grasp closure error exceeds
         either stops the run as failed ("grasp closure lost"): the object would be
         torn or dropped. Default (1 mm, 0.01 rad).
+    stall_time : float
+        A run whose path time has not advanced for this long [s] (every step scaled
+        to 0: the task cannot move at all) stops as failed ("path stalled").
     progress : callable, optional
         Called as ``progress(done, total)`` after every sample.
 
@@ -240,6 +246,7 @@ def rollout(
     controller.reset()
     completed, message = True, ""
     projection_failures = 0
+    stalled_since = t_wall
     k = 0
     for k in range(rows):
         state = DualArmState(tau, q_l, q_f, sigma)
@@ -254,6 +261,15 @@ def rollout(
             message = (f"step {k} at t = {t_wall:.4f} s: grasp closure lost: "
                        f"{tr.closure_pos_err[k]:.3g} m, {tr.closure_rot_err[k]:.3g} rad "
                        f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
+            k += 1
+            break
+        if out.scale > 0.0:
+            stalled_since = t_wall
+        elif t_wall - stalled_since >= stall_time - 1e-9:
+            completed = False
+            message = (f"step {k} at t = {t_wall:.4f} s: path stalled: the task could not "
+                       f"move for {t_wall - stalled_since:.3g} s (task scale 0); last "
+                       f"solver message: {out.solution.message}")
             k += 1
             break
         if not out.applied:

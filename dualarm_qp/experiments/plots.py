@@ -70,6 +70,8 @@ def plot_closure(path: Path, trace: Trace, title: str = "") -> None:
     floor = 1e-16
     ax.semilogy(trace.t, np.maximum(trace.closure_pos_err, floor), label="position [m]")
     ax.semilogy(trace.t, np.maximum(trace.closure_rot_err, floor), label="rotation [rad]")
+    ax.axhline(1e-12, color="0.5", ls=":", lw=0.9,
+               label="drift-correction tolerance (1e-12)")
     ax.set_xlabel("t [s]")
     ax.set_ylabel("closure error")
     ax.legend(fontsize=8)
@@ -80,20 +82,50 @@ def plot_closure(path: Path, trace: Trace, title: str = "") -> None:
 
 def plot_compare(path: Path, traces: Sequence[tuple[str, Trace]], column: str,
                  *, joint: int | None = None, limits: tuple[float, float] | None = None,
-                 ylabel: str = "", title: str = "", scale: float = 1.0) -> None:
-    """One quantity of several runs on one axis (e.g. the paper's Figs. 5 and 6)."""
+                 ylabel: str = "", title: str = "", scale: float = 1.0,
+                 note: str = "") -> None:
+    """One quantity of several runs on one axis (e.g. the paper's Figs. 5 and 6).
+
+    The axis spans the data; a range limit (dashed) far outside the data is named in
+    the legend instead of squeezing the curves.
+    """
     fig, ax = plt.subplots(figsize=(7, 4))
+    lo, hi = np.inf, -np.inf
     for label, tr in traces:
         y = getattr(tr, column)
         if joint is not None:
             y = y[:, joint]
         ax.plot(tr.t, y * scale, label=label)
+        if y.size:
+            lo, hi = min(lo, float(np.nanmin(y))), max(hi, float(np.nanmax(y)))
+    lo, hi = lo * scale, hi * scale
+    if scale < 0:
+        lo, hi = hi, lo
+    span = max(hi - lo, 1e-9)
+    pad = 0.08 * span
+    view = (lo - pad, hi + pad)
     if limits is not None:
+        shown: list[float] = []
+        hidden: list[float] = []
         for lim in limits:
-            ax.axhline(lim * scale, color="C3", ls="--", lw=0.9)
+            v = lim * scale
+            near = lo - 0.5 * span <= v <= hi + 0.5 * span
+            (shown if near else hidden).append(v)
+        for v in shown:
+            view = (min(view[0], v - pad), max(view[1], v + pad))
+            ax.axhline(v, color="C3", ls="--", lw=0.9)
+        if shown:
+            ax.plot([], [], color="C3", ls="--", lw=0.9,
+                    label="range limit " + ", ".join(f"{v:.4g}" for v in shown))
+        if hidden:
+            ax.plot([], [], color="none",
+                    label="off the axis: limit " + ", ".join(f"{v:.4g}" for v in hidden))
+    ax.set_ylim(*view)
     ax.set_xlabel("t [s]")
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.05 if note else 0, 1, 1))
+    if note:
+        fig.text(0.01, 0.015, note, fontsize=7, color="0.3")
     _save(fig, path)

@@ -28,6 +28,10 @@ def bundled_config(name: str) -> Path:
     return Path(str(resources.files("dualarm_qp") / "data" / name))
 
 
+_JUMP_NOTE = ("first sample of (b), (c): the paper's step has no speed limit and Table 2 "
+              "starts outside the ranges (docs/reproduction.md)")
+
+
 @dataclass
 class Reproduction:
     """Outcome of :func:`reproduce`: one run per case plus the paper's checks."""
@@ -82,9 +86,14 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
     plot_compare(out / "fig5_joint3.png", traces, "q_f", joint=2,
                  limits=(follower.q_min[2], follower.q_max[2]), scale=180.0 / np.pi,
                  ylabel="follower q3 [deg]",
-                 title="Fig. 5: follower joint 3 (dashed: its range)")
+                 title="Fig. 5: follower joint 3 (dashed: its range)", note=_JUMP_NOTE)
+    surface = build_experiment(load_config(
+        Path(config_dir) / CASES[1][1] if config_dir is not None else bundled_config(CASES[1][1])
+    )).task.surface
     plot_compare(out / "fig6_grasp.png", traces, "grasp", scale=1e3,
-                 ylabel="grasp r2_z [mm]", title="Fig. 6: follower grasp position")
+                 limits=(surface.sigma_min, surface.sigma_max),
+                 ylabel="grasp r2_z [mm]", title="Fig. 6: follower grasp position "
+                 "(dashed: the grasp range of Eq. 3)", note=_JUMP_NOTE)
     checks: dict[str, Any] = {k: _joint3_excursion(r) for k, r in runs.items()}
     for k in ("b", "c"):
         g = runs[k].result.trace.grasp

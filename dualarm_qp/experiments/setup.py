@@ -10,13 +10,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..control.controller import DualArmController
-from ..errors import ConfigError, DualArmError
+from ..errors import ConfigError, DualArmError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
 from ..se3 import make_pose, rot_x, rot_y, rot_z
 from ..solvers.policy import Policy
-from ..solvers.registry import get_solver
+from ..solvers.registry import get_solver, solver_info
 from ..step.build import DualArmState, StepOptions
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
@@ -218,6 +218,11 @@ def build_experiment(
 
 
 def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
+    if solver is None:  # the file's solver: a wrong name is an error in the file
+        try:
+            solver_info(cfg.solver.name)
+        except SolverNotFoundError as err:
+            raise ConfigError(str(err), path=path, key="solver.name") from None
     sc = Scales(LENGTH_SCALE[cfg.units.length], ANGLE_SCALE[cfg.units.angle],
                 TIME_SCALE[cfg.units.time])
     c = cfg.controller

@@ -77,6 +77,11 @@ class Backend:
     exact: bool = False
 
 
+#: Time limit [s] of one backend call where the backend takes one: a guard against a
+#: runaway call (proxqp once took 49.6 s on one step), generous enough for a backend's
+#: cold first call on a loaded machine (0.1 s was exceeded there).
+TIME_LIMIT_S = 1.0
+
 #: Registry name suffix -> backend. Limits: iterations for every backend that has them,
 #: plus a time limit [s] where the backend offers one. quadprog has no limit option: it
 #: is a finite dual active-set method (at most a few n iterations on this problem).
@@ -86,27 +91,27 @@ class Backend:
 BACKENDS: dict[str, Backend] = {
     "osqp": Backend("osqp", "osqp", sparse=True, warm_start=True, profile={
         "eps_abs": 1e-7, "eps_rel": 0.0, "polishing": True, "scaling": 0, "max_iter": 4000,
-        "time_limit": 0.1}),
+        "time_limit": TIME_LIMIT_S}),
     "proxsuite": Backend("proxqp", "proxsuite", sparse=True, warm_start=True, profile={
         "eps_abs": 1e-9, "eps_rel": 0.0, "compute_preconditioner": False, "max_iter": 1000}),
     "daqp": Backend("daqp", "daqp", exact=True, profile={
-        "primal_tol": 1e-10, "iter_limit": 1000, "time_limit": 0.1}),
+        "primal_tol": 1e-10, "iter_limit": 1000, "time_limit": TIME_LIMIT_S}),
     "clarabel": Backend("clarabel", "clarabel", sparse=True, profile={
-        "max_iter": 100, "time_limit": 0.1}),
+        "max_iter": 100, "time_limit": TIME_LIMIT_S}),
     "piqp": Backend("piqp", "piqp", profile={
         "eps_abs": 1e-8, "eps_rel": 1e-9, "max_iter": 100}),
     "highs": Backend("highs", "highs", sparse=True, exact=True, profile={
         "primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10,
-        "time_limit": 0.1, "qp_iteration_limit": 1000}),
+        "time_limit": TIME_LIMIT_S, "qp_iteration_limit": 1000}),
     "quadprog": Backend("quadprog", "quadprog", infeasible_when_not_found=True),
     "cvxopt": Backend("cvxopt", "cvxopt", profile={
         "abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10, "maxiters": 100}),
     "ecos": Backend("ecos", "ecos", profile={
         "abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10, "max_iters": 100}),
     "scs": Backend("scs", "scs", sparse=True, profile={
-        "eps_abs": 1e-9, "eps_rel": 0.0, "max_iters": 100000, "time_limit_secs": 0.1}),
+        "eps_abs": 1e-9, "eps_rel": 0.0, "max_iters": 100000, "time_limit_secs": TIME_LIMIT_S}),
     "qpalm": Backend("qpalm", "qpalm", sparse=True, profile={
-        "eps_abs": 1e-9, "eps_rel": 0.0, "max_iter": 10000, "max_time": 0.1}),
+        "eps_abs": 1e-9, "eps_rel": 0.0, "max_iter": 10000, "max_time": TIME_LIMIT_S}),
 }
 
 
