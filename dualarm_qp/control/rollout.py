@@ -211,8 +211,9 @@ def rollout(
         either stops the run as failed ("grasp closure lost"): the object would be
         torn or dropped. Default (1 mm, 0.01 rad).
     stall_time : float
-        A run whose path time has not advanced for this long [s] (every step scaled
-        to 0: the task cannot move at all) stops as failed ("path stalled").
+        A run whose path time advances by less than 1% of the time elapsed over a
+        window of this length [s] (the task scaled to nearly 0: it cannot move) stops
+        as failed ("path stalled").
     progress : callable, optional
         Called as ``progress(done, total)`` after every sample.
 
@@ -246,7 +247,7 @@ def rollout(
     controller.reset()
     completed, message = True, ""
     projection_failures = 0
-    stalled_since = t_wall
+    window = (t_wall, tau)  # start of the current stall-detection window
     k = 0
     for k in range(rows):
         state = DualArmState(tau, q_l, q_f, sigma)
@@ -263,15 +264,16 @@ def rollout(
                        f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
             k += 1
             break
-        if out.scale > 0.0:
-            stalled_since = t_wall
-        elif t_wall - stalled_since >= stall_time - 1e-9:
-            completed = False
-            message = (f"step {k} at t = {t_wall:.4f} s: path stalled: the task could not "
-                       f"move for {t_wall - stalled_since:.3g} s (task scale 0); last "
-                       f"solver message: {out.solution.message}")
-            k += 1
-            break
+        if t_wall - window[0] >= stall_time - 1e-9:
+            if tau - window[1] < 0.01 * (t_wall - window[0]):
+                completed = False
+                message = (f"step {k} at t = {t_wall:.4f} s: path stalled: the object "
+                           f"advanced {tau - window[1]:.3g} s along its path in "
+                           f"{t_wall - window[0]:.3g} s (task scaled to nearly 0); last "
+                           f"solver message: {out.solution.message}")
+                k += 1
+                break
+            window = (t_wall, tau)
         if not out.applied:
             completed = False
             message = (f"step {k} at t = {t_wall:.4f} s: solver status "

@@ -72,3 +72,21 @@ def test_stop_policy_stops_with_the_conflicting_bounds():
     assert not res.completed
     assert "conflicting bounds" in res.message
     assert np.isfinite(res.trace.q_f).all()
+
+
+def test_a_path_that_cannot_move_stops_the_run():
+    """Speed limits so low that only a stopped object is feasible: the path stalls."""
+    exp = slow_experiment()
+    f = exp.task.follower
+    frozen = SerialArm(f.dh, q_min=f.q_min, q_max=f.q_max, qd_max=np.full(6, 1e-9),
+                       base=f.base, tool=f.tool, name=f.name)
+    exp.task = DualArmTask(exp.task.leader, frozen, exp.task.H1, exp.task.surface,
+                           exp.task.trajectory)
+    import dataclasses
+
+    exp.options = dataclasses.replace(exp.options, grasp_speed_max=1e-9)
+    ctrl = DualArmController(exp.task, get_solver("nullspace"), exp.options, policy="scale")
+    res = rollout(ctrl, exp.initial, duration=3.0, stall_time=0.5)
+    assert not res.completed
+    assert "path stalled" in res.message
+    assert res.trace.t[-1] == pytest.approx(0.5, abs=0.031)

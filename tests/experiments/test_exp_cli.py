@@ -148,3 +148,35 @@ def test_reproduce_shows_the_papers_claims(tmp_path, capsys):
     for case in ("a", "b", "c"):
         assert rep["cases"][case]["closure_pos_err_max_m"] < 1e-6
         assert rep["cases"][case]["closure_rot_err_max_rad"] < 1e-6
+
+
+def test_unwritable_output_folder_is_bad_input(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    for argv in (["run", str(short_config(tmp_path)), "--out", str(blocker / "sub")],
+                 ["reproduce", "--out", str(blocker)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "cannot write the output folder" in err and "Traceback" not in err
+
+
+def test_unknown_solver_in_the_file_names_file_and_key(tmp_path, capsys):
+    d = yaml.safe_load(short_config(tmp_path).read_text())
+    d["solver"]["name"] = "qp:bogus"
+    path = tmp_path / "bogus.yaml"
+    path.write_text(yaml.safe_dump(d))
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "solver.name" in err and "nullspace" in err
+
+
+def test_solvers_table_has_a_header_and_install_hints(capsys):
+    from dualarm_qp.solvers import list_solvers
+
+    assert main(["solvers"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[:3] == ["SOLVER", "INSTALLED", "BOUNDS"]
+    assert lines[1].startswith("reference ")
+    for s in list_solvers():
+        if not s.available and s.extra:
+            assert any(f"dualarm-qp[{s.extra}]" in line for line in lines)
