@@ -162,7 +162,7 @@ def write_json(path: Path, rows: Sequence[dict[str, Any]], meta: dict[str, Any])
 
 
 def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
-    """Median step time split per solver (stacked bars), p99 as a tick, per config."""
+    """Median step time split per solver (stacked bars, linear axis), p99 as a tick."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -185,13 +185,13 @@ def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
         p99 = [float(r.get("step_time_p99_s") or np.nan) * 1e6 for r in rs]
         ax.plot(p99, y, "k|", markersize=12, label="step p99")
         ax.set_yticks(y, [f"{r['solver']} ({r['success_rate']:.2f})" for r in rs])
-        ax.set_xscale("log")
         ax.set_title(cfg, fontsize=9)
         ax.invert_yaxis()
     axes[-1, 0].set_xlabel("controller step time [us] (median split; | = p99); "
                            "(success rate)")
-    axes[0, 0].legend(fontsize=7, loc="lower right", ncol=5)
-    fig.tight_layout()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="upper center", ncol=5, frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / height))
     try:
         atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     finally:
