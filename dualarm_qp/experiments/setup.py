@@ -223,6 +223,13 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
             solver_info(cfg.solver.name)
         except SolverNotFoundError as err:
             raise ConfigError(str(err), path=path, key="solver.name") from None
+    if cfg.solver.options:  # options the solver refuses are an error in the file
+        try:
+            get_solver(solver or cfg.solver.name, **cfg.solver.options)
+        except SolverNotFoundError:
+            pass  # an unavailable --solver override: reported by its own message later
+        except DualArmError as err:
+            raise ConfigError(str(err), path=path, key="solver.options") from None
     sc = Scales(LENGTH_SCALE[cfg.units.length], ANGLE_SCALE[cfg.units.angle],
                 TIME_SCALE[cfg.units.time])
     c = cfg.controller

@@ -34,6 +34,7 @@ import numpy as np
 import qpsolvers
 import scipy.sparse as sp
 
+from ..errors import InvalidInputError
 from ..step.problem import StepProblem
 from . import _native
 from ._affine import max_task_scale
@@ -152,6 +153,30 @@ class QPSolver:
         self._native: _native.NativeQP | None = None
         if self.backend.solver in _native.NATIVE:
             self._native = _native.NATIVE[self.backend.solver](self.options)
+        if options:
+            self._check_options(options)
+
+    def _check_options(self, options: dict[str, Any]) -> None:
+        """Reject option names the backend does not know, now rather than at every step.
+
+        One solve of a tiny problem with the options: a backend that refuses an option
+        raises then (osqp, proxqp, daqp, ...). Raises InvalidInputError naming them.
+        """
+        probe = StepProblem(A=np.ones((1, 2)), b=np.ones(1), weights=np.ones(2),
+                            center=np.zeros(2), lower=np.full(2, -10.0),
+                            upper=np.full(2, 10.0), n_grasp=1)
+        try:
+            if self._native is not None:
+                self._native.solve(probe)
+            else:
+                self._qpsolvers(probe)
+        except (TypeError, ValueError, AttributeError, KeyError) as err:
+            raise InvalidInputError(
+                f"{self.name} does not accept the options {sorted(options)}: {err}"
+            ) from None
+        finally:
+            if self._native is not None:
+                self._native = _native.NATIVE[self.backend.solver](self.options)
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Build the shifted QP, call the backend, and verify its answer."""

@@ -180,3 +180,20 @@ def test_solvers_table_has_a_header_and_install_hints(capsys):
     for s in list_solvers():
         if not s.available and s.extra:
             assert any(f"dualarm-qp[{s.extra}]" in line for line in lines)
+
+
+def test_solver_options_pass_through_and_bad_ones_are_named(tmp_path, capsys):
+    from dualarm_qp.experiments import build_experiment, load_config
+
+    d = yaml.safe_load(short_config(tmp_path).read_text())
+    d["solver"] = {"name": "qp:osqp", "options": {"eps_abs": 1e-9, "max_iter": 123}}
+    good = tmp_path / "good.yaml"
+    good.write_text(yaml.safe_dump(d))
+    solver = build_experiment(load_config(good)).controller().solver
+    assert solver.options["eps_abs"] == 1e-9 and solver.options["max_iter"] == 123
+    d["solver"]["options"] = {"eps_absolute": 1e-9}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(d))
+    assert main(["run", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "solver.options" in err and "eps_absolute" in err
