@@ -70,13 +70,15 @@ def test_backend_options_override_the_profile() -> None:
     assert solver.options["polishing"] is True  # type: ignore[attr-defined]
 
 
-def test_bad_backend_option_is_an_error_status_not_an_exception() -> None:
-    if "qp:daqp" not in available_solvers():
-        pytest.skip("daqp not installed")
-    sol = get_solver("qp:daqp", no_such_option=1).solve(
-        random_problem(np.random.default_rng(0)))
-    assert sol.status is Status.ERROR
-    assert "daqp" in sol.message
+@pytest.mark.parametrize("name", [n for n in ("qp:daqp", "qp:osqp", "qp:proxsuite")
+                                  if n in available_solvers()])
+def test_bad_backend_option_is_refused_when_the_solver_is_built(name: str) -> None:
+    """A backend that knows its options refuses a wrong one at once, naming it."""
+    with pytest.raises(InvalidInputError, match="no_such_option"):
+        get_solver(name, no_such_option=1)
+    # A good option is accepted and used.
+    key = "iter_limit" if name == "qp:daqp" else "max_iter"
+    assert get_solver(name, **{key: 77}).options[key] == 77  # type: ignore[attr-defined]
 
 
 def test_bad_solver_option_is_invalid_input() -> None:
