@@ -1,0 +1,70 @@
+"""Data flows one way: nothing below imports from above, and solvers never see robots."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[2] / "dualarm_qp"
+
+#: Layer of each top-level module or subpackage, lowest first.
+LAYERS = {
+    "errors": 0, "_validate": 0, "se3": 0, "_io": 0,
+    "kinematics": 1,
+    "task": 2,
+    "step": 3,
+    "solvers": 4,
+    "control": 5,
+    "experiments": 6, "bench": 6,
+    "cli": 7, "__main__": 7, "__init__": 7,
+}
+
+
+def _modules():
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE).with_suffix("")
+        yield rel.parts, path
+
+
+def _imports(parts: tuple[str, ...], path: Path):
+    """Absolute dotted names of the package modules that ``path`` imports."""
+    tree = ast.parse(path.read_text())
+    here = ["dualarm_qp", *parts[:-1]]  # the package the module lives in
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = here[: len(here) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            names = [f"{mod}.{a.name}" for a in node.names]
+            yield from [mod, *names]
+        elif isinstance(node, ast.Import):
+            yield from (a.name for a in node.names)
+
+
+def _layer(dotted: str) -> tuple[str, int] | None:
+    parts = dotted.split(".")
+    if parts[0] != "dualarm_qp" or len(parts) < 2 or parts[1] not in LAYERS:
+        return None
+    return parts[1], LAYERS[parts[1]]
+
+
+@pytest.mark.parametrize(("parts", "path"), list(_modules()),
+                         ids=lambda v: "/".join(v) if isinstance(v, tuple) else "")
+def test_no_module_imports_from_a_higher_layer(parts, path):
+    top = parts[0]
+    own = LAYERS[top]
+    for dotted in _imports(parts, path):
+        found = _layer(dotted)
+        if found is None:
+            continue
+        name, layer = found
+        assert layer <= own, f"{'/'.join(parts)} (layer {own}) imports {dotted} (layer {layer})"
+        if top == "solvers":
+            assert name not in ("kinematics", "task"), f"a solver imports {dotted}"
+            if name == "step":
+                assert dotted.startswith("dualarm_qp.step.problem"), (
+                    f"solvers may only use the step problem, not {dotted}")
