@@ -40,7 +40,14 @@ from . import _native
 from ._affine import max_task_scale
 from ._kkt import refine
 from ._util import empty_box_failure
-from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed, verify
+from .base import (
+    DEFAULT_TOLERANCE,
+    Status,
+    StepSolution,
+    Tolerance,
+    failed,
+    verified_solution,
+)
 from .registry import register
 
 
@@ -217,9 +224,9 @@ class QPSolver:
 
     def _verified(self, problem: StepProblem, x: np.ndarray, start: float,
                   extras: dict[str, Any]) -> StepSolution:
-        return verify(problem, StepSolution(
-            x=x, status=Status.OPTIMAL, solver=self.name,
-            solve_time=time.perf_counter() - start, extras=extras), self.tol)
+        # verified_solution is verify() without first building the unverified solution.
+        return verified_solution(problem, x, Status.OPTIMAL, solver=self.name, tol=self.tol,
+                                 solve_time=time.perf_counter() - start, extras=extras)
 
     def _qpsolvers(self, problem: StepProblem) -> _native.BackendAnswer:
         """One call through ``qpsolvers.solve_problem`` (the backends without a native path)."""
