@@ -101,8 +101,7 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
     (``A z = 0``) gives the one multiplier ``mu = z^T W (x - c) / z_k``, whose sign is
     checked. Two or more fixed bounds (a degenerate vertex, or a zero-width box), a
     fixed bound that hardly moves along ``z``, or a large pivoted ``x0`` (cancellation
-    in ``x0 + t z``) are left to :func:`_solve_active`, so every answer equals the
-    general one to rounding.
+    in ``x0 + t z``) are left to :func:`_solve_active`.
     """
     lo, up = problem.lower.tolist(), problem.upper.tolist()
     lo_s = [max(1.0, abs(v)) for v in lo]  # scales of the bounds, as in _refine_general
@@ -140,7 +139,7 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
             if cand is not None:
                 return cand
             continue
-        cand = _candidate_1d(problem, side, fixed, x0, z, x0max)
+        cand = _candidate_1d(problem, side, fixed, (x0, z, lo, up), x0max)
         if cand is _UNDECIDED:
             cand = _solve_side(problem, side)
         if cand is not None:
@@ -152,10 +151,14 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
 _UNDECIDED = np.zeros(0)
 
 
-def _candidate_1d(problem: StepProblem, side: list[int], fixed: list[int], x0: list[float],
-                  z: list[float], x0max: float) -> FloatArray | None:
-    """Closed-form candidate of one guess (at most one fixed bound), if it certifies."""
-    lo, up = problem.lower.tolist(), problem.upper.tolist()
+def _candidate_1d(problem: StepProblem, side: list[int], fixed: list[int],
+                  line: tuple[list[float], list[float], list[float], list[float]],
+                  x0max: float) -> FloatArray | None:
+    """Closed-form candidate of one guess (at most one fixed bound), if it certifies.
+
+    ``line`` holds ``x0``, ``z``, ``lower`` and ``upper`` as lists.
+    """
+    x0, z, lo, up = line
     w, c = problem.weights.tolist(), problem.center.tolist()
     idx = range(len(x0))
     if fixed:
