@@ -19,6 +19,7 @@ import numpy as np
 from .._io import atomic_write_with, jsonable, write_text
 from .._io import write_json as _write_json_file
 from .runner import STATUSES
+from .table import render_table
 
 #: Columns of ``bench.csv``, in order.
 COLUMNS: tuple[str, ...] = (
@@ -129,15 +130,7 @@ def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> s
                          + [""] * (len(TABLE) - 3))
             continue
         cells.append([_fmt(r.get(col), kind) for _, col, kind in TABLE])
-    if markdown:
-        lines = ["| " + " | ".join(cells[0]) + " |",
-                 "|" + "|".join("---" for _ in TABLE) + "|"]
-        lines += ["| " + " | ".join(c) + " |" for c in cells[1:]]
-        return "\n".join(lines)
-    widths = [max(len(row[i]) for row in cells) for i in range(len(TABLE))]
-    return "\n".join("  ".join(c.rjust(w) if i > 1 else c.ljust(w)
-                               for i, (c, w) in enumerate(zip(row, widths, strict=True)))
-                     for row in cells)
+    return render_table(cells, markdown=markdown, left_columns=2)
 
 
 def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:

@@ -33,6 +33,7 @@ from ..errors import InvalidInputError
 from ..solvers.base import Status, residuals
 from ..solvers.registry import get_solver
 from ..step.problem import StepProblem
+from .table import render_table
 
 FloatArray = NDArray[np.float64]
 
@@ -290,10 +291,4 @@ def format_suite_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False
             else:
                 line.append(fmt.format(v))
         cells.append(line)
-    if markdown:
-        out = ["| " + " | ".join(cells[0]) + " |", "|" + "|".join("---" for _ in cells[0]) + "|"]
-        return "\n".join(out + ["| " + " | ".join(c) + " |" for c in cells[1:]])
-    widths = [max(len(c[i]) for c in cells) for i in range(len(cells[0]))]
-    return "\n".join("  ".join(c.ljust(w) if i == 0 else c.rjust(w)
-                               for i, (c, w) in enumerate(zip(row, widths, strict=True)))
-                     for row in cells)
+    return render_table(cells, markdown=markdown, left_columns=1)
