@@ -4,17 +4,20 @@ First-order and interior-point backends stop at a tolerance; on the recorded ste
 sliding weight ``s7`` reaches 1e9, the multipliers reach 1e5 and more, and their
 absolute dual tolerances cannot be met (see ``docs/benchmarks.md``). The backend's point
 still tells which bounds are active. Given that guess, the step QP reduces to an
-equality-constrained least-distance problem solved exactly by one small factorisation,
-and the KKT conditions (primal feasibility, multiplier signs) either certify the result
-as the optimum or reject the guess. This is what OSQP's own "polish" does, done here
-once for every backend, in the original variables.
+equality-constrained least-distance problem solved exactly, and the KKT conditions
+(primal feasibility, stationarity on the whole null space of the free columns,
+multiplier signs) either certify the result as the optimum or reject the guess. This is
+what OSQP's own "polish" does, done here once for every backend, in the original
+variables.
 
-With a one-dimensional null space (every 6 x 7 step) a guess with at most one active
-bound is decided in closed form on the line ``x0 + t z`` of :mod:`._affine`: one 6 x 6
-LU solve per call and scalar arithmetic per guess. This is also the more accurate form:
-the general path's normal equations ``A_f W_f^-1 A_f^T`` reach a condition number of
-about 5e9 when ``s7`` is 1e9, and its answers are then off by up to about 1e-8 (enough
-for its equality check to reject some optima that the closed form certifies).
+Every rank decision is an SVD at :data:`~._affine.RANK_RTOL` (:func:`~._affine.factor`).
+When the null space of ``A`` is one-dimensional (every regular 6 x 7 step), a guess with
+at most one active bound is decided in closed form on the line ``x0 + t z`` of
+:mod:`._affine`: one SVD per call and scalar arithmetic per guess; on that line the
+one stationarity condition is the projection on ``z``. With a larger null space (a
+6 x 8 step, or a 6 x 7 step at a singular pose whose numerical rank is 5) every guess
+goes through :func:`_solve_active`, which solves on the null space of the free columns
+and checks that the gradient ``W (x - c) + A^T lam`` vanishes on every free variable.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import AffineSet, affine_solutions
+from ._affine import AffineSet, affine_solutions, factor, least_distance
 
 FloatArray = NDArray[np.float64]
 
@@ -36,11 +39,8 @@ DUAL_TOL = 1e-9
 
 #: A fixed bound whose variable moves by at most this (relative to ``max |z|``) along the
 #: null direction is left to the general solve (the closed form would divide by it).
+#: A routing threshold, not a rank decision: both paths are exact.
 ZERO_STEP = 1e-8
-
-#: ``max |x0| / max(1, max |x|)`` above which the closed form's ``x0 + t z`` could lose
-#: more than about 4 digits to cancellation: the general solve is used instead.
-GROWTH_LIMIT = 1e4
 
 
 def refine(problem: StepProblem, x: FloatArray) -> FloatArray | None:
@@ -52,17 +52,31 @@ def refine(problem: StepProblem, x: FloatArray) -> FloatArray | None:
     variables lie in their box and whose bound multipliers have the right sign is the
     optimum of the step QP (the QP is strictly convex, so the KKT point is unique).
 
-    With a one-dimensional null space (``n = m + 1``, every step of the paper) each
-    candidate is written in closed form on the line ``x0 + t z`` (:func:`_refine_1d`);
-    the guesses it cannot decide that way go through the general solve, which is the
-    same certificate for any shape.
+    When the numerical null space of ``A`` (:data:`~._affine.RANK_RTOL`) is
+    one-dimensional (every regular 6 x 7 step) each candidate is written in closed form
+    on the line ``x0 + t z`` (:func:`_refine_1d`); the guesses it cannot decide that way,
+    and every guess when the null space has another dimension, go through the general
+    solve, which is the same certificate for any shape and checks stationarity on the
+    whole null space.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        The step (``x`` in [rad/s, m/s]).
+    x : ndarray, shape (n,)
+        Approximate answer.
+
+    Returns
+    -------
+    ndarray or None
+        The certified optimum, clipped into the box (it lies in it to 1e-10 relative).
     """
     if not np.isfinite(x).all():
         return None
     m, n = problem.A.shape
-    if m and n == m + 1:
+    if m and n <= m + 1:  # otherwise the null space has at least two dimensions
         aff = affine_solutions(problem.A, problem.b)
-        if aff is not None and aff.N.shape[1] == 1:
+        if aff is not None and aff.nullity == 1:
             return _refine_1d(problem, x, aff)
     return _refine_general(problem, x)
 
@@ -99,9 +113,10 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
     minimiser ``z^T W (c - x0) / z^T W z``; with one bound ``k`` fixed, ``t`` puts
     ``x_k`` on it, and stationarity ``W (x - c) + A^T lam = mu e_k`` projected on ``z``
     (``A z = 0``) gives the one multiplier ``mu = z^T W (x - c) / z_k``, whose sign is
-    checked. Two or more fixed bounds (a degenerate vertex, or a zero-width box), a
-    fixed bound that hardly moves along ``z``, or a large pivoted ``x0`` (cancellation
-    in ``x0 + t z``) are left to :func:`_solve_active`.
+    checked. ``x0`` is the minimum-norm solution, orthogonal to ``z``, so ``x0 + t z``
+    does not cancel. Two or more fixed bounds (a degenerate vertex, or a zero-width
+    box) or a fixed bound that hardly moves along ``z`` are left to
+    :func:`_solve_active`.
     """
     lo, up = problem.lower.tolist(), problem.upper.tolist()
     lo_s = [max(1.0, abs(v)) for v in lo]  # scales of the bounds, as in _refine_general
@@ -114,7 +129,6 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
     n = len(xs)
     idx = range(n)
     zmax = max(map(abs, z))
-    x0max = max(map(abs, x0))
     tried: set[tuple[int, ...]] = set()
     for rel in ACTIVE_GUESSES:
         # Side of each bound guessed active: -1 lower, +1 upper, 0 free.
@@ -139,21 +153,15 @@ def _refine_1d(problem: StepProblem, x: FloatArray, aff: AffineSet) -> FloatArra
             if cand is not None:
                 return cand
             continue
-        cand = _candidate_1d(problem, side, fixed, (x0, z, lo, up), x0max)
-        if cand is _UNDECIDED:
-            cand = _solve_side(problem, side)
+        cand = _candidate_1d(problem, side, fixed, (x0, z, lo, up))
         if cand is not None:
             return cand
     return None
 
 
-#: Returned by :func:`_candidate_1d` when the closed form is not accurate enough.
-_UNDECIDED = np.zeros(0)
-
-
 def _candidate_1d(problem: StepProblem, side: list[int], fixed: list[int],
-                  line: tuple[list[float], list[float], list[float], list[float]],
-                  x0max: float) -> FloatArray | None:
+                  line: tuple[list[float], list[float], list[float], list[float]]
+                  ) -> FloatArray | None:
     """Closed-form candidate of one guess (at most one fixed bound), if it certifies.
 
     ``line`` holds ``x0``, ``z``, ``lower`` and ``upper`` as lists.
@@ -175,8 +183,6 @@ def _candidate_1d(problem: StepProblem, side: list[int], fixed: list[int],
     xc = [x0[i] + t * z[i] for i in idx]
     if fixed:
         xc[k] = bound
-    if x0max > GROWTH_LIMIT * max(1.0, max(map(abs, xc))):
-        return _UNDECIDED
     cand = np.array(xc)
     b = problem.b
     scale_b = max(1.0, *map(abs, b.tolist()))
@@ -207,7 +213,17 @@ def _solve_side(problem: StepProblem, side: list[int]) -> FloatArray | None:
 
 def _solve_active(problem: StepProblem, at_lo: NDArray[np.bool_], at_up: NDArray[np.bool_],
                   pinned: NDArray[np.bool_]) -> FloatArray | None:
-    """Exact minimiser with the given bounds fixed, if it passes the KKT checks."""
+    """Exact minimiser with the given bounds fixed, if it passes the KKT checks.
+
+    The free variables are ``x_F = x0 + N t`` on the numerical null space of the free
+    columns ``A_F`` (:func:`~._affine.factor`, rank at :data:`~._affine.RANK_RTOL`), with
+    ``t`` minimising ``|W_F^1/2 (x0 + N t - c_F)|`` (:func:`~._affine.least_distance`).
+    The multipliers are the minimum-norm ``lam`` of ``A_F^T lam = -W_F (x_F - c_F)``.
+    The candidate is certified when ``A x = b`` holds, the free variables lie in their
+    box, the gradient ``W (x - c) + A^T lam`` vanishes on every free variable
+    (stationarity on the whole null space, not only its sign on the fixed ones) and has
+    the sign of an active bound on every fixed variable.
+    """
     A, b, w, c = problem.A, problem.b, problem.weights, problem.center
     at_lo = at_lo | pinned
     at_up = at_up & ~pinned
@@ -216,23 +232,12 @@ def _solve_active(problem: StepProblem, at_lo: NDArray[np.bool_], at_up: NDArray
     x = c.copy()
     x[at_lo] = problem.lower[at_lo]
     x[at_up] = problem.upper[at_up]
-    Af = A[:, free]
-    rhs = b - A[:, fixed] @ x[fixed]
-    if problem.m:
-        # Free part: x_f = c_f - W_f^-1 A_f^T lam with A_f x_f = rhs, i.e.
-        # (A_f W_f^-1 A_f^T) lam = A_f c_f - rhs.
-        winv = 1.0 / w[free]
-        M = (Af * winv) @ Af.T
-        r = Af @ c[free] - rhs
-        try:
-            lam = np.linalg.solve(M, r)
-        except np.linalg.LinAlgError:
-            return None
-        if not np.isfinite(lam).all():
-            return None
-        x[free] = c[free] - winv * (Af.T @ lam)
-    else:
-        lam = np.zeros(0)
+    f = factor(A[:, free])
+    x_free = least_distance(f.N, f.solve(b - A[:, fixed] @ x[fixed]), w[free], c[free])
+    x[free] = x_free
+    if not np.isfinite(x).all():
+        return None
+    lam = f.solve_transposed(-w[free] * (x_free - c[free]))
     scale_b = max(1.0, float(np.abs(b).max(initial=0.0)))
     if problem.m and float(np.abs(A @ x - b).max()) > 1e-9 * scale_b:
         return None  # too few free variables for the task: the guess is wrong
@@ -240,11 +245,14 @@ def _solve_active(problem: StepProblem, at_lo: NDArray[np.bool_], at_up: NDArray
     tol = PRIMAL_TOL * np.maximum(1.0, np.maximum(np.abs(lo), np.abs(up)))
     if (x[free] < lo[free] - tol[free]).any() or (x[free] > up[free] + tol[free]).any():
         return None
-    # Stationarity: W (x - c) + A^T lam = mu_lo - mu_up with mu >= 0.
-    g = w * (x - c) + A.T @ lam
-    dual_scale = max(1.0, float(np.abs(w * (x - c)).max()), float(np.abs(A.T @ lam).max(
+    # Stationarity: W (x - c) + A^T lam = mu_lo - mu_up, mu >= 0, mu = 0 when free.
+    grad = w * (x - c)
+    a_lam = A.T @ lam
+    g = grad + a_lam
+    dtol = DUAL_TOL * max(1.0, float(np.abs(grad).max()), float(np.abs(a_lam).max(
         initial=0.0)))
-    dtol = DUAL_TOL * dual_scale
+    if float(np.abs(g[free]).max(initial=0.0)) > dtol:
+        return None
     if (g[at_lo & ~pinned] < -dtol).any() or (g[at_up & ~pinned] > dtol).any():
         return None
     return np.clip(x, lo, up)

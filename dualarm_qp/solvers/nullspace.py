@@ -1,12 +1,18 @@
 """Exact solver of the step QP by parametrising the null space of ``A``.
 
-Every solution of ``A x = b`` is ``x = x0 + N t`` (:func:`~._affine.affine_solutions`).
+Every solution of ``A x = b`` is ``x = x0 + N t`` (:func:`~._affine.affine_solutions`:
+one SVD, the null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`).
 
+* No redundant variable (a square nonsingular step such as the leader's 6 x 6, d = 0):
+  ``x = x0 = A^-1 b``, OPTIMAL if it lies in the box, INFEASIBLE naming the bound it
+  breaks otherwise.
 * One redundant variable (the paper's 6 x 7 step, d = 1): the cost Eq. 37 is a scalar
   quadratic in ``t``, the box gives an interval ``[t_lo, t_hi]``, and the minimiser is
-  ``t* = -z^T S (x0 - c) / z^T S z`` clamped to it. One 6 x 6 LU solve, no SVD.
-* Several redundant variables (d > 1, e.g. 6 x 8): an exact primal active-set method
-  on the box, started from a feasible point of the LP in :mod:`._affine`.
+  ``t* = -z^T S (x0 - c) / z^T S z`` clamped to it.
+* Several redundant variables (d > 1: a 6 x 8 step, or a numerically rank-deficient
+  6 x 7 step at a singular pose): an exact primal active-set method on the box,
+  started from a feasible point of the LP in :mod:`._affine`; each iteration solves
+  the equality-constrained subproblem on the null space of the free columns.
 
 Infeasible steps (empty box, empty interval, inconsistent equality) are reported as
 INFEASIBLE with the conflicting bounds in ``message`` and ``extras["conflicts"]``.
@@ -22,7 +28,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import PIVOT_GROWTH_LIMIT, AffineSet, affine_solutions, max_task_scale
+from ._affine import (
+    RANK_RTOL,
+    AffineSet,
+    affine_solutions,
+    factor,
+    least_distance,
+    max_task_scale,
+)
 from ._util import bound_label, empty_box_failure
 from .base import (
     DEFAULT_TOLERANCE,
@@ -68,26 +81,18 @@ class NullspaceSolver:
         if empty is not None:
             return empty
         extras: dict[str, Any] = {}
-        x: FloatArray | None = None
-        conflicts: tuple[str, ...] = ()
-        robust = False
-        while True:
-            aff = affine_solutions(problem.A, problem.b, robust=robust)
-            if aff is None:
-                return failed(problem, Status.INFEASIBLE, self.name,
-                              "A x = b has no solution (A is rank-deficient)",
-                              time.perf_counter() - start, conflicts=())
-            growth = 0.0
-            if aff.N.shape[1] <= 1:
-                x, conflicts, growth = self._interval(problem, aff, lower, upper)
-            else:
-                x, conflicts, extras["iterations"] = self._active_set(problem)
-            # The pivoted x0 may be large and cancel in x0 + t z: redo with the SVD.
-            if not aff.pivoted or (x is not None and growth <= PIVOT_GROWTH_LIMIT):
-                break
-            robust = True
+        aff = affine_solutions(problem.A, problem.b)
+        if aff is None:
+            return failed(problem, Status.INFEASIBLE, self.name,
+                          "A x = b has no solution (A is rank-deficient)",
+                          time.perf_counter() - start, conflicts=())
+        x: FloatArray | None
+        if aff.nullity <= 1:
+            x, conflicts = self._interval(problem, aff, lower, upper)
+        else:
+            x, conflicts, extras["iterations"] = self._active_set(problem)
         elapsed = time.perf_counter() - start
-        extras["nullity"] = aff.N.shape[1]
+        extras["nullity"] = aff.nullity
         if x is None:
             if "iterations" in extras and extras["iterations"] > self.max_iter:
                 return failed(problem, Status.ERROR, self.name,
@@ -100,17 +105,19 @@ class NullspaceSolver:
                                  solve_time=elapsed, extras=extras)
 
     def _interval(self, problem: StepProblem, aff: AffineSet, los: list[float],
-                  ups: list[float]) -> tuple[FloatArray | None, tuple[str, ...], float]:
+                  ups: list[float]) -> tuple[FloatArray | None, tuple[str, ...]]:
         """Minimise over ``x = x0 + t z``: clamp the scalar minimiser to the bound interval.
 
-        ``los`` and ``ups`` are the bounds as lists. Returns ``(x or None, conflicts,
-        growth)`` with ``growth = max|x0| / max|x|``. Plain Python floats: at n = 7
-        each numpy call costs more than the arithmetic.
+        ``los`` and ``ups`` are the bounds as lists [rad/s, m/s]. With no null direction
+        (square nonsingular ``A``) ``x = x0``, checked against the box. A component
+        ``|z_i| <= RANK_RTOL * max |z|`` does not move ``x_i`` (see
+        :func:`~._affine.moves`). Returns ``(x or None, conflicts)``. Plain Python
+        floats: at n = 7 each numpy call costs more than the arithmetic.
         """
         xs = aff.x0.tolist()
-        zs = aff.N[:, 0].tolist() if aff.N.shape[1] else [0.0] * len(xs)
+        zs = aff.N[:, 0].tolist() if aff.nullity else [0.0] * len(xs)
         z_max = max(max(zs), -min(zs))
-        z_tiny = 1e-13 * z_max
+        z_tiny = RANK_RTOL * z_max
         tol = self.feasibility_tol
         curvature = slope = 0.0  # z^T S z and z^T S (x0 - c)
         t_lo, t_hi = -np.inf, np.inf
@@ -122,9 +129,9 @@ class NullspaceSolver:
                 a, b = (lo - xi) / zi, (up - xi) / zi
             elif zi < -z_tiny:
                 a, b = (up - xi) / zi, (lo - xi) / zi
-            else:  # the null direction does not move x_i
+            else:  # the null direction does not move x_i (or there is none)
                 if xi < lo - tol or xi > up + tol:
-                    return None, (bound_label(problem, i, xi > up),), 0.0
+                    return None, (bound_label(problem, i, xi > up),)
                 continue
             curvature += wi * zi * zi
             slope += wi * zi * (xi - ci)
@@ -135,16 +142,10 @@ class NullspaceSolver:
         t = -slope / curvature if curvature > 0.0 else 0.0
         if t_lo > t_hi:
             if (t_lo - t_hi) * z_max > 2.0 * tol:  # not just rounding: infeasible
-                return None, (bound_label(problem, *why_lo), bound_label(problem, *why_hi)), 0.0
+                return None, (bound_label(problem, *why_lo), bound_label(problem, *why_hi))
             t = 0.5 * (t_lo + t_hi)
         t = min(max(t, t_lo), t_hi)
-        x = [xi + t * zi for xi, zi in zip(xs, zs, strict=True)]
-        x_max, x0_max = max(max(x), -min(x)), max(max(xs), -min(xs))
-        if x_max > 0.0:
-            growth = x0_max / x_max
-        else:  # x = 0, or NaN from an overflowing pivot (then growth = inf: retry)
-            growth = 0.0 if x0_max == 0.0 else np.inf
-        return np.array(x), (), growth
+        return np.array([xi + t * zi for xi, zi in zip(xs, zs, strict=True)]), ()
 
     def _active_set(self, problem: StepProblem
                     ) -> tuple[FloatArray | None, tuple[str, ...], int]:
@@ -190,19 +191,23 @@ def _equality_qp(problem: StepProblem, side: NDArray[np.int8], x: FloatArray
                  ) -> tuple[FloatArray, FloatArray]:
     """Minimise Eq. 37 with ``A x = b`` and the working-set variables at their bounds.
 
+    The free part is written ``x_F = x0 + N t`` on the numerical null space of the free
+    columns ``A_F`` (:func:`~._affine.factor`, rank at :data:`~._affine.RANK_RTOL`);
+    ``t`` minimises ``|S_F^1/2 (x0 + N t - c_F)|`` (:func:`~._affine.least_distance`,
+    no rank decision). ``x`` is the current iterate: it
+    meets the equality, so the right-hand side lies in the range of ``A_F``.
+
     Returns the minimiser and the bound multipliers ``mu`` (zero off the working set),
-    from ``S (x - c) = A^T lambda + mu``.
+    from ``S (x - c) = A^T lambda + mu`` with the minimum-norm ``lambda``.
     """
     w, c, A = problem.weights, problem.center, problem.A
     free = side == 0
     target = np.where(side < 0, problem.lower, np.where(side > 0, problem.upper, x))
     rhs = problem.b - A[:, ~free] @ target[~free]
-    inv_sqrt = 1.0 / np.sqrt(w[free])
-    scaled = A[:, free] * inv_sqrt
-    y = np.linalg.lstsq(scaled, rhs - A[:, free] @ c[free], rcond=None)[0]
-    target[free] = c[free] + inv_sqrt * y
+    f = factor(A[:, free])
+    target[free] = least_distance(f.N, f.solve(rhs), w[free], c[free])
     grad = w * (target - c)
-    lam = np.linalg.lstsq(A[:, free].T, grad[free], rcond=None)[0]
+    lam = f.solve_transposed(grad[free])
     mu = np.where(free, 0.0, grad - A.T @ lam)
     return target, mu
 

@@ -56,11 +56,16 @@ def test_nullspace_square_system() -> None:
     problem = random_problem(np.random.default_rng(1), n=6, n_grasp=0)
     sol = get_solver("nullspace").solve(problem)
     assert sol.status is Status.OPTIMAL
+    assert sol.extras["nullity"] == 0
     assert relative_error(sol.x, np.linalg.solve(problem.A, problem.b)) < 1e-10
+    far = StepProblem(A=problem.A, b=10.0 * problem.b, weights=problem.weights,
+                      center=problem.center, lower=problem.lower, upper=problem.upper,
+                      n_grasp=0)
+    assert get_solver("nullspace").solve(far).status is Status.INFEASIBLE
 
 
 def test_nullspace_survives_a_singular_joint_block() -> None:
-    """A[:, :6] singular (arm singularity): the SVD fallback gives the exact answer."""
+    """A[:, :6] numerically singular (arm singularity): the SVD gives the exact answer."""
     rng = np.random.default_rng(5)
     base = random_problem(rng)
     A = base.A.copy()
@@ -140,6 +145,7 @@ def test_nullspace_rank_deficient_equality() -> None:
     assert ref is not None
     sol = get_solver("nullspace").solve(problem)
     assert sol.status is Status.OPTIMAL, sol.message
+    assert sol.extras["nullity"] == 2  # rank 5, decided by the SVD (not an LU pivot)
     assert relative_error(sol.x, ref) < 1e-9
     b_bad = problem.b.copy()
     b_bad[5] += 1.0
