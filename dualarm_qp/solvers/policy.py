@@ -2,14 +2,17 @@
 
 :func:`solve_step` wraps any registered solver. A usable answer is returned as is. When
 the solver gives none (INFEASIBLE, ERROR, or a VIOLATION it did not mean) the step is
-checked for feasibility (:func:`~._affine.max_task_scale`); a feasible step keeps the
-solver's own failure (the solver is at fault, not the step). An infeasible step gets:
+checked for feasibility (:func:`~._affine.max_task_scale`). A feasible step is the
+solver's fault, not the step's: it is solved again by the ``fallback`` solver when one
+is given (see below), else the solver's own failure is returned. An infeasible step
+gets:
 
 ``"scale"``
     the largest ``s`` in ``[0, task_scale_max]`` with ``{A x = s b, box}`` non-empty
     (closed form for a one-dimensional null space, an LP otherwise), then the solver on
     the task ``s b``; status SCALED with ``solution.scale = s``. If the solver fails on
-    that (degenerate) problem, the feasible point found with ``s`` is returned. If not
+    that (degenerate) problem, the ``fallback`` solves it when given; failing that, the
+    feasible point found with ``s`` is returned. If not
     even ``s = 0`` is feasible, falls back to ``"relax"``. The whole right-hand side is
     scaled, so a closure-correction term in ``b`` is slowed with the task (at ``s = 0``
     the step holds still and corrects nothing; the rollout's drift projection still
@@ -22,13 +25,26 @@ solver's own failure (the solver is at fault, not the step). An infeasible step 
 
 An empty box (``lower > upper``) cannot be relaxed: ``"scale"`` and ``"relax"`` return
 INFEASIBLE with the empty boxes in ``extras["conflicts"]``; ``"stop"`` raises.
+
+Fallback. With ``fallback`` given (e.g. the exact ``nullspace`` solver), a feasible
+step that the solver failed is solved by the fallback, and the answer is the
+fallback's (its status, ``x`` and extras, verified with ``tol``), with
+
+* ``solution.solver``: still the primary solver's name;
+* ``extras["fallback"] = {"from": <primary name>, "to": <fallback name>,
+  "status": <the primary's failed status value>, "message": <its message>}``;
+* ``solution.message``: ``"<primary> <status> (<its message>); solved by <fallback>"``;
+* ``solution.solve_time``: both solves and the feasibility check.
+
+No new status is used: the fallback is recorded only in ``extras["fallback"]``. The
+default is no fallback, so that a benchmark measures each solver's own success.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy.optimize import lsq_linear
@@ -48,8 +64,8 @@ RELAX_EPS = 1e-8
 
 
 def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale", *,
-               tol: Tolerance = DEFAULT_TOLERANCE, relax_eps: float = RELAX_EPS
-               ) -> StepSolution:
+               tol: Tolerance = DEFAULT_TOLERANCE, relax_eps: float = RELAX_EPS,
+               fallback: StepSolver | None = None) -> StepSolution:
     """Solve one step with ``solver`` and apply ``policy`` if the step is infeasible.
 
     Parameters
@@ -64,11 +80,15 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
         Tolerances used to verify the policy's answer.
     relax_eps : float
         Weight of the centring term in ``"relax"`` (dimensionless).
+    fallback : StepSolver or None
+        Solver for the steps that are feasible but that ``solver`` failed (and for a
+        failed inner solve of ``"scale"``); None (the default) keeps the failure.
 
     Returns
     -------
     StepSolution
-        Never contains NaN. ``extras["policy"]`` records the policy applied, if any.
+        Never contains NaN. ``extras["policy"]`` records the policy applied, if any;
+        ``extras["fallback"]`` records a fallback (see the module docstring).
 
     Raises
     ------
@@ -86,36 +106,71 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     start = time.perf_counter() - solution.solve_time
     reach = max_task_scale(problem, cap=1.0)
     if reach.scale is not None and reach.scale >= 1.0 - 1e-12:
-        return solution  # the step is feasible: the failure is the solver's own
+        # The step is feasible: the failure is the solver's own.
+        if fallback is None:
+            return solution
+        return _fell_back(solution, fallback, problem, solver.name, tol, start)
     if policy == "stop":
         conflicts = reach.blocking or _relaxed_conflicts(problem, relax_eps)
         raise InfeasibleStepError(
             f"step infeasible for solver '{solver.name}' "
             f"(largest feasible task scale: {_fmt(reach.scale)})", conflicts=conflicts)
     if policy == "scale" and reach.scale is not None:
-        return _scaled(solver, problem, reach, tol, start)
+        return _scaled(solver, problem, reach, tol, start, fallback)
     return _relaxed(solver.name, problem, reach.blocking, relax_eps, tol, start)
 
 
+def _fell_back(failure: StepSolution, fallback: StepSolver, problem: StepProblem,
+               name: str, tol: Tolerance, start: float) -> StepSolution:
+    """Solve a feasible step that the solver ``name`` failed with ``fallback``."""
+    answer = fallback.solve(problem)
+    record = _fallback_record(failure, name, fallback.name)
+    message = f"{name} {failure.status.value} ({failure.message}); solved by {fallback.name}"
+    if not answer.status.usable:
+        message = (f"{name} {failure.status.value} ({failure.message}); the fallback "
+                   f"{fallback.name} failed too: {answer.message}")
+    elif answer.message:
+        message += f": {answer.message}"
+    return verify(problem, dataclasses.replace(
+        answer, solver=name, message=message, solve_time=time.perf_counter() - start,
+        extras={**answer.extras, "fallback": record}), tol)
+
+
+def _fallback_record(failure: StepSolution, name: str, fallback: str) -> dict[str, str]:
+    """``extras["fallback"]``: who failed, how, and who solved the step instead."""
+    return {"from": name, "to": fallback, "status": failure.status.value,
+            "message": failure.message}
+
+
 def _scaled(solver: StepSolver, problem: StepProblem, reach: TaskScale, tol: Tolerance,
-            start: float) -> StepSolution:
+            start: float, fallback: StepSolver | None = None) -> StepSolution:
     """Solve the task scaled by the largest feasible ``s`` (capped by task_scale_max)."""
     if reach.scale is not None and reach.scale > problem.task_scale_max:
         reach = max_task_scale(problem, cap=problem.task_scale_max)
     s = float(reach.scale or 0.0)
-    inner = solver.solve(dataclasses.replace(problem, b=s * problem.b))
-    extras = {"policy": "scale", "conflicts": reach.blocking, "inner_status": inner.status}
+    scaled = dataclasses.replace(problem, b=s * problem.b)
+    inner = solver.solve(scaled)
+    extras: dict[str, Any] = {"policy": "scale", "conflicts": reach.blocking,
+                              "inner_status": inner.status}
+    if not inner.status.usable and fallback is not None:
+        second = fallback.solve(scaled)
+        if second.status.usable:
+            extras["fallback"] = _fallback_record(inner, solver.name, fallback.name)
+            inner = second
     x = inner.x
     if inner.status.usable:
-        s *= inner.scale  # a scaling solver (sns) may scale the scaled task further
+        s *= inner.scale  # 1 for every registered solver (they solve the task given)
     elif reach.x is not None:
         x = reach.x  # the feasible set at the largest s is (nearly) a single point
         extras["point"] = "feasibility"
     message = (f"task scaled to {s:.6g} of b; blocking bounds: "
                f"{', '.join(reach.blocking) or 'none'}")
+    if "fallback" in extras:
+        message += f"; solved by {extras['fallback']['to']} after {solver.name} failed"
+    # ``start`` is the start of the first solve: the wall time since covers every solve.
     return verify(problem, StepSolution(
         x=x, status=Status.SCALED, scale=s, solver=solver.name, message=message,
-        solve_time=inner.solve_time + time.perf_counter() - start, extras=extras), tol)
+        solve_time=time.perf_counter() - start, extras=extras), tol)
 
 
 def _relaxed(name: str, problem: StepProblem, blocking: tuple[str, ...], relax_eps: float,

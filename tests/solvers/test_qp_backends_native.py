@@ -1,14 +1,23 @@
-"""The native osqp path: calling osqp's extension solver directly changes nothing."""
+"""The native osqp and proxsuite paths: osqp's extension shortcut changes nothing, and
+every call is bounded (iteration caps, a Ctrl-C passed on, no banner)."""
 
 from __future__ import annotations
 
+import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dualarm_qp.bench.suite import load_suite
-from dualarm_qp.solvers import _native, get_solver
+from dualarm_qp.solvers import Status, _native, available_solvers, get_solver
 
 SUITE = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "step_suite.npz"
 
@@ -35,3 +44,116 @@ def test_osqp_extension_path_matches_the_public_api(monkeypatch: pytest.MonkeyPa
         if a.x is not None and b.x is not None:
             np.testing.assert_array_equal(a.x, b.x)
     assert sum(a.solved for a in fast_out) > 0 and sum(not a.solved for a in fast_out) > 0
+
+
+# --- the guards: proxqp's iteration caps, osqp's swallowed SIGINT, HiGHS's banner -------
+
+#: A recorded step on which proxqp, with the raw cost and its default inner limit
+#: (``max_iter_in`` = 1500), stalled for 126,250 iterations (1.9 s).
+PATHOLOGICAL_STEP = 1032
+
+
+@pytest.mark.skipif("proxqp" not in _native.NATIVE, reason="proxsuite is not installed")
+def test_proxsuite_profile_caps_inner_and_outer_iterations() -> None:
+    solver = get_solver("qp:proxsuite")
+    assert solver.options["max_iter"] * (solver.options["max_iter_in"] + 1) <= 50_000
+    problem = load_suite(SUITE).problems[PATHOLOGICAL_STEP]
+    sol = solver.solve(problem)
+    assert sol.status is Status.OPTIMAL, sol.message
+    settings = solver._native._qp.settings  # the options reached the backend
+    assert settings.max_iter == solver.options["max_iter"]
+    assert settings.max_iter_in == solver.options["max_iter_in"]
+
+
+@pytest.mark.skipif("proxqp" not in _native.NATIVE, reason="proxsuite is not installed")
+def test_proxsuite_pathological_call_returns_within_a_second(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The raw cost and no preconditioner (the old set-up) stall proxqp on this step;
+    the profile's iteration caps end the call well within a second."""
+    problem = dataclasses.replace(load_suite(SUITE).problems[PATHOLOGICAL_STEP], x_prev=None)
+    monkeypatch.setattr(_native, "cost_weights", lambda w: np.array(w, dtype=float))
+    options = {**get_solver("qp:proxsuite").options, "compute_preconditioner": False,
+               "eps_primal_inf": 1e-4}
+    native = _native.NATIVE["proxqp"](options)
+    start = time.perf_counter()
+    out = native.solve(problem)
+    elapsed = time.perf_counter() - start
+    assert not out.solved  # still pathological ...
+    assert out.iterations is not None
+    assert out.iterations <= options["max_iter"] * (options["max_iter_in"] + 1)
+    assert elapsed < 1.0  # ... but bounded
+
+
+def _endless_osqp() -> _native.OSQPNative:
+    """An osqp object that never converges (no termination check) for 5 s."""
+    return _native.OSQPNative({"eps_abs": 1e-300, "eps_rel": 0.0, "check_termination": 0,
+                               "polishing": False, "scaling": 0, "max_iter": 10**9,
+                               "time_limit": 5.0})
+
+
+@pytest.fixture
+def restore_sigint() -> Iterator[None]:
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _interrupt_in(seconds: float) -> threading.Timer:
+    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+@pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
+@pytest.mark.usefixtures("restore_sigint")
+def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
+    """osqp's own SIGINT handler catches a Ctrl-C during a solve and returns
+    "interrupted"; the step is not taken and the KeyboardInterrupt reaches the caller."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    solver = get_solver("qp:osqp")
+    solver._native = _endless_osqp()
+    problem = load_suite(SUITE).problems[0]
+    timer = _interrupt_in(0.3)
+    start = time.perf_counter()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            solver.solve(problem)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < 3.0  # at the signal, not at the time limit
+
+
+@pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
+@pytest.mark.usefixtures("restore_sigint")
+def test_osqp_interrupted_is_never_a_result() -> None:
+    """With a handler that does not raise, the interrupted call is an ERROR with no x,
+    and the program's handler still sees the signal."""
+    seen: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    solver = get_solver("qp:osqp")
+    solver._native = _endless_osqp()
+    problem = load_suite(SUITE).problems[0]
+    timer = _interrupt_in(0.3)
+    try:
+        sol = solver.solve(problem)
+    finally:
+        timer.cancel()
+    assert seen == [signal.SIGINT]
+    assert sol.status is Status.ERROR
+    assert "interrupt" in sol.extras["backend_status"].lower()
+    assert not sol.x.any()
+
+
+@pytest.mark.skipif("qp:highs" not in available_solvers(), reason="highs is not installed")
+def test_highs_prints_no_banner() -> None:
+    code = ("import numpy as np\n"
+            "from dualarm_qp.bench.suite import load_suite\n"
+            "from dualarm_qp.solvers import get_solver\n"
+            f"p = load_suite({str(SUITE)!r}).problems[0]\n"
+            "print(get_solver('qp:highs').solve(p).status.value)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.strip() == "optimal"
+    assert "HiGHS" not in out.stderr

@@ -13,10 +13,11 @@ from dualarm_qp.solvers._kkt import refine
 from dualarm_qp.step.problem import StepProblem
 
 QP = [n for n in available_solvers() if n.startswith("qp:")]
-#: Backends that may miss a feasible instance (of 40, 10 with s7 = 1e9, where osqp and
-#: proxqp run into their iteration limits); a miss is ERROR, never OPTIMAL or INFEASIBLE.
-#: Measured on these seeds: osqp 7, proxsuite 8, quadprog 5, clarabel 3.
-MAY_MISS = {"qp:osqp": 10, "qp:proxsuite": 10, "qp:clarabel": 4, "qp:quadprog": 7}
+#: Backends that may miss a feasible instance (of 40, 10 with s7 = 1e9); a miss is ERROR,
+#: never OPTIMAL or INFEASIBLE. Measured on these seeds with the raw cost: osqp 7,
+#: proxsuite 8, quadprog 5, clarabel 3; with the cost normalised (_native.cost_weights)
+#: and the present profiles: none. The first-order backends keep a little headroom.
+MAY_MISS = {"qp:osqp": 2, "qp:proxsuite": 1}
 
 
 def _feasible(seed: int, count: int, s7: float | None = None
@@ -99,8 +100,13 @@ def test_shape_change_is_a_fresh_setup(name: str) -> None:
     for m in (6, 5, 6):
         problem = random_problem(rng, m=m)
         sol = solver.solve(problem)
-        assert sol.status in (Status.OPTIMAL, Status.ERROR), sol.message
+        # FEASIBLE: the backend said solved but no certificate holds (clarabel's 5 x 7
+        # answer here is 6e-3 off the optimum), so it may not claim OPTIMAL.
+        assert sol.status in (Status.OPTIMAL, Status.FEASIBLE, Status.ERROR), sol.message
         assert sol.bound_violation <= 1e-7 or sol.status is Status.ERROR
+        if sol.status is Status.OPTIMAL:
+            exact = get_solver("nullspace").solve(problem)
+            assert relative_error(sol.x, exact.x) < 1e-6
 
 
 def test_refine_certifies_the_optimum_from_a_rough_point() -> None:
