@@ -6,7 +6,7 @@ Importing this package registers every solver module:
 ``fixed_grasp``    Zheng and Luh: the grasp does not slide, no bounds
 ``nullspace``      exact QP solution by null-space parametrisation (fast for 6 x 7)
 ``qp:<backend>``   the QP of Eq. 37 through qpsolvers (osqp, proxsuite, daqp, ...)
-``sns``            Saturation in the Null Space with task scaling (hard bounds, not a QP)
+``sns``            Saturation in the Null Space (hard bounds, not a QP; scaled by the policy)
 
 and :func:`solve_step` applies an infeasible-step policy around any of them.
 """

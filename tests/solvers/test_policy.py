@@ -55,10 +55,7 @@ def test_scale_reaches_the_largest_feasible_scale(name: str) -> None:
         assert sol.status is Status.SCALED, (sol.status, sol.message)
         expected = lp_max_scale(problem)
         assert expected is not None
-        if name == "sns":  # SNS may stop short of the optimal scale, never beyond it
-            assert sol.scale <= expected + 1e-7
-        else:
-            assert abs(sol.scale - expected) <= 1e-7 * max(1.0, expected)
+        assert abs(sol.scale - expected) <= 1e-7 * max(1.0, expected)
         assert sol.bound_violation <= 1e-7
         assert sol.eq_residual <= 1e-7 * max(1.0, float(np.abs(problem.b).max()))
 
@@ -68,9 +65,6 @@ def test_relax_keeps_the_bounds(name: str) -> None:
     """RELAXED: bounds hold, the task residual is what bounded least squares leaves."""
     problem = too_large_task(0)
     sol = solve_step(get_solver(name), problem, "relax")
-    if name == "sns":  # SNS scales the task itself: its SCALED answer is usable
-        assert sol.status is Status.SCALED
-        return
     if sol.status is not Status.RELAXED:  # methods without bounds report VIOLATION
         assert name in ("reference", "fixed_grasp"), sol.status
         return
@@ -85,8 +79,6 @@ def test_stop_raises_with_conflicts(name: str) -> None:
     solver = get_solver(name)
     for problem in (too_large_task(1), nowhere_feasible()):
         sol = solver.solve(problem)
-        if name == "sns" and sol.status is Status.SCALED:
-            continue  # SNS scales the task itself; "stop" only acts on failures
         if sol.status.usable:
             pytest.fail(f"{name} claimed {sol.status} on an infeasible step")
         if name in ("reference", "fixed_grasp"):
