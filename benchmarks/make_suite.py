@@ -54,9 +54,10 @@ class Recorder(DualArmController):
         super().__init__(*args, **kwargs)
         self.problems: list[StepProblem] = []
 
-    def step(self, state):  # type: ignore[no-untyped-def]
-        out = super().step(state)
-        self.problems.append(out.build.problem)
+    def step(self, state, *, scale_max=1.0):  # type: ignore[no-untyped-def]
+        out = super().step(state, scale_max=scale_max)
+        if out.build is not None:
+            self.problems.append(out.build.problem)
         return out
 
 

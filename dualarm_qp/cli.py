@@ -11,6 +11,7 @@ import sys
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from . import __version__
 from .errors import DualArmError, InvalidInputError
@@ -49,23 +50,38 @@ def _cmd_run(args: argparse.Namespace) -> int:
                          / exp.solver_name.replace(":", "_"))
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                              plots=not args.no_plots)
-    s = outcome.summary
-    print(f"{exp.name}: solver {exp.solver_name}, {s['samples']} samples, "
-          f"{'completed' if outcome.ok else 'FAILED'}")
-    print(f"  closure error max: {s['closure_pos_err_max_m']:.3g} m, "
-          f"{s['closure_rot_err_max_rad']:.3g} rad")
-    start = s["margin_qf_start_rad"]
-    print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
-          f"follower joint margin at start {start:.4f} rad"
-          + (" (starts outside its range)" if start < 0 else "")
-          + f", smallest after {s['margin_qf_min_after_start_rad']:.4f} rad")
-    print(f"  statuses: {s['status_counts']}; step time median "
-          f"{s['step_time_median_s'] * 1e6:.0f} us")
-    print(f"  outputs: {out}/")
+    print_run_summary(outcome.summary, str(out))
     if not outcome.ok:
-        _err(s["message"])
+        _err(outcome.summary["message"])
         return EXIT_FAILED
     return EXIT_OK
+
+
+def print_run_summary(s: dict[str, Any], out: str) -> None:
+    """Print the console summary of one run (from its summary.json content)."""
+    print(f"{s['experiment']}: solver {s['solver']}, {s['samples']} samples, "
+          f"{'completed' if s['completed'] else 'FAILED'}")
+    print(f"  path completed: {s['path_completed_pct']:.1f}%; time lost to scaling: "
+          f"{s['time_lost_to_scaling_s']:.3g} s")
+    print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "
+          f"{s['leader_rot_err_max_rad']:.3g} rad; closure error max: "
+          f"{s['closure_pos_err_max_m']:.3g} m, {s['closure_rot_err_max_rad']:.3g} rad")
+    limits = "hard limits" if s["hard_limits"] else "limits not enforced by this solver"
+    print(f"  realised motion, worst share of each limit ({limits}; above 1 is outside):")
+    for part, r in s["realised_limits"].items():
+        print(f"    {part:<9} range {r['range_ratio_max']:.3g} ({r['worst_range']}), "
+              f"speed {r['speed_ratio_max']:.3g} ({r['worst_speed'] or '-'})")
+    print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
+          f"smallest singular value: leader {s['sigma_min']['leader']:.3g}, "
+          f"follower {s['sigma_min']['follower']:.3g}")
+    fallback = f", {s['fallback_steps']} by the fallback solver" if s["fallback_steps"] else ""
+    print(f"  statuses: {s['status_counts']}{fallback}; step time median "
+          f"{s['step_time_median_s'] * 1e6:.0f} us")
+    for warning in s["warnings"]:
+        print(f"  warning: {warning}")
+    if s["failure"] is not None:
+        print(f"  failed on: {s['failure']['criterion']}")
+    print(f"  outputs: {out}/")
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:

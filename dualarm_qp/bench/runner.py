@@ -198,9 +198,10 @@ class _RecordingController(DualArmController):
         super().__init__(*args, **kwargs)
         self.problems: list[StepProblem] = []
 
-    def step(self, state: DualArmState) -> ControlOutput:
-        out = super().step(state)
-        self.problems.append(out.build.problem)
+    def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
+        out = super().step(state, scale_max=scale_max)
+        if out.build is not None:
+            self.problems.append(out.build.problem)
         return out
 
 
@@ -217,8 +218,7 @@ def canonical_steps(config: BenchConfig, settings: BenchSettings) -> list[StepPr
     ctrl = _RecordingController(exp.task, get_solver(CANONICAL_SOLVER, **_opts(exp)),
                                 exp.options, leader_gain=exp.leader_gain, policy=exp.policy,
                                 tolerance=settings.tolerance)
-    rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
-            closure_tolerance=exp.closure_tolerance)
+    rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project, limits=exp.limits)
     return ctrl.problems
 
 
@@ -256,9 +256,10 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
                                  leader_gain=exp.leader_gain, policy=exp.policy,
                                  tolerance=settings.tolerance)
         runs.append(rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
-                            closure_tolerance=exp.closure_tolerance))
+                            limits=exp.limits))
     first = runs[0]
     tr = first.trace
+    planned = max(planned, len(tr))  # a slowed task runs past its nominal samples
     counts = Counter(tr.status)
     usable = sum(counts.get(s.value, 0) for s in Status if s.usable)
     k_all, a_all, s_all, t_all = (

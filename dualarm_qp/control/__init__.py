@@ -1,6 +1,9 @@
 """The per-step controller and the rollout built on it."""
 
 from .controller import ControlOutput, DualArmController, StepTimes
-from .rollout import RolloutResult, Trace, rollout
+from .realised import LimitReport
+from .rollout import Failure, RolloutResult, RunLimits, rollout
+from .trace import Trace
 
-__all__ = ["ControlOutput", "DualArmController", "RolloutResult", "StepTimes", "Trace", "rollout"]
+__all__ = ["ControlOutput", "DualArmController", "Failure", "LimitReport", "RolloutResult",
+           "RunLimits", "StepTimes", "Trace", "rollout"]

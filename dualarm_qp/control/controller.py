@@ -14,18 +14,26 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import lapack
 
-from ..errors import InvalidInputError, NonFiniteError, SolverNotFoundError
-from ..se3 import compose_rows, pose_error_rows
-from ..solvers.base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, verify
+from ..errors import InfeasibleStepError, InvalidInputError, NonFiniteError, SolverNotFoundError
+from ..solvers.base import (
+    DEFAULT_TOLERANCE,
+    Status,
+    StepSolution,
+    StepSolver,
+    Tolerance,
+    equality_limit,
+    verify,
+)
+from ..solvers.nullspace import NullspaceSolver
 from ..solvers.policy import POLICIES, Policy, solve_step
 from ..solvers.registry import solver_info
 from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
+from ..step.leader import LeaderBuild, LeaderStepBuilder
+from ..step.problem import StepProblem
 from ..task.scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
-
 
 
 @dataclass(frozen=True)
@@ -56,22 +64,32 @@ class ControlOutput:
     m : float
         Grasp sliding speed [m/s].
     scale : float
-        Task scale applied this step (1.0 = full speed along the path).
+        Path-time rate of this step: the path advances by ``scale * dt`` (1.0 = full
+        speed). The product of the ``scale_max`` asked for, the leader's task scale and
+        the follower's.
     status : Status
-        Solver status, or RECOVERING when a variable started outside its range and
-        the solver met the bounds that pull it back.
+        Follower solver status, or RECOVERING when a variable started outside its
+        range and the solver met the bounds that pull it back.
     solution : StepSolution
-        The verified solver output.
+        The verified follower solver output (``extras["fallback"]`` when the step was
+        solved by the fallback solver after the configured one failed).
     build : StepBuild
-        The step problem and what the builder noticed.
-    leader_error : ndarray, shape (6,)
-        Leader tool pose error to its target ``D(t) H1^-1`` [m, rad].
+        The follower step problem and what the builder noticed (None when the leader's
+        step was unusable and the follower's was not built).
+    leader : LeaderBuild
+        The leader's step problem and its tracking error.
+    leader_solution : StepSolution
+        The leader's verified step (its ``scale`` is the leader's task scale).
+    sigma_min : tuple of float
+        Smallest singular value of the leader's and the follower's joint Jacobian
+        (rows ``[v; w]`` in m/s and rad/s per rad/s).
     times : StepTimes
         Timing split of the step.
     applied : bool
         Whether the command is meant to be applied. True for every usable status,
         and for a bound VIOLATION of a method that ignores bounds by design (the
-        paper's reference step); False otherwise (the rates are then zero).
+        paper's reference step) whose equality holds; False otherwise (the rates are
+        then zero).
     """
 
     ql_dot: FloatArray
@@ -80,14 +98,35 @@ class ControlOutput:
     scale: float
     status: Status
     solution: StepSolution
-    build: StepBuild
-    leader_error: FloatArray
+    build: StepBuild | None
+    leader: LeaderBuild
+    leader_solution: StepSolution
+    sigma_min: tuple[float, float]
     times: StepTimes
     applied: bool
 
+    @property
+    def leader_error(self) -> FloatArray:
+        """Leader tool pose error to its target ``D(t) H1^-1`` [m, rad]."""
+        return self.leader.error
+
+    @property
+    def fallback(self) -> bool:
+        """Whether the fallback solver produced this step's follower command."""
+        return "fallback" in self.solution.extras
+
 
 class DualArmController:
-    """Leader tracking plus the redundancy-resolved follower step.
+    """Leader tracking plus the redundancy-resolved follower step, both within limits.
+
+    Each step solves two problems in turn. The leader's (:mod:`dualarm_qp.step.leader`):
+    its rates that move the object along ``D(t)``, inside the leader's joint ranges and
+    speed limits when the solver claims hard limits. Then the follower's (Eqs. 25-40)
+    for those leader rates. Both go through the same infeasible-step policy: under
+    ``"scale"`` the leader's largest feasible task scale slows the path for both arms,
+    and the follower may slow it further (the leader's rates are scaled with it, which
+    keeps them in their box, since a box of rates always holds 0 and scaling
+    shrinks the rates towards it).
 
     Parameters
     ----------
@@ -103,6 +142,16 @@ class DualArmController:
         What to do with an infeasible step (see :func:`dualarm_qp.solvers.solve_step`).
     tolerance : Tolerance
         What counts as meeting the equality and the bounds.
+    fallback : StepSolver, optional
+        Solver for a step on which ``solver`` fails although the step is feasible (the
+        exact ``nullspace`` solver is the usual choice); None lets such a step fail.
+
+    Notes
+    -----
+    The leader's problem is square (six joints, six task rows): it has at most one
+    solution, which the exact ``nullspace`` solver finds. The paper's methods
+    (``reference``, ``fixed_grasp``) ignore limits by design; for them the leader's box
+    is left open.
     """
 
     def __init__(
@@ -114,6 +163,7 @@ class DualArmController:
         leader_gain: float | None = None,
         policy: Policy = "scale",
         tolerance: Tolerance = DEFAULT_TOLERANCE,
+        fallback: StepSolver | None = None,
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
@@ -127,50 +177,25 @@ class DualArmController:
         self.leader_gain = leader_gain
         self.policy = policy
         self.tolerance = tolerance
+        self.fallback = fallback
         try:
             self._hard_bounds = solver_info(solver.name).hard_bounds
         except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
             self._hard_bounds = True
         self._builder = StepBuilder(task, options)
-        # The object frame is often the leader's tool frame: skip composing with I.
-        self._H1_inv = None if np.array_equal(task.H1, np.eye(4)) else task.H1_inv.tolist()
+        self._leader_builder = LeaderStepBuilder(task, options, leader_gain,
+                                                 bounds=self._hard_bounds)
+        self._leader_solver = NullspaceSolver(tol=tolerance)
         self._x_prev: FloatArray | None = None
+
+    @property
+    def hard_bounds(self) -> bool:
+        """Whether the solver claims hard limits (False for the paper's methods)."""
+        return self._hard_bounds
 
     def reset(self) -> None:
         """Forget the warm start (call between unrelated runs)."""
         self._x_prev = None
-
-    def leader_rates(
-        self, t: float, T_l: FloatArray, J_l: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        """Leader joint rates that move the object along ``D(t)`` [rad/s].
-
-        Feed-forward of the object's twist at the leader's tool plus feedback of the
-        leader's pose error. Returns ``(ql_dot, error)``.
-        """
-        traj = self.task.trajectory
-        D = traj.pose(t).tolist()
-        V = traj.twist(t).tolist()
-        T_target = D if self._H1_inv is None else compose_rows(D, self._H1_inv)
-        # Velocity of the leader's tool origin: v_o + w x (p_l - p_o).
-        r0 = T_target[0][3] - D[0][3]
-        r1 = T_target[1][3] - D[1][3]
-        r2 = T_target[2][3] - D[2][3]
-        w0, w1, w2 = V[3], V[4], V[5]
-        V_l = [V[0] + (w1 * r2 - w2 * r1), V[1] + (w2 * r0 - w0 * r2),
-               V[2] + (w0 * r1 - w1 * r0), w0, w1, w2]
-        err = pose_error_rows(T_target, T_l.tolist())
-        if self.leader_gain > 0:
-            V_l = [v + self.leader_gain * e for v, e in zip(V_l, err, strict=True)]
-        twist = np.array(V_l)
-        ql_dot: FloatArray = twist
-        info = -1
-        if J_l.shape[0] == J_l.shape[1]:
-            # LAPACK gesv directly: np.linalg.solve costs several times more at 6 x 6.
-            ql_dot, info = lapack.dgesv(J_l, twist)[2:]
-        if info != 0:  # singular or not square: least squares
-            ql_dot = np.linalg.lstsq(J_l, twist, rcond=None)[0]
-        return ql_dot, np.array(err)
 
     def _checked(self, state: DualArmState) -> DualArmState:
         """``state`` with float arrays of the right lengths, or a clear error."""
@@ -186,62 +211,123 @@ class DualArmController:
             return state
         return DualArmState(t, q_l, q_f, sigma)
 
-    def step(self, state: DualArmState) -> ControlOutput:
+    def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
         """Compute one step's command from the measured ``state``.
+
+        Parameters
+        ----------
+        state : DualArmState
+            Measured joints of both arms, grasp coordinate and path time.
+        scale_max : float
+            Largest path-time rate of this step in [0, 1]: the path's feed-forward is
+            scaled by it (a rollout passes less than 1 when the path ends within the
+            sample).
 
         Never raises for an infeasible step under the "scale" and "relax" policies:
         the status says what happened. Under "stop" an infeasible step raises
-        :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting bounds.
+        :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting bounds
+        (``ql<i>`` for the leader, with its smallest singular value).
 
         Raises
         ------
         ShapeError, NonFiniteError, InvalidInputError
-            A joint vector of the wrong length or with NaN, a non-finite grasp or time.
+            A joint vector of the wrong length or with NaN, a non-finite grasp or time,
+            ``scale_max`` outside [0, 1].
         """
         t0 = time.perf_counter()
+        if not 0.0 <= scale_max <= 1.0:
+            raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         state = self._checked(state)
         leader_kin = self.task.leader.fk_jacobian(state.q_l)
         follower_kin = self.task.follower.fk_jacobian(state.q_f)
+        sigma_min = (_smallest_singular_value(leader_kin[1]),
+                     _smallest_singular_value(follower_kin[1]))
         t1 = time.perf_counter()
-        ql_dot, leader_err = self.leader_rates(state.t, *leader_kin)
+        lead = self._leader_builder.build(state.t, state.q_l, *leader_kin, scale_max=scale_max)
+        t2 = time.perf_counter()
+        try:
+            leader_sol = solve_step(self._leader_solver, lead.problem, policy=self.policy,
+                                    tol=self.tolerance)
+        except InfeasibleStepError as err:
+            raise InfeasibleStepError(
+                f"leader: {err} (smallest singular value of the leader's Jacobian "
+                f"{sigma_min[0]:.3g})", conflicts=err.conflicts) from None
+        t3 = time.perf_counter()
+        n_f = self._builder.n - 1
+        if not leader_sol.status.usable:
+            self._x_prev = None
+            return ControlOutput(
+                ql_dot=np.zeros(self.task.leader.n), qf_dot=np.zeros(n_f), m=0.0, scale=0.0,
+                status=leader_sol.status, solution=leader_sol, build=None, leader=lead,
+                leader_solution=leader_sol, sigma_min=sigma_min,
+                times=StepTimes(t1 - t0, t2 - t1, t3 - t2, 0.0), applied=False)
+        ql_dot = _inside(leader_sol.x, lead.problem) if self._hard_bounds else leader_sol.x
         build = self._builder.build(state, ql_dot, leader_kin=leader_kin,
                                     follower_kin=follower_kin, x_prev=self._x_prev)
-        t2 = time.perf_counter()
-        solution = solve_step(self.solver, build.problem, policy=self.policy, tol=self.tolerance)
-        t3 = time.perf_counter()
+        t4 = time.perf_counter()
+        solution = solve_step(self.solver, build.problem, policy=self.policy,
+                              tol=self.tolerance, fallback=self.fallback)
+        t5 = time.perf_counter()
         # Every solution is verified with our tolerances before it is applied; registered
         # solvers already did that (they verify before returning), so it is done here
         # only for a solution verified otherwise or not at all.
         if not _verified_with(solution, self.tolerance):
             solution = verify(build.problem, solution, self.tolerance,
                               claims_bounds=self._hard_bounds)
-        t4 = time.perf_counter()
+        t6 = time.perf_counter()
 
         status = solution.status
-        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovering.any():
+        recovering = build.recovering.any() or lead.recovering.any()
+        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and recovering:
             status = Status.RECOVERING
             solution = replace(solution, status=status)
         if not self._hard_bounds and status is Status.VIOLATION:
-            # The paper's methods ignore the bounds by design; integrate and report.
-            usable_x = True
+            # The paper's methods ignore the bounds by design: integrate a bound
+            # violation and report it, but never a step whose equality is broken.
+            usable_x = solution.eq_residual <= equality_limit(build.problem, self.tolerance)
         else:
             usable_x = status.usable
-        n_f = self._builder.n - 1
-        x = solution.x if usable_x else np.zeros(n_f + 1)
+        if not usable_x:
+            x = np.zeros(n_f + 1)
+        elif self._hard_bounds:
+            x = _inside(solution.x, build.problem)
+        else:
+            x = solution.x
         self._x_prev = x if usable_x else None
-        scale = min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
+        follower_scale = min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
+        scale = scale_max * leader_sol.scale * follower_scale
         return ControlOutput(
-            ql_dot=ql_dot if scale == 1.0 else ql_dot * scale,
+            ql_dot=ql_dot if follower_scale == 1.0 else ql_dot * follower_scale,
             qf_dot=x[:n_f].copy(),
             m=float(x[n_f]),
             scale=scale,
             status=status,
             solution=solution,
             build=build,
-            leader_error=leader_err,
-            times=StepTimes(t1 - t0, t2 - t1, t3 - t2, t4 - t3),
+            leader=lead,
+            leader_solution=leader_sol,
+            sigma_min=sigma_min,
+            times=StepTimes(t1 - t0, (t2 - t1) + (t4 - t3), (t3 - t2) + (t5 - t4), t6 - t5),
             applied=usable_x,
         )
+
+
+def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:
+    """``x`` clipped to the problem's box.
+
+    A verified answer may pass a bound by up to the bound tolerance (1e-7 per s); the
+    clip removes that, so that the integrated motion keeps the ranges exactly rather
+    than to ``tolerance * dt``. It moves ``A x`` by at most ``|A|`` times that much.
+    """
+    return np.minimum(np.maximum(x, problem.lower), problem.upper)
+
+
+def _smallest_singular_value(J: FloatArray) -> float:
+    """Smallest singular value of the joint Jacobian ``J`` (0 for a wide or empty one)."""
+    m, n = J.shape
+    if n < m or n == 0:
+        return 0.0
+    return float(np.linalg.svd(J, compute_uv=False)[-1])
 
 
 def _verified_with(solution: StepSolution, tol: Tolerance) -> bool:

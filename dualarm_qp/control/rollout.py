@@ -1,4 +1,16 @@
-"""The rollout: integrate the controller along the path and record every sample."""
+"""The rollout: integrate the controller along the path, record it, and judge the run.
+
+A run **completes** only when the task was done:
+
+* the whole path was executed (path time at its end; under the ``"scale"`` policy the
+  run goes on past the nominal duration, up to ``duration_cap``);
+* the leader tracked ``D(t)`` and the grasp closure held, within their tolerances;
+* for a solver that claims hard limits, the realised motion (:mod:`.realised`) kept
+  every limit of both arms and of the grasp.
+
+Otherwise it **fails**, and :class:`Failure` names the criterion, the sample and the
+amount. Every sample is kept either way.
+"""
 
 from __future__ import annotations
 
@@ -16,69 +28,98 @@ from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..se3 import rotation_error
 from ..step.build import DualArmState
-from .controller import ControlOutput, DualArmController
+from .controller import DualArmController
+from .realised import LimitReport, measure
+from .trace import Trace, record
 
 FloatArray = NDArray[np.float64]
 
+#: Criteria a run can fail on (``Failure.criterion``).
+CRITERIA = ("solver", "closure", "tracking", "singularity", "stalled", "path_incomplete",
+            "range", "speed")
 
-@dataclass
-class Trace:
-    """Everything recorded along a rollout, one row per sample.
+#: What a smallest singular value below the threshold does.
+SINGULARITY_ACTIONS = ("warn", "stop", "ignore")
 
-    Row k holds the state at time ``t[k]`` and the command computed from it; the
-    command of the last row is computed but not integrated.
+
+@dataclass(frozen=True)
+class Failure:
+    """Why a run failed.
+
+    Attributes
+    ----------
+    criterion : str
+        One of :data:`CRITERIA`.
+    sample : int
+        Row of the trace where it was found.
+    t : float
+        Time of that sample [s].
+    amount : float
+        The offending value (an error [m or rad], a ratio, a singular value, a share of
+        the path); NaN when there is none (a solver message).
+    limit : float
+        What it was allowed.
+    message : str
+        One line for a person.
     """
 
-    t: FloatArray
-    tau: FloatArray
-    q_l: FloatArray
-    q_f: FloatArray
-    grasp: FloatArray
-    m: FloatArray
-    ql_dot: FloatArray
-    qf_dot: FloatArray
-    closure_pos_err: FloatArray
-    closure_rot_err: FloatArray
-    leader_pos_err: FloatArray
-    leader_rot_err: FloatArray
-    margin_qf: FloatArray
-    margin_ql: FloatArray
-    margin_grasp: FloatArray
-    scale: FloatArray
-    status: list[str]
-    objective: FloatArray
-    eq_residual: FloatArray
-    bound_violation: FloatArray
-    kinematics_time_s: FloatArray
-    assembly_time_s: FloatArray
-    solve_time_s: FloatArray
-    step_time_s: FloatArray
+    criterion: str
+    sample: int
+    t: float
+    amount: float
+    limit: float
+    message: str
 
-    @classmethod
-    def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
-        """Arrays for ``rows`` samples, filled with NaN until written."""
-        def v(*shape: int) -> FloatArray:
-            return np.full((rows, *shape), np.nan)
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"criterion": self.criterion, "sample": self.sample, "t_s": self.t,
+                "amount": self.amount, "limit": self.limit, "message": self.message}
 
-        return cls(
-            t=v(), tau=v(), q_l=v(n_l), q_f=v(n_f), grasp=v(), m=v(), ql_dot=v(n_l),
-            qf_dot=v(n_f), closure_pos_err=v(), closure_rot_err=v(), leader_pos_err=v(),
-            leader_rot_err=v(), margin_qf=v(n_f), margin_ql=v(n_l), margin_grasp=v(),
-            scale=v(), status=[""] * rows, objective=v(), eq_residual=v(),
-            bound_violation=v(), kinematics_time_s=v(), assembly_time_s=v(),
-            solve_time_s=v(), step_time_s=v(),
-        )
 
-    def truncate(self, rows: int) -> Trace:
-        """Return the first ``rows`` samples."""
-        kw: dict[str, Any] = {}
-        for name in self.__dataclass_fields__:
-            val = getattr(self, name)
-            kw[name] = val[:rows]
-        return Trace(**kw)
+@dataclass(frozen=True)
+class RunLimits:
+    """What a run must keep to complete, and how far it may run.
 
-    def __len__(self) -> int:
-        return int(self.t.shape[0])
+    Parameters
+    ----------
+    closure : tuple of float
+        ``(position [m], rotation [rad])`` of the grasp closure error (default 1 mm,
+        0.01 rad): beyond it the object would be torn or dropped.
+    tracking : tuple of float
+        ``(position [m], rotation [rad])`` of the leader's error to ``D(path time)``
+        (default 1 mm, 0.01 rad).
+    singular_value_min : float
+        Threshold on the smallest singular value of either arm's Jacobian (default
+        1e-3; 0 turns it off).
+    singularity_action : {"warn", "stop", "ignore"}
+        What a sample below the threshold does (default ``"warn"``).
+    stall_time : float
+        A run whose path time advances by less than 1% of the time elapsed over a
+        window of this length [s] fails as stalled (default 1 s).
+    duration_cap : float, optional
+        Longest run [s] when the task was slowed; default twice the duration.
+    """
+
+    closure: tuple[float, float] = (1e-3, 1e-2)
+    tracking: tuple[float, float] = (1e-3, 1e-2)
+    singular_value_min: float = 1e-3
+    singularity_action: str = "warn"
+    stall_time: float = 1.0
+    duration_cap: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("closure", "tracking"):
+            pos, rot = getattr(self, name)
+            if not (pos > 0 and rot > 0):
+                raise InvalidInputError(f"{name} tolerance must be positive, got "
+                                        f"{getattr(self, name)}")
+        if not (math.isfinite(self.singular_value_min) and self.singular_value_min >= 0):
+            raise InvalidInputError("singular_value_min must be a finite number >= 0")
+        if self.singularity_action not in SINGULARITY_ACTIONS:
+            raise InvalidInputError(f"singularity_action must be one of "
+                                    f"{SINGULARITY_ACTIONS}, got {self.singularity_action!r}")
+        if not self.stall_time > 0:
+            raise InvalidInputError("stall_time must be positive")
 
 
 @dataclass
@@ -89,28 +130,61 @@ class RolloutResult:
     ----------
     trace : Trace
         The samples that were completed.
-    completed : bool
-        True when the whole duration was run.
-    message : str
-        Why the run stopped early ("" when completed).
+    failure : Failure or None
+        Why the run failed; None when it completed.
     solver : str
         Solver name.
     dt : float
         Sampling interval [s].
+    path_start, path_end : float
+        Path time of the start and of the end of the task [s].
+    realised : dict of str to LimitReport
+        The realised motion against the limits of ``"leader"``, ``"follower"`` and
+        ``"grasp"``.
+    hard_bounds : bool
+        Whether the solver claims hard limits (then the realised limits decide
+        completion).
+    warnings : list of str
+        What a person should know although the run may have completed.
+    extras : dict
+        Further settings to report.
     """
 
     trace: Trace
-    completed: bool
-    message: str
+    failure: Failure | None
     solver: str
     dt: float
+    path_start: float
+    path_end: float
+    realised: dict[str, LimitReport]
+    hard_bounds: bool
+    warnings: list[str] = field(default_factory=list)
     extras: dict[str, Any] = field(default_factory=dict)
 
-    def summary(self, arm_limits: dict[str, Any] | None = None) -> dict[str, Any]:
+    @property
+    def completed(self) -> bool:
+        """Whether the task was done (see the module docstring)."""
+        return self.failure is None
+
+    @property
+    def message(self) -> str:
+        """Why the run failed ("" when it completed)."""
+        return "" if self.failure is None else self.failure.message
+
+    @property
+    def path_completed(self) -> float:
+        """Share of the path executed, in [0, 1]."""
+        tr = self.trace
+        if not len(tr):
+            return 0.0
+        span = self.path_end - self.path_start
+        return float(min(max((tr.tau[-1] - self.path_start) / span, 0.0), 1.0))
+
+    def summary(self) -> dict[str, Any]:
         """Scalars that sum the run up (JSON-ready)."""
         tr = self.trace
         n = len(tr)
-        counts = Counter(tr.status)
+
         def fmax(a: FloatArray) -> float:
             return float(np.nanmax(a)) if a.size and not np.all(np.isnan(a)) else float("nan")
 
@@ -119,21 +193,34 @@ class RolloutResult:
 
         solve = tr.solve_time_s[~np.isnan(tr.solve_time_s)]
         step = tr.step_time_s[~np.isnan(tr.step_time_s)]
+        elapsed = float(tr.t[-1] - tr.t[0]) if n else 0.0
+        advanced = float(tr.tau[-1] - tr.tau[0]) if n else 0.0
         out: dict[str, Any] = {
             "solver": self.solver,
             "completed": self.completed,
             "message": self.message,
+            "failure": None if self.failure is None else self.failure.as_dict(),
+            "warnings": list(self.warnings),
             "samples": n,
             "dt_s": self.dt,
             "t_end_s": float(tr.t[-1]) if n else 0.0,
             "path_time_end_s": float(tr.tau[-1]) if n else 0.0,
-            "status_counts": dict(sorted(counts.items())),
-            "time_lost_to_scaling_s": float(np.nansum(1.0 - tr.scale[:-1]) * self.dt)
-            if n > 1 else 0.0,
+            "path_completed_pct": 100.0 * self.path_completed,
+            "time_lost_to_scaling_s": round(elapsed - advanced, 9),
+            "status_counts": dict(sorted(Counter(tr.status).items())),
+            "leader_status_counts": dict(sorted(Counter(tr.leader_status).items())),
+            "fallback_steps": int(np.nansum(tr.fallback)),
+            "hard_limits": self.hard_bounds,
+            "realised_limits": {k: v.as_dict() for k, v in self.realised.items()},
             "closure_pos_err_max_m": fmax(tr.closure_pos_err),
             "closure_rot_err_max_rad": fmax(tr.closure_rot_err),
+            "closure_pos_err_pre_max_m": fmax(tr.closure_pos_err_pre),
+            "closure_rot_err_pre_max_rad": fmax(tr.closure_rot_err_pre),
+            "correction_max_rad": {"leader": fmax(tr.correction_l),
+                                   "follower": fmax(tr.correction_f)},
             "leader_pos_err_max_m": fmax(tr.leader_pos_err),
             "leader_rot_err_max_rad": fmax(tr.leader_rot_err),
+            "sigma_min": {"leader": fmin(tr.sigma_min_l), "follower": fmin(tr.sigma_min_f)},
             "grasp_start_m": float(tr.grasp[0]) if n else float("nan"),
             "grasp_end_m": float(tr.grasp[-1]) if n else float("nan"),
             "grasp_min_m": fmin(tr.grasp),
@@ -146,7 +233,8 @@ class RolloutResult:
             "margin_ql_min_rad": fmin(tr.margin_ql),
             "margin_grasp_min_m": fmin(tr.margin_grasp),
             "end_inside_all_ranges": bool(
-                n and np.nanmin(tr.margin_qf[-1]) >= -1e-9 and tr.margin_grasp[-1] >= -1e-9
+                n and np.nanmin(tr.margin_qf[-1]) >= -1e-9
+                and np.nanmin(tr.margin_ql[-1]) >= -1e-9 and tr.margin_grasp[-1] >= -1e-9
             ),
             "bound_violation_max": fmax(tr.bound_violation),
             "eq_residual_max": fmax(tr.eq_residual),
@@ -159,130 +247,137 @@ class RolloutResult:
         return out
 
 
-def _margins(q: FloatArray, lo: FloatArray, hi: FloatArray) -> FloatArray:
-    """Signed distance to the nearest limit per joint (negative outside) [rad]."""
-    return np.minimum(q - lo, hi - q)
-
-
 def rollout(
     controller: DualArmController,
     initial: DualArmState,
     *,
     duration: float,
+    limits: RunLimits | None = None,
     reresolve_orientation: bool | None = None,
-    project: bool = True,
-    closure_tolerance: tuple[float, float] = (1e-3, 1e-2),
-    stall_time: float = 1.0,
+    project: bool | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> RolloutResult:
-    """Run ``controller`` from ``initial`` for ``duration`` seconds of simulated time.
+    """Run ``controller`` from ``initial`` along ``duration`` seconds of path.
 
     Each sample: the controller computes the command from the current state; the
     leader integrates ``ql_dot * dt``, the follower ``qf_dot * dt`` and the grasp
     ``m * dt``; the path time advances by ``scale * dt`` (a scaled step slows the
-    object). On a curved path with the paper's frozen-orientation Jacobian, the
-    follower's orientation is re-resolved after each step (Sec. 3.3).
+    object). The run ends when the path time reaches ``initial.t + duration``; a
+    slowed task runs longer, up to ``limits.duration_cap``.
 
-    Euler integration leaves an error of second order in ``dt`` per step. The
-    controller's closure feedback (``correction_gain``) removes it over the following
-    steps, as it would on a real arm; with ``project=True`` the rollout also corrects
-    the drift at once, at position level: a few Gauss-Newton iterations move the
-    leader onto ``D(path time) H1^-1`` and the follower onto the grasp closure (the
-    grasp coordinate is kept). Both are recorded in the trace as errors before the
-    next step.
+    Drift correction: Euler integration leaves a closure and tracking error of second
+    order in ``dt`` per step, which the controller's feedback terms remove over the
+    following steps, inside the step's limits. The paper's methods, which ignore
+    limits, may also use position-level corrections after the step: the Sec. 3.3
+    re-resolution of the hand orientation on a curved path (``reresolve_orientation``)
+    and a drift projection (``project``: a few Gauss-Newton iterations putting the
+    leader on ``D(path time) H1^-1`` and the follower on the grasp). Their effect is
+    recorded (``closure_*_err_pre``, ``correction_*``). A solver that claims hard
+    limits refuses both: an unbounded correction after the step would break them.
 
     Parameters
     ----------
     controller : DualArmController
         The per-step controller.
     initial : DualArmState
-        State at ``t = initial.t``.
+        State at path time ``initial.t``.
     duration : float
-        Length of the run [s].
+        Length of the path [s].
+    limits : RunLimits, optional
+        Tolerances, singularity threshold and cap (defaults: :class:`RunLimits`).
     reresolve_orientation : bool, optional
-        Apply the Sec. 3.3 re-resolution; default: when the path is curved and the
-        controller does not use the exact orientation Jacobian.
-    project : bool
-        Correct the integration drift of both arms after every step (see above).
-        Corrections that do not converge are counted in the summary
-        (``projection_failures``).
-    closure_tolerance : tuple of float
-        ``(position [m], rotation [rad])``: a sample whose grasp closure error exceeds
-        either stops the run as failed ("grasp closure lost"): the object would be
-        torn or dropped. Default (1 mm, 0.01 rad).
-    stall_time : float
-        A run whose path time advances by less than 1% of the time elapsed over a
-        window of this length [s] (the task scaled to nearly 0: it cannot move) stops
-        as failed ("path stalled").
+        Apply the Sec. 3.3 re-resolution; default: for the paper's methods, when the
+        path is curved and the controller freezes the orientation.
+    project : bool, optional
+        Apply the drift projection; default: for the paper's methods.
     progress : callable, optional
         Called as ``progress(done, total)`` after every sample.
 
     Returns
     -------
     RolloutResult
-        Never raises for a failed step: the run stops, and the result says why
-        (``completed=False``) while keeping every completed sample.
+        Never raises for a failed step: the run stops, and the result says why while
+        keeping every completed sample.
+
+    Raises
+    ------
+    InvalidInputError
+        A non-positive duration, a cap below it, or a position-level correction asked
+        for a solver that claims hard limits.
     """
     if not (math.isfinite(duration) and duration > 0):
         raise InvalidInputError(f"duration must be a positive number of seconds, got {duration}")
+    limits = RunLimits() if limits is None else limits
+    cap = 2.0 * duration if limits.duration_cap is None else limits.duration_cap
+    if not cap >= duration:
+        raise InvalidInputError(f"duration_cap ({cap:g} s) must be at least the duration "
+                                f"({duration:g} s)")
     task = controller.task
     leader, follower, surface = task.leader, task.follower, task.surface
+    hard = controller.hard_bounds
+    curved = bool(getattr(surface, "curved", False)) or float(
+        np.linalg.norm(surface.angular_rate(float(initial.sigma)))) > 0.0
+    if reresolve_orientation is None:
+        reresolve_orientation = not hard and curved and not controller.options.exact_orientation
+    if project is None:
+        project = not hard
+    if hard and (project or reresolve_orientation):
+        raise InvalidInputError(
+            f"solver '{controller.solver.name}' keeps hard limits: the position-level "
+            "corrections (projection, re-resolution) are unbounded and would break them; "
+            "its drift is corrected through the step's feedback term")
     dt = controller.options.dt
-    steps = math.floor(duration / dt + 1e-9)
-    rows = steps + 1
-    tr = Trace.allocate(rows, leader.n, follower.n)
+    path_start = float(initial.t)
+    path_end = path_start + duration
+    max_rows = math.floor(cap / dt + 1e-9) + 1
+    nominal_rows = math.floor(duration / dt + 1e-9) + 1
+    tr = Trace.allocate(max_rows, leader.n, follower.n)
     q_l = leader.check_q(initial.q_l, "initial q_l").copy()
     q_f = follower.check_q(initial.q_f, "initial q_f").copy()
     sigma = float(initial.sigma)
-    tau = float(initial.t)
-    t_wall = float(initial.t)
-    if reresolve_orientation is None:
-        curved = float(np.linalg.norm(surface.angular_rate(sigma))) > 0.0 or bool(
-            getattr(surface, "curved", False)
-        )
-        reresolve_orientation = curved and not controller.options.exact_orientation
-    tol_pos, tol_rot = closure_tolerance
-    if not (tol_pos > 0 and tol_rot > 0):
-        raise InvalidInputError(f"closure_tolerance must be positive, got {closure_tolerance}")
+    tau = path_start
+    t_wall = path_start
+    pre: tuple[float, float] | None = None  # closure error before correction, if any
+    corr = (0.0, 0.0)
     controller.reset()
-    completed, message = True, ""
+    failure: Failure | None = None
+    warnings: list[str] = []
     projection_failures = 0
     window = (t_wall, tau)  # start of the current stall-detection window
+    end_tol = 1e-9 * max(1.0, abs(path_end))
     k = 0
-    for k in range(rows):
+    for k in range(max_rows):
         state = DualArmState(tau, q_l, q_f, sigma)
+        at_end = tau >= path_end - end_tol
+        scale_max = 0.0 if at_end else min(1.0, (path_end - tau) / dt)
         try:
-            out = controller.step(state)
+            out = controller.step(state, scale_max=scale_max)
         except DualArmError as err:
-            completed, message = False, f"step {k} at t = {t_wall:.4f} s: {err}"
+            failure = Failure("solver", k, t_wall, math.nan, math.nan,
+                              f"step {k} at t = {t_wall:.4f} s: {err}")
             break
-        _record(tr, k, t_wall, state, out, controller)
-        if tr.closure_pos_err[k] > tol_pos or tr.closure_rot_err[k] > tol_rot:
-            completed = False
-            message = (f"step {k} at t = {t_wall:.4f} s: grasp closure lost: "
-                       f"{tr.closure_pos_err[k]:.3g} m, {tr.closure_rot_err[k]:.3g} rad "
-                       f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
-            k += 1
-            break
-        if t_wall - window[0] >= stall_time - 1e-9:
+        record(tr, k, t_wall, state, out, controller)
+        tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (
+            pre if pre is not None else (tr.closure_pos_err[k], tr.closure_rot_err[k]))
+        tr.correction_l[k], tr.correction_f[k] = corr
+        failure = _sample_failure(tr, k, out.applied, out.status.value,
+                                  out.solution.message, limits, warnings)
+        if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
             if tau - window[1] < 0.01 * (t_wall - window[0]):
-                completed = False
-                message = (f"step {k} at t = {t_wall:.4f} s: path stalled: the object "
-                           f"advanced {tau - window[1]:.3g} s along its path in "
-                           f"{t_wall - window[0]:.3g} s (task scaled to nearly 0); last "
-                           f"solver message: {out.solution.message}")
-                k += 1
-                break
+                failure = Failure(
+                    "stalled", k, t_wall, tau - window[1], 0.01 * (t_wall - window[0]),
+                    f"step {k} at t = {t_wall:.4f} s: path stalled: the object advanced "
+                    f"{tau - window[1]:.3g} s along its path in {t_wall - window[0]:.3g} s "
+                    f"(task scale {tr.scale[k]:.3g}, leader's {tr.leader_scale[k]:.3g}; "
+                    f"smallest singular values: leader {tr.sigma_min_l[k]:.3g}, follower "
+                    f"{tr.sigma_min_f[k]:.3g}); last solver message: {out.solution.message}")
             window = (t_wall, tau)
-        if not out.applied:
-            completed = False
-            message = (f"step {k} at t = {t_wall:.4f} s: solver status "
-                       f"{out.status.value}: {out.solution.message}")
+        if failure is not None:
             k += 1
             break
         if progress is not None:
-            progress(k + 1, rows)
-        if k == rows - 1:
+            progress(k + 1, nominal_rows)
+        if at_end or k == max_rows - 1:
             k += 1
             break
         q_l = q_l + dt * out.ql_dot
@@ -290,26 +385,112 @@ def rollout(
         sigma = sigma + dt * out.m
         tau = tau + dt * out.scale
         t_wall = t_wall + dt
-        if reresolve_orientation:
-            q_f = _reresolve(controller, q_l, q_f, sigma)
-        if project:
-            q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
-            q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
-            projection_failures += (not ok_l) + (not ok_f)
-    trace = tr if k >= rows else tr.truncate(k)
-    return RolloutResult(trace, completed and k >= rows, message, controller.solver.name, dt,
-                         extras={"projection": project,
-                                 "projection_failures": projection_failures,
-                                 "closure_tolerance_m_rad": list(closure_tolerance)})
+        pre, corr = None, (0.0, 0.0)
+        if reresolve_orientation or project:
+            pre = task.closure_error(q_l, q_f, sigma)
+            q_l0, q_f0 = q_l, q_f
+            if reresolve_orientation:
+                q_f = _reresolve(controller, q_l, q_f, sigma)
+            if project:
+                q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
+                q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
+                projection_failures += (not ok_l) + (not ok_f)
+            corr = (float(np.abs(q_l - q_l0).max(initial=0.0)),
+                    float(np.abs(q_f - q_f0).max(initial=0.0)))
+    trace = tr.truncate(k)
+    realised = _realised(controller, trace, dt)
+    if failure is None and len(trace) and trace.tau[-1] < path_end - end_tol:
+        done = (trace.tau[-1] - path_start) / duration
+        failure = Failure(
+            "path_incomplete", len(trace) - 1, float(trace.t[-1]), done, 1.0,
+            f"path not completed: {100 * done:.1f}% of the path in {cap:g} s "
+            f"(the duration cap; the task was slowed by the limits)")
+    if failure is None and hard:
+        failure = _realised_failure(realised, trace, dt)
+    return RolloutResult(
+        trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
+        warnings=warnings,
+        extras={"projection": project, "reresolve_orientation": reresolve_orientation,
+                "projection_failures": projection_failures,
+                "closure_tolerance_m_rad": list(limits.closure),
+                "tracking_tolerance_m_rad": list(limits.tracking),
+                "singular_value_min": limits.singular_value_min,
+                "duration_cap_s": cap})
+
+
+def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
+                    limits: RunLimits, warnings: list[str]) -> Failure | None:
+    """Return the first criterion sample ``k`` breaks, or None (appends warnings)."""
+    t = float(tr.t[k])
+    at = f"step {k} at t = {t:.4f} s"
+    checks = (
+        ("closure", "grasp closure lost", tr.closure_pos_err[k], tr.closure_rot_err[k],
+         limits.closure),
+        ("tracking", "leader left its path", tr.leader_pos_err[k], tr.leader_rot_err[k],
+         limits.tracking),
+    )
+    for criterion, what, pos, rot, (tol_pos, tol_rot) in checks:
+        if pos > tol_pos or rot > tol_rot:
+            ratio_pos, ratio_rot = pos / tol_pos, rot / tol_rot
+            amount, limit = (pos, tol_pos) if ratio_pos >= ratio_rot else (rot, tol_rot)
+            return Failure(criterion, k, t, float(amount), limit,
+                           f"{at}: {what}: {pos:.3g} m, {rot:.3g} rad "
+                           f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
+    threshold = limits.singular_value_min
+    if threshold > 0 and limits.singularity_action != "ignore":
+        for arm, sv in (("leader", tr.sigma_min_l[k]), ("follower", tr.sigma_min_f[k])):
+            if sv < threshold:
+                text = (f"{at}: the {arm} is near a singularity: smallest singular value "
+                        f"of its Jacobian {sv:.3g} (threshold {threshold:g})")
+                if limits.singularity_action == "stop":
+                    return Failure("singularity", k, t, float(sv), threshold, text)
+                if not any(w.startswith(f"{arm} near a singularity") for w in warnings):
+                    warnings.append(f"{arm} near a singularity from {text}")
+    if not applied:
+        return Failure("solver", k, t, math.nan, math.nan,
+                       f"{at}: solver status {status}: {message}")
+    return None
+
+
+def _realised(controller: DualArmController, trace: Trace, dt: float
+              ) -> dict[str, LimitReport]:
+    """Measure the realised motion of both arms and of the grasp against their limits."""
+    task, opts = controller.task, controller.options
+    reports = {}
+    speed_rule = opts.velocity_limits  # speeds are reported against the arms' limits always
+    for role, arm, q in (("leader", task.leader, trace.q_l),
+                         ("follower", task.follower, trace.q_f)):
+        prefix = "ql" if role == "leader" else "qf"
+        reports[role] = measure(q, arm.q_min, arm.q_max, arm.qd_max, dt,
+                                [f"{prefix}{j + 1}" for j in range(arm.n)],
+                                speed_rule=speed_rule)
+    surface = task.surface
+    reports["grasp"] = measure(trace.grasp[:, None], np.array([surface.sigma_min]),
+                               np.array([surface.sigma_max]),
+                               np.array([opts.grasp_speed_max]), dt, ["grasp"],
+                               speed_rule=speed_rule)
+    return reports
+
+
+def _realised_failure(realised: dict[str, LimitReport], trace: Trace, dt: float
+                      ) -> Failure | None:
+    """Return the earliest realised-limit breach of a hard-limit run, as a failure."""
+    breaches = [r.breach for r in realised.values() if r.breach is not None]
+    if not breaches:
+        return None
+    b = min(breaches, key=lambda b: b.sample)
+    t = float(trace.t[b.sample])
+    return Failure(b.criterion, b.sample, t, b.amount, b.limit,
+                   f"step {b.sample} at t = {t:.4f} s: realised motion broke a limit: "
+                   f"{b.describe(dt)}")
 
 
 def _project(arm: SerialArm, T_target: FloatArray, q: FloatArray) -> tuple[FloatArray, bool]:
     """Move ``q`` onto ``T_target`` by damped Gauss-Newton from the integrated guess.
 
-    Joint limits are not imposed here: the step's bounds already kept the joints in
-    range, and the correction is of the order of the integration error (``dt^2``).
-    Returns the corrected joints (never worse than ``q``: only steps that lower the
-    error are taken) and whether the correction converged to 1e-9 m and rad.
+    Only for the paper's methods, which ignore limits (see :func:`rollout`). Returns the
+    corrected joints (never worse than ``q``: only steps that lower the error are taken)
+    and whether the correction converged to 1e-9 m and rad.
     """
     res = ik_dls(arm, T_target, q, tol_pos=1e-12, tol_rot=1e-12, max_iter=5,
                  respect_limits=False, raise_on_failure=False)
@@ -325,59 +506,11 @@ def _reresolve(controller: DualArmController, q_l: FloatArray, q_f: FloatArray,
     dw = rotation_error(T_target[:3, :3], T_f[:3, :3])
     twist = np.concatenate((np.zeros(3), dw))
     try:
-        dq = np.linalg.lstsq(J, twist, rcond=None)[0]
+        dq = np.linalg.lstsq(J, twist, rcond=1e-9)[0]
     except np.linalg.LinAlgError:
         return q_f
     return q_f + dq
 
 
-def _record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
-            controller: DualArmController) -> None:
-    task = controller.task
-    leader, follower, surface = task.leader, task.follower, task.surface
-    tr.t[k] = t
-    tr.tau[k] = state.t
-    tr.q_l[k] = state.q_l
-    tr.q_f[k] = state.q_f
-    tr.grasp[k] = state.sigma
-    tr.m[k] = out.m
-    tr.ql_dot[k] = out.ql_dot
-    tr.qf_dot[k] = out.qf_dot
-    err = out.build.closure_error
-    tr.closure_pos_err[k] = float(np.linalg.norm(err[:3]))
-    tr.closure_rot_err[k] = float(np.linalg.norm(err[3:]))
-    le = out.leader_error
-    tr.leader_pos_err[k] = float(np.linalg.norm(le[:3]))
-    tr.leader_rot_err[k] = float(np.linalg.norm(le[3:]))
-    tr.margin_qf[k] = _margins(state.q_f, follower.q_min, follower.q_max)
-    tr.margin_ql[k] = _margins(state.q_l, leader.q_min, leader.q_max)
-    tr.margin_grasp[k] = _grasp_margin(surface, state.sigma)
-    tr.scale[k] = out.scale
-    tr.status[k] = out.status.value
-    sol = out.solution
-    tr.objective[k] = sol.objective
-    tr.eq_residual[k] = sol.eq_residual
-    tr.bound_violation[k] = sol.bound_violation
-    tr.kinematics_time_s[k] = out.times.kinematics
-    tr.assembly_time_s[k] = out.times.assembly
-    tr.solve_time_s[k] = out.times.solve
-    tr.step_time_s[k] = out.times.total
-
-
-def _grasp_margin(surface: Any, sigma: float) -> float:
-    """Signed distance of the grasp to the nearest end of its range [m]."""
-    lo = surface.sigma_min
-    hi = surface.sigma_max
-    r = surface.point(sigma)
-    s = surface.tangent(sigma)
-    margin = min(sigma - lo, hi - sigma)
-    for i in range(3):
-        if abs(s[i]) < 1e-12:
-            continue
-        for bound, sign in ((surface.r_min[i], 1.0), (surface.r_max[i], -1.0)):
-            if math.isfinite(bound):
-                margin = min(margin, sign * (r[i] - bound) / abs(s[i]))
-    return float(margin)
-
-
-__all__ = ["RolloutResult", "Trace", "rollout"]
+__all__ = ["CRITERIA", "SINGULARITY_ACTIONS", "Failure", "RolloutResult", "RunLimits",
+           "rollout"]

@@ -229,9 +229,14 @@ class ControllerSpec(_Model):
 
     ``correction_gain`` and ``leader_gain`` are in 1/(time unit), default ``1/dt``;
     ``centre_horizon`` (time unit, default ``dt``, the paper's) is how fast the range
-    centres pull; ``projection`` turns on the rollout's position-level drift correction
-    after each step; ``closure_tolerance: [length, angle]`` (default 1 mm and 0.01 rad)
-    stops a run whose grasp closure error exceeds it.
+    centres pull; ``projection`` turns the rollout's position-level drift correction
+    after each step on or off (default: on for the paper's methods, which ignore
+    limits; refused for a hard-limit solver); ``closure_tolerance`` and
+    ``tracking_tolerance`` (``[length, angle]``, default 1 mm and 0.01 rad) fail a run
+    whose grasp closure or leader tracking error exceeds them;
+    ``singular_value_min`` (default 1e-3, SI) and ``singularity_action`` (warn, stop
+    or ignore) say what a Jacobian near a singularity does; ``duration_cap`` (time
+    unit, default twice ``duration``) is how long a slowed task may run.
     """
 
     dt: float
@@ -245,10 +250,28 @@ class ControllerSpec(_Model):
     recovery_fraction: float = 0.0
     policy: Literal["scale", "relax", "stop"] = "scale"
     exact_orientation: bool = False
-    projection: bool = True
+    projection: bool | None = None
     closure_tolerance: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    tracking_tolerance: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    singular_value_min: float = 1e-3
+    singularity_action: Literal["warn", "stop", "ignore"] = "warn"
+    duration_cap: float | None = None
 
-    @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max")
+    @field_validator("singular_value_min")
+    @classmethod
+    def _non_negative_value(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= 0):
+            raise ValueError("must be a finite number >= 0")
+        return v
+
+    @model_validator(mode="after")
+    def _cap(self) -> ControllerSpec:
+        if self.duration_cap is not None and self.duration_cap < self.duration:
+            raise ValueError(f"duration_cap ({self.duration_cap:g}) must be at least "
+                             f"the duration ({self.duration:g})")
+        return self
+
+    @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap")
     @classmethod
     def _positive_time(cls, v: float | None) -> float | None:
         if v is not None and not (math.isfinite(v) and v > 0):
@@ -269,7 +292,7 @@ class ControllerSpec(_Model):
             raise ValueError("must be in [0, 1]")
         return v
 
-    @field_validator("closure_tolerance")
+    @field_validator("closure_tolerance", "tracking_tolerance")
     @classmethod
     def _tolerance(cls, v: list[float] | None) -> list[float] | None:
         if v is not None and not all(math.isfinite(x) and x > 0 for x in v):
@@ -278,10 +301,16 @@ class ControllerSpec(_Model):
 
 
 class SolverSpec(_Model):
-    """Which solver from the registry, with its options."""
+    """Which solver from the registry, with its options.
+
+    ``fallback`` names the solver that takes a step on which a hard-limit solver fails
+    although the step is feasible (default ``nullspace``, the exact solver; ``none``
+    lets such a step fail the run).
+    """
 
     name: str = "reference"
     options: dict[str, Any] = Field(default_factory=dict)
+    fallback: str = "nullspace"
 
 
 class ExperimentConfig(_Model):

@@ -10,13 +10,19 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_open, atomic_write_with, write_json
-from ..control.rollout import Trace
+from ..control.trace import Trace
 
 __all__ = ["atomic_open", "atomic_write_with", "trace_columns", "write_json", "write_trace_csv"]
 
 
 def trace_columns(trace: Trace) -> dict[str, Any]:
-    """Return the CSV columns of a trace, in order, SI units."""
+    """Return the CSV columns of a trace, in order, SI units.
+
+    ``t, path_t, ql*, qf*, grasp`` are the realised motion; ``m, ql_dot*, qf_dot*`` the
+    commanded (applied) rates of the row's step; ``closure_*_err_pre`` and
+    ``correction_*`` the closure error before, and the size of, any position-level
+    correction; ``feedback_*`` the closure feedback in the step.
+    """
     cols: dict[str, Any] = {"t": trace.t, "path_t": trace.tau}
     for j in range(trace.q_l.shape[1]):
         cols[f"ql{j + 1}"] = trace.q_l[:, j]
@@ -45,6 +51,18 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     cols["assembly_time_s"] = trace.assembly_time_s
     cols["solve_time_s"] = trace.solve_time_s
     cols["step_time_s"] = trace.step_time_s
+    # Added with the realised-motion checks (appended: earlier columns keep their place).
+    cols["leader_scale"] = trace.leader_scale
+    cols["leader_status"] = trace.leader_status
+    cols["fallback"] = trace.fallback
+    cols["sigma_min_l"] = trace.sigma_min_l
+    cols["sigma_min_f"] = trace.sigma_min_f
+    cols["closure_pos_err_pre"] = trace.closure_pos_err_pre
+    cols["closure_rot_err_pre"] = trace.closure_rot_err_pre
+    cols["correction_l"] = trace.correction_l
+    cols["correction_f"] = trace.correction_f
+    cols["feedback_pos"] = trace.feedback_pos
+    cols["feedback_rot"] = trace.feedback_rot
     return cols
 
 

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..control.rollout import Trace
+from ..control.trace import Trace
 from ..kinematics.arm import SerialArm
 from ..task.surfaces import GraspSurface
 from .outputs import atomic_write_with

@@ -87,8 +87,7 @@ def run_experiment(
     t0 = time.perf_counter()
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
-                         closure_tolerance=exp.closure_tolerance,
-                         progress=update)
+                         limits=exp.limits, progress=update)
     finally:
         if bar is not None:
             bar.close()
@@ -121,7 +120,7 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
             "correction_gain_1_s": opts.correction_gain,
             "leader_gain_1_s": exp.leader_gain,
             "exact_orientation": opts.exact_orientation,
-            "closure_projection": exp.project,
+            "fallback_solver": exp.fallback if result.hard_bounds else None,
             "centre_horizon_s": opts.centre_horizon,
         },
         "reconstruction": exp.notes,

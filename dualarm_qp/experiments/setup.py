@@ -10,13 +10,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..control.controller import DualArmController
+from ..control.rollout import RunLimits
 from ..errors import ConfigError, DualArmError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
 from ..se3 import make_pose, rot_x, rot_y, rot_z
 from ..solvers.policy import Policy
-from ..solvers.registry import get_solver, solver_info
+from ..solvers.registry import SolverInfo, get_solver, solver_info
 from ..step.build import DualArmState, StepOptions
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
@@ -61,10 +62,13 @@ class Experiment:
         Infeasible-step policy.
     duration : float
         Run length [s].
-    project : bool
-        Position-level drift correction in the rollout.
-    closure_tolerance : tuple of float
-        Largest grasp closure error ``(m, rad)`` a run may reach before it is stopped.
+    limits : RunLimits
+        Tolerances, singularity threshold and duration cap of the run.
+    project : bool or None
+        Position-level drift correction in the rollout (None: the default for the
+        solver, see :func:`~dualarm_qp.control.rollout.rollout`).
+    fallback : str or None
+        Solver for a feasible step the configured hard-limit solver fails on.
     notes : dict
         Reconstruction facts worth reporting (leader IK branch, follower base, ...).
     """
@@ -79,15 +83,25 @@ class Experiment:
     leader_gain: float
     policy: Policy
     duration: float
-    project: bool = True
-    closure_tolerance: tuple[float, float] = (1e-3, 1e-2)
+    limits: RunLimits = field(default_factory=RunLimits)
+    project: bool | None = None
+    fallback: str | None = "nullspace"
     notes: dict[str, Any] = field(default_factory=dict)
 
-    def controller(self) -> DualArmController:
-        """Return a fresh controller with the configured solver."""
+    def controller(self, *, fallback: bool = True) -> DualArmController:
+        """Return a fresh controller with the configured solver.
+
+        ``fallback=False`` leaves out the fallback solver (the bench measures each
+        solver's own success).
+        """
         solver = get_solver(self.solver_name, **self.solver_options)
+        backup = None
+        if (fallback and self.fallback is not None and self.fallback != self.solver_name
+                and solver_info(self.solver_name).hard_bounds):
+            backup = get_solver(self.fallback)
         return DualArmController(self.task, solver, self.options,
-                                 leader_gain=self.leader_gain, policy=self.policy)
+                                 leader_gain=self.leader_gain, policy=self.policy,
+                                 fallback=backup)
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
@@ -277,23 +291,54 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         exact_orientation=c.exact_orientation,
         centre_horizon=None if c.centre_horizon is None else c.centre_horizon * sc.time,
     )
-    closure_tolerance = (1e-3, 1e-2) if c.closure_tolerance is None else (
-        c.closure_tolerance[0] * sc.length, c.closure_tolerance[1] * sc.angle)
+    def tolerance(value: list[float] | None) -> tuple[float, float]:
+        return (1e-3, 1e-2) if value is None else (value[0] * sc.length, value[1] * sc.angle)
+
+    limits = RunLimits(
+        closure=tolerance(c.closure_tolerance), tracking=tolerance(c.tracking_tolerance),
+        singular_value_min=c.singular_value_min, singularity_action=c.singularity_action,
+        duration_cap=None if c.duration_cap is None else c.duration_cap * sc.time)
+    fallback = None if cfg.solver.fallback == "none" else cfg.solver.fallback
+    if fallback is not None:
+        try:
+            info = solver_info(fallback)
+        except SolverNotFoundError as err:
+            raise ConfigError(str(err), path=path, key="solver.fallback") from None
+        if not (info.hard_bounds and info.available):
+            raise ConfigError("the fallback must be an installed solver that keeps hard "
+                              "limits (or 'none')", path=path, key="solver.fallback",
+                              valid=["nullspace", "none"]) from None
+    solver_name = solver or cfg.solver.name
+    chosen = _solver_info_or_none(solver_name)
+    if c.projection and chosen is not None and chosen.hard_bounds:
+        raise ConfigError(f"solver '{solver_name}' keeps hard limits; the position-level "
+                          "projection is unbounded and would break them (drift is "
+                          "corrected through the step's feedback term)", path=path,
+                          key="controller.projection", valid=["false"]) from None
     return Experiment(
         name=cfg.name,
         path=path,
         task=task,
         initial=DualArmState(trajectory.t0, q_l0, q_f0, sigma0),
         options=options,
-        solver_name=solver or cfg.solver.name,
+        solver_name=solver_name,
         solver_options=dict(cfg.solver.options),
         leader_gain=1.0 / dt if c.leader_gain is None else c.leader_gain / sc.time,
         policy=c.policy,
         duration=duration,
+        limits=limits,
         project=c.projection,
-        closure_tolerance=closure_tolerance,
+        fallback=fallback,
         notes=notes,
     )
+
+
+def _solver_info_or_none(name: str) -> SolverInfo | None:
+    """Return the registry entry of ``name``, or None when there is none."""
+    try:
+        return solver_info(name)
+    except SolverNotFoundError:
+        return None
 
 
 def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,

@@ -27,8 +27,8 @@ class Status(str, enum.Enum):
         minimise Eq. 37 (SNS; the fixed-grasp method, which holds ``m = 0``).
     SCALED
         The full task was infeasible; ``A x = scale * b`` holds while the bounds hold.
-        The exact solvers under the "scale" policy use the largest such ``scale`` in
-        [0, 1]; SNS uses the scale its saturation sequence reaches.
+        Under the "scale" policy every solver gets the largest such ``scale`` in
+        [0, 1] (:func:`~dualarm_qp.solvers.solve_step` finds it exactly).
     RELAXED
         The full task was infeasible; the equality was met in weighted least squares
         while the bounds hold.
@@ -180,6 +180,14 @@ def _residuals(problem: StepProblem, x: FloatArray, xs: list[float], scale: floa
     return eq, viol, gaps
 
 
+def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
+    """Largest ``|A x - scale * b|`` component that counts as meeting the equality.
+
+    ``tol.equality`` relative to ``max(1, max |b|)`` [m/s or rad/s].
+    """
+    return tol.equality * max(1.0, max(map(abs, problem.b.tolist()), default=0.0))
+
+
 def verify(
     problem: StepProblem,
     solution: StepSolution,
@@ -249,7 +257,7 @@ def verified_solution(
         )
     eq, viol, gaps = _residuals(problem, x, xs, scale)
     if status.usable:
-        scale_eq = tol.equality * max(1.0, max(map(abs, problem.b.tolist()), default=0.0))
+        scale_eq = equality_limit(problem, tol)
         if status is not Status.RELAXED and eq > scale_eq:
             status = Status.VIOLATION
             message = message or f"equality residual {eq:.3g} exceeds tolerance {scale_eq:.3g}"

@@ -419,8 +419,9 @@ class CurvedBar(GraspSurface):
     Notes
     -----
     ``phi(r) = +-((x - c_x)^2 + z^2 - R_c^2) / (2 R_c)`` (sign ``+`` for the outer face);
-    its gradient is unit on the surface and points along ``a*``. ``r_min`` / ``r_max``
-    are the bounding box of the grasp arc.
+    its gradient is unit on the surface and points along ``a*``. The grasp range is the
+    arc ``[sigma_min, sigma_max]``; ``r_min`` / ``r_max`` are unbounded (no box of Eq. 3:
+    that box describes a straight path).
     """
 
     SIDES = ("outer", "inner")
@@ -452,13 +453,12 @@ class CurvedBar(GraspSurface):
             )
         if lo > hi:
             raise LimitsError(f"sigma_min {lo:g} m exceeds sigma_max {hi:g} m")
-        # Bounding box of the arc: endpoints plus interior extrema of x (k sigma = 0)
-        # and of z (k sigma = +-pi/2).
-        cands = [lo, hi] + [
-            c for c in (0.0, 0.5 * math.pi / self._k, -0.5 * math.pi / self._k) if lo < c < hi
-        ]
-        pts = np.array([self._point(c) for c in cands])
-        super().__init__(sigma_min=lo, sigma_max=hi, r_min=pts.min(axis=0), r_max=pts.max(axis=0))
+        # The grasp range is taken along the arc (sigma), not as a box in object
+        # coordinates: Eqs. 30-31 assume a straight path, and on an arc the box of its
+        # end points is empty along the tangent once the grasp is outside the range.
+        inf = math.inf
+        super().__init__(sigma_min=lo, sigma_max=hi, r_min=(-inf, -inf, -inf),
+                         r_max=(inf, inf, inf))
 
     @property
     def curvature(self) -> float:

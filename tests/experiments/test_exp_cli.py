@@ -52,9 +52,28 @@ def test_run_writes_outputs(tmp_path, capsys):
 @pytest.mark.parametrize("solver", ["nullspace", "qp:daqp", "fixed_grasp"])
 def test_run_with_solver_override(tmp_path, solver):
     out = tmp_path / "o"
-    assert main(["run", str(short_config(tmp_path)), "--solver", solver, "--out", str(out),
+    config = short_config(tmp_path, velocity_limits=True, grasp_speed_max=100)
+    assert main(["run", str(config), "--solver", solver, "--out", str(out),
                  "--quiet", "--no-plots"]) == 0
     assert json.loads((out / "summary.json").read_text())["solver"] == solver
+
+
+@pytest.mark.parametrize("solver", ["nullspace", "qp:daqp"])
+def test_unlimited_first_jump_fails_a_hard_limit_run_on_the_closure(tmp_path, solver, capsys):
+    """Without speed limits Table 2's grasp jumps back into range in one sample.
+
+    The linearised step then opens the closure far beyond 1 mm; a hard-limit solver may
+    not hide that behind an unbounded position-level correction, so the run fails and
+    says so (exit 1, criterion "closure").
+    """
+    out = tmp_path / "o"
+    assert main(["run", str(short_config(tmp_path)), "--solver", solver, "--out", str(out),
+                 "--quiet", "--no-plots"]) == 1
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] is False
+    assert summary["failure"]["criterion"] == "closure"
+    assert summary["failure"]["sample"] == 1
+    assert "grasp closure lost" in capsys.readouterr().err
 
 
 def test_unknown_key_exit_2_one_clear_line(tmp_path, capsys):

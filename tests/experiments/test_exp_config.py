@@ -145,3 +145,64 @@ def test_bundled_configs_are_the_repository_configs():
 
     for _, name in CASES:
         assert bundled_config(name).read_bytes() == (CONFIGS / name).read_bytes()
+
+
+def _built(mutate, solver=None):
+    d = paper_dict()
+    mutate(d)
+    return build_experiment(parse_config(d, "x.yaml"), "x.yaml", solver=solver)
+
+
+def test_run_limits_convert_to_si():
+    def mutate(d):
+        d["controller"].update(tracking_tolerance=[2, 1], closure_tolerance=[3, 2],
+                               singular_value_min=0.01, singularity_action="stop",
+                               duration_cap=40)
+
+    exp = _built(mutate)
+    assert exp.limits.tracking == pytest.approx((0.002, math.radians(1)))
+    assert exp.limits.closure == pytest.approx((0.003, math.radians(2)))
+    assert exp.limits.singular_value_min == 0.01
+    assert exp.limits.singularity_action == "stop"
+    assert exp.limits.duration_cap == pytest.approx(40.0)
+
+
+@pytest.mark.parametrize(("key", "value", "words"), [
+    ("duration_cap", 1.0, "at least the duration"),
+    ("singularity_action", "panic", "warn"),
+    ("singular_value_min", -1.0, ">= 0"),
+    ("tracking_tolerance", [0, 1], "positive"),
+])
+def test_bad_run_limits_name_the_key(key, value, words):
+    def mutate(d):
+        d["controller"][key] = value
+
+    with pytest.raises(ConfigError, match=words) as err:
+        _built(mutate)
+    assert "controller" in str(err.value)
+
+
+def test_projection_is_refused_for_a_hard_limit_solver():
+    def mutate(d):
+        d["controller"]["projection"] = True
+
+    with pytest.raises(ConfigError, match="controller.projection"):
+        _built(mutate, solver="nullspace")
+    assert _built(mutate).project is True  # the paper's reference step may use it
+
+
+@pytest.mark.parametrize(("fallback", "ok"), [("nullspace", True), ("none", True),
+                                               ("qp:daqp", True), ("reference", False),
+                                               ("qp:nope", False)])
+def test_fallback_must_keep_hard_limits(fallback, ok):
+    def mutate(d):
+        d["solver"]["fallback"] = fallback
+
+    if ok:
+        exp = _built(mutate, solver="qp:osqp")
+        ctrl = exp.controller()
+        assert (ctrl.fallback is None) == (fallback == "none")
+        assert exp.controller(fallback=False).fallback is None
+    else:
+        with pytest.raises(ConfigError, match="solver.fallback"):
+            _built(mutate)

@@ -1,0 +1,160 @@
+"""The realised motion of a run, measured against every limit.
+
+A limit is kept when the recorded motion keeps it, not when the commanded step did.
+Speeds are the finite differences of consecutive recorded positions over ``dt``;
+ranges are read from the recorded positions. Two rules:
+
+* **speed**: ``|q[k+1] - q[k]| / dt <= v_max (1 + SPEED_RTOL)`` for every sample;
+* **range**: the distance outside ``[lo, hi]`` never grows from one sample to the next
+  by more than ``RANGE_TOL``: a variable that starts outside its range never moves
+  further out, and one that is inside (or got back inside) never leaves it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+#: Relative slack on a speed limit for finite-difference rounding.
+SPEED_RTOL = 1e-6
+
+#: Absolute slack [rad or m] on a range: the solvers' bound tolerance (1e-7 per s) over
+#: one sample, plus rounding.
+RANGE_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Breach:
+    """The first sample at which a realised limit was broken.
+
+    Attributes
+    ----------
+    criterion : {"range", "speed"}
+        Which rule was broken.
+    variable : str
+        Name of the variable (``"ql2"``, ``"qf3"``, ``"grasp"``).
+    sample : int
+        Row of the trace (for a speed: the first row of the pair).
+    amount : float
+        The realised value: distance outside the range [rad or m], or speed [rad/s
+        or m/s].
+    limit : float
+        What it was allowed: the previous distance outside the range, or the speed
+        limit.
+    """
+
+    criterion: str
+    variable: str
+    sample: int
+    amount: float
+    limit: float
+
+    def describe(self, dt: float) -> str:
+        """One line for a person."""
+        if self.criterion == "speed":
+            return (f"{self.variable} moved at {self.amount:.6g} per s between samples "
+                    f"{self.sample} and {self.sample + 1} (limit {self.limit:.6g}, "
+                    f"{self.amount / self.limit:.3g}x)")
+        if self.limit > 0:
+            return (f"{self.variable} moved further outside its range at sample "
+                    f"{self.sample}: {self.amount:.6g} outside, was {self.limit:.6g}")
+        return (f"{self.variable} left its range at sample {self.sample} "
+                f"(t = {self.sample * dt:.4f} s after the start): {self.amount:.6g} outside")
+
+
+@dataclass(frozen=True)
+class LimitReport:
+    """Worst realised use of the limits of one group of variables (an arm, the grasp).
+
+    Attributes
+    ----------
+    range_ratio : float
+        ``max |x - mid| / half_width`` over samples and variables: at most 1 inside the
+        ranges, above 1 outside (0 when no range is finite).
+    speed_ratio : float
+        ``max |dx/dt| / v_max`` (0 when no speed limit is finite).
+    range_excess : float
+        Largest distance outside a range [rad or m] (0 when always inside).
+    worst_range, worst_speed : str
+        The variables that reached ``range_ratio`` and ``speed_ratio``.
+    breach : Breach or None
+        The first broken rule, if any.
+    """
+
+    range_ratio: float
+    speed_ratio: float
+    range_excess: float
+    worst_range: str
+    worst_speed: str
+    breach: Breach | None
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready."""
+        return {"range_ratio_max": self.range_ratio, "speed_ratio_max": self.speed_ratio,
+                "range_excess_max": self.range_excess, "worst_range": self.worst_range,
+                "worst_speed": self.worst_speed}
+
+
+def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt: float,
+            names: Sequence[str], *, speed_rule: bool = True) -> LimitReport:
+    """Measure the realised motion ``x`` (rows: samples) against its limits.
+
+    Parameters
+    ----------
+    x : ndarray, shape (rows, n)
+        Recorded positions [rad or m].
+    lo, hi : ndarray, shape (n,)
+        Ranges (may be infinite).
+    v_max : ndarray, shape (n,)
+        Speed limits [per s] (may be infinite).
+    dt : float
+        Sampling interval [s].
+    names : sequence of str
+        Variable names for the report.
+    speed_rule : bool
+        Whether a speed above ``v_max`` is a breach (False: the speed ratio is only
+        reported, for a run whose step did not impose the speed limits).
+    """
+    x = np.asarray(x, dtype=np.float64)
+    x = x.reshape(x.shape[0], -1) if x.ndim != 2 else x
+    lo, hi, v_max = (np.broadcast_to(np.asarray(a, dtype=np.float64), x.shape[1:])
+                     for a in (lo, hi, v_max))
+    rows = x.shape[0]
+    if rows == 0:
+        return LimitReport(0.0, 0.0, 0.0, "", "", None)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    mid = np.where(finite, 0.5 * (lo + hi), 0.0)
+    half = np.where(finite, 0.5 * (hi - lo), 1.0)
+    ratio = np.where(finite, np.abs(x - mid) / np.where(half > 0, half, np.inf), 0.0)
+    ratio = np.where(finite & (half <= 0) & (x != mid), np.inf, ratio)
+    excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)
+    jr = int(np.argmax(ratio.max(axis=0)))
+    breach: Breach | None = None
+    speed_ratio, js = 0.0, 0
+    if rows > 1:
+        speed = np.abs(np.diff(x, axis=0)) / dt
+        limited = np.isfinite(v_max)
+        sratio = np.where(limited, speed / np.where(limited, v_max, 1.0), 0.0)
+        js = int(np.argmax(sratio.max(axis=0)))
+        speed_ratio = float(sratio[:, js].max())
+        over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)) & speed_rule)
+        grew = np.argwhere(np.diff(excess, axis=0) > RANGE_TOL)
+        first = [(int(k), "speed", int(j)) for k, j in over[:1]]
+        first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
+        if first:
+            k, what, j = min(first)
+            if what == "speed":
+                breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
+            else:
+                breach = Breach("range", names[j], k, float(excess[k, j]),
+                                float(excess[k - 1, j]))
+    return LimitReport(float(ratio[:, jr].max()), speed_ratio, float(excess.max()),
+                       names[jr], names[js] if rows > 1 else "", breach)
+
+
+__all__ = ["RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

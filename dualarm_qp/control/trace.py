@@ -1,0 +1,162 @@
+"""The trace of a rollout: one row per sample, what was realised and what was commanded."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..step.build import DualArmState
+from ..task.surfaces import GraspSurface
+from .controller import ControlOutput, DualArmController
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass
+class Trace:
+    """Everything recorded along a rollout, one row per sample.
+
+    Row k holds the realised state at time ``t[k]`` (``tau``, ``q_l``, ``q_f``,
+    ``grasp``: what the arms actually did) and the command computed from it
+    (``ql_dot``, ``qf_dot``, ``m``: the rates applied over the next sample, already
+    scaled); the command of the last row is computed but not integrated. The realised
+    rates are the differences of consecutive states over ``dt``; without a
+    position-level correction they equal the commanded ones.
+
+    ``closure_*_err_pre`` is the grasp closure error of the integrated state before any
+    position-level correction (the paper's re-resolution, or the drift projection of
+    the paper's methods) made row k's state; ``correction_l`` and ``correction_f`` are
+    the largest joint change [rad] that correction applied. Both equal the plain
+    values (and 0) when no correction ran. ``feedback_pos`` and ``feedback_rot`` are the
+    closure feedback ``K e`` in the follower's right-hand side [m/s, rad/s]: the
+    velocity-level correction, which the step's limits bound.
+    """
+
+    t: FloatArray
+    tau: FloatArray
+    q_l: FloatArray
+    q_f: FloatArray
+    grasp: FloatArray
+    m: FloatArray
+    ql_dot: FloatArray
+    qf_dot: FloatArray
+    closure_pos_err: FloatArray
+    closure_rot_err: FloatArray
+    closure_pos_err_pre: FloatArray
+    closure_rot_err_pre: FloatArray
+    correction_l: FloatArray
+    correction_f: FloatArray
+    feedback_pos: FloatArray
+    feedback_rot: FloatArray
+    leader_pos_err: FloatArray
+    leader_rot_err: FloatArray
+    sigma_min_l: FloatArray
+    sigma_min_f: FloatArray
+    margin_qf: FloatArray
+    margin_ql: FloatArray
+    margin_grasp: FloatArray
+    scale: FloatArray
+    leader_scale: FloatArray
+    status: list[str]
+    leader_status: list[str]
+    fallback: FloatArray
+    objective: FloatArray
+    eq_residual: FloatArray
+    bound_violation: FloatArray
+    kinematics_time_s: FloatArray
+    assembly_time_s: FloatArray
+    solve_time_s: FloatArray
+    step_time_s: FloatArray
+
+    @classmethod
+    def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
+        """Arrays for ``rows`` samples, filled with NaN until written."""
+        widths = {"q_l": n_l, "ql_dot": n_l, "margin_ql": n_l,
+                  "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f}
+        values: dict[str, Any] = {}
+        for f in fields(cls):
+            if f.name in ("status", "leader_status"):
+                values[f.name] = [""] * rows
+            elif f.name in widths:
+                values[f.name] = np.full((rows, widths[f.name]), np.nan)
+            else:
+                values[f.name] = np.full(rows, np.nan)
+        return cls(**values)
+
+    def truncate(self, rows: int) -> Trace:
+        """Return the first ``rows`` samples."""
+        return Trace(**{f.name: getattr(self, f.name)[:rows] for f in fields(self)})
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+
+def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
+           controller: DualArmController) -> None:
+    """Write sample ``k`` (wall time ``t`` [s]) from the state and its command."""
+    task = controller.task
+    leader, follower = task.leader, task.follower
+    tr.t[k] = t
+    tr.tau[k] = state.t
+    tr.q_l[k] = state.q_l
+    tr.q_f[k] = state.q_f
+    tr.grasp[k] = state.sigma
+    tr.m[k] = out.m
+    tr.ql_dot[k] = out.ql_dot
+    tr.qf_dot[k] = out.qf_dot
+    le = out.leader.error
+    tr.leader_pos_err[k] = math.hypot(*le[:3].tolist())
+    tr.leader_rot_err[k] = math.hypot(*le[3:].tolist())
+    tr.sigma_min_l[k], tr.sigma_min_f[k] = out.sigma_min
+    if out.build is not None:
+        err = out.build.closure_error
+        tr.closure_pos_err[k] = math.hypot(*err[:3].tolist())
+        tr.closure_rot_err[k] = math.hypot(*err[3:].tolist())
+        gain = float(controller.options.correction_gain or 0.0)
+        tr.feedback_pos[k] = gain * tr.closure_pos_err[k]
+        tr.feedback_rot[k] = gain * tr.closure_rot_err[k]
+    tr.margin_qf[k] = np.minimum(state.q_f - follower.q_min, follower.q_max - state.q_f)
+    tr.margin_ql[k] = np.minimum(state.q_l - leader.q_min, leader.q_max - state.q_l)
+    tr.margin_grasp[k] = grasp_margin(task.surface, state.sigma)
+    tr.scale[k] = out.scale
+    tr.leader_scale[k] = out.leader_solution.scale if out.leader_solution.status.usable else 0.0
+    tr.status[k] = out.status.value
+    tr.leader_status[k] = out.leader_solution.status.value
+    tr.fallback[k] = float(out.fallback)
+    sol = out.solution
+    tr.objective[k] = sol.objective
+    tr.eq_residual[k] = sol.eq_residual
+    tr.bound_violation[k] = sol.bound_violation
+    tr.kinematics_time_s[k] = out.times.kinematics
+    tr.assembly_time_s[k] = out.times.assembly
+    tr.solve_time_s[k] = out.times.solve
+    tr.step_time_s[k] = out.times.total
+
+
+def grasp_margin(surface: GraspSurface, sigma: float) -> float:
+    """Signed distance of the grasp to the nearest end of its range [m].
+
+    The range along the path, ``[sigma_min, sigma_max]``, intersected with the box of
+    Eq. 3 where the surface has one (on a straight path both say the same).
+    """
+    lo = surface.sigma_min
+    hi = surface.sigma_max
+    margin = min(sigma - lo, hi - sigma)
+    if not (np.isfinite(surface.r_min).any() or np.isfinite(surface.r_max).any()):
+        return float(margin)
+    r = surface.point(sigma)
+    s = surface.tangent(sigma)
+    for i in range(3):
+        if abs(s[i]) < 1e-12:
+            continue
+        for bound, sign in ((surface.r_min[i], 1.0), (surface.r_max[i], -1.0)):
+            if math.isfinite(bound):
+                margin = min(margin, sign * (r[i] - bound) / abs(s[i]))
+    return float(margin)
+
+
+__all__ = ["Trace", "grasp_margin", "record"]
