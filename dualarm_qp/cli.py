@@ -128,10 +128,10 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench.report import format_table, write_report
     from .bench.runner import BenchSettings, run_bench
-    from .experiments.reproduce import CASES, bundled_config
+    from .experiments.reproduce import BENCH_CONFIGS, bundled_config
     from .solvers import available_solvers
 
-    configs = args.configs or [bundled_config(name) for _, name in CASES]
+    configs = args.configs or [bundled_config(name) for name in BENCH_CONFIGS]
     solvers = [s.strip() for s in args.solvers.split(",") if s.strip()] if args.solvers \
         else available_solvers()
     settings = BenchSettings(repeat=args.repeat, duration=args.duration)
@@ -179,7 +179,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("bench", help="run every config with every solver, compare them")
     b.add_argument("configs", nargs="*", type=Path, metavar="CONFIG",
-                   help="experiment YAML files (default: the paper's three cases)")
+                   help="experiment YAML files (default: the beam with speed limits and "
+                        "the curved bar)")
     b.add_argument("--solvers", help="comma-separated solver names (default: all available)")
     b.add_argument("--out", default="bench_out", help="output folder (default bench_out); "
                    "finished jobs stored there are reused, so a bench resumes")

@@ -23,6 +23,12 @@ CASES = (
 )
 
 
+#: What ``dualarm-qp bench`` compares when given no config: the beam task with speed
+#: limits and the curved bar (the paper's own configs have no speed limits, where a
+#: hard-limit solver's first, unlimited step tears the grasp closure open).
+BENCH_CONFIGS = ("puma_beam_limits.yaml", "curved_bar_waypoints.yaml")
+
+
 def bundled_config(name: str) -> Path:
     """Path of a configuration file shipped with the package."""
     return Path(str(resources.files("dualarm_qp") / "data" / name))

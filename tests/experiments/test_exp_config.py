@@ -141,9 +141,9 @@ def test_nan_joints_and_bad_values_name_their_key(tmp_path):
 
 def test_bundled_configs_are_the_repository_configs():
     """`dualarm-qp reproduce` runs the package's copies: they must be these files."""
-    from dualarm_qp.experiments.reproduce import CASES, bundled_config
+    from dualarm_qp.experiments.reproduce import BENCH_CONFIGS, CASES, bundled_config
 
-    for _, name in CASES:
+    for name in [*(name for _, name in CASES), *BENCH_CONFIGS]:
         assert bundled_config(name).read_bytes() == (CONFIGS / name).read_bytes()
 
 
