@@ -186,7 +186,7 @@ def test_projection_is_refused_for_a_hard_limit_solver():
     def mutate(d):
         d["controller"]["projection"] = True
 
-    with pytest.raises(ConfigError, match="controller.projection"):
+    with pytest.raises(ConfigError, match=r"controller\.projection"):
         _built(mutate, solver="nullspace")
     assert _built(mutate).project is True  # the paper's reference step may use it
 
@@ -204,5 +204,5 @@ def test_fallback_must_keep_hard_limits(fallback, ok):
         assert (ctrl.fallback is None) == (fallback == "none")
         assert exp.controller(fallback=False).fallback is None
     else:
-        with pytest.raises(ConfigError, match="solver.fallback"):
+        with pytest.raises(ConfigError, match=r"solver\.fallback"):
             _built(mutate)
