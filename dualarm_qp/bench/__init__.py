@@ -7,14 +7,17 @@ may import from everything below it, and nothing below imports it.
   per finished pair so that an interrupted bench resumes;
 * :mod:`.suite`: scoring of solvers on a file of recorded step problems, the way
   qpbenchmark scores QP solvers;
-* :mod:`.report`: table, CSV, JSON and plot.
+* :mod:`.report`: table, CSV, JSON and plot;
+* :mod:`.store`, :mod:`.interrupt`: the result store shared by concurrent benches, and
+  stopping on SIGINT / SIGTERM without storing a cut-short job.
 """
 
 from .report import COLUMNS, format_table, objective_gaps, write_report
-from .runner import BenchResult, BenchSettings, run_bench, run_job
+from .runner import BenchInterrupted, BenchResult, BenchSettings, run_bench, run_job
 
 __all__ = [
     "COLUMNS",
+    "BenchInterrupted",
     "BenchResult",
     "BenchSettings",
     "format_table",

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._io import atomic_write_with, jsonable, write_text
 from .._io import write_json as _write_json_file
-from .runner import STATUSES
+from .runner import STATUSES, job_failure
 from .table import render_table
 
 #: Columns of ``bench.csv``, in order.
@@ -36,7 +36,7 @@ COLUMNS: tuple[str, ...] = (
     "objective_gap_max", "objective_gap_median", "objective_gap_rel_max",
     "objective_gap_steps",
     "replay_success_rate", "replay_solve_time_median_s", "bare_solve_time_median_s",
-    "solve_over_bare", "timed_samples", "wall_time_s", "key", "error",
+    "solve_over_bare", "timed_samples", "wall_time_s", "key", "message", "error",
 )
 
 
@@ -46,7 +46,8 @@ def objective_gaps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     ``objective_gap_max`` and ``objective_gap_median`` are ``objective - best`` over the
     canonical steps where this solver and at least one solver were within tolerance
     (``best`` is the smallest such objective); ``objective_gap_rel_max`` divides each
-    step's gap by ``max(1, |best|)``; ``objective_gap_steps`` counts the steps.
+    step's gap by ``max(1, |best|)``; ``objective_gap_steps`` counts the steps. A failed
+    job (:func:`~.runner.job_failure`) gets its reason in ``error``.
     """
     by_cfg: dict[str, list[dict[str, Any]]] = {}
     for rec in records:
@@ -76,6 +77,9 @@ def objective_gaps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         row.update(objective_gap_max=gap_max, objective_gap_median=gap_med,
                    objective_gap_rel_max=gap_rel,
                    objective_gap_steps=n)
+        reason = job_failure(rec)
+        if reason is not None:
+            row["error"] = reason
         out.append(row)
     return out
 
@@ -122,15 +126,28 @@ TABLE: tuple[tuple[str, str, str], ...] = (
 
 
 def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> str:
-    """Format the rows as a text table (or a Markdown table); times in microseconds."""
+    """Format the rows as a text table (or a Markdown table); times in microseconds.
+
+    A job that raised an error shows ``ERROR`` in place of its numbers; every failed
+    job (:func:`~.runner.job_failure`) is listed with its reason under the table.
+    """
     cells = [[h for h, _, _ in TABLE]]
+    failed = []
     for r in rows:
-        if r.get("error"):
+        reason = job_failure(r)
+        if reason is not None:
+            failed.append(f"{r.get('experiment')} / {r.get('solver')}: {reason}")
+        if r.get("error") and not r.get("steps_run"):
             cells.append([str(r.get("experiment")), str(r.get("solver")), "ERROR"]
                          + [""] * (len(TABLE) - 3))
             continue
         cells.append([_fmt(r.get(col), kind) for _, col, kind in TABLE])
-    return render_table(cells, markdown=markdown, left_columns=2)
+    text = render_table(cells, markdown=markdown, left_columns=2)
+    if failed:
+        sep = "\n\n" if markdown else "\n"
+        text += sep + "\n".join(["Failed jobs:", *(f"- {f}" if markdown else f"  {f}"
+                                                      for f in failed)])
+    return text
 
 
 def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> None:
@@ -156,15 +173,16 @@ def write_json(path: Path, rows: Sequence[dict[str, Any]], meta: dict[str, Any])
 
 def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
     """Median step time split per solver (stacked bars, linear axis), p99 as a tick."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # The object interface on an Agg canvas: no pyplot, the user's backend untouched.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     good = [r for r in rows if not r.get("error")]
     configs = list(dict.fromkeys(str(r["experiment"]) for r in good)) or ["(none)"]
     height = 0.8 * len(configs) + 0.35 * max(len(good), 1) + 0.8
-    fig, axes = plt.subplots(len(configs), 1, figsize=(8, height), squeeze=False)
+    fig = Figure(figsize=(8, height))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(configs), 1, squeeze=False)
     parts = (("kinematics", "kinematics_time_median_s"), ("assembly", "assembly_time_median_s"),
              ("solve", "solve_time_median_s"), ("verify", "verify_time_median_s"))
     for ax, cfg in zip(axes[:, 0], configs, strict=True):
@@ -185,10 +203,7 @@ def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=7, loc="upper center", ncol=5, frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / height))
-    try:
-        atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    finally:
-        plt.close(fig)
+    atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
 
 
 def write_report(out_dir: Path, records: Sequence[dict[str, Any]], meta: dict[str, Any],

@@ -14,19 +14,28 @@ One *job* is one (configuration, solver) pair. It does two things:
    replay also times the backend's bare solve (the native call alone, as qpsolvers
    times it) on the same problem with the same warm start and options.
 
-A job's result is keyed by (configuration file and content, solver, settings) and
-appended to ``results.jsonl`` as soon as it is finished; a bench run into the same
-folder skips every job whose key is already stored.
+A job's result is keyed by (configuration file and content, solver, settings, record
+format, and a digest of the package's source code, :func:`code_digest`) and appended to
+``results.jsonl`` as soon as it is finished; a bench run into the same folder skips
+every job whose key is already stored, so changed code is measured afresh.
+
+Interrupts and sharing (see :mod:`.interrupt` and :mod:`.store`): a job cut short by
+SIGINT or SIGTERM, or whose backend reports that a signal interrupted a solve, is never
+stored; the bench stops with what finished (:class:`BenchInterrupted`). Benches run
+together on one folder claim each job before computing it, so every job is computed
+and stored once; a bench waits for the jobs another one is computing.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
 import os
 import platform
+import signal
 import time
 import warnings
 from collections import Counter
@@ -43,13 +52,22 @@ from ..control.controller import ControlOutput, DualArmController
 from ..control.rollout import rollout
 from ..errors import DualArmError, InvalidInputError
 from ..experiments.config import load_config
+from ..experiments.options import options_for
 from ..experiments.setup import Experiment, build_experiment
 from ..solvers.base import DEFAULT_TOLERANCE, Status, Tolerance, verify
 from ..solvers.policy import solve_step
 from ..solvers.registry import get_solver, solver_info
 from ..step.build import DualArmState
 from ..step.problem import StepProblem
-from .store import append_result, load_results
+from .interrupt import (
+    BackendInterrupted,
+    Interrupted,
+    StopGuard,
+    backend_interrupted,
+    pass_on_sigint,
+    signal_name,
+)
+from .store import append_result, claim_job, load_results
 
 FloatArray = NDArray[np.float64]
 
@@ -64,6 +82,25 @@ CANONICAL_SOLVER = "nullspace"
 RECORD_FORMAT = 1
 
 RESULTS_FILE = "results.jsonl"
+
+#: How often a job is run again when its backend reported an interrupt that the process
+#: ignores (SIGINT inherited as ignored: osqp still catches it during a solve).
+BACKEND_INTERRUPT_RETRIES = 2
+
+
+@functools.lru_cache(maxsize=1)
+def code_digest() -> str:
+    """Digest of the package's Python source: sha256 over sorted relative paths + contents.
+
+    Computed once per process; part of every job's key, so that stored results of other
+    code are not reused.
+    """
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py"), key=lambda p: p.relative_to(root).as_posix()):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -80,12 +117,16 @@ class BenchSettings:
         What counts as meeting the equality and the bounds.
     replay : bool
         Replay the canonical steps (objective gap, bare backend time).
+    solver_options : dict
+        Options per solver name (``--solver-option``), applied over a configuration's
+        own options when that solver runs; part of that solver's job keys only.
     """
 
     repeat: int = 1
     duration: float | None = None
     tolerance: Tolerance = DEFAULT_TOLERANCE
     replay: bool = True
+    solver_options: dict[str, dict[str, Any]] = field(default_factory=dict, hash=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.repeat, int) and self.repeat >= 1):
@@ -131,18 +172,66 @@ class BenchResult:
     computed: int
     out_dir: Path
     machine: dict[str, Any] = field(default_factory=dict)
+    planned: int = 0
+    interrupted: str | None = None
+
+    @property
+    def failures(self) -> list[tuple[dict[str, Any], str]]:
+        """The failed jobs (see :func:`job_failure`) with their reasons."""
+        out = []
+        for rec in self.records:
+            reason = job_failure(rec)
+            if reason is not None:
+                out.append((rec, reason))
+        return out
 
     @property
     def ok(self) -> bool:
-        """Whether every job ran to its end (a solver failing steps is still ok)."""
-        return all(not r.get("error") for r in self.records)
+        """Whether every job ran and measured something (a solver failing steps is ok)."""
+        return not self.failures and self.interrupted is None
+
+
+class BenchInterrupted(Interrupted):
+    """:func:`run_bench` was interrupted; :attr:`result` holds the jobs that finished.
+
+    Parameters
+    ----------
+    result : BenchResult
+        The finished jobs (stored or read back), in request order.
+    signum : int or None
+        The signal, where known.
+    """
+
+    def __init__(self, result: BenchResult, signum: int | None) -> None:
+        super().__init__(signum)
+        self.result = result
+
+
+def job_failure(rec: dict[str, Any]) -> str | None:
+    """Why a job failed, or None: it raised an error, or it had no usable step.
+
+    A job whose run stopped early after some usable steps has not failed: its success
+    rate measures the solver. One that raised a library error (``"error"``), or whose
+    run produced no usable step (nothing to time or compare), has.
+    """
+    if rec.get("error"):
+        return str(rec["error"])
+    if not rec.get("steps_run") or not rec.get("success_rate"):
+        why = rec.get("message") or "no reason recorded"
+        return f"no usable step: {why}"
+    return None
 
 
 def settings_hash(config: BenchConfig, solver: str, settings: BenchSettings) -> str:
-    """Key of one job: hash of the configuration text, solver, settings and format."""
-    blob = json.dumps({"config": config.path, "config_sha256": config.sha256,
-                       "solver": solver, "settings": settings.as_dict(),
-                       "format": RECORD_FORMAT, "version": __version__}, sort_keys=True)
+    """Key of one job: hash of the configuration text, solver, settings, format and code."""
+    key = {"config": config.path, "config_sha256": config.sha256,
+           "solver": solver, "settings": settings.as_dict(),
+           "format": RECORD_FORMAT, "version": __version__,
+           "code": code_digest()}
+    options = options_for(solver, settings.solver_options)
+    if options:  # only this solver's command-line options
+        key["solver_options"] = options
+    blob = json.dumps(key, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
@@ -162,7 +251,10 @@ def check_solvers(names: Sequence[str]) -> list[str]:
         Naming the pip extra for a known solver whose backend is missing.
     """
     if not names:
-        raise InvalidInputError("no solver given")
+        from ..solvers import available_solvers
+
+        raise InvalidInputError("no solver given; available solvers: "
+                                + ", ".join(available_solvers()))
     for name in names:
         solver_info(name)
     return list(dict.fromkeys(names))
@@ -191,7 +283,27 @@ def machine_info() -> dict[str, Any]:
             "load_average": load, "time": time.strftime("%Y-%m-%d %H:%M:%S %z")}
 
 
-class _RecordingController(DualArmController):
+def _check_solution(sol: Any) -> None:
+    """Raise BackendInterrupted if a step solution shows that a signal cut its solve short."""
+    fallback = sol.extras.get("fallback") if isinstance(sol.extras, dict) else None
+    texts = (sol.extras.get("backend_status", "") if isinstance(sol.extras, dict) else "",
+             sol.message, fallback.get("message", "") if isinstance(fallback, dict) else "")
+    if any(backend_interrupted(t) for t in texts):
+        raise BackendInterrupted(f"{sol.solver}: a signal interrupted the backend "
+                                 f"({sol.message})")
+
+
+class _CheckedController(DualArmController):
+    """A controller that refuses step answers of a backend interrupted by a signal."""
+
+    def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
+        out = super().step(state, scale_max=scale_max)
+        _check_solution(out.solution)
+        _check_solution(out.leader_solution)
+        return out
+
+
+class _RecordingController(_CheckedController):
     """A controller that keeps the step problem of every step it computes."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -206,7 +318,8 @@ class _RecordingController(DualArmController):
 
 
 def _experiment(config: BenchConfig, solver: str, settings: BenchSettings) -> Experiment:
-    exp = build_experiment(load_config(config.path), config.path, solver=solver)
+    exp = build_experiment(load_config(config.path), config.path, solver=solver,
+                           solver_options=settings.solver_options)
     if settings.duration is not None:
         exp = dataclasses.replace(exp, duration=settings.duration)
     return exp
@@ -245,16 +358,23 @@ def _fmax(a: FloatArray) -> float:
 
 def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
             canonical: Sequence[StepProblem] | None = None) -> dict[str, Any]:
-    """Run one (configuration, solver) job and return its record (see module docstring)."""
+    """Run one (configuration, solver) job and return its record (see module docstring).
+
+    Raises
+    ------
+    BackendInterrupted
+        A backend reported that a signal interrupted one of its solves: the job's numbers
+        are void (the caller must not store them).
+    """
     t_start = time.perf_counter()
     exp = _experiment(config, solver, settings)
     opts = exp.solver_options if solver == exp.solver_name else {}
     planned = math.floor(exp.duration / exp.options.dt + 1e-9) + 1
     runs = []
     for _ in range(settings.repeat):
-        ctrl = DualArmController(exp.task, get_solver(solver, **opts), exp.options,
-                                 leader_gain=exp.leader_gain, policy=exp.policy,
-                                 tolerance=settings.tolerance)
+        ctrl = _CheckedController(exp.task, get_solver(solver, **opts), exp.options,
+                                  leader_gain=exp.leader_gain, policy=exp.policy,
+                                  tolerance=settings.tolerance)
         runs.append(rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
                             limits=exp.limits))
     first = runs[0]
@@ -314,6 +434,7 @@ def replay(steps: Sequence[StepProblem], solver: str, options: dict[str, Any],
         t0 = time.perf_counter()
         sol = solve_step(s, problem, policy=exp.policy, tol=tol)
         t1 = time.perf_counter()
+        _check_solution(sol)
         sol = verify(problem, sol, tol, claims_bounds=hard)
         times.append(t1 - t0)
         ok = sol.status.usable and sol.scale == 1.0
@@ -380,10 +501,27 @@ class _BareProbe:
                 warnings.simplefilter("ignore")
                 res = qpsolvers.solve_problem(qp, solver=backend.solver, initvals=initvals,
                                               **self.solver.options)
-        except Exception:  # a backend failure is the solver's business, not the probe's
+        except Exception as err:  # a backend failure is the solver's business, not the probe's
+            if backend_interrupted(err):
+                pass_on_sigint()
+                raise BackendInterrupted(f"bare {backend.solver}: {err}") from None
             return None
+        if backend_interrupted(_probe_status(res)):
+            # osqp's own SIGINT handler caught a Ctrl-C during the solve and qpsolvers does
+            # not pass it on: hand it to Python (raises unless SIGINT is ignored).
+            pass_on_sigint()
+            raise BackendInterrupted(f"bare {backend.solver}: {_probe_status(res)}")
         t = getattr(res, "solve_time", None)
         return float(t) if t is not None else None
+
+
+def _probe_status(res: Any) -> str:
+    """Return a qpsolvers solution's backend status as text ('' if none)."""
+    extras = getattr(res, "extras", None) or {}
+    if "status" in extras:
+        return str(extras["status"])
+    info = extras.get("info")
+    return str(getattr(info, "status", "")) if info is not None else ""
 
 
 def run_bench(
@@ -393,7 +531,7 @@ def run_bench(
     *,
     settings: BenchSettings | None = None,
     log: Callable[[str], None] | None = None,
-    job: Callable[..., dict[str, Any]] = run_job,
+    job: Callable[..., dict[str, Any]] | None = None,
 ) -> BenchResult:
     """Run every configuration with every solver; reuse the jobs already stored.
 
@@ -404,60 +542,130 @@ def run_bench(
     solvers : sequence of str
         Registry names (checked before any job runs).
     out_dir : path
-        Folder of the result store ``results.jsonl``.
+        Folder of the result store ``results.jsonl``; other benches may use it at the
+        same time (each job is computed and stored once, see :mod:`.store`).
     settings : BenchSettings, optional
         Repeat count, duration override, tolerance.
     log : callable, optional
-        Receives one line per job.
-    job : callable
-        The job function (tests replace it to count or interrupt jobs).
+        Receives a line when the jobs start and one line per job.
+    job : callable, optional
+        The job function (default :func:`run_job`; tests replace it to count or
+        interrupt jobs).
 
     Returns
     -------
     BenchResult
         Records in (configuration, solver) order. A job that raised a library error is
-        stored with an ``"error"`` message and is not retried on resume; an interrupt
-        (Ctrl-C) stops the bench with every finished job stored.
+        stored with an ``"error"`` message and is not retried on resume.
+
+    Raises
+    ------
+    BenchInterrupted
+        On SIGINT (Ctrl-C) or SIGTERM, or a KeyboardInterrupt: the job under way is not
+        stored; the exception's ``result`` holds the jobs that finished.
     """
     settings = settings or BenchSettings()
     solvers = check_solvers(solvers)
     cfgs = [read_config(p) for p in configs]
     if not cfgs:
         raise InvalidInputError("no configuration given")
+    job_fn = run_job if job is None else job
     out = Path(out_dir)
     store = out / RESULTS_FILE
-    done = load_results(store)
-    records: list[dict[str, Any]] = []
-    computed = 0
     machine = machine_info()
-    for cfg in cfgs:
-        canonical: list[StepProblem] | None = None
-        for solver in solvers:
-            key = settings_hash(cfg, solver, settings)
-            if key in done:
-                records.append(done[key])
-                if log:
-                    log(f"{cfg.name} / {solver}: stored result reused")
-                continue
-            if canonical is None and settings.replay:
-                canonical = canonical_steps(cfg, settings)
+    pairs = [(cfg, solver, settings_hash(cfg, solver, settings))
+             for cfg in cfgs for solver in solvers]
+    finished: dict[str, dict[str, Any]] = {}
+    computed = 0
+    canonical: dict[str, list[StepProblem]] = {}
+
+    def say(line: str) -> None:
+        if log:
+            log(line)
+
+    def result(interrupted: str | None = None) -> BenchResult:
+        recs = [finished[k] for _, _, k in pairs if k in finished]
+        return BenchResult(recs, computed, out, machine, planned=len(pairs),
+                           interrupted=interrupted)
+
+    def compute(cfg: BenchConfig, solver: str, key: str, guard: StopGuard) -> dict[str, Any]:
+        for attempt in range(BACKEND_INTERRUPT_RETRIES + 1):
             try:
-                rec = job(cfg, solver, settings, canonical)
+                if settings.replay and cfg.path not in canonical:
+                    canonical[cfg.path] = canonical_steps(cfg, settings)
+                rec = job_fn(cfg, solver, settings, canonical.get(cfg.path))
             except DualArmError as err:
                 rec = {"config": cfg.path, "experiment": cfg.name, "solver": solver,
                        "error": f"{type(err).__name__}: {err}"}
-            rec.update(key=key, settings=settings.as_dict(), machine=machine)
-            append_result(store, rec)
-            done[key] = rec
-            records.append(rec)
-            computed += 1
-            if log:
-                log(_line(rec))
-    return BenchResult(records, computed, out, machine)
+            except BackendInterrupted as err:
+                # Only reached when SIGINT is ignored here (otherwise the interrupt was
+                # raised): the process goes on, but this attempt's numbers are void.
+                guard.check()
+                if attempt == BACKEND_INTERRUPT_RETRIES:  # someone keeps sending SIGINT
+                    raise Interrupted(signal.SIGINT) from err
+                say(f"{cfg.name} / {solver}: {err}; running the job again")
+                continue
+            guard.check()  # an interrupt that was swallowed on the way still counts
+            rec.update(key=key, settings=settings.as_dict(), machine=machine,
+                       code=code_digest())
+            return rec
+        raise AssertionError("unreachable")  # pragma: no cover
+
+    def run_one(cfg: BenchConfig, solver: str, key: str, guard: StopGuard,
+                wait: bool) -> bool:
+        """Run one job unless stored or claimed elsewhere; False if left to another bench."""
+        nonlocal computed
+        if wait:
+            say(f"{cfg.name} / {solver}: waiting for the bench that is computing it")
+        claim = claim_job(out, key, wait=wait)
+        if claim is None:
+            return False
+        with claim:
+            stored = load_results(store).get(key)  # another bench may have stored it
+            if stored is not None:
+                finished[key] = stored
+                claim.release(stored=True)
+                say(f"{cfg.name} / {solver}: stored by another bench, reused")
+                return True
+            rec = compute(cfg, solver, key, guard)
+            with guard.deferred():  # a finished job is stored whole, or not at all
+                append_result(store, rec)
+                claim.release(stored=True)
+                finished[key] = rec
+                computed += 1
+                say(_line(rec))
+        return True
+
+    with StopGuard() as guard:
+        try:
+            done = load_results(store)
+            for _, _, key in pairs:
+                if key in done:
+                    finished[key] = done[key]
+            todo = len({k for _, _, k in pairs} - finished.keys())
+            say(f"bench: {len(pairs)} jobs, {len(pairs) - todo} stored in {store}, "
+                f"{todo} to run")
+            later = []
+            for cfg, solver, key in pairs:
+                if key in finished:
+                    if key in done:
+                        say(f"{cfg.name} / {solver}: stored result reused")
+                    continue
+                if not run_one(cfg, solver, key, guard, wait=False):
+                    say(f"{cfg.name} / {solver}: another bench is computing it")
+                    later.append((cfg, solver, key))
+            for cfg, solver, key in later:
+                if key not in finished:
+                    run_one(cfg, solver, key, guard, wait=True)
+        except KeyboardInterrupt as err:
+            signum = guard.signum if guard.signum is not None else getattr(err, "signum", None)
+            raise BenchInterrupted(result(signal_name(signum)), signum) from None
+    return result()
 
 
 def _line(rec: dict[str, Any]) -> str:
-    if rec.get("error"):
-        return f"{rec['experiment']} / {rec['solver']}: ERROR {rec['error']}"
+    reason = job_failure(rec)
+    if reason is not None:
+        return f"{rec['experiment']} / {rec['solver']}: FAILED: {reason}"
     return (f"{rec['experiment']} / {rec['solver']}: success {rec['success_rate']:.3f}, "
             f"step median {rec['step_time_median_s'] * 1e6:.0f} us")

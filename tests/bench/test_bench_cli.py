@@ -44,3 +44,54 @@ def test_bench_missing_backend_names_extra(tmp_path: Path,
         pytest.skip("every backend is installed here")
     assert main(["bench", CONFIG, "--solvers", missing[0].name, "--out", str(tmp_path)]) == 2
     assert f"dualarm-qp[{missing[0].extra}]" in capsys.readouterr().err
+
+
+def test_bench_no_solver_named_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for given in ("", " , ,", ","):
+        assert main(["bench", CONFIG, "--solvers", given, "--out", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert "names no solver" in err and "nullspace" in err and "reference" in err
+    assert not (tmp_path / "results.jsonl").exists()
+
+
+def test_bench_all_jobs_failing_exit_1_with_reasons(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from dualarm_qp.bench import runner
+    from dualarm_qp.errors import SolverError
+
+    def broken(config, solver, *args):  # type: ignore[no-untyped-def]
+        raise SolverError(f"{solver} exploded")
+
+    monkeypatch.setattr(runner, "run_job", broken)
+    args = ["bench", CONFIG, "--solvers", "reference,nullspace", "--out", str(tmp_path),
+            "--duration", "0.124", "--quiet", "--no-plots"]
+    assert main(args) == 1
+    cap = capsys.readouterr()
+    assert "reference exploded" in cap.out and "nullspace exploded" in cap.out
+    assert "ERROR" in cap.out and "nan" not in cap.out
+    assert "2 of 2 jobs failed (all of them)" in cap.err
+    rows = list(csv.DictReader(open(tmp_path / "bench.csv", encoding="utf-8")))
+    assert [r["error"] for r in rows] == ["SolverError: reference exploded",
+                                          "SolverError: nullspace exploded"]
+    assert main(args) == 1  # stored failures are reported again on resume
+    assert "0 of 2 jobs computed" in capsys.readouterr().out
+
+
+def test_bench_jobs_without_a_usable_step_fail(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run that stops before its first usable step gave nothing to compare: exit 1."""
+    from dualarm_qp.control.controller import DualArmController
+    from dualarm_qp.errors import SolverError
+
+    def no_answer(self, state, *, scale_max=1.0):  # type: ignore[no-untyped-def]
+        raise SolverError("no answer at all")
+
+    monkeypatch.setattr(DualArmController, "step", no_answer)
+    assert main(["bench", CONFIG, "--solvers", "nullspace", "--out", str(tmp_path),
+                 "--duration", "0.124", "--quiet", "--no-plots"]) == 1
+    cap = capsys.readouterr()
+    assert "no usable step" in cap.out and "no answer at all" in cap.out
+    row = next(csv.DictReader(open(tmp_path / "bench.csv", encoding="utf-8")))
+    assert row["error"].startswith("no usable step") and "no answer at all" in row["message"]

@@ -3,16 +3,22 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
+import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from dualarm_qp.bench import BenchSettings, run_bench, run_job, write_report
+from dualarm_qp.bench import BenchSettings, run_bench, run_job, runner, write_report
+from dualarm_qp.bench.interrupt import BackendInterrupted, StopGuard
 from dualarm_qp.bench.report import COLUMNS
+from dualarm_qp.bench.runner import BenchInterrupted
 from dualarm_qp.bench.store import append_result, load_results
 from dualarm_qp.errors import ConfigError, SolverNotFoundError
 from dualarm_qp.experiments.reproduce import bundled_config
+from dualarm_qp.solvers import available_solvers
 
 CONFIG = str(bundled_config("puma_beam_sliding_s7_100.yaml"))
 #: With speed limits: a hard-limit solver's run on the paper's configs fails at its first
@@ -73,9 +79,11 @@ def test_second_run_recomputes_nothing(tmp_path: Path) -> None:
 
 
 def test_interrupted_bench_resumes_where_it_stopped(tmp_path: Path) -> None:
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(BenchInterrupted) as stop:
         run_bench([CONFIG], ["nullspace", "reference", "sns"], tmp_path, settings=SHORT,
                   job=Counting(interrupt_after=1))
+    assert [r["solver"] for r in stop.value.result.records] == ["nullspace"]
+    assert stop.value.result.interrupted and stop.value.result.planned == 3
     assert len(load_results(tmp_path / "results.jsonl")) == 1
     rest = Counting()
     res = run_bench([CONFIG], ["nullspace", "reference", "sns"], tmp_path, settings=SHORT,
@@ -101,3 +109,133 @@ def test_bad_input_is_reported_before_any_job(tmp_path: Path) -> None:
     with pytest.raises(ConfigError):
         run_bench([tmp_path / "missing.yaml"], ["nullspace"], tmp_path, job=job)
     assert job.calls == 0 and not (tmp_path / "results.jsonl").exists()
+
+
+def test_swallowed_signal_keeps_the_job_out_of_the_store(tmp_path: Path) -> None:
+    """A SIGTERM during a job that some code swallows still stops the bench unstored."""
+
+    def swallowing(*args: Any) -> dict[str, Any]:
+        rec = run_job(*args)
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)  # the handler runs here at the latest
+        except KeyboardInterrupt:
+            pass  # swallowed on the way
+        return rec
+
+    with pytest.raises(BenchInterrupted) as stop:
+        run_bench([LIMITS], ["nullspace", "sns"], tmp_path, settings=SHORT, job=swallowing)
+    assert stop.value.signum == signal.SIGTERM and stop.value.result.records == []
+    assert load_results(tmp_path / "results.jsonl") == {}
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # handlers restored
+
+
+def _interrupted_osqp(monkeypatch: pytest.MonkeyPatch) -> None:
+    """osqp answering as it does when its own handler caught a SIGINT that Python ignores."""
+    from dualarm_qp.solvers import _native
+
+    monkeypatch.setattr(_native.OSQPNative, "solve", lambda self, problem:
+                        _native.BackendAnswer(None, False, False, "interrupted"))
+
+
+@pytest.mark.skipif("qp:osqp" not in available_solvers(), reason="osqp not installed")
+def test_job_with_an_interrupted_backend_is_never_stored(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    _interrupted_osqp(monkeypatch)
+    with pytest.raises(BackendInterrupted, match="interrupt"):
+        run_job(runner.read_config(LIMITS), "qp:osqp", SHORT)
+    calls = Counting()
+    with pytest.raises(BenchInterrupted):
+        run_bench([LIMITS], ["nullspace", "qp:osqp"], tmp_path, settings=SHORT, job=calls)
+    assert calls.calls == 1 + runner.BACKEND_INTERRUPT_RETRIES + 1  # retried, never stored
+    assert [r["solver"] for r in load_results(tmp_path / "results.jsonl").values()] == [
+        "nullspace"]
+    monkeypatch.undo()  # the backend answers again: the resume computes the job
+    res = run_bench([LIMITS], ["nullspace", "qp:osqp"], tmp_path, settings=SHORT)
+    assert res.computed == 1 and res.ok
+
+
+def test_a_transient_backend_interrupt_is_retried(tmp_path: Path) -> None:
+    seen = []
+
+    def flaky(*args: Any) -> dict[str, Any]:
+        seen.append(args[1])
+        if len(seen) == 1:
+            raise BackendInterrupted("osqp: interrupted")
+        return run_job(*args)
+
+    res = run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT, job=flaky)
+    assert seen == ["nullspace", "nullspace"] and res.computed == 1
+    assert len((tmp_path / "results.jsonl").read_text().splitlines()) == 1
+
+
+def test_stop_guard_keeps_an_ignored_sigint_ignored() -> None:
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with StopGuard() as guard:
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            signal.raise_signal(signal.SIGINT)
+            assert not guard.stopped
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_stop_guard_defers_inside_a_critical_block() -> None:
+    done = []
+    with StopGuard() as guard, pytest.raises(KeyboardInterrupt):
+        with guard.deferred():
+            signal.raise_signal(signal.SIGTERM)
+            done.append(True)  # reached: the block runs to its end
+    assert done == [True] and guard.signum == signal.SIGTERM
+
+
+def test_changed_code_invalidates_stored_rows(tmp_path: Path,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    digest = runner.code_digest()
+    assert len(digest) == 64 and digest == runner.code_digest()
+    first = run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT)
+    assert first.records[0]["code"] == digest
+    monkeypatch.setattr(runner, "code_digest", lambda: "0" * 64)
+    again = Counting()
+    res = run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT, job=again)
+    assert again.calls == 1 and res.computed == 1
+    assert res.records[0]["key"] != first.records[0]["key"]
+    monkeypatch.undo()
+    back = Counting()
+    run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT, job=back)
+    assert back.calls == 0  # the rows of this code are still there
+
+
+def test_job_failure_reasons() -> None:
+    ok = {"steps_run": 11, "success_rate": 0.7, "message": "stopped at step 8"}
+    assert runner.job_failure(ok) is None
+    assert runner.job_failure({"error": "SolverError: boom"}) == "SolverError: boom"
+    nothing = {"steps_run": 0, "success_rate": 0.0, "message": "step 0: no answer"}
+    assert runner.job_failure(nothing) == "no usable step: step 0: no answer"
+
+
+@pytest.mark.skipif("qp:osqp" not in available_solvers(), reason="osqp not installed")
+def test_bare_probe_passes_on_a_sigint_that_osqp_swallowed(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """qpsolvers returns osqp's "interrupted" answer as a plain failure; the probe re-raises."""
+    from types import SimpleNamespace
+
+    import qpsolvers
+
+    from dualarm_qp.solvers.registry import get_solver
+
+    answer = SimpleNamespace(solve_time=1e-5,
+                             extras={"info": SimpleNamespace(status="interrupted")})
+    monkeypatch.setattr(qpsolvers, "solve_problem", lambda *a, **k: answer)
+    cfg = runner.read_config(LIMITS)
+    problem = runner.canonical_steps(cfg, SHORT)[0]
+    probe = runner._BareProbe.make(get_solver("qp:osqp"))
+    assert probe is not None
+    with pytest.raises(KeyboardInterrupt):  # Python's own SIGINT handler
+        probe.solve_time(problem)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:  # SIGINT ignored: the answer is still void
+        with pytest.raises(BackendInterrupted):
+            probe.solve_time(problem)
+    finally:
+        signal.signal(signal.SIGINT, previous)
