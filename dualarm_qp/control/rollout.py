@@ -30,13 +30,13 @@ from ..se3 import rotation_error
 from ..step.build import DualArmState
 from .controller import DualArmController
 from .realised import LimitReport, measure
-from .trace import Trace, record
+from .trace import Trace, record, record_state
 
 FloatArray = NDArray[np.float64]
 
 #: Criteria a run can fail on (``Failure.criterion``).
 CRITERIA = ("solver", "closure", "tracking", "singularity", "stalled", "path_incomplete",
-            "range", "speed")
+            "range", "speed", "interrupted")
 
 #: What a smallest singular value below the threshold does.
 SINGULARITY_ACTIONS = ("warn", "stop", "ignore")
@@ -172,6 +172,20 @@ class RolloutResult:
         return "" if self.failure is None else self.failure.message
 
     @property
+    def time_lost(self) -> float:
+        """Time the run took beyond what the executed path needs at full speed [s].
+
+        The elapsed time minus the whole samples that the path time advanced would
+        take unscaled (the last sample's shortening where the path ends is no loss).
+        """
+        tr = self.trace
+        if not len(tr):
+            return 0.0
+        elapsed = float(tr.t[-1] - tr.t[0])
+        advanced = float(tr.tau[-1] - tr.tau[0])
+        return max(elapsed - self.dt * math.ceil(advanced / self.dt - 1e-9), 0.0)
+
+    @property
     def path_completed(self) -> float:
         """Share of the path executed, in [0, 1]."""
         tr = self.trace
@@ -193,8 +207,6 @@ class RolloutResult:
 
         solve = tr.solve_time_s[~np.isnan(tr.solve_time_s)]
         step = tr.step_time_s[~np.isnan(tr.step_time_s)]
-        elapsed = float(tr.t[-1] - tr.t[0]) if n else 0.0
-        advanced = float(tr.tau[-1] - tr.tau[0]) if n else 0.0
         out: dict[str, Any] = {
             "solver": self.solver,
             "completed": self.completed,
@@ -206,7 +218,7 @@ class RolloutResult:
             "t_end_s": float(tr.t[-1]) if n else 0.0,
             "path_time_end_s": float(tr.tau[-1]) if n else 0.0,
             "path_completed_pct": 100.0 * self.path_completed,
-            "time_lost_to_scaling_s": round(elapsed - advanced, 9),
+            "time_lost_to_scaling_s": round(self.time_lost, 12),
             "status_counts": dict(sorted(Counter(tr.status).items())),
             "leader_status_counts": dict(sorted(Counter(tr.leader_status).items())),
             "fallback_steps": int(np.nansum(tr.fallback)),
@@ -256,6 +268,7 @@ def rollout(
     reresolve_orientation: bool | None = None,
     project: bool | None = None,
     progress: Callable[[int, int], None] | None = None,
+    stop_on_interrupt: bool = False,
 ) -> RolloutResult:
     """Run ``controller`` from ``initial`` along ``duration`` seconds of path.
 
@@ -291,7 +304,12 @@ def rollout(
     project : bool, optional
         Apply the drift projection; default: for the paper's methods.
     progress : callable, optional
-        Called as ``progress(done, total)`` after every sample.
+        Called as ``progress(done, total)`` after every sample; it may raise
+        KeyboardInterrupt to stop the run.
+    stop_on_interrupt : bool
+        On KeyboardInterrupt (Ctrl-C) during the samples, stop and return the samples
+        completed so far, failing on criterion ``"interrupted"``; by default the
+        exception propagates (and the samples are lost).
 
     Returns
     -------
@@ -345,60 +363,78 @@ def rollout(
     projection_failures = 0
     window = (t_wall, tau)  # start of the current stall-detection window
     end_tol = 1e-9 * max(1.0, abs(path_end))
-    k = 0
-    for k in range(max_rows):
-        state = DualArmState(tau, q_l, q_f, sigma)
-        at_end = tau >= path_end - end_tol
-        scale_max = 0.0 if at_end else min(1.0, (path_end - tau) / dt)
-        try:
-            out = controller.step(state, scale_max=scale_max)
-        except DualArmError as err:
-            failure = Failure("solver", k, t_wall, math.nan, math.nan,
-                              f"step {k} at t = {t_wall:.4f} s: {err}")
-            break
-        record(tr, k, t_wall, state, out, controller)
-        tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (
-            pre if pre is not None else (tr.closure_pos_err[k], tr.closure_rot_err[k]))
-        tr.correction_l[k], tr.correction_f[k] = corr
-        failure = _sample_failure(tr, k, out.applied, out.status.value,
-                                  out.solution.message, limits, warnings)
-        if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
-            if tau - window[1] < 0.01 * (t_wall - window[0]):
-                failure = Failure(
-                    "stalled", k, t_wall, tau - window[1], 0.01 * (t_wall - window[0]),
-                    f"step {k} at t = {t_wall:.4f} s: path stalled: the object advanced "
-                    f"{tau - window[1]:.3g} s along its path in {t_wall - window[0]:.3g} s "
-                    f"(task scale {tr.scale[k]:.3g}, leader's {tr.leader_scale[k]:.3g}; "
-                    f"smallest singular values: leader {tr.sigma_min_l[k]:.3g}, follower "
-                    f"{tr.sigma_min_f[k]:.3g}); last solver message: {out.solution.message}")
-            window = (t_wall, tau)
-        if failure is not None:
-            k += 1
-            break
-        if progress is not None:
-            progress(k + 1, nominal_rows)
-        if at_end or k == max_rows - 1:
-            k += 1
-            break
-        q_l = q_l + dt * out.ql_dot
-        q_f = q_f + dt * out.qf_dot
-        sigma = sigma + dt * out.m
-        tau = tau + dt * out.scale
-        t_wall = t_wall + dt
-        pre, corr = None, (0.0, 0.0)
-        if reresolve_orientation or project:
-            pre = task.closure_error(q_l, q_f, sigma)
-            q_l0, q_f0 = q_l, q_f
-            if reresolve_orientation:
-                q_f = _reresolve(controller, q_l, q_f, sigma)
-            if project:
-                q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
-                q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
-                projection_failures += (not ok_l) + (not ok_f)
-            corr = (float(np.abs(q_l - q_l0).max(initial=0.0)),
-                    float(np.abs(q_f - q_f0).max(initial=0.0)))
-    trace = tr.truncate(k)
+    rows = 0  # samples recorded whole
+    interrupted: KeyboardInterrupt | None = None
+    try:
+        for k in range(max_rows):
+            state = DualArmState(tau, q_l, q_f, sigma)
+            at_end = tau >= path_end - end_tol
+            scale_max = 0.0 if at_end else min(1.0, (path_end - tau) / dt)
+            try:
+                out = controller.step(state, scale_max=scale_max)
+            except DualArmError as err:
+                # The state was reached: keep it (with no command) before stopping.
+                record_state(tr, k, t_wall, state, controller)
+                rows = k + 1
+                message = f"step {k} at t = {t_wall:.4f} s: {err}"
+                if at_end:  # the path is done; this command would not be applied
+                    warnings.append(f"the command at the path's end failed: {message}")
+                else:
+                    failure = Failure("solver", k, t_wall, math.nan, math.nan, message)
+                break
+            record(tr, k, t_wall, state, out, controller)
+            tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (
+                pre if pre is not None else (tr.closure_pos_err[k], tr.closure_rot_err[k]))
+            tr.correction_l[k], tr.correction_f[k] = corr
+            rows = k + 1
+            # The command at the path's end is not applied: it cannot fail the run.
+            failure = _sample_failure(tr, k, out.applied or at_end, out.status.value,
+                                      out.solution.message, limits, warnings)
+            if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
+                if tau - window[1] < 0.01 * (t_wall - window[0]):
+                    failure = Failure(
+                        "stalled", k, t_wall, tau - window[1], 0.01 * (t_wall - window[0]),
+                        f"step {k} at t = {t_wall:.4f} s: path stalled: the object advanced "
+                        f"{tau - window[1]:.3g} s along its path in "
+                        f"{t_wall - window[0]:.3g} s (task scale {tr.scale[k]:.3g}, leader's "
+                        f"{tr.leader_scale[k]:.3g}; smallest singular values: leader "
+                        f"{tr.sigma_min_l[k]:.3g}, follower {tr.sigma_min_f[k]:.3g}); last "
+                        f"solver message: {out.solution.message}")
+                window = (t_wall, tau)
+            if failure is not None:
+                break
+            if progress is not None:
+                progress(k + 1, nominal_rows)
+            if at_end or k == max_rows - 1:
+                break
+            q_l = q_l + dt * out.ql_dot
+            q_f = q_f + dt * out.qf_dot
+            sigma = sigma + dt * out.m
+            tau = tau + dt * out.scale
+            t_wall = t_wall + dt
+            pre, corr = None, (0.0, 0.0)
+            if reresolve_orientation or project:
+                pre = task.closure_error(q_l, q_f, sigma)
+                q_l0, q_f0 = q_l, q_f
+                if reresolve_orientation:
+                    q_f = _reresolve(controller, q_l, q_f, sigma)
+                if project:
+                    q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
+                    q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
+                    projection_failures += (not ok_l) + (not ok_f)
+                corr = (float(np.abs(q_l - q_l0).max(initial=0.0)),
+                        float(np.abs(q_f - q_f0).max(initial=0.0)))
+    except KeyboardInterrupt as exc:
+        if not stop_on_interrupt:
+            raise
+        interrupted = exc
+    trace = tr.truncate(rows)
     realised = _realised(controller, trace, dt)
+    if interrupted is not None:
+        t_last = float(trace.t[-1]) if rows else path_start
+        failure = Failure("interrupted", max(rows - 1, 0), t_last, math.nan, math.nan,
+                          f"interrupted ({str(interrupted) or 'KeyboardInterrupt'}) after "
+                          f"{rows} samples, at t = {t_last:.4f} s")
     if failure is None and len(trace) and trace.tau[-1] < path_end - end_tol:
         done = (trace.tau[-1] - path_start) / duration
         failure = Failure(

@@ -1,9 +1,16 @@
-"""Writing run outputs: the CSV trace and the JSON summary, each file atomically."""
+"""Writing run outputs: the CSV trace and the JSON summary, each file atomically.
+
+An output folder holds the files of one run (or one reproduction); a command *owns*
+the files it writes there (and the temporary files it writes them through), and
+replaces or removes only those: any other file in the folder is left alone.
+"""
 
 from __future__ import annotations
 
 import csv
 import io
+import re
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -11,8 +18,85 @@ import numpy as np
 
 from .._io import atomic_open, atomic_write_with, write_json
 from ..control.trace import Trace
+from ..errors import InvalidInputError
 
-__all__ = ["atomic_open", "atomic_write_with", "trace_columns", "write_json", "write_trace_csv"]
+__all__ = ["atomic_open", "atomic_write_with", "check_unused_folder", "owned_entries",
+           "remove_owned", "trace_columns", "write_json", "write_trace_csv"]
+
+
+def _temp_pattern(names: Iterable[str]) -> re.Pattern[str]:
+    """Names of the temporary files :mod:`dualarm_qp._io` writes ``names`` through."""
+    alts = "|".join(re.escape(n) for n in names)
+    return re.compile(rf"\.({alts})\.[A-Za-z0-9_]{{8}}\.[A-Za-z0-9]+")
+
+
+def owned_entries(folder: Path, names: Iterable[str]) -> list[Path]:
+    """Files in ``folder`` that a command owns: ``names`` and their temporary files.
+
+    Parameters
+    ----------
+    folder : Path
+        The output folder (missing: nothing is owned).
+    names : iterable of str
+        The file names the command writes there.
+
+    Returns
+    -------
+    list of Path
+        Sorted; only regular files (or links), never folders.
+    """
+    names = tuple(names)
+    if not folder.is_dir() or not names:
+        return []
+    temp = _temp_pattern(names)
+    return sorted(p for p in folder.iterdir()
+                  if (p.name in names or temp.fullmatch(p.name))
+                  and (p.is_symlink() or p.is_file()))
+
+
+def remove_owned(folder: Path, names: Iterable[str]) -> list[str]:
+    """Remove the files of ``names`` (and their temporary files) from ``folder``.
+
+    Returns
+    -------
+    list of str
+        The names removed; nothing else in the folder is touched.
+    """
+    removed = []
+    for path in owned_entries(folder, names):
+        path.unlink(missing_ok=True)
+        removed.append(path.name)
+    return removed
+
+
+def check_unused_folder(folder: Path, *, force: bool, what: str = "a run") -> None:
+    """Refuse an output folder that already holds files, unless ``force``.
+
+    Parameters
+    ----------
+    folder : Path
+        The output folder; missing or empty is fine.
+    force : bool
+        Accept a folder that holds files: the command then replaces only the files
+        it owns (:func:`owned_entries`) and keeps the others.
+    what : str
+        What writes there, for the message.
+
+    Raises
+    ------
+    InvalidInputError
+        The folder holds files and ``force`` is False.
+    """
+    if force or not folder.is_dir():
+        return
+    entries = sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir())
+    if entries:
+        shown = ", ".join(entries[:5]) + (f" and {len(entries) - 5} more"
+                                          if len(entries) > 5 else "")
+        raise InvalidInputError(
+            f"the output folder {folder} is not empty ({shown}); choose another --out, "
+            f"or pass --force to replace the files {what} writes there (other files are "
+            "kept)")
 
 
 def trace_columns(trace: Trace) -> dict[str, Any]:
@@ -63,6 +147,7 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     cols["correction_f"] = trace.correction_f
     cols["feedback_pos"] = trace.feedback_pos
     cols["feedback_rot"] = trace.feedback_rot
+    cols["leader_time_s"] = trace.leader_time_s
     return cols
 
 

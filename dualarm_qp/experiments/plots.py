@@ -1,4 +1,9 @@
-"""PNG plots of a run: joints against their limits, the grasp, the closure error."""
+"""PNG plots of a run: joints against their limits, the grasp, the closure error.
+
+The figures are drawn with matplotlib's object interface (:class:`~matplotlib.figure.
+Figure` on an Agg canvas), never through :mod:`matplotlib.pyplot`: importing or using
+this module leaves the user's backend choice and pyplot's figures alone.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +11,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from ..control.trace import Trace
 from ..kinematics.arm import SerialArm
@@ -18,16 +21,23 @@ from ..task.surfaces import GraspSurface
 from .outputs import atomic_write_with
 
 
-def _save(fig: Any, path: Path) -> None:
+def _figure(**kwargs: Any) -> Figure:
+    """Return a figure on its own Agg canvas (no pyplot, no global state)."""
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Figure, path: Path) -> None:
     atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    plt.close(fig)
 
 
 def plot_joints(path: Path, trace: Trace, leader: SerialArm, follower: SerialArm,
                 title: str = "") -> None:
     """Both arms' joints [deg] against time with their ranges shaded out."""
     n = max(leader.n, follower.n)
-    fig, axes = plt.subplots(2, n, figsize=(2.6 * n, 5.2), sharex=True, squeeze=False)
+    fig = _figure(figsize=(2.6 * n, 5.2))
+    axes = fig.subplots(2, n, sharex=True, squeeze=False)
     for row, (arm, q, label) in enumerate(((leader, trace.q_l, "leader"),
                                            (follower, trace.q_f, "follower"))):
         for j in range(n):
@@ -51,7 +61,8 @@ def plot_joints(path: Path, trace: Trace, leader: SerialArm, follower: SerialArm
 
 def plot_grasp(path: Path, trace: Trace, surface: GraspSurface, title: str = "") -> None:
     """Grasp coordinate [mm] and sliding speed [mm/s] against time."""
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    fig = _figure(figsize=(7, 5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
     ax1.plot(trace.t, trace.grasp * 1e3, color="C0")
     for lim in (surface.sigma_min, surface.sigma_max):
         ax1.axhline(lim * 1e3, color="C3", ls="--", lw=0.9)
@@ -66,7 +77,8 @@ def plot_grasp(path: Path, trace: Trace, surface: GraspSurface, title: str = "")
 
 def plot_closure(path: Path, trace: Trace, title: str = "") -> None:
     """Grasp closure error (Eq. 15) against time, log scale."""
-    fig, ax = plt.subplots(figsize=(7, 3.6))
+    fig = _figure(figsize=(7, 3.6))
+    ax = fig.subplots()
     floor = 1e-16
     ax.semilogy(trace.t, np.maximum(trace.closure_pos_err, floor), label="position [m]")
     ax.semilogy(trace.t, np.maximum(trace.closure_rot_err, floor), label="rotation [rad]")
@@ -89,7 +101,8 @@ def plot_compare(path: Path, traces: Sequence[tuple[str, Trace]], column: str,
     The axis spans the data; a range limit (dashed) far outside the data is named in
     the legend instead of squeezing the curves.
     """
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig = _figure(figsize=(7, 4))
+    ax = fig.subplots()
     lo, hi = np.inf, -np.inf
     for label, tr in traces:
         y = getattr(tr, column)

@@ -1,7 +1,13 @@
-"""Reproduce the paper's Sec. 4 example: the three PUMA beam cases and Figs. 5 and 6."""
+"""Reproduce the paper's Sec. 4 example: the three PUMA beam cases and Figs. 5 and 6.
+
+A reproduction owns, in its output folder, ``reproduce.json`` (written last: it lists
+what was written), the two figures and a folder per case with that case's run outputs.
+A new reproduction into the same folder first removes those (and only those).
+"""
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -9,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from .._io import SignalHold
 from .config import load_config
-from .outputs import write_json
-from .plots import plot_compare
-from .run import RunOutcome, run_experiment
+from .outputs import owned_entries, remove_owned, write_json
+from .run import OUTPUT_FILES, RunOutcome, remove_run_outputs, run_and_write
 from .setup import build_experiment
 
 #: The paper's three cases: (label, config file name).
@@ -22,6 +28,12 @@ CASES = (
     ("c", "puma_beam_sliding_s7_1000.yaml"),
 )
 
+
+#: Files a reproduction writes into its output folder, besides a folder per case.
+REPRODUCE_FILES = ("reproduce.json", "fig5_joint3.png", "fig6_grasp.png")
+
+#: The folders of the cases, in :data:`CASES` order.
+CASE_FOLDERS = tuple(f"case_{label}" for label, _ in CASES)
 
 #: What ``dualarm-qp bench`` compares when given no config: the beam task with speed
 #: limits and the curved bar (the paper's own configs have no speed limits, where a
@@ -40,15 +52,70 @@ _JUMP_NOTE = ("first sample of (b), (c): the paper's step has no speed limit and
 
 @dataclass
 class Reproduction:
-    """Outcome of :func:`reproduce`: one run per case plus the paper's checks."""
+    """Outcome of :func:`reproduce`: one run per case plus the paper's checks.
+
+    Attributes
+    ----------
+    runs : dict of str to RunOutcome
+        The cases run, by label (fewer than three when interrupted).
+    checks : dict
+        The paper's checks (empty when interrupted).
+    interrupted : str or None
+        The label of the case an interrupt stopped.
+    """
 
     runs: dict[str, RunOutcome]
     checks: dict[str, Any]
+    interrupted: str | None = None
 
     @property
     def ok(self) -> bool:
-        """Whether every run completed."""
-        return all(r.ok for r in self.runs.values())
+        """Whether every case ran and completed."""
+        return len(self.runs) == len(CASES) and all(r.ok for r in self.runs.values())
+
+    @property
+    def status(self) -> str:
+        """``"completed"``, ``"failed"`` or ``"interrupted"``."""
+        if self.interrupted is not None:
+            return "interrupted"
+        return "completed" if self.ok else "failed"
+
+
+def is_reproduction_folder(out: str | Path) -> bool:
+    """Whether ``out`` is free for a reproduction without ``--force``.
+
+    It is when missing or empty, or when it holds an earlier reproduction: its
+    ``reproduce.json``, or (a reproduction stopped before writing that) nothing but
+    what a reproduction writes.
+    """
+    out = Path(out)
+    if not out.is_dir() or (out / "reproduce.json").is_file():
+        return True
+    own = set(owned_entries(out, REPRODUCE_FILES))
+    for entry in out.iterdir():
+        if entry.name in CASE_FOLDERS and entry.is_dir() and not entry.is_symlink():
+            if set(entry.iterdir()) - set(owned_entries(entry, OUTPUT_FILES)):
+                return False
+        elif entry not in own:
+            return False
+    return True
+
+
+def remove_reproduction(out: Path) -> None:
+    """Remove an earlier reproduction's files from ``out``; other files stay.
+
+    ``reproduce.json`` goes first, then the figures, then each case's run files
+    (and the case folder, when that leaves it empty). Signals are held meanwhile.
+    """
+    with SignalHold():
+        (out / "reproduce.json").unlink(missing_ok=True)
+        remove_owned(out, REPRODUCE_FILES)
+        for name in CASE_FOLDERS:
+            folder = out / name
+            if folder.is_dir() and not folder.is_symlink():
+                remove_run_outputs(folder)
+                with contextlib.suppress(OSError):
+                    folder.rmdir()  # only when empty
 
 
 def _joint3_excursion(outcome: RunOutcome) -> dict[str, float]:
@@ -64,9 +131,30 @@ def _joint3_excursion(outcome: RunOutcome) -> dict[str, float]:
     }
 
 
+def _case_config(config_dir: str | Path | None, fname: str) -> Path:
+    return Path(config_dir) / fname if config_dir is not None else bundled_config(fname)
+
+
+def _write_record(out: Path, runs: dict[str, RunOutcome], checks: dict[str, Any],
+                  figures: list[str], interrupted: str | None) -> None:
+    """Write ``reproduce.json``: what this reproduction wrote, and how it ended."""
+    rep = Reproduction(runs, checks, interrupted)
+    write_json(out / "reproduce.json", {
+        "status": rep.status,
+        "interrupted_case": interrupted,
+        "cases": {k: r.summary for k, r in runs.items()},
+        "checks": checks,
+        "figures": figures,
+        "outputs": [f"case_{k}/" for k in runs] + figures,
+    })
+
+
 def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
               progress: bool | None = None) -> Reproduction:
     """Run cases (a), (b), (c) and draw Fig. 5 (follower q3) and Fig. 6 (grasp).
+
+    An earlier reproduction in ``out_dir`` is replaced (:func:`remove_reproduction`);
+    other files there stay.
 
     Parameters
     ----------
@@ -78,24 +166,59 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
         (identical to the repository's ``configs/``).
     progress : bool, optional
         Progress bars (default: when attached to a terminal).
+
+    Returns
+    -------
+    Reproduction
+        When an interrupt (Ctrl-C, SIGTERM) stopped a case's rollout, that case is
+        written as interrupted, the later ones are not run, no figure is drawn, and
+        ``reproduce.json`` says so (``status: interrupted``). An interrupt that comes
+        elsewhere (while files are written, between cases) is raised as
+        KeyboardInterrupt once ``reproduce.json`` records the same.
     """
     out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    remove_reproduction(out)
     runs: dict[str, RunOutcome] = {}
-    for label, fname in CASES:
-        path = Path(config_dir) / fname if config_dir is not None else bundled_config(fname)
-        exp = build_experiment(load_config(path), str(path))
-        runs[label] = run_experiment(exp, out / f"case_{label}", progress=progress)
-    follower = build_experiment(load_config(
-        Path(config_dir) / CASES[0][1] if config_dir is not None else bundled_config(CASES[0][1])
-    )).task.follower
+    held: SignalHold | None = None
+    label = CASES[0][0]
+    try:
+        for label, fname in CASES:
+            path = _case_config(config_dir, fname)
+            exp = build_experiment(load_config(path), str(path))
+            runs[label], hold = run_and_write(exp, out / f"case_{label}", progress=progress)
+            if runs[label].interrupted or hold.signum is not None:
+                held = hold
+                break
+    except KeyboardInterrupt:
+        with SignalHold():
+            _write_record(out, runs, {}, [], label)
+        raise
+    if held is not None:  # stopped: no figures, no checks
+        with SignalHold():
+            _write_record(out, runs, {}, [], label)
+        held.deliver()
+        return Reproduction(runs, {}, label)
+    with SignalHold():
+        checks = _figures_and_checks(out, runs, config_dir)
+        _write_record(out, runs, checks, ["fig5_joint3.png", "fig6_grasp.png"], None)
+    return Reproduction(runs, checks)
+
+
+def _figures_and_checks(out: Path, runs: dict[str, RunOutcome],
+                        config_dir: str | Path | None) -> dict[str, Any]:
+    """Draw Figs. 5 and 6 from the three cases and return the paper's checks."""
+    from .plots import plot_compare
+
+    follower = build_experiment(load_config(_case_config(config_dir, CASES[0][1]))
+                                ).task.follower
     traces = [(f"case ({k}) {r.summary['experiment']}", r.result.trace) for k, r in runs.items()]
     plot_compare(out / "fig5_joint3.png", traces, "q_f", joint=2,
                  limits=(follower.q_min[2], follower.q_max[2]), scale=180.0 / np.pi,
                  ylabel="follower q3 [deg]",
                  title="Fig. 5: follower joint 3 (dashed: its range)", note=_JUMP_NOTE)
-    surface = build_experiment(load_config(
-        Path(config_dir) / CASES[1][1] if config_dir is not None else bundled_config(CASES[1][1])
-    )).task.surface
+    surface = build_experiment(load_config(_case_config(config_dir, CASES[1][1]))
+                               ).task.surface
     plot_compare(out / "fig6_grasp.png", traces, "grasp", scale=1e3,
                  limits=(surface.sigma_min, surface.sigma_max),
                  ylabel="grasp r2_z [mm]", title="Fig. 6: follower grasp position "
@@ -114,9 +237,4 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
         "case_c_moves_less_at_start": checks["c"]["grasp_travel_first_10_steps_mm"]
         < checks["b"]["grasp_travel_first_10_steps_mm"],
     }
-    write_json(out / "reproduce.json", {
-        "cases": {k: r.summary for k, r in runs.items()},
-        "checks": checks,
-        "figures": ["fig5_joint3.png", "fig6_grasp.png"],
-    })
-    return Reproduction(runs, checks)
+    return checks

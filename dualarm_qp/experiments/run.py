@@ -1,4 +1,12 @@
-"""Run an experiment and write its outputs (CSV, JSON, PNG)."""
+"""Run an experiment and write its outputs (CSV, JSON, PNG).
+
+The outputs of a run form one set: ``summary.json`` is written last and lists the
+other files, so a folder whose ``summary.json`` exists holds exactly what it lists.
+The set is written with SIGINT and SIGTERM held (:class:`~dualarm_qp._io.SignalHold`):
+an interrupt during the rollout stops it and the samples done so far are written as
+an ``interrupted`` run; an interrupt while the files are written waits until they all
+are.
+"""
 
 from __future__ import annotations
 
@@ -9,12 +17,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .._io import SignalHold, interrupt_requested
 from ..control.rollout import RolloutResult, rollout
-from .outputs import write_json, write_trace_csv
-from .plots import plot_closure, plot_grasp, plot_joints
+from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
 
+#: The files a run owns in its output folder (``summary.json`` lists the others written).
 OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "grasp.png", "closure.png")
+
+#: What ``summary.json``'s ``status`` says.
+STATUSES = ("completed", "failed", "interrupted")
 
 
 @dataclass
@@ -40,14 +52,37 @@ class RunOutcome:
         """Whether the whole duration was run."""
         return self.result.completed
 
+    @property
+    def interrupted(self) -> bool:
+        """Whether an interrupt (Ctrl-C, SIGTERM) stopped the rollout."""
+        return run_status(self.result) == "interrupted"
 
-def _progress_bar(total: int, label: str) -> tuple[Any, Any]:
-    from tqdm import tqdm
 
-    bar = tqdm(total=total, desc=label, unit="step", leave=False, file=sys.stderr)
+def run_status(result: RolloutResult) -> str:
+    """Return ``"completed"``, ``"interrupted"`` or ``"failed"`` (one of :data:`STATUSES`)."""
+    if result.failure is None:
+        return "completed"
+    return "interrupted" if result.failure.criterion == "interrupted" else "failed"
+
+
+def _progress(total: int, label: str, show: bool) -> tuple[Any, Any]:
+    """Return a progress bar (or None) and the rollout's per-sample callback.
+
+    The callback also stops the rollout when the command line received an interrupt
+    that some code swallowed (:func:`~dualarm_qp._io.interrupt_requested`).
+    """
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, desc=label, unit="step", leave=False, file=sys.stderr)
 
     def update(done: int, _total: int) -> None:
-        bar.update(done - bar.n)
+        swallowed = interrupt_requested()
+        if swallowed:
+            raise KeyboardInterrupt(swallowed)
+        if bar is not None:
+            bar.update(done - bar.n)
 
     return bar, update
 
@@ -77,27 +112,59 @@ def run_experiment(
     -------
     RunOutcome
         The outputs are written even when the run fails part-way: the summary then
-        says ``completed: false`` and why, and the CSV holds the completed samples.
+        says ``completed: false`` and why, and the CSV holds the completed samples. A
+        KeyboardInterrupt (Ctrl-C) during the rollout stops it the same way (status
+        ``interrupted``, criterion ``"interrupted"``); one that comes while the files
+        are written is raised once they all are.
+    """
+    outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots)
+    hold.deliver()
+    return outcome
+
+
+def run_and_write(
+    exp: Experiment,
+    out_dir: str | Path | None = None,
+    *,
+    progress: bool | None = None,
+    plots: bool = True,
+) -> tuple[RunOutcome, SignalHold]:
+    """Do what :func:`run_experiment` does, but hand back a signal held while writing.
+
+    For callers that must record the outcome before they stop (a reproduction):
+    they call ``hold.deliver()`` when ready.
+
+    Returns
+    -------
+    outcome : RunOutcome
+        As :func:`run_experiment`.
+    hold : SignalHold
+        ``hold.signum`` is the SIGINT or SIGTERM that came while the files were
+        written (None if none did).
     """
     controller = exp.controller()
     if progress is None:
         progress = sys.stderr.isatty()
     steps = int(exp.duration / exp.options.dt + 1e-9) + 1
-    bar, update = _progress_bar(steps, exp.name) if progress else (None, None)
+    bar, update = _progress(steps, exp.name, progress)
     t0 = time.perf_counter()
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
-                         limits=exp.limits, progress=update)
-    finally:
+                         limits=exp.limits, progress=update, stop_on_interrupt=True)
+    except BaseException:
         if bar is not None:
             bar.close()
+        raise
     wall = time.perf_counter() - t0
-    summary = make_summary(exp, result, wall)
-    out = None
-    if out_dir is not None:
-        out = Path(out_dir)
-        write_outputs(out, exp, result, summary, plots=plots)
-    return RunOutcome(result, summary, out)
+    with SignalHold(deliver=False) as hold:
+        if bar is not None:
+            bar.close()
+        summary = make_summary(exp, result, wall)
+        out = None
+        if out_dir is not None:
+            out = Path(out_dir)
+            write_outputs(out, exp, result, summary, plots=plots)
+    return RunOutcome(result, summary, out), hold
 
 
 def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[str, Any]:
@@ -120,26 +187,62 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
             "correction_gain_1_s": opts.correction_gain,
             "leader_gain_1_s": exp.leader_gain,
             "exact_orientation": opts.exact_orientation,
-            "fallback_solver": exp.fallback if result.hard_bounds else None,
+            "fallback_solver": (exp.fallback if result.hard_bounds
+                                and exp.fallback != exp.solver_name else None),
             "centre_horizon_s": opts.centre_horizon,
         },
         "reconstruction": exp.notes,
+        "status": run_status(result),
         **result.summary(),
         "wall_time_s": wall_s,
         "python": platform.python_version(),
     }
 
 
+def remove_run_outputs(out: Path) -> list[str]:
+    """Remove the files of an earlier run from ``out``; ``summary.json`` goes first.
+
+    Only the files a run owns (:data:`OUTPUT_FILES` and the temporary files they are
+    written through) are removed; anything else in the folder stays.
+
+    Returns
+    -------
+    list of str
+        The names removed.
+    """
+    first = out / "summary.json"
+    removed = ["summary.json"] if first.is_file() else []
+    first.unlink(missing_ok=True)
+    return removed + remove_owned(out, OUTPUT_FILES)
+
+
 def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
-                  *, plots: bool = True) -> None:
-    """Write every output file of a run into ``out`` (each file atomically)."""
+                  *, plots: bool = True) -> list[str]:
+    """Write the output set of a run into ``out``, replacing an earlier run's.
+
+    The earlier run's files go first (:func:`remove_run_outputs`), then
+    ``trajectory.csv`` and the plots are written, each atomically, and ``summary.json``
+    comes last, its ``outputs`` listing exactly the other files written. Call it
+    inside a :class:`~dualarm_qp._io.SignalHold` for an all-or-nothing set.
+
+    Returns
+    -------
+    list of str
+        The files written, ``summary.json`` last.
+    """
     out.mkdir(parents=True, exist_ok=True)
+    remove_run_outputs(out)
     write_trace_csv(out / "trajectory.csv", result.trace)
+    written = ["trajectory.csv"]
     if plots and len(result.trace):
+        from .plots import plot_closure, plot_grasp, plot_joints
+
         task = exp.task
         tag = f"{exp.name} ({exp.solver_name})"
         plot_joints(out / "joints.png", result.trace, task.leader, task.follower, title=tag)
         plot_grasp(out / "grasp.png", result.trace, task.surface, title=tag)
         plot_closure(out / "closure.png", result.trace, title=tag)
-    summary["outputs"] = [name for name in OUTPUT_FILES if (out / name).exists()]
+        written += ["joints.png", "grasp.png", "closure.png"]
+    summary["outputs"] = list(written)
     write_json(out / "summary.json", summary)
+    return [*written, "summary.json"]
