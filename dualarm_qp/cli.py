@@ -1,22 +1,30 @@
 """Command-line interface: ``dualarm-qp run | reproduce | bench | solvers``.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
-input (configuration, arguments, missing solver).
+input (configuration, arguments, missing solver, an output folder in use), 130
+interrupted by Ctrl-C (SIGINT) or SIGTERM (what was done is written, marked
+``interrupted``), 141 standard output closed early (``dualarm-qp solvers | head -1``).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import signal
 import sys
+import tempfile
 import traceback
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 from . import __version__
+from ._io import InterruptHandlers
 from .errors import DualArmError, InvalidInputError
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141  # 128 + SIGINT, 128 + SIGPIPE
 
 
 def _err(msg: str) -> None:
@@ -28,9 +36,8 @@ def _output_folder(path: str | Path) -> Path:
     out = Path(path)
     try:
         out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".write-test"
-        probe.touch()
-        probe.unlink()
+        with tempfile.TemporaryFile(dir=out):  # nameless where it can be: never left over
+            pass
     except OSError as err:
         reason = err.strerror or str(err)
         if isinstance(err, (FileExistsError, NotADirectoryError)):
@@ -40,17 +47,27 @@ def _output_folder(path: str | Path) -> Path:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .experiments.config import load_config
+    from .experiments.config import load_config, safe_name
+    from .experiments.options import check_solver_options, parse_solver_options
+    from .experiments.outputs import check_unused_folder
     from .experiments.run import run_experiment
     from .experiments.setup import build_experiment
 
-    exp = build_experiment(load_config(args.config), str(args.config), solver=args.solver)
+    solver_options = parse_solver_options(args.solver_option)
+    exp = build_experiment(load_config(args.config), str(args.config), solver=args.solver,
+                           solver_options=solver_options)
+    check_solver_options(solver_options, used=[exp.solver_name])
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
-    out = _output_folder(args.out if args.out else Path("runs") / exp.name
-                         / exp.solver_name.replace(":", "_"))
+    out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
+               / exp.solver_name.replace(":", "_"))
+    check_unused_folder(out, force=args.force, what="a run")
+    out = _output_folder(out)
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                              plots=not args.no_plots)
     print_run_summary(outcome.summary, str(out))
+    if outcome.interrupted:
+        _err(f"{outcome.summary['message']}; the samples done are written")
+        return EXIT_INTERRUPTED
     if not outcome.ok:
         _err(outcome.summary["message"])
         return EXIT_FAILED
@@ -59,8 +76,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def print_run_summary(s: dict[str, Any], out: str) -> None:
     """Print the console summary of one run (from its summary.json content)."""
+    status = s.get("status", "completed" if s["completed"] else "failed")
     print(f"{s['experiment']}: solver {s['solver']}, {s['samples']} samples, "
-          f"{'completed' if s['completed'] else 'FAILED'}")
+          f"{status if status == 'completed' else status.upper()}")
     print(f"  path completed: {s['path_completed_pct']:.1f}%; time lost to scaling: "
           f"{s['time_lost_to_scaling_s']:.3g} s")
     print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "
@@ -79,25 +97,35 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
           f"{s['step_time_median_s'] * 1e6:.0f} us")
     for warning in s["warnings"]:
         print(f"  warning: {warning}")
-    if s["failure"] is not None:
+    if s["failure"] is not None and status != "interrupted":
         print(f"  failed on: {s['failure']['criterion']}")
     print(f"  outputs: {out}/")
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .experiments.reproduce import reproduce
+    from .experiments.outputs import check_unused_folder
+    from .experiments.reproduce import is_reproduction_folder, reproduce
 
+    if not is_reproduction_folder(args.out):  # its own earlier output is replaced freely
+        check_unused_folder(Path(args.out), force=args.force, what="a reproduction")
     rep = reproduce(_output_folder(args.out), config_dir=args.configs,
                     progress=None if not args.quiet else False)
     print(f"Reproduction of Suh & Shin (1988), Sec. 4 -> {args.out}/")
     for label, run in rep.runs.items():
-        c = rep.checks[label]
         s = run.summary
+        mark = "" if run.ok else f"  [{s['status'].upper()}]"
+        c = rep.checks.get(label)
+        if c is None:
+            print(f"  case ({label}) {s['experiment']:<28} {s['samples']} samples{mark}")
+            continue
         print(f"  case ({label}) {s['experiment']:<28} q3 in [{c['q3_min_deg']:7.2f}, "
               f"{c['q3_max_deg']:7.2f}] deg, samples outside range: "
               f"{c['q3_samples_outside']:4d}, grasp {s['grasp_start_m'] * 1e3:.1f} -> "
-              f"{s['grasp_end_m'] * 1e3:.1f} mm"
-              + ("" if run.ok else "  [FAILED]"))
+              f"{s['grasp_end_m'] * 1e3:.1f} mm" + mark)
+    if rep.interrupted is not None:
+        _err(f"interrupted in case ({rep.interrupted}); the cases done are written, "
+             "without the figures; see reproduce.json")
+        return EXIT_INTERRUPTED
     for claim, held in rep.checks["claims"].items():
         print(f"  {'yes' if held else 'NO '}  {claim.replace('_', ' ')}")
     print("  figures: fig5_joint3.png, fig6_grasp.png; details in reproduce.json")
@@ -126,27 +154,56 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from .bench.interrupt import EXIT_INTERRUPTED, StopGuard
     from .bench.report import format_table, write_report
-    from .bench.runner import BenchSettings, run_bench
+    from .bench.runner import BenchInterrupted, BenchSettings, run_bench
     from .experiments.reproduce import BENCH_CONFIGS, bundled_config
     from .solvers import available_solvers
 
     configs = args.configs or [bundled_config(name) for name in BENCH_CONFIGS]
-    solvers = [s.strip() for s in args.solvers.split(",") if s.strip()] if args.solvers \
-        else available_solvers()
-    settings = BenchSettings(repeat=args.repeat, duration=args.duration)
+    if args.solvers is None:
+        solvers = available_solvers()
+    else:
+        solvers = [s.strip() for s in args.solvers.split(",") if s.strip()]
+        if not solvers:
+            raise InvalidInputError(f"--solvers names no solver ({args.solvers!r}); give "
+                                    "comma-separated names, or leave the option out for "
+                                    "all available: " + ", ".join(available_solvers()))
+    from .experiments.options import check_solver_options, parse_solver_options
+
+    solver_options = parse_solver_options(args.solver_option)
+    check_solver_options(solver_options, used=solvers)
+    settings = BenchSettings(repeat=args.repeat, duration=args.duration,
+                             solver_options=solver_options)
     out = _output_folder(args.out)
-    result = run_bench(configs, solvers, out, settings=settings,
-                       log=None if args.quiet else lambda line: print(line, file=sys.stderr))
-    meta = {"machine": result.machine, "settings": settings.as_dict(),
-            "configs": [str(c) for c in configs], "solvers": solvers,
-            "jobs_computed_this_run": result.computed}
-    rows = write_report(out, result.records, meta, plots=not args.no_plots)
-    print(format_table(rows))
-    print(f"outputs: {out}/bench.json, bench.csv" + ("" if args.no_plots else ", bench.png")
-          + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
-    if not result.ok:
-        _err("some jobs failed; see the 'error' column")
+    with StopGuard() as guard:  # a signal during the report: finish it, then exit 130
+        try:
+            result = run_bench(configs, solvers, out, settings=settings,
+                               log=None if args.quiet
+                               else lambda line: print(line, file=sys.stderr))
+        except BenchInterrupted as stop:
+            result = stop.result
+        meta = {"machine": result.machine, "settings": settings.as_dict(),
+                "configs": [str(c) for c in configs], "solvers": solvers,
+                "jobs_computed_this_run": result.computed, "jobs_planned": result.planned,
+                "interrupted": result.interrupted}
+        with guard.deferred():
+            rows = write_report(out, result.records, meta, plots=not args.no_plots)
+            print(format_table(rows))
+            print(f"outputs: {out}/bench.json, bench.csv"
+                  + ("" if args.no_plots else ", bench.png")
+                  + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
+            sys.stdout.flush()
+    if result.interrupted is not None:
+        _err(f"interrupted ({result.interrupted}): {len(result.records)} of "
+             f"{result.planned} jobs done and stored, the job under way was not stored; "
+             "run the same command again to resume")
+        return EXIT_INTERRUPTED
+    failures = result.failures
+    if failures:
+        _err(f"{len(failures)} of {len(result.records)} jobs failed"
+             + (" (all of them)" if len(failures) == len(result.records) else "")
+             + "; the reasons are listed under the table and in bench.csv's 'error' column")
         return EXIT_FAILED
     return EXIT_OK
 
@@ -165,8 +222,16 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run one experiment from a YAML file")
     r.add_argument("config", type=Path, help="experiment YAML file")
     r.add_argument("--solver", help="override the file's solver (see 'dualarm-qp solvers')")
+    r.add_argument("--solver-option", action="append", default=[],
+                   metavar="SOLVER.OPTION=VALUE",
+                   help="an option for one solver, e.g. qp:osqp.eps_abs=1e-9 (repeatable; "
+                        "the value is read as in YAML); the file's solver.options apply "
+                        "only to the file's own solver")
     r.add_argument("--out", help="output folder (default runs/<name>/<solver>)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--force", action="store_true",
+                   help="write into a folder that holds files: replace the files a run "
+                        "writes, keep the others")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 
@@ -175,6 +240,9 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--configs", type=Path, default=None,
                     help="folder with the three YAML files (default: the bundled copies)")
     rp.add_argument("--quiet", action="store_true", help="no progress bar")
+    rp.add_argument("--force", action="store_true",
+                    help="write into a folder that holds other files, keeping them (an "
+                         "earlier reproduction there is replaced even without --force)")
     rp.set_defaults(func=_cmd_reproduce)
 
     b = sub.add_parser("bench", help="run every config with every solver, compare them")
@@ -182,8 +250,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="experiment YAML files (default: the beam with speed limits and "
                         "the curved bar)")
     b.add_argument("--solvers", help="comma-separated solver names (default: all available)")
+    b.add_argument("--solver-option", action="append", default=[],
+                   metavar="SOLVER.OPTION=VALUE",
+                   help="an option for one of the solvers, e.g. qp:osqp.eps_abs=1e-9 "
+                        "(repeatable); a file's solver.options apply only to its own solver")
     b.add_argument("--out", default="bench_out", help="output folder (default bench_out); "
-                   "finished jobs stored there are reused, so a bench resumes")
+                   "finished jobs stored there are reused, so a bench resumes; benches "
+                   "sharing it split the jobs")
     b.add_argument("--repeat", type=int, default=1,
                    help="rollouts per job; their step timings are pooled (default 1)")
     b.add_argument("--duration", type=float, default=None,
@@ -194,29 +267,99 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("solvers", help="list the solvers and whether they are installed")
     s.set_defaults(func=_cmd_solvers)
+    for command in sub.choices.values():  # --debug after the command too
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                             help="show tracebacks of internal errors")
     return p
 
 
+def _drop_stdout() -> None:
+    """Point standard output at the null device, so that the final flush is quiet."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # not a real file (captured): nothing to flush later
+        pass
+
+
+@contextlib.contextmanager
+def _quiet_swallowed_interrupts() -> Iterator[None]:
+    """Print nothing for a KeyboardInterrupt that Python could only ignore.
+
+    One raised inside a weak-reference callback or a finaliser is printed as
+    "Exception ignored in ..." and dropped; the interrupt handlers have recorded it,
+    and the command stops on it (:func:`~dualarm_qp._io.interrupt_requested`).
+    """
+    previous = sys.unraisablehook
+
+    def hook(unraisable: Any) -> None:
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            previous(unraisable)
+
+    sys.unraisablehook = hook
+    try:
+        yield
+    finally:
+        sys.unraisablehook = previous
+
+
+def _run_command(args: argparse.Namespace, handlers: InterruptHandlers) -> int:
+    """Run the command and map what happened to an exit code and one message."""
+    try:
+        code = int(args.func(args))
+        sys.stdout.flush()  # a closed pipe shows here, not in the flush at exit
+    except BrokenPipeError:  # e.g. `dualarm-qp solvers | head -1`: end quietly
+        _drop_stdout()
+        return EXIT_BROKEN_PIPE
+    except KeyboardInterrupt as stop:
+        _err(f"interrupted ({stop})" if str(stop) else "interrupted")
+        return EXIT_INTERRUPTED
+    except DualArmError as err:
+        if handlers.signum is None:
+            _err(str(err))
+            return EXIT_BAD_INPUT
+        code = EXIT_FAILED  # came from the interrupt: reported below
+    except Exception as err:
+        if args.debug:
+            traceback.print_exc()
+        if handlers.signum is None:  # an internal error: say so plainly, no traceback
+            _err(f"internal error: {type(err).__name__}: {err} "
+                 "(rerun with --debug for details)")
+            return EXIT_FAILED
+        code = EXIT_FAILED  # caused by the interrupt (an import cut short): reported below
+    if handlers.signum is not None and code != EXIT_INTERRUPTED:
+        _err(f"interrupted ({signal.Signals(handlers.signum).name})")
+        return EXIT_INTERRUPTED
+    return code
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``dualarm-qp`` command."""
+    """Entry point of the ``dualarm-qp`` command.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments; default: the program's (``sys.argv[1:]``). Without them, main
+        is the program: after the command, SIGINT and SIGTERM are left at their
+        default action, so that a late one ends the process quietly.
+
+    Returns
+    -------
+    int
+        The exit code (see the module docstring).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:
         parser.print_help()
         return EXIT_BAD_INPUT
+    # SIGTERM stops a run the way Ctrl-C does; both are remembered even if swallowed.
     try:
-        return int(args.func(args))
-    except DualArmError as err:
-        _err(str(err))
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        _err("interrupted")
-        return 130
-    except Exception as err:  # an internal error: say so plainly, no traceback by default
-        if args.debug:
-            traceback.print_exc()
-        _err(f"internal error: {type(err).__name__}: {err} (rerun with --debug for details)")
-        return EXIT_FAILED
+        with InterruptHandlers(final=argv is None) as handlers, _quiet_swallowed_interrupts():
+            return _run_command(args, handlers)
+    except KeyboardInterrupt:  # another one while the first was being reported
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -9,13 +9,27 @@ errors that name the file, the key and the valid keys.
 from __future__ import annotations
 
 import math
+import re
+import unicodedata
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    AllowInfNan,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
 
 from ..errors import ConfigError
 
@@ -25,19 +39,73 @@ LENGTH_SCALE = {"m": 1.0, "mm": 1e-3}
 ANGLE_SCALE = {"rad": 1.0, "deg": math.pi / 180.0}
 TIME_SCALE = {"s": 1.0, "ms": 1e-3}
 
+#: Most samples a run may take: ``duration_cap / dt`` (``duration_cap`` defaults to twice
+#: ``duration``). Each sample keeps about 60 numbers, so this is about 1 GB at most.
+MAX_SAMPLES = 2_000_000
+
+#: Largest experiment file read, in bytes.
+MAX_FILE_BYTES = 1_000_000
+
+#: Deepest nesting of mappings and lists in an experiment file (the schema needs 6).
+MAX_DEPTH = 32
+
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def _finite(values: list[float]) -> list[float]:
-    for v in values:
-        if not math.isfinite(v):
-            raise ValueError("values must be finite numbers")
-    return values
+def _keyed(key: str, message: str) -> PydanticCustomError:
+    """Return a validation error of a model-level check that belongs to one key.
+
+    :func:`parse_config` appends ``key`` to the model's location, so the message names
+    e.g. ``controller.dt`` rather than ``controller``.
+    """
+    return PydanticCustomError("keyed", "{message}", {"key": key, "message": message})
 
 
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+def _number(value: Any) -> Any:
+    """Refuse what pydantic would otherwise turn into a number: booleans and text.
+
+    ``dt: true`` would read as 1 and ``dt: "0.1"`` as 0.1; both are mistakes in a file.
+    """
+    if isinstance(value, bool):
+        raise ValueError(f"must be a valid number, not {str(value).lower()}")
+    if isinstance(value, (str, bytes)):
+        raise ValueError("must be a valid number, not text")
+    return value
+
+
+def _not_nan(value: float) -> float:
+    if math.isnan(value):
+        raise ValueError("must be a number, not NaN")
+    return value
+
+
+#: Largest magnitude of a number in a file: beyond it (1e12 m, rad, s, ...) the
+#: arithmetic of a run overflows long before it means anything.
+MAX_MAGNITUDE = 1e12
+
+#: A finite number (int or float; not a boolean, text, NaN or infinity), at most
+#: :data:`MAX_MAGNITUDE` in size.
+Num = Annotated[float, BeforeValidator(_number), AllowInfNan(False),
+                Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
+#: A number that may be infinite (a joint limit that does not limit); never NaN.
+LimitNum = Annotated[float, BeforeValidator(_number), AfterValidator(_not_nan)]
+
+Vec3 = Annotated[list[Num], Field(min_length=3, max_length=3)]
+
+
+def _indicator(value: Any) -> Any:
+    if isinstance(value, bool):
+        raise ValueError(f"must be +1 or -1, not {str(value).lower()}")
+    return value
+
+
+Indicator = Annotated[Literal[1, -1], BeforeValidator(_indicator)]
+
+
+def _scalar_to_list(value: Any) -> Any:
+    return value if isinstance(value, (list, tuple)) else [value]
 
 
 class Units(_Model):
@@ -56,23 +124,17 @@ class PoseSpec(_Model):
 
     position: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
     rpy: Vec3 | None = None
-    rotation: list[Vec3] | None = None
-
-    @field_validator("position", "rpy")
-    @classmethod
-    def _check_finite(cls, v: list[float] | None) -> list[float] | None:
-        return None if v is None else _finite(v)
+    rotation: Annotated[list[Vec3], Field(min_length=3, max_length=3)] | None = None
 
     @model_validator(mode="after")
     def _one_rotation(self) -> PoseSpec:
         if self.rpy is not None and self.rotation is not None:
-            raise ValueError("give either rpy or rotation, not both")
+            raise _keyed("rotation", "give either rpy or rotation, not both")
         if self.rotation is not None:
             R = np.asarray(self.rotation, dtype=float)
-            if R.shape != (3, 3) or not np.isfinite(R).all():
-                raise ValueError("rotation must be a 3x3 matrix of finite numbers")
             if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-                raise ValueError("rotation must be a proper rotation matrix")
+                raise _keyed("rotation", "must be a proper rotation matrix (orthonormal "
+                             "to 1e-6, determinant +1)")
         return self
 
 
@@ -80,7 +142,7 @@ class DHSpec(_Model):
     """A DH table: rows ``[a, alpha, d]`` or ``[a, alpha, d, offset]``."""
 
     convention: Literal["standard", "modified"] = "standard"
-    rows: list[list[float]] = Field(min_length=1)
+    rows: list[list[Num]] = Field(min_length=1, max_length=32)
 
     @field_validator("rows")
     @classmethod
@@ -88,29 +150,37 @@ class DHSpec(_Model):
         widths = {len(r) for r in rows}
         if len(widths) != 1 or widths.pop() not in (3, 4):
             raise ValueError("every DH row must have 3 or 4 numbers [a, alpha, d(, offset)]")
-        for r in rows:
-            _finite(r)
         return rows
 
 
 class IKBranch(_Model):
     """Closed-form IK branch indicators (+1 / -1) for the PUMA 560."""
 
-    arm: Literal[1, -1] = 1
-    elbow: Literal[1, -1] = 1
-    wrist: Literal[1, -1] = 1
+    arm: Indicator = 1
+    elbow: Indicator = 1
+    wrist: Indicator = 1
 
 
 class InitialSpec(_Model):
-    """Initial joints: given directly, or by an IK branch at D(t0)."""
+    """Initial joints: given, or solved at the arm's target pose at t0.
 
-    joints: list[float] | None = None
+    ``joints`` are the initial joints; ``ik_branch`` (PUMA 560 preset) solves the
+    target pose in closed form on that branch; ``near`` solves it by damped least
+    squares starting from these joints (any arm). The leader's target pose is
+    ``D(t0) H1^-1``, the follower's ``D(t0) H2(grasp_initial)``; the follower's needs
+    an explicit ``base``.
+    """
+
+    joints: list[Num] | None = None
     ik_branch: IKBranch | None = None
+    near: list[Num] | None = None
 
     @model_validator(mode="after")
     def _one(self) -> InitialSpec:
-        if (self.joints is None) == (self.ik_branch is None):
-            raise ValueError("give exactly one of 'joints' or 'ik_branch'")
+        given = [k for k in ("joints", "ik_branch", "near") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'joints', 'ik_branch' or 'near'"
+                             + (f" (got {', '.join(given)})" if given else ""))
         return self
 
 
@@ -121,9 +191,9 @@ class ArmSpec(_Model):
     dh: DHSpec | None = None
     base: PoseSpec | Literal["auto"] = Field(default_factory=PoseSpec)
     tool: PoseSpec | None = None
-    q_min: list[float] | None = None
-    q_max: list[float] | None = None
-    qd_max: list[float] | None = None
+    q_min: list[LimitNum] | None = None
+    q_max: list[LimitNum] | None = None
+    qd_max: list[LimitNum] | None = None
     initial: InitialSpec
 
     @model_validator(mode="after")
@@ -145,10 +215,10 @@ class SurfaceSpec(_Model):
     type: Literal["plane_bar", "cylinder", "curved_bar"] = "plane_bar"
     r_min: Vec3 | None = None
     r_max: Vec3 | None = None
-    radius: float | None = None
-    azimuth: float | None = None
+    radius: Num | None = None
+    azimuth: Num | None = None
     side: Literal["outer", "inner"] | None = None
-    grasp_range: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    grasp_range: Annotated[list[Num], Field(min_length=2, max_length=2)] | None = None
 
     @model_validator(mode="after")
     def _fields(self) -> SurfaceSpec:
@@ -156,18 +226,25 @@ class SurfaceSpec(_Model):
             extra = [k for k in ("radius", "azimuth", "side", "grasp_range")
                      if getattr(self, k) is not None]
             if extra:
-                raise ValueError(f"a plane_bar takes r_min and r_max, not {', '.join(extra)}")
+                raise _keyed(extra[0], f"a plane_bar takes r_min and r_max, not "
+                             f"{', '.join(extra)}")
+            if self.r_min is not None and self.r_max is not None and any(
+                    lo > hi for lo, hi in zip(self.r_min, self.r_max, strict=True)):
+                raise _keyed("r_min", "must not exceed r_max in any coordinate")
         else:
-            if self.radius is None or not (math.isfinite(self.radius) and self.radius > 0):
-                raise ValueError(f"a {self.type} needs a positive 'radius'")
+            if self.radius is None or not self.radius > 0:
+                raise _keyed("radius", f"a {self.type} needs a positive 'radius'")
             if self.grasp_range is None:
-                raise ValueError(f"a {self.type} needs 'grasp_range: [min, max]'")
-            if self.r_min is not None or self.r_max is not None:
-                raise ValueError(f"a {self.type} takes grasp_range, not r_min / r_max")
+                raise _keyed("grasp_range", f"a {self.type} needs 'grasp_range: [min, max]'")
+            if self.grasp_range[0] > self.grasp_range[1]:
+                raise _keyed("grasp_range", "must be [min, max] with min <= max")
+            for k in ("r_min", "r_max"):
+                if getattr(self, k) is not None:
+                    raise _keyed(k, f"a {self.type} takes grasp_range, not r_min / r_max")
             if self.type == "cylinder" and self.side is not None:
-                raise ValueError("'side' is for a curved_bar")
+                raise _keyed("side", "'side' is for a curved_bar")
             if self.type == "curved_bar" and self.azimuth is not None:
-                raise ValueError("'azimuth' is for a cylinder")
+                raise _keyed("azimuth", "'azimuth' is for a cylinder")
         return self
 
 
@@ -176,13 +253,13 @@ class ObjectSpec(_Model):
 
     H1: PoseSpec = Field(default_factory=PoseSpec)
     surface: SurfaceSpec = Field(default_factory=SurfaceSpec)
-    grasp_initial: float
+    grasp_initial: Num
 
 
 class Waypoint(_Model):
     """One waypoint of the object path."""
 
-    t: float
+    t: Num
     pose: PoseSpec
 
 
@@ -192,14 +269,30 @@ class TrajectorySpec(_Model):
     type: Literal["linear", "waypoints"] = "linear"
     start: PoseSpec | None = None
     velocity: Vec3 | None = None
-    waypoints: list[Waypoint] | None = None
+    waypoints: Annotated[list[Waypoint], Field(max_length=100_000)] | None = None
 
     @model_validator(mode="after")
     def _fields(self) -> TrajectorySpec:
-        if self.type == "linear" and (self.start is None or self.velocity is None):
-            raise ValueError("a linear trajectory needs 'start' and 'velocity'")
-        if self.type == "waypoints" and (not self.waypoints or len(self.waypoints) < 2):
-            raise ValueError("a waypoints trajectory needs at least two 'waypoints'")
+        if self.type == "linear":
+            for k in ("start", "velocity"):
+                if getattr(self, k) is None:
+                    raise _keyed(k, "a linear trajectory needs 'start' and 'velocity'")
+            if self.waypoints is not None:
+                raise _keyed("waypoints", "a linear trajectory takes start and velocity, "
+                             "not waypoints")
+        if self.type == "waypoints":
+            if not self.waypoints or len(self.waypoints) < 2:
+                raise _keyed("waypoints", "a waypoints trajectory needs at least two "
+                             "'waypoints'")
+            times = [w.t for w in self.waypoints]
+            bad = next((i for i in range(1, len(times)) if times[i] <= times[i - 1]), None)
+            if bad is not None:
+                raise _keyed(f"waypoints.{bad}.t", "waypoint times must be strictly "
+                             f"increasing (got {times[bad - 1]:g} then {times[bad]:g})")
+            for k in ("start", "velocity"):
+                if getattr(self, k) is not None:
+                    raise _keyed(k, "a waypoints trajectory takes waypoints, not start / "
+                                 "velocity")
         return self
 
 
@@ -212,16 +305,17 @@ class WeightsSpec(_Model):
     ``grasp_unit: mm`` is 1e8 in SI, with ``grasp_unit: m`` it is 100.
     """
 
-    joints: float | list[float] = 1.0
-    grasp: float = 1.0
+    joints: Annotated[list[Num], BeforeValidator(_scalar_to_list),
+                      Field(min_length=1)] = Field(default_factory=lambda: [1.0])
+    grasp: Num = 1.0
     grasp_unit: Literal["m", "mm"] | None = None
 
-    @model_validator(mode="after")
-    def _positive(self) -> WeightsSpec:
-        joints = self.joints if isinstance(self.joints, list) else [self.joints]
-        if not all(math.isfinite(w) and w > 0 for w in [*joints, self.grasp]):
+    @field_validator("joints", "grasp")
+    @classmethod
+    def _positive(cls, v: Any) -> Any:
+        if not all(w > 0 for w in (v if isinstance(v, list) else [v])):
             raise ValueError("weights must be finite and > 0")
-        return self
+        return v
 
 
 class ControllerSpec(_Model):
@@ -239,23 +333,23 @@ class ControllerSpec(_Model):
     unit, default twice ``duration``) is how long a slowed task may run.
     """
 
-    dt: float
-    duration: float
+    dt: Num
+    duration: Num
     weights: WeightsSpec = Field(default_factory=WeightsSpec)
     velocity_limits: bool = True
-    grasp_speed_max: float | None = None
-    correction_gain: float | None = None
-    leader_gain: float | None = None
-    centre_horizon: float | None = None
-    recovery_fraction: float = 0.0
+    grasp_speed_max: Num | None = None
+    correction_gain: Num | None = None
+    leader_gain: Num | None = None
+    centre_horizon: Num | None = None
+    recovery_fraction: Num = 0.0
     policy: Literal["scale", "relax", "stop"] = "scale"
     exact_orientation: bool = False
     projection: bool | None = None
-    closure_tolerance: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
-    tracking_tolerance: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
-    singular_value_min: float = 1e-3
+    closure_tolerance: Annotated[list[Num], Field(min_length=2, max_length=2)] | None = None
+    tracking_tolerance: Annotated[list[Num], Field(min_length=2, max_length=2)] | None = None
+    singular_value_min: Num = 1e-3
     singularity_action: Literal["warn", "stop", "ignore"] = "warn"
-    duration_cap: float | None = None
+    duration_cap: Num | None = None
 
     @field_validator("singular_value_min")
     @classmethod
@@ -267,8 +361,17 @@ class ControllerSpec(_Model):
     @model_validator(mode="after")
     def _cap(self) -> ControllerSpec:
         if self.duration_cap is not None and self.duration_cap < self.duration:
-            raise ValueError(f"duration_cap ({self.duration_cap:g}) must be at least "
-                             f"the duration ({self.duration:g})")
+            raise _keyed("duration_cap", f"duration_cap ({self.duration_cap:g}) must be at "
+                         f"least the duration ({self.duration:g})")
+        if self.duration < self.dt:
+            raise _keyed("duration", f"the duration ({self.duration:g}) is shorter than "
+                         f"one sample (dt = {self.dt:g}); it must be at least dt")
+        cap = 2.0 * self.duration if self.duration_cap is None else self.duration_cap
+        samples = cap / self.dt
+        if samples > MAX_SAMPLES:
+            raise _keyed("dt", f"dt = {self.dt:g} with a run of up to {cap:g} (duration_cap, "
+                         f"default twice duration) asks for {samples:.3g} samples; at most "
+                         f"{MAX_SAMPLES:,} are allowed: raise dt or shorten the run")
         return self
 
     @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap")
@@ -312,11 +415,20 @@ class SolverSpec(_Model):
     options: dict[str, Any] = Field(default_factory=dict)
     fallback: str = "nullspace"
 
+    @field_validator("options")
+    @classmethod
+    def _scalars(cls, v: dict[str, Any]) -> dict[str, Any]:
+        for key, value in v.items():
+            if not (value is None or isinstance(value, (bool, int, float, str))):
+                raise _keyed(key, "a solver option must be a single value (number, "
+                             f"true/false or text), got a {type(value).__name__}")
+        return v
+
 
 class ExperimentConfig(_Model):
     """A whole experiment file (the values as written, in the file's units)."""
 
-    name: str = "experiment"
+    name: Annotated[str, Field(min_length=1, max_length=200)] = "experiment"
     description: str = ""
     units: Units = Field(default_factory=Units)
     leader: ArmSpec
@@ -325,6 +437,38 @@ class ExperimentConfig(_Model):
     trajectory: TrajectorySpec
     controller: ControllerSpec
     solver: SolverSpec = Field(default_factory=SolverSpec)
+
+    @field_validator("name")
+    @classmethod
+    def _printable(cls, v: str) -> str:
+        bad = next((c for c in v if unicodedata.category(c)[0] == "C"), None)
+        if bad is not None:
+            raise ValueError(f"must be printable text (it holds the control character "
+                             f"U+{ord(bad):04X})")
+        if not any(c.isalnum() for c in v):
+            raise ValueError("must hold at least one letter or digit")
+        return v
+
+
+def safe_name(name: str) -> str:
+    """Return ``name`` as one safe file-name component (the default run folder's).
+
+    Every character other than a letter, a digit, ``-``, ``_`` or ``.`` becomes ``_``
+    (path separators, NUL and other control characters, spaces); leading dots are
+    dropped (no ``..``, no hidden folder) and the result is cut to 100 characters.
+    Always non-empty: ``"experiment"`` when nothing usable is left.
+
+    Examples
+    --------
+    >>> safe_name("../../escape")
+    '_.._escape'
+    >>> safe_name("beam s7=100")
+    'beam_s7_100'
+    """
+    text = unicodedata.normalize("NFKC", str(name))
+    out = re.sub(r"[^\w.-]", "_", text, flags=re.ASCII).lstrip(".")
+    out = out[:100].rstrip(".")
+    return out or "experiment"
 
 
 def _valid_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
@@ -356,45 +500,252 @@ def _model_in(annotation: Any) -> type[BaseModel] | None:
     return None
 
 
+def _location(err: Any) -> tuple[Any, ...]:
+    """Return the error's location without pydantic's union and validator tags."""
+    loc = list(err["loc"])
+    ctx = err.get("ctx") or {}
+    if err["type"] == "keyed" and ctx.get("key"):
+        loc.extend(int(p) if p.isdigit() else p for p in str(ctx["key"]).split("."))
+    return tuple(p for p in loc if not (isinstance(p, str) and (
+        "[" in p or p.startswith(("function-", "literal[")))))
+
+
 def parse_config(data: Any, path: str = "<config>") -> ExperimentConfig:
     """Validate a loaded YAML document.
 
     Raises
     ------
     ConfigError
-        Naming the file, the first offending key and, for unknown keys, the valid keys.
+        Naming the file, the first offending key and, for unknown keys and fixed
+        choices, the valid ones.
     """
     if not isinstance(data, dict):
-        raise ConfigError("the file must hold a mapping of keys at the top level", path=path)
+        kind = "empty" if data is None else f"a {_yaml_kind(data)}"
+        raise ConfigError(f"the top level of the file must be a mapping of keys "
+                          f"(name, leader, follower, ...), but it is {kind}", path=path)
     try:
         return ExperimentConfig.model_validate(data)
     except ValidationError as err:
-        # An unknown key first (a misspelt required key is also "missing"), then bad
-        # values, then missing keys.
-        rank = {"extra_forbidden": 0, "missing": 2}
-        first = min(err.errors(), key=lambda e: rank.get(e["type"], 1))
-        loc = tuple(first["loc"])
-        # Drop pydantic's union/literal tags from the location.
-        clean = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith(
-            ("function-", "literal[")))))
-        key = ".".join(str(p) for p in clean) or None
-        if first["type"] == "extra_forbidden":
-            valid = _valid_keys(ExperimentConfig, clean)
-            raise ConfigError("unknown key", path=path, key=key, valid=valid) from None
-        if first["type"] == "missing":
-            raise ConfigError("missing required key", path=path, key=key) from None
-        msg = first["msg"]
-        if first["type"].startswith("literal_error") and "expected" in first.get("ctx", {}):
-            msg = f"invalid value {first.get('input')!r}"
-            raise ConfigError(msg, path=path, key=key,
-                              valid=[s.strip(" '\"") for s in
-                                     str(first["ctx"]["expected"]).replace(" or ", ",").split(",")]
-                              ) from None
-        msg = msg.removeprefix("Value error, ")
-        got = first.get("input")
-        if not isinstance(got, (dict, list)):  # a whole section would drown the message
-            msg = f"{msg} (got {got!r})"
-        raise ConfigError(msg, path=path, key=key) from None
+        raise _config_error(err, path) from None
+    except RecursionError:
+        raise ConfigError(f"the document is nested too deeply (more than {MAX_DEPTH} "
+                          "levels)", path=path) from None
+
+
+def _yaml_kind(value: Any) -> str:
+    if isinstance(value, list):
+        return "list"
+    if isinstance(value, str):
+        return "text"
+    if isinstance(value, bool):
+        return "boolean"
+    if isinstance(value, (int, float)):
+        return "number"
+    return type(value).__name__
+
+
+def _config_error(err: ValidationError, path: str) -> ConfigError:
+    """Return the ConfigError for the most telling of pydantic's errors."""
+    # An unknown key first (a misspelt required key is also "missing"), then bad
+    # values, then missing keys; a union's "should be a valid list" loses to the
+    # other branch's complaint.
+    rank = {"extra_forbidden": 0, "missing": 3, "list_type": 2, "dict_type": 2,
+            "model_type": 2}
+    first = min(err.errors(), key=lambda e: rank.get(e["type"], 1))
+    clean = _location(first)
+    key = ".".join(str(p) for p in clean) or None
+    if first["type"] == "extra_forbidden":
+        valid = _valid_keys(ExperimentConfig, clean)
+        return ConfigError("unknown key", path=path, key=key, valid=valid)
+    if first["type"] == "missing":
+        return ConfigError("missing required key", path=path, key=key)
+    ctx = first.get("ctx") or {}
+    if first["type"].startswith("literal_error") and "expected" in ctx:
+        return ConfigError(
+            f"invalid value {first.get('input')!r}", path=path, key=key,
+            valid=[s.strip(" '\"") for s in
+                   str(ctx["expected"]).replace(" or ", ",").split(",")])
+    msg = str(ctx.get("message", first["msg"])).removeprefix("Value error, ")
+    if first["type"] in ("less_than_equal", "greater_than_equal"):
+        msg = f"must be between {-MAX_MAGNITUDE:g} and {MAX_MAGNITUDE:g}"
+    if first["type"] in ("model_type", "dict_type"):
+        valid = _valid_keys(ExperimentConfig, (*clean, ""))
+        return ConfigError(f"must be a mapping of keys, got {_yaml_kind(first.get('input'))}",
+                           path=path, key=key, valid=valid)
+    got = first.get("input")
+    if first["type"] != "keyed" and not isinstance(got, (dict, list)):
+        text = repr(got)  # a whole section would drown the message
+        msg = f"{msg} (got {text if len(text) <= 60 else text[:57] + '...'})"
+    return ConfigError(msg, path=path, key=key)
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that reads ``1e-9`` as a number (YAML 1.1 reads it as text)."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
+
+
+def yaml_scalar(text: str) -> Any:
+    """Read one YAML scalar (``1e-9``, ``true``, ``abc``) as an experiment file would.
+
+    Raises
+    ------
+    ValueError
+        ``text`` is not one scalar (a list, a mapping or broken YAML).
+    """
+    try:
+        value = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as err:
+        raise ValueError(f"not a valid YAML value: {getattr(err, 'problem', err)}") from None
+    if isinstance(value, (dict, list)):
+        raise ValueError("must be a single value, not a list or a mapping")
+    return value
+
+
+def _decode(raw: bytes, path: str) -> str:
+    """Return the file's text, or raise a ConfigError saying where the encoding is wrong."""
+    boms = {b"\xff\xfe\x00\x00": "UTF-32", b"\x00\x00\xfe\xff": "UTF-32",
+            b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16"}
+    for bom, name in boms.items():
+        if raw.startswith(bom):
+            raise ConfigError(f"the file is {name} encoded; save it as UTF-8", path=path)
+    if b"\x00" in raw:
+        line = raw[: raw.index(b"\x00")].count(b"\n") + 1
+        raise ConfigError(f"the file holds a NUL byte at line {line}: it is binary or "
+                          "UTF-16/32 without a byte-order mark; save it as UTF-8 text",
+                          path=path)
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = raw[: err.start].count(b"\n") + 1
+        column = err.start - (raw.rfind(b"\n", 0, err.start) + 1) + 1
+        key = _key_at_line(raw.decode("utf-8", errors="replace"), line)
+        raise ConfigError(f"the file is not UTF-8 text: byte 0x{raw[err.start]:02x} at line "
+                          f"{line}, column {column}; save it as UTF-8",
+                          path=path, key=key) from None
+
+
+class _Frame:
+    """An open mapping or list while walking the YAML events."""
+
+    __slots__ = ("current", "expect_key", "is_key", "is_map", "keys")
+
+    def __init__(self, is_map: bool, is_key: bool) -> None:
+        self.is_map = is_map
+        self.current: str | int | None = None if is_map else 0
+        self.expect_key = is_map
+        self.keys: set[str] = set()
+        self.is_key = is_key
+
+
+def _walk(text: str, path: str) -> Iterator[tuple[tuple[str, ...], yaml.Event]]:
+    """Yield every YAML event with its key path, without recursion (any depth).
+
+    Raises ConfigError for nesting deeper than :data:`MAX_DEPTH` (PyYAML's loader
+    recurses and would end in a RecursionError) and for a key given twice in one
+    mapping (PyYAML keeps the last one silently).
+    """
+    stack: list[_Frame] = []
+
+    def where() -> tuple[str, ...]:
+        return tuple(str(f.current) for f in stack if f.current is not None)
+
+    def value_done() -> None:
+        if stack:
+            top = stack[-1]
+            if top.is_map:
+                top.expect_key = True
+            else:
+                assert isinstance(top.current, int)
+                top.current += 1
+
+    for event in yaml.parse(text, Loader=_Loader):
+        top = stack[-1] if stack else None
+        if isinstance(event, (yaml.ScalarEvent, yaml.AliasEvent)):
+            if top is not None and top.is_map and top.expect_key:
+                key = (str(event.value) if isinstance(event, yaml.ScalarEvent)
+                       else f"*{event.anchor}")
+                if key in top.keys and key != "<<":
+                    line = event.start_mark.line + 1 if event.start_mark else 0
+                    raise ConfigError(f"the key is given twice in one mapping (again at "
+                                      f"line {line}); give it once", path=path,
+                                      key=".".join((*where()[:-1], key))
+                                      if top.current is not None else key)
+                top.keys.add(key)
+                top.current = key
+                top.expect_key = False
+                yield where(), event
+            else:
+                yield where(), event
+                value_done()
+        elif isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            if len(stack) >= MAX_DEPTH:
+                line = event.start_mark.line + 1 if event.start_mark else 0
+                raise ConfigError(f"nested more than {MAX_DEPTH} levels deep (line {line}); "
+                                  "an experiment file needs at most 6", path=path,
+                                  key=_schema_key(where()) or None)
+            yield where(), event
+            is_key = top is not None and top.is_map and top.expect_key
+            stack.append(_Frame(isinstance(event, yaml.MappingStartEvent), is_key))
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            done = stack.pop()
+            yield where(), event
+            if done.is_key and stack:
+                stack[-1].current = "?"
+                stack[-1].expect_key = False
+            else:
+                value_done()
+        else:
+            yield where(), event
+
+
+def _schema_key(keys: tuple[str, ...]) -> str:
+    """Return the part of a key path that the schema knows (plus one free mapping key).
+
+    ``solver.options.x.0.0...`` gives ``solver.options.x``, ``description.a.a...`` gives
+    ``description``: where a runaway structure starts.
+    """
+    current: Any = ExperimentConfig
+    out: list[str] = []
+    for part in keys:
+        if isinstance(current, type) and issubclass(current, BaseModel):
+            if part.isdigit():  # an item of a list of models
+                out.append(part)
+                continue
+            field = current.model_fields.get(part)
+            if field is None:
+                out.append(part)
+                break
+            out.append(part)
+            current = _model_in(field.annotation) or (
+                dict if "dict" in str(field.annotation) else None)
+            continue
+        if current is dict:
+            out.append(part)
+        break
+    return ".".join(out)
+
+
+def _key_at_line(text: str, line: int) -> str | None:
+    """Key path of the first value or key on ``line`` (1-based), or None."""
+    try:
+        for keys, event in _walk(text, "<text>"):
+            mark = event.start_mark
+            if mark is not None and mark.line + 1 >= line and keys:
+                return ".".join(keys)
+    except (yaml.YAMLError, ConfigError):
+        pass
+    return None
+
+
+def _scan(text: str, path: str) -> None:
+    """Walk the whole document once (see :func:`_walk`) before it is constructed."""
+    for _ in _walk(text, path):
+        pass
 
 
 def load_config(path: str | Path) -> ExperimentConfig:
@@ -407,16 +758,26 @@ def load_config(path: str | Path) -> ExperimentConfig:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise ConfigError(f"the file is {size:,} bytes; an experiment file is at most "
+                              f"{MAX_FILE_BYTES:,}", path=str(p))
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise ConfigError("file not found", path=str(p)) from None
+    except IsADirectoryError:
+        raise ConfigError("is a folder, not a file", path=str(p)) from None
     except OSError as err:
         raise ConfigError(f"cannot read file: {err.strerror}", path=str(p)) from None
+    text = _decode(raw, str(p))
     try:
-        data = yaml.safe_load(text)
+        _scan(text, str(p))
+        data = yaml.load(text, Loader=_Loader)
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         raise ConfigError(f"not valid YAML{where}: {getattr(err, 'problem', err)}",
                           path=str(p)) from None
+    except RecursionError:
+        raise ConfigError(f"nested more than {MAX_DEPTH} levels deep", path=str(p)) from None
     return parse_config(data, str(p))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -13,16 +15,37 @@ from ..control.controller import DualArmController
 from ..control.rollout import RunLimits
 from ..errors import ConfigError, DualArmError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
+from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
-from ..se3 import make_pose, rot_x, rot_y, rot_z
+from ..se3 import log_so3, make_pose, rot_x, rot_y, rot_z
 from ..solvers.policy import Policy
-from ..solvers.registry import SolverInfo, get_solver, solver_info
+from ..solvers.registry import (
+    SolverInfo,
+    SolverOptionError,
+    canonical_name,
+    get_solver,
+    solver_info,
+)
 from ..step.build import DualArmState, StepOptions
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
 from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
-from .config import ANGLE_SCALE, LENGTH_SCALE, TIME_SCALE, ArmSpec, ExperimentConfig, PoseSpec
+from .config import (
+    ANGLE_SCALE,
+    LENGTH_SCALE,
+    TIME_SCALE,
+    ArmSpec,
+    ExperimentConfig,
+    InitialSpec,
+    PoseSpec,
+)
+from .options import SolverFlagError, SolverOptions, flag_error, options_for
+
+#: A start further than this from its pose at t0 (leader: D(t0) H1^-1; follower: the
+#: grasp closure) is an error in the file: [m] and [rad] (1 mm, 0.1 deg), or the run's
+#: own tolerance (``closure_tolerance`` / ``tracking_tolerance``) when that is tighter.
+START_TOLERANCE = (1e-3, math.radians(0.1))
 
 FloatArray = NDArray[np.float64]
 
@@ -141,6 +164,17 @@ def _vec(values: list[float] | None, scale: float, n: int, key: str, path: str) 
     return arr
 
 
+@contextlib.contextmanager
+def _at(key: str, path: str) -> Iterator[None]:
+    """Report a library refusal inside the block as a ConfigError naming ``key``."""
+    try:
+        yield
+    except ConfigError:
+        raise
+    except DualArmError as err:
+        raise ConfigError(str(err), path=path, key=key) from None
+
+
 def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: str) -> SerialArm:
     tool = None if spec.tool is None else _pose(spec.tool, sc)
     if spec.preset == "puma560":
@@ -159,6 +193,19 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
     qd_max = _vec(spec.qd_max, sc.angle / sc.time, n, f"{role}.qd_max", path)
     if q_min is None and q_max is None and qd_max is None:
         return arm
+    lo = arm.q_min if q_min is None else q_min
+    hi = arm.q_max if q_max is None else q_max
+    crossed = np.flatnonzero(lo > hi)
+    if crossed.size:
+        i = int(crossed[0])
+        raise ConfigError(f"joint {i + 1}: q_min ({lo[i] / sc.angle:g}) is above q_max "
+                          f"({hi[i] / sc.angle:g})", path=path,
+                          key=f"{role}.q_min" if q_min is not None else f"{role}.q_max")
+    if qd_max is not None and not (qd_max > 0).all():
+        i = int(np.flatnonzero(~(qd_max > 0))[0])
+        raise ConfigError(f"joint {i + 1}: a speed limit must be > 0, got "
+                          f"{qd_max[i] * sc.time / sc.angle:g}", path=path,
+                          key=f"{role}.qd_max")
     return SerialArm(
         dh,
         q_min=arm.q_min if q_min is None else q_min,
@@ -203,6 +250,7 @@ def build_experiment(
     path: str = "<config>",
     *,
     solver: str | None = None,
+    solver_options: SolverOptions | None = None,
 ) -> Experiment:
     """Build the task, initial state and controller settings of an experiment.
 
@@ -214,90 +262,165 @@ def build_experiment(
         File name, for error messages.
     solver : str, optional
         Override of the configured solver name.
+    solver_options : mapping, optional
+        Options per solver name from the command line
+        (:func:`~dualarm_qp.experiments.options.parse_solver_options`); those of the
+        solver that runs are applied over the file's.
+
+    Notes
+    -----
+    The file's ``solver.options`` belong to the file's solver: they are checked against
+    it (when it is installed) and handed to the solver only when the solver that runs
+    is that one (``solver`` None or the same name); another solver runs with its
+    defaults and its own command-line options.
 
     Raises
     ------
     ConfigError
         Inconsistent values that the schema cannot catch (wrong number of joints,
-        an IK branch that does not exist, ...), naming the file and key.
+        an IK branch that does not exist, a follower base that does not close the grasp,
+        an option the file's solver refuses, ...), naming the file and key.
+    InvalidInputError
+        A command-line option the running solver refuses, naming ``--solver-option``.
     """
     try:
-        return _build(cfg, path, solver)
+        return _build(cfg, path, solver, solver_options)
     except ConfigError as err:
         if err.path is None:
             raise ConfigError(str(err), path=path) from None
+        raise
+    except SolverFlagError:
         raise
     except DualArmError as err:
         raise ConfigError(str(err), path=path) from None
 
 
-def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
-    if solver is None:  # the file's solver: a wrong name is an error in the file
-        try:
-            solver_info(cfg.solver.name)
-        except SolverNotFoundError as err:
+def _solver_options(cfg: ExperimentConfig, path: str, solver: str | None,
+                    cli: SolverOptions | None) -> dict[str, Any]:
+    """Return the options the running solver gets (see :func:`build_experiment`), checked."""
+    own = cfg.solver.options
+    file_info = None
+    try:
+        file_info = solver_info(cfg.solver.name)
+    except SolverNotFoundError as err:
+        if solver is None:  # the file's solver runs: a wrong name is an error in the file
             raise ConfigError(str(err), path=path, key="solver.name") from None
-    if cfg.solver.options:  # options the solver refuses are an error in the file
+    if own and file_info is not None:  # options the file's solver refuses: the file's fault
         try:
-            get_solver(solver or cfg.solver.name, **cfg.solver.options)
-        except SolverNotFoundError:
-            pass  # an unavailable --solver override: reported by its own message later
+            get_solver(cfg.solver.name, **own)
+        except SolverOptionError as err:
+            raise ConfigError(err.reason, path=path, key=f"solver.options.{err.option}",
+                              valid=err.valid) from None
         except DualArmError as err:
             raise ConfigError(str(err), path=path, key="solver.options") from None
+    running = solver or cfg.solver.name
+    same = canonical_name(running) == canonical_name(cfg.solver.name)
+    extra = options_for(running, cli)
+    chosen = {**(own if same else {}), **extra}
+    if extra:
+        try:
+            solver_info(running)
+        except SolverNotFoundError:
+            return chosen  # reported by its own message when the solver is built
+        try:
+            get_solver(running, **chosen)
+        except SolverOptionError as err:
+            if err.option in extra:
+                raise flag_error(err) from None
+            raise ConfigError(err.reason, path=path, key=f"solver.options.{err.option}",
+                              valid=err.valid) from None
+        except DualArmError as err:
+            raise SolverFlagError(f"--solver-option for '{running}': {err}") from None
+    return chosen
+
+
+def _build(cfg: ExperimentConfig, path: str, solver: str | None,
+           cli_options: SolverOptions | None) -> Experiment:
+    solver_options = _solver_options(cfg, path, solver, cli_options)
     sc = Scales(LENGTH_SCALE[cfg.units.length], ANGLE_SCALE[cfg.units.angle],
                 TIME_SCALE[cfg.units.time])
     c = cfg.controller
     dt, duration = c.dt * sc.time, c.duration * sc.time
     notes: dict[str, Any] = {}
-    surface = _surface(cfg, sc)
-    trajectory = _trajectory(cfg, sc, duration)
-    H1 = _pose(cfg.object.H1, sc)
+    with _at("object.surface", path):
+        surface = _surface(cfg, sc)
+    with _at("trajectory", path):
+        trajectory = _trajectory(cfg, sc, duration)
+    with _at("object.H1", path):
+        H1 = _pose(cfg.object.H1, sc)
     sigma0 = cfg.object.grasp_initial * sc.length
+    with _at("object.grasp_initial", path):
+        surface.pose(sigma0)
+
+    def tolerance(value: list[float] | None) -> tuple[float, float]:
+        return (1e-3, 1e-2) if value is None else (value[0] * sc.length, value[1] * sc.angle)
+
+    with _at("controller", path):
+        limits = RunLimits(
+            closure=tolerance(c.closure_tolerance), tracking=tolerance(c.tracking_tolerance),
+            singular_value_min=c.singular_value_min, singularity_action=c.singularity_action,
+            duration_cap=None if c.duration_cap is None else c.duration_cap * sc.time)
 
     if cfg.leader.base == "auto":
         raise ConfigError("'auto' is only supported for the follower's base", path=path,
                           key="leader.base")
-    leader = _arm(cfg.leader, sc, "leader", _pose(cfg.leader.base, sc), path)
+    with _at("leader", path):
+        leader = _arm(cfg.leader, sc, "leader", _pose(cfg.leader.base, sc), path)
+    with _at("follower", path):
+        follower = _arm(cfg.follower, sc, "follower", None, path)
+    for role, arm, least in (("leader", leader, 6), ("follower", follower, 5)):
+        if arm.n < least:
+            raise ConfigError(f"the {role} has {arm.n} joints; it needs at least {least} "
+                              "to carry the object along a 6-DoF path", path=path,
+                              key=f"{role}.dh.rows")
 
     # Follower: its base may be recovered from the grasp closure at t0 (the paper's case).
     f_spec = cfg.follower
-    follower = _arm(f_spec, sc, "follower", None, path)
-    if f_spec.initial.joints is None:
-        raise ConfigError("the follower's initial state must be given as 'joints'",
-                          path=path, key="follower.initial")
-    q_f0 = _vec(f_spec.initial.joints, sc.angle, follower.n, "follower.initial.joints", path)
+    q_f0: FloatArray | None = None
     if f_spec.base == "auto":
-        T_base_tool = follower.fk(q_f0)
-        base_f = trajectory.pose(trajectory.t0) @ surface.pose(sigma0) @ np.linalg.inv(
-            T_base_tool)
+        if f_spec.initial.joints is None:
+            form = "ik_branch" if f_spec.initial.ik_branch is not None else "near"
+            raise ConfigError(f"with 'base: auto' the base is recovered from the initial "
+                              f"joints, so a pose to solve ({form}) is ambiguous: give "
+                              "'joints', or give the follower's base explicitly",
+                              path=path, key=f"follower.initial.{form}",
+                              valid=["joints"])
+        q_f0 = _vec(f_spec.initial.joints, sc.angle, follower.n, "follower.initial.joints",
+                    path)
+        with _at("follower.initial.joints", path):
+            T_base_tool = follower.fk(q_f0)
+            base_f = trajectory.pose(trajectory.t0) @ surface.pose(sigma0) @ np.linalg.inv(
+                T_base_tool)
         notes["follower_base_m"] = base_f[:3, 3].tolist()
         notes["follower_base_rotation"] = base_f[:3, :3].round(12).tolist()
     else:
-        base_f = _pose(f_spec.base, sc)
-    follower = follower.with_base(base_f)
+        with _at("follower.base", path):
+            base_f = _pose(f_spec.base, sc)
+    with _at("follower", path):
+        follower = follower.with_base(base_f)
+        task = DualArmTask(leader, follower, H1, surface, trajectory)
+    q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking)
+    if q_f0 is None:
+        q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure)
 
-    task = DualArmTask(leader, follower, H1, surface, trajectory)
-    q_l0 = _leader_initial(cfg, task, sc, path, notes)
-    options = StepOptions(
-        dt=dt,
-        joint_weights=np.broadcast_to(np.asarray(c.weights.joints, dtype=float),
-                                      (follower.n,)).copy(),
-        grasp_weight=c.weights.grasp / LENGTH_SCALE[c.weights.grasp_unit or cfg.units.length]**2,
-        velocity_limits=c.velocity_limits,
-        grasp_speed_max=math.inf if c.grasp_speed_max is None
-        else c.grasp_speed_max * sc.length / sc.time,
-        correction_gain=None if c.correction_gain is None else c.correction_gain / sc.time,
-        recovery_fraction=c.recovery_fraction,
-        exact_orientation=c.exact_orientation,
-        centre_horizon=None if c.centre_horizon is None else c.centre_horizon * sc.time,
-    )
-    def tolerance(value: list[float] | None) -> tuple[float, float]:
-        return (1e-3, 1e-2) if value is None else (value[0] * sc.length, value[1] * sc.angle)
-
-    limits = RunLimits(
-        closure=tolerance(c.closure_tolerance), tracking=tolerance(c.tracking_tolerance),
-        singular_value_min=c.singular_value_min, singularity_action=c.singularity_action,
-        duration_cap=None if c.duration_cap is None else c.duration_cap * sc.time)
+    weights = np.asarray(c.weights.joints, dtype=float)
+    if weights.size not in (1, follower.n):
+        raise ConfigError(f"needs one weight or {follower.n} (one per follower joint), got "
+                          f"{weights.size}", path=path, key="controller.weights.joints")
+    with _at("controller", path):
+        options = StepOptions(
+            dt=dt,
+            joint_weights=np.broadcast_to(weights, (follower.n,)).copy(),
+            grasp_weight=c.weights.grasp / LENGTH_SCALE[c.weights.grasp_unit
+                                                        or cfg.units.length]**2,
+            velocity_limits=c.velocity_limits,
+            grasp_speed_max=math.inf if c.grasp_speed_max is None
+            else c.grasp_speed_max * sc.length / sc.time,
+            correction_gain=None if c.correction_gain is None else c.correction_gain / sc.time,
+            recovery_fraction=c.recovery_fraction,
+            exact_orientation=c.exact_orientation,
+            centre_horizon=None if c.centre_horizon is None else c.centre_horizon * sc.time,
+        )
     fallback = None if cfg.solver.fallback == "none" else cfg.solver.fallback
     if fallback is not None:
         try:
@@ -322,7 +445,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None) -> Experiment:
         initial=DualArmState(trajectory.t0, q_l0, q_f0, sigma0),
         options=options,
         solver_name=solver_name,
-        solver_options=dict(cfg.solver.options),
+        solver_options=solver_options,
         leader_gain=1.0 / dt if c.leader_gain is None else c.leader_gain / sc.time,
         policy=c.policy,
         duration=duration,
@@ -341,24 +464,103 @@ def _solver_info_or_none(name: str) -> SolverInfo | None:
         return None
 
 
+def _pose_gap(T_a: FloatArray, T_b: FloatArray) -> tuple[float, float]:
+    """Distance [m] and angle [rad] between two poses."""
+    dp = float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3]))
+    dw = float(np.linalg.norm(log_so3(T_a[:3, :3] @ T_b[:3, :3].T)))
+    return dp, dw
+
+
+def _start_limit(run_tolerance: tuple[float, float]) -> tuple[float, float]:
+    """:data:`START_TOLERANCE`, or the run's tolerance where that is tighter."""
+    return (min(START_TOLERANCE[0], run_tolerance[0]),
+            min(START_TOLERANCE[1], run_tolerance[1]))
+
+
+def _gap_text(dp: float, dw: float, limit: tuple[float, float]) -> str:
+    return (f"{dp * 1e3:.3f} mm and {math.degrees(dw):.3f} deg (allowed: "
+            f"{limit[0] * 1e3:g} mm, {math.degrees(limit[1]):g} deg)")
+
+
+def _solve_initial(spec: InitialSpec, arm: SerialArm, preset: str | None, T: FloatArray,
+                   sc: Scales, role: str, what: str, path: str,
+                   notes: dict[str, Any]) -> FloatArray:
+    """Joints reaching ``T`` by the IK branch or from the ``near`` joints of ``spec``."""
+    if spec.ik_branch is not None:
+        b = spec.ik_branch
+        key = f"{role}.initial.ik_branch"
+        if preset != "puma560":
+            raise ConfigError("ik_branch needs the puma560 preset; give 'joints' or 'near' "
+                              "for a DH arm", path=path, key=key, valid=["joints", "near"])
+        try:
+            sol = ik_branch(arm, T, b.arm, b.elbow, b.wrist)
+        except DualArmError as err:
+            try:
+                found = puma560_ik(arm, T)
+            except DualArmError:
+                found = []
+            valid = [f"arm={s.arm} elbow={s.elbow} wrist={s.wrist}" for s in found]
+            raise ConfigError(f"the {role}'s IK branch is not valid at {what}: {err}",
+                              path=path, key=key, valid=valid) from None
+        notes[f"{role}_ik_branch"] = {"arm": b.arm, "elbow": b.elbow, "wrist": b.wrist}
+        q = np.asarray(sol.q, dtype=float)
+    else:
+        key = f"{role}.initial.near"
+        seed = _vec(_required(spec.near, key, path), sc.angle, arm.n, key, path)
+        with _at(key, path):
+            # The limits are not imposed: an arm may start outside its range (Table 2).
+            res = ik_dls(arm, T, seed, tol_pos=1e-12, tol_rot=1e-12, max_iter=500,
+                         respect_limits=False, raise_on_failure=False)
+        if not (res.position_error <= 1e-10 and res.rotation_error <= 1e-10):
+            raise ConfigError(f"no joints found near these that reach {what} "
+                              f"(best: {res.position_error * 1e3:.3f} mm, "
+                              f"{math.degrees(res.rotation_error):.3f} deg away); give "
+                              "other joints to start from", path=path, key=key)
+        q = np.asarray(res.q, dtype=float)
+    notes[f"{role}_q0_deg"] = np.rad2deg(q).round(6).tolist()
+    return q
+
+
 def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
-                    notes: dict[str, Any]) -> FloatArray:
+                    notes: dict[str, Any], tracking: tuple[float, float]) -> FloatArray:
     spec = cfg.leader.initial
     leader = task.leader
-    if spec.joints is not None:
-        q = _vec(spec.joints, sc.angle, leader.n, "leader.initial.joints", path)
-        return np.asarray(q)
-    b = _required(spec.ik_branch, "leader.initial.ik_branch", path)
-    if cfg.leader.preset != "puma560":
-        raise ConfigError("ik_branch needs the puma560 preset; give 'joints' for a DH arm",
-                          path=path, key="leader.initial.ik_branch")
-    T = task.leader_target(task.trajectory.t0)
-    try:
-        sol = ik_branch(leader, T, b.arm, b.elbow, b.wrist)
-    except DualArmError as err:
-        valid = [f"arm={s.arm} elbow={s.elbow} wrist={s.wrist}" for s in puma560_ik(leader, T)]
-        raise ConfigError(f"the leader's IK branch is not valid at D(t0): {err}", path=path,
-                          key="leader.initial.ik_branch", valid=valid) from None
-    notes["leader_ik_branch"] = {"arm": b.arm, "elbow": b.elbow, "wrist": b.wrist}
-    notes["leader_q0_deg"] = np.rad2deg(sol.q).round(6).tolist()
-    return np.asarray(sol.q)
+    with _at("trajectory", path):
+        T = task.leader_target(task.trajectory.t0)
+    if spec.joints is None:
+        return _solve_initial(spec, leader, cfg.leader.preset, T, sc, "leader",
+                              "D(t0) H1^-1", path, notes)
+    q = np.asarray(_vec(spec.joints, sc.angle, leader.n, "leader.initial.joints", path))
+    with _at("leader.initial.joints", path):
+        dp, dw = _pose_gap(leader.fk(q), T)
+    limit = _start_limit(tracking)
+    if not (dp <= limit[0] and dw <= limit[1]):
+        raise ConfigError("these joints put the object away from the start of the path "
+                          f"D(t0): the leader's tool is off by {_gap_text(dp, dw, limit)}; "
+                          "give joints at D(t0) H1^-1, or use 'ik_branch' or 'near'",
+                          path=path, key="leader.initial.joints")
+    return q
+
+
+def _follower_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
+                      notes: dict[str, Any], q_l0: FloatArray, sigma0: float,
+                      closure: tuple[float, float]) -> FloatArray:
+    """Return the follower's joints with an explicit base: given (and checked) or solved."""
+    spec = cfg.follower.initial
+    follower = task.follower
+    with _at("object.grasp_initial", path):
+        T = task.follower_target(q_l0, sigma0)
+    if spec.joints is None:
+        return _solve_initial(spec, follower, cfg.follower.preset, T, sc, "follower",
+                              "the grasp D(t0) H2(grasp_initial)", path, notes)
+    q = np.asarray(_vec(spec.joints, sc.angle, follower.n, "follower.initial.joints", path))
+    with _at("follower.initial.joints", path):
+        dp, dw = _pose_gap(follower.fk(q), T)
+    limit = _start_limit(closure)
+    if not (dp <= limit[0] and dw <= limit[1]):
+        raise ConfigError("the base and the initial joints do not close the grasp at t0: "
+                          "the follower's tool is off the grasp pose D(t0) H2(grasp_initial) "
+                          f"by {_gap_text(dp, dw, limit)}; fix the base or the joints, use "
+                          "'base: auto', or solve the joints with 'ik_branch' or 'near'",
+                          path=path, key="follower.base")
+    return q

@@ -14,8 +14,9 @@ import time
 import numpy as np
 
 from ..step.problem import StepProblem
+from ._affine import factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, verify
-from .registry import register
+from .registry import check_tolerance, register
 
 
 class FixedGraspSolver:
@@ -30,6 +31,7 @@ class FixedGraspSolver:
     name = "fixed_grasp"
 
     def __init__(self, *, tol: Tolerance = DEFAULT_TOLERANCE) -> None:
+        check_tolerance(self.name, tol)
         self.tol = tol
 
     def solve(self, problem: StepProblem) -> StepSolution:
@@ -40,7 +42,7 @@ class FixedGraspSolver:
         c = problem.center[:q]
         inv_sqrt = 1.0 / np.sqrt(problem.weights[:q])
         # x = c + S^-1/2 y with y the least-norm solution of (A S^-1/2) y = b - A c.
-        y = np.linalg.lstsq(A * inv_sqrt, problem.b - A @ c, rcond=None)[0]
+        y = factor(A * inv_sqrt).solve(problem.b - A @ c)  # rank decided at RANK_RTOL
         x = np.zeros(problem.n)
         x[:q] = c + inv_sqrt * y
         elapsed = time.perf_counter() - start

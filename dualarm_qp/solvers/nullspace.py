@@ -45,7 +45,7 @@ from .base import (
     failed,
     verified_solution,
 )
-from .registry import register
+from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
 
@@ -68,6 +68,9 @@ class NullspaceSolver:
 
     def __init__(self, *, feasibility_tol: float = 1e-10, max_iter: int = 200,
                  tol: Tolerance = DEFAULT_TOLERANCE) -> None:
+        check_number(self.name, "feasibility_tol", feasibility_tol, minimum=0.0, strict=True)
+        check_number(self.name, "max_iter", max_iter, integer=True, minimum=1)
+        check_tolerance(self.name, tol)
         self.feasibility_tol = float(feasibility_tol)
         self.max_iter = int(max_iter)
         self.tol = tol

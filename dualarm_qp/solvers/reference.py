@@ -16,8 +16,9 @@ import time
 import numpy as np
 
 from ..step.problem import StepProblem
+from ._affine import factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed, verify
-from .registry import register
+from .registry import check_tolerance, register
 
 
 class ReferenceSolver:
@@ -32,6 +33,7 @@ class ReferenceSolver:
     name = "reference"
 
     def __init__(self, *, tol: Tolerance = DEFAULT_TOLERANCE) -> None:
+        check_tolerance(self.name, tol)
         self.tol = tol
 
     def solve(self, problem: StepProblem) -> StepSolution:
@@ -39,6 +41,12 @@ class ReferenceSolver:
         start = time.perf_counter()
         A, b = problem.A, problem.b
         S = np.diag(problem.weights)
+        rank = factor(A).rank
+        if rank < problem.m:  # decided at RANK_RTOL, not by an LU pivot
+            return failed(problem, Status.ERROR, self.name,
+                          f"J_f has rank {rank} < {problem.m} (RANK_RTOL): J_f^+ = "
+                          "J_f^T (J_f J_f^T)^-1 is undefined",
+                          time.perf_counter() - start)
         try:
             A_pinv = A.T @ np.linalg.inv(A @ A.T)  # J_f^+ = J_f^T (J_f J_f^T)^-1
         except np.linalg.LinAlgError as err:

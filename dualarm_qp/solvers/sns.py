@@ -82,7 +82,7 @@ from .base import (
     failed,
     verified_solution,
 )
-from .registry import register
+from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -113,6 +113,8 @@ class SNSSolver:
 
     def __init__(self, *, feasibility_tol: float = 1e-10,
                  tol: Tolerance = DEFAULT_TOLERANCE) -> None:
+        check_number(self.name, "feasibility_tol", feasibility_tol, minimum=0.0, strict=True)
+        check_tolerance(self.name, tol)
         self.feasibility_tol = float(feasibility_tol)
         self.tol = tol
 

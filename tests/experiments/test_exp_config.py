@@ -206,3 +206,158 @@ def test_fallback_must_keep_hard_limits(fallback, ok):
     else:
         with pytest.raises(ConfigError, match=r"solver\.fallback"):
             _built(mutate)
+
+
+# --- the follower's start: explicit base, IK branch, near ---------------------------------
+
+def _recovered_base() -> dict:
+    """The follower base that 'base: auto' recovers for the paper's case, in file units."""
+    exp = build_experiment(parse_config(paper_dict()))
+    base = exp.task.follower.base
+    return {"position": (base[:3, 3] * 1e3).tolist(), "rotation": base[:3, :3].tolist()}
+
+
+def test_explicit_base_matching_the_joints_is_accepted():
+    d = paper_dict()
+    d["follower"]["base"] = _recovered_base()
+    exp = build_experiment(parse_config(d))
+    dp, dw = exp.task.closure_error(exp.initial.q_l, exp.initial.q_f, exp.initial.sigma)
+    assert dp < 1e-9 and dw < 1e-9
+
+
+@pytest.mark.parametrize(("shift_mm", "turn_deg", "words"), [
+    ((5.0, 0.0, 0.0), 0.0, "5.000 mm and 0.000 deg"),
+    ((0.0, 0.0, 0.0), 0.3, "0.300 deg"),
+])
+def test_follower_base_mismatch_is_a_config_error_in_mm_and_deg(shift_mm, turn_deg, words):
+    d = paper_dict()
+    base = _recovered_base()
+    base["position"] = [p + s for p, s in zip(base["position"], shift_mm, strict=True)]
+    R = np.asarray(base["rotation"])
+    t = math.radians(turn_deg)
+    Rz = np.array([[math.cos(t), -math.sin(t), 0], [math.sin(t), math.cos(t), 0], [0, 0, 1]])
+    base["rotation"] = (Rz @ R).tolist()
+    d["follower"]["base"] = base
+    with pytest.raises(ConfigError) as info:
+        build_experiment(parse_config(d, "x.yaml"), "x.yaml")
+    msg = str(info.value)
+    assert info.value.key == "follower.base"
+    assert words in msg and "allowed: 1 mm, 0.1 deg" in msg
+
+
+def test_follower_ik_branch_start_closes_the_grasp():
+    from dualarm_qp.kinematics.puma_ik import puma560_ik
+
+    d = paper_dict()
+    d["follower"]["base"] = _recovered_base()
+    exp = build_experiment(parse_config(d))
+    target = exp.task.follower_target(exp.initial.q_l, exp.initial.sigma)
+    branches = puma560_ik(exp.task.follower, target)
+    assert branches
+    for sol in branches:
+        d["follower"]["initial"] = {"ik_branch": {"arm": sol.arm, "elbow": sol.elbow,
+                                                  "wrist": sol.wrist}}
+        e = build_experiment(parse_config(d))
+        dp, dw = e.task.closure_error(e.initial.q_l, e.initial.q_f, e.initial.sigma)
+        assert dp < 1e-9 and dw < 1e-9
+        assert e.notes["follower_ik_branch"] == {"arm": sol.arm, "elbow": sol.elbow,
+                                                 "wrist": sol.wrist}
+    # Table 2's own configuration is off its range (joint 3), so no branch is it.
+
+
+def test_follower_near_start_solves_from_the_given_joints():
+    """Table 2's joints, recovered from 3 deg away (off the range: limits not imposed)."""
+    d = paper_dict()
+    d["follower"]["base"] = _recovered_base()
+    table2 = d["follower"]["initial"]["joints"]
+    d["follower"]["initial"] = {"near": [q + 3.0 for q in table2]}
+    e = build_experiment(parse_config(d))
+    dp, dw = e.task.closure_error(e.initial.q_l, e.initial.q_f, e.initial.sigma)
+    assert dp < 1e-9 and dw < 1e-9
+    np.testing.assert_allclose(e.initial.q_f, np.deg2rad(table2), atol=1e-4)
+
+
+def test_leader_near_start_reaches_d_t0():
+    d = paper_dict()
+    ref = build_experiment(parse_config(d))
+    d["leader"]["initial"] = {"near": (np.rad2deg(ref.initial.q_l) + 2.0).tolist()}
+    e = build_experiment(parse_config(d))
+    np.testing.assert_allclose(e.initial.q_l, ref.initial.q_l, atol=1e-8)
+
+
+def test_follower_ik_branch_needs_an_explicit_base():
+    d = paper_dict()
+    d["follower"]["initial"] = {"ik_branch": {"arm": 1, "elbow": 1, "wrist": 1}}
+    with pytest.raises(ConfigError, match="ambiguous") as info:
+        build_experiment(parse_config(d, "x.yaml"), "x.yaml")
+    assert info.value.key == "follower.initial.ik_branch"
+
+
+# --- names, caps ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize(("name", "safe"), [
+    ("../../escape", "_.._escape"),
+    ("/etc/passwd", "_etc_passwd"),
+    ("beam s7=100", "beam_s7_100"),
+    ("..", "experiment"),
+    ("a\x00b", "a_b"),
+    ("puma_beam_sliding_s7_100", "puma_beam_sliding_s7_100"),
+    ("x" * 300, "x" * 100),
+])
+def test_safe_name_is_one_file_name_component(name, safe):
+    from dualarm_qp.experiments.config import safe_name
+
+    got = safe_name(name)
+    assert got == safe
+    assert "/" not in got and "\x00" not in got and not got.startswith(".")
+
+
+def test_run_folder_stays_inside_runs(tmp_path, monkeypatch):
+    from dualarm_qp.cli import main
+
+    d = paper_dict()
+    d["name"] = "../../escape"
+    d["controller"]["duration"] = 0.062
+    path = tmp_path / "escape.yaml"
+    path.write_text(yaml.safe_dump(d))
+    work = tmp_path / "a" / "b"
+    work.mkdir(parents=True)
+    monkeypatch.chdir(work)
+    assert main(["run", str(path), "--quiet", "--no-plots"]) == 0
+    assert (work / "runs" / "_.._escape" / "reference" / "summary.json").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "escape.yaml"]
+    assert sorted(p.name for p in work.iterdir()) == ["runs"]
+
+
+def test_nul_in_the_name_is_refused():
+    d = paper_dict()
+    d["name"] = "run\x00"
+    with pytest.raises(ConfigError, match="control character") as info:
+        parse_config(d, "x.yaml")
+    assert info.value.key == "name"
+
+
+def test_sample_cap_and_short_duration():
+    from dualarm_qp.experiments.config import MAX_SAMPLES
+
+    d = paper_dict()
+    d["controller"]["dt"] = 2 * d["controller"]["duration"] / MAX_SAMPLES  # exactly the cap
+    parse_config(d)
+    d["controller"]["dt"] /= 1.01
+    with pytest.raises(ConfigError, match="2,000,000") as info:
+        parse_config(d)
+    assert info.value.key == "controller.dt"
+    d = paper_dict()
+    d["controller"]["duration"] = d["controller"]["dt"]  # one step: allowed
+    parse_config(d)
+    d["controller"]["duration"] = d["controller"]["dt"] / 2
+    with pytest.raises(ConfigError, match="shorter than one sample"):
+        parse_config(d)
+
+
+def test_numbers_in_yaml_1_2_notation_are_numbers(tmp_path):
+    text = PAPER.read_text().replace("dt: 0.031 ", "dt: 31e-3 ")
+    assert "31e-3" in text
+    path = tmp_path / "exp.yaml"
+    path.write_text(text)
+    assert load_config(path).controller.dt == pytest.approx(0.031)
