@@ -38,17 +38,23 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class StepTimes:
-    """Wall-clock split of one controller step [s]."""
+    """Wall-clock split of one controller step [s].
+
+    ``kinematics`` holds both arms' forward kinematics, Jacobians and smallest singular
+    values; ``assembly``, ``solve`` and ``verify`` the follower's problem; ``leader`` the
+    leader's whole step (assembly and solve).
+    """
 
     kinematics: float
     assembly: float
     solve: float
     verify: float
+    leader: float = 0.0
 
     @property
     def total(self) -> float:
         """Whole controller step [s]."""
-        return self.kinematics + self.assembly + self.solve + self.verify
+        return self.kinematics + self.assembly + self.solve + self.verify + self.leader
 
 
 @dataclass(frozen=True)
@@ -68,8 +74,9 @@ class ControlOutput:
         speed). The product of the ``scale_max`` asked for, the leader's task scale and
         the follower's.
     status : Status
-        Follower solver status, or RECOVERING when a variable started outside its
-        range and the solver met the bounds that pull it back.
+        Follower solver status, or RECOVERING when a follower variable started outside
+        its range and the solver met the bounds that pull it back; the leader's status
+        when the leader's step was unusable (the follower's was then not solved).
     solution : StepSolution
         The verified follower solver output (``extras["fallback"]`` when the step was
         solved by the fallback solver after the configured one failed).
@@ -169,12 +176,9 @@ class DualArmController:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
         if leader_gain is None:
             leader_gain = 1.0 / options.dt
-        if not (np.isfinite(leader_gain) and leader_gain >= 0):
-            raise InvalidInputError("leader_gain must be a finite number >= 0 [1/s]")
         self.task = task
         self.solver = solver
         self.options = options
-        self.leader_gain = leader_gain
         self.policy = policy
         self.tolerance = tolerance
         self.fallback = fallback
@@ -183,10 +187,21 @@ class DualArmController:
         except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
             self._hard_bounds = True
         self._builder = StepBuilder(task, options)
-        self._leader_builder = LeaderStepBuilder(task, options, leader_gain,
-                                                 bounds=self._hard_bounds)
+        self._leader_builder = LeaderStepBuilder(task, options, 0.0, bounds=self._hard_bounds)
+        self.leader_gain = leader_gain  # checked by the setter
         self._leader_solver = NullspaceSolver(tol=tolerance)
         self._x_prev: FloatArray | None = None
+
+    @property
+    def leader_gain(self) -> float:
+        """Feedback gain [1/s] of the leader's tracking of ``D(t)``."""
+        return self._leader_builder.gain
+
+    @leader_gain.setter
+    def leader_gain(self, value: float) -> None:
+        if not (np.isfinite(value) and value >= 0):
+            raise InvalidInputError("leader_gain must be a finite number >= 0 [1/s]")
+        self._leader_builder.gain = float(value)
 
     @property
     def hard_bounds(self) -> bool:
@@ -244,14 +259,15 @@ class DualArmController:
                      _smallest_singular_value(follower_kin[1]))
         t1 = time.perf_counter()
         lead = self._leader_builder.build(state.t, state.q_l, *leader_kin, scale_max=scale_max)
-        t2 = time.perf_counter()
         try:
             leader_sol = solve_step(self._leader_solver, lead.problem, policy=self.policy,
                                     tol=self.tolerance)
         except InfeasibleStepError as err:
             raise InfeasibleStepError(
-                f"leader: {err} (smallest singular value of the leader's Jacobian "
-                f"{sigma_min[0]:.3g})", conflicts=err.conflicts) from None
+                f"the leader's step is infeasible within its limits (smallest singular "
+                f"value of its Jacobian {sigma_min[0]:.3g})", conflicts=err.conflicts) from None
+        if lead.recovering.any() and (leader_sol.status is Status.OPTIMAL):
+            leader_sol = replace(leader_sol, status=Status.RECOVERING)
         t3 = time.perf_counter()
         n_f = self._builder.n - 1
         if not leader_sol.status.usable:
@@ -260,7 +276,7 @@ class DualArmController:
                 ql_dot=np.zeros(self.task.leader.n), qf_dot=np.zeros(n_f), m=0.0, scale=0.0,
                 status=leader_sol.status, solution=leader_sol, build=None, leader=lead,
                 leader_solution=leader_sol, sigma_min=sigma_min,
-                times=StepTimes(t1 - t0, t2 - t1, t3 - t2, 0.0), applied=False)
+                times=StepTimes(t1 - t0, 0.0, 0.0, 0.0, t3 - t1), applied=False)
         ql_dot = _inside(leader_sol.x, lead.problem) if self._hard_bounds else leader_sol.x
         build = self._builder.build(state, ql_dot, leader_kin=leader_kin,
                                     follower_kin=follower_kin, x_prev=self._x_prev)
@@ -277,8 +293,7 @@ class DualArmController:
         t6 = time.perf_counter()
 
         status = solution.status
-        recovering = build.recovering.any() or lead.recovering.any()
-        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and recovering:
+        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovering.any():
             status = Status.RECOVERING
             solution = replace(solution, status=status)
         if not self._hard_bounds and status is Status.VIOLATION:
@@ -307,7 +322,7 @@ class DualArmController:
             leader=lead,
             leader_solution=leader_sol,
             sigma_min=sigma_min,
-            times=StepTimes(t1 - t0, (t2 - t1) + (t4 - t3), (t3 - t2) + (t5 - t4), t6 - t5),
+            times=StepTimes(t1 - t0, t4 - t3, t5 - t4, t6 - t5, t3 - t1),
             applied=usable_x,
         )
 
@@ -323,7 +338,11 @@ def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:
 
 
 def _smallest_singular_value(J: FloatArray) -> float:
-    """Smallest singular value of the joint Jacobian ``J`` (0 for a wide or empty one)."""
+    """Smallest singular value of the joint Jacobian ``J``.
+
+    0 when ``J`` has fewer columns than rows (fewer joints than task rows: the arm is
+    singular in the task space everywhere) or none.
+    """
     m, n = J.shape
     if n < m or n == 0:
         return 0.0

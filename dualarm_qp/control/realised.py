@@ -5,9 +5,10 @@ Speeds are the finite differences of consecutive recorded positions over ``dt``;
 ranges are read from the recorded positions. Two rules:
 
 * **speed**: ``|q[k+1] - q[k]| / dt <= v_max (1 + SPEED_RTOL)`` for every sample;
-* **range**: the distance outside ``[lo, hi]`` never grows from one sample to the next
+* **range**: the distance outside ``[lo, hi]`` never exceeds its smallest earlier value
   by more than ``RANGE_TOL``: a variable that starts outside its range never moves
-  further out, and one that is inside (or got back inside) never leaves it.
+  further out, and one that is inside (or got back inside) never leaves it (compared
+  with the best so far, so a slow creep cannot pass in steps under the tolerance).
 """
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ class Breach:
         The realised value: distance outside the range [rad or m], or speed [rad/s
         or m/s].
     limit : float
-        What it was allowed: the previous distance outside the range, or the speed
-        limit.
+        What it was allowed: the smallest earlier distance outside the range, or the
+        speed limit.
     """
 
     criterion: str
@@ -143,7 +144,8 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         js = int(np.argmax(sratio.max(axis=0)))
         speed_ratio = float(sratio[:, js].max())
         over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)) & speed_rule)
-        grew = np.argwhere(np.diff(excess, axis=0) > RANGE_TOL)
+        best = np.minimum.accumulate(excess, axis=0)
+        grew = np.argwhere(excess[1:] > best[:-1] + RANGE_TOL)
         first = [(int(k), "speed", int(j)) for k, j in over[:1]]
         first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
         if first:
@@ -152,7 +154,7 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
                 breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
             else:
                 breach = Breach("range", names[j], k, float(excess[k, j]),
-                                float(excess[k - 1, j]))
+                                float(best[k - 1, j]))
     return LimitReport(float(ratio[:, jr].max()), speed_ratio, float(excess.max()),
                        names[jr], names[js] if rows > 1 else "", breach)
 

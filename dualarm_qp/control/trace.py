@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.build import DualArmState
+from ..task.scene import DualArmTask
 from ..task.surfaces import GraspSurface
 from .controller import ControlOutput, DualArmController
 
@@ -27,13 +28,15 @@ class Trace:
     rates are the differences of consecutive states over ``dt``; without a
     position-level correction they equal the commanded ones.
 
-    ``closure_*_err_pre`` is the grasp closure error of the integrated state before any
-    position-level correction (the paper's re-resolution, or the drift projection of
-    the paper's methods) made row k's state; ``correction_l`` and ``correction_f`` are
-    the largest joint change [rad] that correction applied. Both equal the plain
-    values (and 0) when no correction ran. ``feedback_pos`` and ``feedback_rot`` are the
-    closure feedback ``K e`` in the follower's right-hand side [m/s, rad/s]: the
-    velocity-level correction, which the step's limits bound.
+    ``leader_time_s`` is the leader's step (its assembly and solve);
+    ``kinematics_time_s`` holds both arms. ``closure_*_err_pre`` is the grasp closure
+    error of the integrated state before any position-level correction (the paper's
+    re-resolution, or the drift projection of the paper's methods) made row k's state;
+    ``correction_l`` and ``correction_f`` are the largest joint change [rad] that
+    correction applied. Both equal the plain values (and 0) when no correction ran.
+    ``feedback_pos`` and ``feedback_rot`` are the closure feedback ``K e`` in the
+    follower's right-hand side [m/s, rad/s]: the velocity-level correction, which the
+    step's limits bound.
     """
 
     t: FloatArray
@@ -70,6 +73,7 @@ class Trace:
     kinematics_time_s: FloatArray
     assembly_time_s: FloatArray
     solve_time_s: FloatArray
+    leader_time_s: FloatArray
     step_time_s: FloatArray
 
     @classmethod
@@ -98,13 +102,7 @@ class Trace:
 def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
            controller: DualArmController) -> None:
     """Write sample ``k`` (wall time ``t`` [s]) from the state and its command."""
-    task = controller.task
-    leader, follower = task.leader, task.follower
-    tr.t[k] = t
-    tr.tau[k] = state.t
-    tr.q_l[k] = state.q_l
-    tr.q_f[k] = state.q_f
-    tr.grasp[k] = state.sigma
+    _record_state(tr, k, t, state, controller.task)
     tr.m[k] = out.m
     tr.ql_dot[k] = out.ql_dot
     tr.qf_dot[k] = out.qf_dot
@@ -116,12 +114,12 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
         err = out.build.closure_error
         tr.closure_pos_err[k] = math.hypot(*err[:3].tolist())
         tr.closure_rot_err[k] = math.hypot(*err[3:].tolist())
+        # K e as it entered the step: scaled with the follower's task when it was.
         gain = float(controller.options.correction_gain or 0.0)
+        if out.applied:
+            gain *= out.solution.scale
         tr.feedback_pos[k] = gain * tr.closure_pos_err[k]
         tr.feedback_rot[k] = gain * tr.closure_rot_err[k]
-    tr.margin_qf[k] = np.minimum(state.q_f - follower.q_min, follower.q_max - state.q_f)
-    tr.margin_ql[k] = np.minimum(state.q_l - leader.q_min, leader.q_max - state.q_l)
-    tr.margin_grasp[k] = grasp_margin(task.surface, state.sigma)
     tr.scale[k] = out.scale
     tr.leader_scale[k] = out.leader_solution.scale if out.leader_solution.status.usable else 0.0
     tr.status[k] = out.status.value
@@ -134,7 +132,39 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
     tr.kinematics_time_s[k] = out.times.kinematics
     tr.assembly_time_s[k] = out.times.assembly
     tr.solve_time_s[k] = out.times.solve
+    tr.leader_time_s[k] = out.times.leader
     tr.step_time_s[k] = out.times.total
+
+
+def record_state(tr: Trace, k: int, t: float, state: DualArmState,
+                 controller: DualArmController) -> None:
+    """Write sample ``k`` for a state whose step raised: the state, no command.
+
+    The rates and the path-time rate are 0 (nothing was applied); errors and solver
+    fields stay NaN; the status is ``"error"``.
+    """
+    _record_state(tr, k, t, state, controller.task)
+    tr.m[k] = 0.0
+    tr.ql_dot[k] = 0.0
+    tr.qf_dot[k] = 0.0
+    tr.scale[k] = tr.leader_scale[k] = 0.0
+    tr.fallback[k] = 0.0
+    tr.status[k] = tr.leader_status[k] = "error"
+    tr.correction_l[k] = tr.correction_f[k] = 0.0
+
+
+def _record_state(tr: Trace, k: int, t: float, state: DualArmState, task: DualArmTask
+                  ) -> None:
+    """Write the realised state of sample ``k`` and its margins to the ranges."""
+    leader, follower = task.leader, task.follower
+    tr.t[k] = t
+    tr.tau[k] = state.t
+    tr.q_l[k] = state.q_l
+    tr.q_f[k] = state.q_f
+    tr.grasp[k] = state.sigma
+    tr.margin_qf[k] = np.minimum(state.q_f - follower.q_min, follower.q_max - state.q_f)
+    tr.margin_ql[k] = np.minimum(state.q_l - leader.q_min, leader.q_max - state.q_l)
+    tr.margin_grasp[k] = grasp_margin(task.surface, state.sigma)
 
 
 def grasp_margin(surface: GraspSurface, sigma: float) -> float:
@@ -159,4 +189,4 @@ def grasp_margin(surface: GraspSurface, sigma: float) -> float:
     return float(margin)
 
 
-__all__ = ["Trace", "grasp_margin", "record"]
+__all__ = ["Trace", "grasp_margin", "record", "record_state"]

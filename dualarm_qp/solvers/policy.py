@@ -15,8 +15,8 @@ gets:
     feasible point found with ``s`` is returned. If not
     even ``s = 0`` is feasible, falls back to ``"relax"``. The whole right-hand side is
     scaled, so a closure-correction term in ``b`` is slowed with the task (at ``s = 0``
-    the step holds still and corrects nothing; the rollout's drift projection still
-    does).
+    the step holds still and corrects nothing; nothing moves, so no new drift
+    arises either).
 ``"relax"``
     ``min ||A x - b||^2 + eps ||x - c||_S^2 / max(S)`` over the box (bounded least
     squares, BVLS): the bounds hold, the task is met in least squares; status RELAXED.

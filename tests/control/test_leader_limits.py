@@ -142,3 +142,21 @@ def test_curved_bar_grasp_outside_its_arc_range_recovers():
     g = res.trace.grasp
     assert np.all(np.diff(g[g > 0.4]) <= 1e-12)  # never further out
     assert g.min() < 0.4  # and back inside
+
+
+def test_no_time_is_lost_when_only_the_path_end_shortens_the_last_sample():
+    exp = short()
+    res = rollout(exp.controller(), exp.initial, duration=0.05)  # 1.6 samples of 31 ms
+    assert res.completed, res.message
+    assert res.summary()["time_lost_to_scaling_s"] == 0.0
+    assert res.trace.tau[-1] == pytest.approx(0.05, abs=1e-12)
+
+
+def test_a_step_that_raises_keeps_the_state_it_failed_at():
+    exp = with_leader_speed(short("nullspace", policy="stop"), 0.05)
+    res = rollout(exp.controller(), exp.initial, duration=exp.duration)
+    assert not res.completed and res.failure is not None
+    tr = res.trace
+    assert len(tr) == res.failure.sample + 1  # the failing state is the last row
+    assert tr.status[-1] == "error" and tr.scale[-1] == 0.0
+    assert np.isfinite(tr.q_l).all() and np.isfinite(tr.q_f).all()

@@ -121,11 +121,11 @@ def outside(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 
 def check_ranges(traj: dict[str, np.ndarray], lim: Limits) -> list[str]:
-    """The distance outside [lo, hi] never grows from one row to the next (1e-9)."""
+    """The distance outside [lo, hi] never exceeds its smallest earlier value (+1e-9)."""
     out = []
     for c, (lo, hi) in lim.bounds.items():
         d = outside(traj[c], lo, hi)
-        growth = np.diff(d)
+        growth = d[1:] - np.minimum.accumulate(d)[:-1]
         bad = np.flatnonzero(growth > RANGE_TOL)
         if bad.size:
             k = int(bad[np.argmax(growth[bad])])

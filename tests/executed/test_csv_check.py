@@ -87,3 +87,27 @@ def test_closure_and_tracking_breaks_are_caught(good) -> None:
     problems = check_geometry(bad, exp)
     assert any(p.startswith("leader tracking") for p in problems)
     assert np.isfinite(bad["path_t"]).all()
+
+
+def test_a_slow_creep_outside_a_range_is_caught(good) -> None:
+    """Each step 0.6e-9 further out (under the 1e-9 slack), 20 steps: 1.2e-8 in all."""
+    exp, traj = good
+    lim = limits_of(exp)
+    bad = _copy(traj)
+    col = "qf1"
+    _lo, hi = lim.bounds[col]
+    k = len(bad["t"]) // 2
+    bad[col][k:k + 20] = hi + 0.6e-9 * np.arange(1, 21)
+    assert check_ranges(bad, lim)
+
+
+def test_the_library_catches_the_same_creep() -> None:
+    from dualarm_qp.control.realised import measure
+
+    x = np.concatenate([np.linspace(0.0, 1.0, 10), 1.0 + 0.6e-9 * np.arange(1, 101)])
+    report = measure(x[:, None], np.array([0.0]), np.array([1.0]), np.array([np.inf]), 0.01,
+                     ["q"])
+    assert report.breach is not None and report.breach.criterion == "range"
+    steady = np.concatenate([np.linspace(0.0, 1.0, 10), np.full(100, 1.0 + 0.5e-9)])
+    assert measure(steady[:, None], np.array([0.0]), np.array([1.0]), np.array([np.inf]),
+                   0.01, ["q"]).breach is None
