@@ -13,6 +13,7 @@ ranges are read from the recorded positions. Two rules:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -77,8 +78,11 @@ class LimitReport:
     range_ratio : float
         ``max |x - mid| / half_width`` over samples and variables: at most 1 inside the
         ranges, above 1 outside (0 when no range is finite).
+    range_ratio_start : float
+        The same at the first sample: a run that starts outside a range (the paper's
+        Table 2 does) shows it here; the rule only forbids moving further out.
     speed_ratio : float
-        ``max |dx/dt| / v_max`` (0 when no speed limit is finite).
+        ``max |dx/dt| / v_max`` (NaN when no speed limit is finite: nothing to compare).
     range_excess : float
         Largest distance outside a range [rad or m] (0 when always inside).
     worst_range, worst_speed : str
@@ -88,6 +92,7 @@ class LimitReport:
     """
 
     range_ratio: float
+    range_ratio_start: float
     speed_ratio: float
     range_excess: float
     worst_range: str
@@ -96,7 +101,9 @@ class LimitReport:
 
     def as_dict(self) -> dict[str, object]:
         """JSON-ready."""
-        return {"range_ratio_max": self.range_ratio, "speed_ratio_max": self.speed_ratio,
+        return {"range_ratio_max": self.range_ratio,
+                "range_ratio_start": self.range_ratio_start,
+                "speed_ratio_max": self.speed_ratio,
                 "range_excess_max": self.range_excess, "worst_range": self.worst_range,
                 "worst_speed": self.worst_speed}
 
@@ -127,7 +134,7 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
                      for a in (lo, hi, v_max))
     rows = x.shape[0]
     if rows == 0:
-        return LimitReport(0.0, 0.0, 0.0, "", "", None)
+        return LimitReport(0.0, 0.0, math.nan, 0.0, "", "", None)
     finite = np.isfinite(lo) & np.isfinite(hi)
     mid = np.where(finite, 0.5 * (lo + hi), 0.0)
     half = np.where(finite, 0.5 * (hi - lo), 1.0)
@@ -135,28 +142,30 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     ratio = np.where(finite & (half <= 0) & (x != mid), np.inf, ratio)
     excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)
     jr = int(np.argmax(ratio.max(axis=0)))
-    breach: Breach | None = None
-    speed_ratio, js = 0.0, 0
-    if rows > 1:
+    first: list[tuple[int, str, int]] = []  # (sample, rule, variable) of each breach
+    speed_ratio, js = math.nan, 0
+    speed = np.zeros((0, x.shape[1]))
+    if rows > 1 and np.isfinite(v_max).any():
         speed = np.abs(np.diff(x, axis=0)) / dt
         limited = np.isfinite(v_max)
         sratio = np.where(limited, speed / np.where(limited, v_max, 1.0), 0.0)
         js = int(np.argmax(sratio.max(axis=0)))
         speed_ratio = float(sratio[:, js].max())
-        over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)) & speed_rule)
-        best = np.minimum.accumulate(excess, axis=0)
-        grew = np.argwhere(excess[1:] > best[:-1] + RANGE_TOL)
-        first = [(int(k), "speed", int(j)) for k, j in over[:1]]
-        first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
-        if first:
-            k, what, j = min(first)
-            if what == "speed":
-                breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
-            else:
-                breach = Breach("range", names[j], k, float(excess[k, j]),
-                                float(best[k - 1, j]))
-    return LimitReport(float(ratio[:, jr].max()), speed_ratio, float(excess.max()),
-                       names[jr], names[js] if rows > 1 else "", breach)
+        if speed_rule:
+            over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
+            first += [(int(k), "speed", int(j)) for k, j in over[:1]]
+    best = np.minimum.accumulate(excess, axis=0)
+    grew = np.argwhere(excess[1:] > best[:-1] + RANGE_TOL)
+    first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
+    breach: Breach | None = None
+    if first:
+        k, what, j = min(first)
+        if what == "speed":
+            breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
+        else:
+            breach = Breach("range", names[j], k, float(excess[k, j]), float(best[k - 1, j]))
+    return LimitReport(float(ratio[:, jr].max()), float(ratio[0].max()), speed_ratio,
+                       float(excess.max()), names[jr], names[js] if rows > 1 else "", breach)
 
 
 __all__ = ["RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

@@ -389,7 +389,8 @@ def rollout(
             rows = k + 1
             # The command at the path's end is not applied: it cannot fail the run.
             failure = _sample_failure(tr, k, out.applied or at_end, out.status.value,
-                                      out.solution.message, limits, warnings)
+                                      out.solution.message, limits, warnings,
+                                      speed_limited=controller.options.velocity_limits)
             if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
                 if tau - window[1] < 0.01 * (t_wall - window[0]):
                     failure = Failure(
@@ -455,7 +456,8 @@ def rollout(
 
 
 def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
-                    limits: RunLimits, warnings: list[str]) -> Failure | None:
+                    limits: RunLimits, warnings: list[str], *, speed_limited: bool
+                    ) -> Failure | None:
     """Return the first criterion sample ``k`` breaks, or None (appends warnings)."""
     t = float(tr.t[k])
     at = f"step {k} at t = {t:.4f} s"
@@ -469,19 +471,24 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
         if pos > tol_pos or rot > tol_rot:
             ratio_pos, ratio_rot = pos / tol_pos, rot / tol_rot
             amount, limit = (pos, tol_pos) if ratio_pos >= ratio_rot else (rot, tol_rot)
+            hint = ""
+            if criterion == "closure" and not speed_limited:
+                hint = ("; controller.velocity_limits is off, so one step may move the grasp "
+                        "and the joints this far, beyond where the linearised closure "
+                        "(Eq. 25) holds: turn the speed limits on")
             return Failure(criterion, k, t, float(amount), limit,
                            f"{at}: {what}: {pos:.3g} m, {rot:.3g} rad "
-                           f"(tolerance {tol_pos:g} m, {tol_rot:g} rad)")
+                           f"(tolerance {tol_pos:g} m, {tol_rot:g} rad){hint}")
     threshold = limits.singular_value_min
     if threshold > 0 and limits.singularity_action != "ignore":
         for arm, sv in (("leader", tr.sigma_min_l[k]), ("follower", tr.sigma_min_f[k])):
             if sv < threshold:
-                text = (f"{at}: the {arm} is near a singularity: smallest singular value "
-                        f"of its Jacobian {sv:.3g} (threshold {threshold:g})")
+                text = (f"{at}: the {arm} is near a singularity (smallest singular value "
+                        f"of its Jacobian {sv:.3g}, threshold {threshold:g})")
                 if limits.singularity_action == "stop":
                     return Failure("singularity", k, t, float(sv), threshold, text)
-                if not any(w.startswith(f"{arm} near a singularity") for w in warnings):
-                    warnings.append(f"{arm} near a singularity from {text}")
+                if not any(f"the {arm} is near a singularity" in w for w in warnings):
+                    warnings.append(f"first at {text}")
     if not applied:
         return Failure("solver", k, t, math.nan, math.nan,
                        f"{at}: solver status {status}: {message}")

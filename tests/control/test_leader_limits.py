@@ -82,7 +82,7 @@ def test_singularity_threshold_warns_or_stops():
     warn = rollout(exp.controller(), exp.initial, duration=0.2,
                    limits=RunLimits(singular_value_min=0.05))
     assert warn.completed
-    assert any("follower near a singularity" in w for w in warn.warnings)
+    assert any("the follower is near a singularity" in w for w in warn.warnings)
     stop = rollout(exp.controller(), exp.initial, duration=0.2,
                    limits=RunLimits(singular_value_min=0.05, singularity_action="stop"))
     assert not stop.completed and stop.failure is not None
