@@ -184,11 +184,46 @@ class InitialSpec(_Model):
         return self
 
 
+def _name(value: Any) -> Any:
+    if not isinstance(value, str) or not value.strip():
+        raise ValueError("must be a non-empty text")
+    return value
+
+
+#: A non-empty name (a file, a robot, a frame of a URDF).
+Name = Annotated[str, BeforeValidator(_name)]
+
+
+class UrdfSpec(_Model):
+    """One chain of a URDF, from link ``root`` (the base frame) to link ``tip``.
+
+    ``file`` is relative to the experiment file's folder, or absolute.
+    """
+
+    file: Name
+    root: Name
+    tip: Name
+
+
+class ExampleRobotSpec(_Model):
+    """One chain of a robot of example-robot-data (``name``: ur5, panda, baxter, ...)."""
+
+    name: Name
+    root: Name
+    tip: Name
+
+
+#: The keys of an arm that each give its kinematic model; exactly one is given.
+ARM_MODEL_KEYS = ("preset", "dh", "urdf", "example_robot")
+
+
 class ArmSpec(_Model):
-    """One arm: a preset or a DH table, its base pose, limits and initial joints."""
+    """One arm: its model (a preset, a DH table or a URDF chain), base, limits, start."""
 
     preset: Literal["puma560"] | None = None
     dh: DHSpec | None = None
+    urdf: UrdfSpec | None = None
+    example_robot: ExampleRobotSpec | None = None
     base: PoseSpec | Literal["auto"] = Field(default_factory=PoseSpec)
     tool: PoseSpec | None = None
     q_min: list[LimitNum] | None = None
@@ -198,9 +233,16 @@ class ArmSpec(_Model):
 
     @model_validator(mode="after")
     def _one_model(self) -> ArmSpec:
-        if (self.preset is None) == (self.dh is None):
-            raise ValueError("give exactly one of 'preset' or 'dh'")
+        given = [k for k in ARM_MODEL_KEYS if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of 'preset', 'dh', 'urdf' or 'example_robot'"
+                             + (f" (got {', '.join(given)})" if given else ""))
         return self
+
+    @property
+    def model_key(self) -> str:
+        """The key that gives this arm's model (one of :data:`ARM_MODEL_KEYS`)."""
+        return next(k for k in ARM_MODEL_KEYS if getattr(self, k) is not None)
 
 
 class SurfaceSpec(_Model):

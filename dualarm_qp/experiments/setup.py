@@ -6,6 +6,7 @@ import contextlib
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
@@ -18,6 +19,7 @@ from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
+from ..kinematics.robots import EXAMPLE_ROBOTS, RobotModelError, example_robot_arm, urdf_arm
 from ..se3 import log_so3, make_pose, rot_x, rot_y, rot_z
 from ..solvers.policy import Policy
 from ..solvers.registry import (
@@ -179,15 +181,14 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
     tool = None if spec.tool is None else _pose(spec.tool, sc)
     if spec.preset == "puma560":
         arm = puma560(base=base, tool=tool, name=f"{role} puma560")
-        n = 6
-        dh = arm.dh
-    else:
-        dh_spec = _required(spec.dh, f"{role}.dh", path)
-        rows = np.asarray(dh_spec.rows, dtype=float)
+    elif spec.dh is not None:
+        rows = np.asarray(spec.dh.rows, dtype=float)
         scale = np.array([sc.length, sc.angle, sc.length, sc.angle][: rows.shape[1]])
-        dh = DHTable.from_rows(rows * scale, dh_spec.convention)
-        n = dh.n
-        arm = SerialArm(dh, base=base, tool=tool, name=role)
+        arm = SerialArm(DHTable.from_rows(rows * scale, spec.dh.convention), base=base,
+                        tool=tool, name=role)
+    else:
+        arm = _robot_arm(spec, role, base, tool, path)
+    n = arm.n
     q_min = _vec(spec.q_min, sc.angle, n, f"{role}.q_min", path)
     q_max = _vec(spec.q_max, sc.angle, n, f"{role}.q_max", path)
     qd_max = _vec(spec.qd_max, sc.angle / sc.time, n, f"{role}.qd_max", path)
@@ -206,15 +207,39 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
         raise ConfigError(f"joint {i + 1}: a speed limit must be > 0, got "
                           f"{qd_max[i] * sc.time / sc.angle:g}", path=path,
                           key=f"{role}.qd_max")
-    return SerialArm(
-        dh,
-        q_min=arm.q_min if q_min is None else q_min,
-        q_max=arm.q_max if q_max is None else q_max,
-        qd_max=arm.qd_max if qd_max is None else qd_max,
-        base=arm.base,
-        tool=arm.tool,
-        name=arm.name,
-    )
+    return arm.with_limits(q_min, q_max, qd_max)
+
+
+def _robot_arm(spec: ArmSpec, role: str, base: FloatArray | None, tool: FloatArray | None,
+               path: str) -> SerialArm:
+    """One chain of a URDF (``urdf``) or of an example-robot-data robot (``example_robot``).
+
+    Joint ranges and speed limits are the URDF's; the file's ``q_min`` / ``q_max`` /
+    ``qd_max`` override them (see :func:`_arm`).
+    """
+    try:
+        if spec.urdf is not None:
+            key = f"{role}.urdf"
+            file = Path(spec.urdf.file)
+            if not file.is_absolute():  # relative to the experiment file's folder
+                file = Path(path).parent / file
+            return urdf_arm(file, spec.urdf.root, spec.urdf.tip, base=base, tool=tool,
+                            name=f"{role} {file.stem}")
+        robot = _required(spec.example_robot, f"{role}.example_robot", path)
+        key = f"{role}.example_robot"
+        return example_robot_arm(robot.name, robot.root, robot.tip, base=base, tool=tool,
+                                 name=f"{role} {robot.name}")
+    except RobotModelError as err:
+        field = err.field if err.field in ("file", "name", "root", "tip") else None
+        known = err.field == "name" and "unknown robot" in str(err)
+        raise ConfigError(str(err), path=path, key=f"{key}.{field}" if field else key,
+                          valid=sorted(EXAMPLE_ROBOTS) if known else ()) from None
+
+
+def _model_key(spec: ArmSpec, role: str) -> str:
+    """Return the key of ``role``'s arm model, for messages (``leader.dh.rows``, ...)."""
+    key = spec.model_key
+    return f"{role}.{key}.rows" if key == "dh" else f"{role}.{key}"
 
 
 def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
@@ -372,7 +397,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
         if arm.n < least:
             raise ConfigError(f"the {role} has {arm.n} joints; it needs at least {least} "
                               "to carry the object along a 6-DoF path", path=path,
-                              key=f"{role}.dh.rows")
+                              key=_model_key(getattr(cfg, role), role))
 
     # Follower: its base may be recovered from the grasp closure at t0 (the paper's case).
     f_spec = cfg.follower
@@ -491,7 +516,7 @@ def _solve_initial(spec: InitialSpec, arm: SerialArm, preset: str | None, T: Flo
         key = f"{role}.initial.ik_branch"
         if preset != "puma560":
             raise ConfigError("ik_branch needs the puma560 preset; give 'joints' or 'near' "
-                              "for a DH arm", path=path, key=key, valid=["joints", "near"])
+                              "for other arms", path=path, key=key, valid=["joints", "near"])
         try:
             sol = ik_branch(arm, T, b.arm, b.elbow, b.wrist)
         except DualArmError as err:

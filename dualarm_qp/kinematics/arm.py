@@ -1,6 +1,21 @@
-"""Serial arms described by Denavit-Hartenberg tables.
+"""Serial arms: a Pinocchio model with a base placement and a tool frame.
 
-Two conventions are supported, both for revolute joints:
+An arm is one chain of revolute joints. Its kinematics (forward kinematics, the
+geometric Jacobian, the link frames) are computed by Pinocchio on a model whose
+*universe* is the arm's base frame (frame 0): the base placement ``T_world_base`` is
+folded into the placements of the joints and frames attached to the universe, and the
+tool ``T_flange_tool`` is a frame on the last joint. One ``pinocchio.Data`` is
+allocated per arm and reused by every call.
+
+Where a model comes from does not matter above this module; the builders all return a
+:class:`SerialArm`:
+
+* a Denavit-Hartenberg table, ``SerialArm(DHTable(...))`` (this module);
+* :func:`~dualarm_qp.kinematics.puma560` (the paper's Table 1 PUMA 560, DH);
+* one chain of a URDF, :func:`~dualarm_qp.kinematics.urdf_arm`, or of a robot shipped by
+  the ``example-robot-data`` package, :func:`~dualarm_qp.kinematics.example_robot_arm`.
+
+DH conventions, both for revolute joints:
 
 ``standard`` (Denavit-Hartenberg; Fu, Gonzalez and Lee)
     ``A_i = Rot_z(theta_i) Trans_z(d_i) Trans_x(a_i) Rot_x(alpha_i)``; joint i turns
@@ -13,34 +28,38 @@ Two conventions are supported, both for revolute joints:
 with ``theta_i = q_i + offset_i``. The pose of the tool in the world is
 ``T_world_tool = base @ A_1 ... A_n @ tool``.
 
-Implementation note: both conventions are the same alternating chain of two screw
-motions, ``Z(theta, d) = Rot_z(theta) Trans_z(d)`` and ``X(a, alpha) = Trans_x(a)
-Rot_x(alpha)``: standard DH is ``Z_1 X_1 Z_2 X_2 ...`` and modified DH is
-``X_0 Z_1 X_1 Z_2 ...``. :class:`SerialArm` stores that chain once as a list of steps and
-walks it with scalar (Python float) arithmetic, which for a 6-joint arm is several
-times faster than numpy on 4x4 matrices; numpy arrays are built only for the outputs.
+Both are built as one Pinocchio chain: ``A_i = pre_i Rot_z(theta_i) post_i`` with
+``pre = I, post = Trans_z(d) Trans_x(a) Rot_x(alpha)`` (standard) or
+``pre = Rot_x(alpha) Trans_x(a), post = Trans_z(d)`` (modified). Joint i is a revolute
+joint about its local z axis placed at ``post_{i-1} pre_i Rot_z(offset_i)`` in joint
+i-1 (``post_0 = I``), and DH frame i is a frame at ``post_i`` on joint i.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
+from ..se3 import rot_x, rot_z
 
 FloatArray = NDArray[np.float64]
 Convention = Literal["standard", "modified"]
 
-#: A frame as 12 floats: its x, y and z axes and its origin, in world coordinates.
-Frame = tuple[float, float, float, float, float, float, float, float, float,
-              float, float, float]
-#: A joint axis as 6 floats: its unit direction z and a point o on it (world, [m]).
-Axis = tuple[float, float, float, float, float, float]
+#: Pinocchio joint kinds an arm may have: revolute, one coordinate (nq = nv = 1).
+REVOLUTE_JOINTS = frozenset({"JointModelRX", "JointModelRY", "JointModelRZ",
+                             "JointModelRevoluteUnaligned"})
+#: Limits at or beyond this magnitude mean "no limit" (Pinocchio's default is DBL_MAX).
+_NO_LIMIT = 1e300
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+# Names of the frames SerialArm adds to a model.
+_BASE, _LINK, _TOOL = "dualarm_base", "dualarm_link", "dualarm_tool"
 
 
 @dataclass(frozen=True)
@@ -105,34 +124,43 @@ class DHTable:
         return int(self.a.shape[0])
 
 
+
 class SerialArm:
-    """A revolute serial arm: DH kinematics, joint limits, base and tool poses.
+    """A revolute serial arm: a Pinocchio model, joint limits, base and tool poses.
 
     Parameters
     ----------
-    dh : DHTable
-        Kinematic parameters.
+    source : DHTable or pinocchio.Model
+        A DH table, or a Pinocchio model of one chain of revolute joints (one coordinate
+        each, joint i+1 the child of joint i) whose universe is the arm's base frame
+        (see :func:`~dualarm_qp.kinematics.urdf_arm` for one chain of a URDF).
+    tip : str, optional
+        Pinocchio model only: the frame that carries the tool (the flange). Default:
+        the frame of the last joint. A DH arm's flange is DH frame n.
     q_min, q_max : array_like, shape (n,)
-        Joint position limits [rad]. Default: no limit (-inf, inf).
+        Joint position limits [rad]. Default: the model's limits for a Pinocchio model
+        (from its URDF), no limit (-inf, inf) for a DH table.
     qd_max : array_like, shape (n,)
-        Joint speed limits [rad/s], symmetric: ``|qd_i| <= qd_max_i``. Default: inf.
+        Joint speed limits [rad/s], symmetric: ``|qd_i| <= qd_max_i``. Default: the
+        model's ``velocityLimit`` (a zero there means no limit), inf for a DH table.
     base : array_like, shape (4, 4)
         ``T_world_base``, the pose of the arm's base frame (frame 0) in the world.
     tool : array_like, shape (4, 4)
-        ``T_flange_tool``, the tool frame in the last link frame (frame n).
+        ``T_flange_tool``, the tool frame in the flange frame.
     name : str
         Label used in messages.
 
     Raises
     ------
     ShapeError, NonFiniteError, LimitsError, InvalidInputError
-        Malformed parameters.
+        Malformed parameters, or a model that is not one chain of revolute joints.
     """
 
     def __init__(
         self,
-        dh: DHTable,
+        source: DHTable | Any,
         *,
+        tip: str | None = None,
         q_min: Any = None,
         q_max: Any = None,
         qd_max: Any = None,
@@ -140,29 +168,88 @@ class SerialArm:
         tool: Any = None,
         name: str = "arm",
     ) -> None:
-        if not isinstance(dh, DHTable):
-            raise InvalidInputError(f"dh must be a DHTable, got {type(dh).__name__}")
-        n = dh.n
-        self.dh = dh
         self.name = name
-        self.q_min = np.full(n, -np.inf) if q_min is None else _limit(q_min, "q_min", n)
-        self.q_max = np.full(n, np.inf) if q_max is None else _limit(q_max, "q_max", n)
-        check_limits(self.q_min, self.q_max, f"{name} joint limits")
-        self.qd_max = np.full(n, np.inf) if qd_max is None else _limit(qd_max, "qd_max", n)
+        self.dh: DHTable | None
+        if isinstance(source, DHTable):
+            if tip is not None:
+                raise InvalidInputError("'tip' names a frame of a Pinocchio model; the "
+                                        "flange of a DH arm is its last DH frame")
+            self.dh = source
+            template, links, flange = _dh_model(source)
+            lo = hi = vel = None
+        elif isinstance(source, pin.Model):
+            self.dh = None
+            template, links, flange = _chain_model(source, tip, name)
+            lo, hi, vel = _model_limits(template)
+        else:
+            raise InvalidInputError("an arm is built from a DHTable or a pinocchio.Model, "
+                                    f"got {type(source).__name__}")
+        n = template.nq
+        if lo is None or hi is None or vel is None:  # a DH table: no limits of its own
+            lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
+        self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
+                         vel if qd_max is None else qd_max, n)
+        frame = template.frames[flange]
+        self._flange = pin.SE3(frame.placement)
+        self._tool_id = template.addFrame(pin.Frame(_TOOL, frame.parentJoint, flange,
+                                                    pin.SE3(frame.placement),
+                                                    pin.FrameType.OP_FRAME))
+        self._links = links
+        self._template = template
+        self._root_joints = [j for j in range(1, template.njoints) if template.parents[j] == 0]
+        self._root_frames = [i for i, f in enumerate(template.frames) if f.parentJoint == 0]
+        self._place(base, tool)
+
+    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, n: int) -> None:
+        self.q_min = _limit(q_min, "q_min", n)
+        self.q_max = _limit(q_max, "q_max", n)
+        check_limits(self.q_min, self.q_max, f"{self.name} joint limits")
+        self.qd_max = _limit(qd_max, "qd_max", n)
         if (self.qd_max <= 0).any():
-            raise LimitsError(f"{name}: qd_max must be positive, got {self.qd_max}")
+            raise LimitsError(f"{self.name}: qd_max must be positive, got {self.qd_max}")
+
+    def _place(self, base: Any, tool: Any) -> None:
+        """Copy the template model, allocate its data, set the limits, base and tool."""
+        model = pin.Model(self._template)
+        model.lowerPositionLimit = self.q_min
+        model.upperPositionLimit = self.q_max
+        model.velocityLimit = self.qd_max
+        self._model = model
+        self._data = model.createData()
         self.base = base  # validated by the property setters
         self.tool = tool
-        self._steps = _screw_steps(dh)
 
     # ------------------------------------------------------------------ basics
     @property
     def n(self) -> int:
         """Number of joints."""
-        return self.dh.n
+        return int(self._template.nq)
+
+    @property
+    def model(self) -> Any:
+        """The ``pinocchio.Model`` of this arm, base and tool included (do not edit it)."""
+        return self._model
+
+    @property
+    def data(self) -> Any:
+        """The arm's ``pinocchio.Data``: allocated once, overwritten by every call."""
+        return self._data
+
+    @property
+    def tool_frame_id(self) -> int:
+        """Index of the tool frame in :attr:`model` (an ``OP_FRAME`` on the last joint)."""
+        return int(self._tool_id)
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Names of the joints, base to tip (``joint1`` ... for a DH arm)."""
+        return [str(s) for s in list(self._template.names)[1:]]
 
     def __repr__(self) -> str:
-        return f"SerialArm(name={self.name!r}, n={self.n}, convention={self.dh.convention!r})"
+        if self.dh is not None:
+            return (f"SerialArm(name={self.name!r}, n={self.n}, "
+                    f"convention={self.dh.convention!r})")
+        return f"SerialArm(name={self.name!r}, n={self.n}, model={self._template.name!r})"
 
     @property
     def base(self) -> FloatArray:
@@ -172,7 +259,12 @@ class SerialArm:
     @base.setter
     def base(self, value: Any) -> None:
         self._base = _frozen_pose(value, "base")
-        self._base_frame = _frame_of(self._base)
+        B = _se3(self._base)
+        model, template = self._model, self._template
+        for j in self._root_joints:
+            model.jointPlacements[j] = B * template.jointPlacements[j]
+        for i in self._root_frames:
+            model.frames[i].placement = B * template.frames[i].placement
 
     @property
     def tool(self) -> FloatArray:
@@ -182,13 +274,31 @@ class SerialArm:
     @tool.setter
     def tool(self, value: Any) -> None:
         self._tool = _frozen_pose(value, "tool")
-        frame = _frame_of(self._tool)
-        self._tool_frame = None if frame == _IDENTITY else frame
+        self._model.frames[self._tool_id].placement = self._flange * _se3(self._tool)
 
     def with_base(self, base: Any) -> SerialArm:
         """Return a copy of this arm placed at ``base`` (``T_world_base``)."""
-        return SerialArm(self.dh, q_min=self.q_min, q_max=self.q_max, qd_max=self.qd_max,
-                         base=base, tool=self.tool, name=self.name)
+        new = object.__new__(SerialArm)
+        new.__dict__.update(self.__dict__)  # shares the (never edited) template model
+        new._place(base, self._tool)
+        return new
+
+    def with_limits(self, q_min: Any = None, q_max: Any = None,
+                    qd_max: Any = None) -> SerialArm:
+        """Return a copy of this arm with other limits (None keeps a limit as it is).
+
+        Raises
+        ------
+        ShapeError, NonFiniteError, LimitsError, InvalidInputError
+            Malformed limits.
+        """
+        new = object.__new__(SerialArm)
+        new.__dict__.update(self.__dict__)
+        new._set_limits(self.q_min if q_min is None else q_min,
+                        self.q_max if q_max is None else q_max,
+                        self.qd_max if qd_max is None else qd_max, self.n)
+        new._place(self._base, self._tool)
+        return new
 
     def check_q(self, q: Any, name: str = "q") -> FloatArray:
         """Return ``q`` as a finite (n,) float array or raise a clear error.
@@ -205,6 +315,8 @@ class SerialArm:
         if (isinstance(q, np.ndarray) and q.shape == (self.n,) and q.dtype == np.float64
                 and math.isfinite(sum(q.tolist()))):
             return q  # the common case, checked cheaply
+        # A NaN or infinity makes the sum non-finite; so can an overflow of huge finite
+        # values, which the full check then lets through.
         return as_array(q, name, (self.n,))
 
     def within_limits(self, q: FloatArray, tol: float = 0.0) -> bool:
@@ -212,105 +324,34 @@ class SerialArm:
         return bool(np.all(q >= self.q_min - tol) and np.all(q <= self.q_max + tol))
 
     # --------------------------------------------------------------- kinematics
-    def _joint_values(self, q: Any, name: str = "q") -> list[float]:
-        """Return validated joint angles as Python floats (cheap path for float arrays)."""
-        if isinstance(q, np.ndarray) and q.shape == (self.n,) and q.dtype == np.float64:
-            values: list[float] = q.tolist()
-            # A NaN or infinity makes the sum non-finite; so can an overflow of huge
-            # finite values, which the full check below then lets through.
-            if math.isfinite(sum(values)):
-                return values
-        return self.check_q(q, name).tolist()
-
-    def _chain(self, qs: list[float], *, all_frames: bool = True
-               ) -> tuple[list[Frame], list[Axis]]:
-        """Walk the kinematic chain at joint angles ``qs`` [rad].
-
-        Returns
-        -------
-        frames : list of Frame
-            World frames 0..n (frame 0 is the base; no tool); only frame n when
-            ``all_frames`` is False.
-        axes : list of Axis
-            For each joint, its axis ``z`` and a point ``o`` on it, as ``(z, o)``
-            (the z axis and origin of frame i-1 in standard DH; in modified DH the z
-            axis of frame i and the origin of frame i shifted back by ``d_i``).
-        """
-        x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2 = self._base_frame
-        frames: list[Frame] = [self._base_frame]
-        axes: list[Axis] = []
-        cos, sin = math.cos, math.sin
-        # Sequential statements with one temporary (no tuple packing) keep this fast.
-        for kind, j, u, v, w, record in self._steps:
-            if kind == _Z:  # Rot_z(q_j + offset u) Trans_z(d = v)
-                axes.append((z0, z1, z2, p0, p1, p2))
-                theta = qs[j] + u
-                c = cos(theta)
-                s = sin(theta)
-                t = c * x0 + s * y0
-                y0 = c * y0 - s * x0
-                x0 = t
-                t = c * x1 + s * y1
-                y1 = c * y1 - s * x1
-                x1 = t
-                t = c * x2 + s * y2
-                y2 = c * y2 - s * x2
-                x2 = t
-                if v:
-                    p0 += v * z0
-                    p1 += v * z1
-                    p2 += v * z2
-            else:  # Trans_x(a = u) Rot_x(alpha) with v = cos(alpha), w = sin(alpha)
-                if u:
-                    p0 += u * x0
-                    p1 += u * x1
-                    p2 += u * x2
-                if kind == _X_QUARTER:  # alpha = +-pi/2 exactly: (y, z) <- (w z, -w y)
-                    if w > 0.0:
-                        y0, z0, y1, z1, y2, z2 = z0, -y0, z1, -y1, z2, -y2
-                    else:
-                        y0, z0, y1, z1, y2, z2 = -z0, y0, -z1, y1, -z2, y2
-                elif kind == _X:
-                    t = v * y0 + w * z0
-                    z0 = v * z0 - w * y0
-                    y0 = t
-                    t = v * y1 + w * z1
-                    z1 = v * z1 - w * y1
-                    y1 = t
-                    t = v * y2 + w * z2
-                    z2 = v * z2 - w * y2
-                    y2 = t
-            if record and all_frames:
-                frames.append((x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2))
-        if not all_frames:
-            frames = [(x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2)]
-        return frames, axes
-
-    def _tool_pose(self, flange: Frame) -> Frame:
-        """``T_world_tool`` from the world pose of the last link frame."""
-        return flange if self._tool_frame is None else _compose(flange, self._tool_frame)
-
     def link_frames(self, q: Any) -> FloatArray:
         """World poses of frames 0..n (frame 0 is the base), shape (n+1, 4, 4) [m].
 
+        For a DH arm, frame i is DH frame i (frame n the flange); for a Pinocchio model
+        it is the frame of joint i (the link it moves), which need not be the flange.
         The tool transform is not applied; see :meth:`fk`.
         """
-        frames, _ = self._chain(self._joint_values(q))
-        return np.array([_matrix_rows(f) for f in frames]).reshape(len(frames), 4, 4)
+        model, data = self._model, self._data
+        pin.forwardKinematics(model, data, self.check_q(q))
+        return np.array([pin.updateFramePlacement(model, data, i).homogeneous
+                         for i in self._links])
 
     def fk(self, q: Any) -> FloatArray:
         """Pose of the tool frame in the world, ``T_world_tool`` (4x4, metres).
 
-        With the default identity tool this is the flange (frame n).
+        With the default identity tool this is the flange.
         """
-        frames, _ = self._chain(self._joint_values(q), all_frames=False)
-        return np.array(_matrix_rows(self._tool_pose(frames[-1]))).reshape(4, 4)
+        model, data = self._model, self._data
+        pin.forwardKinematics(model, data, self.check_q(q))
+        T: FloatArray = pin.updateFramePlacement(model, data, self._tool_id).homogeneous
+        return T
 
     def jacobian(self, q: Any) -> FloatArray:
         """Geometric Jacobian in the world frame, shape (6, n).
 
         Rows are ``[v; w]``: the linear velocity [m/s] of the tool frame's origin and
-        the angular velocity [rad/s], both in world coordinates, per unit joint rate.
+        the angular velocity [rad/s], both in world coordinates, per unit joint rate
+        (Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian of the tool frame).
         """
         return self.fk_jacobian(q)[1]
 
@@ -324,98 +365,129 @@ class SerialArm:
         J : ndarray, shape (6, n)
             Geometric Jacobian, see :meth:`jacobian`.
         """
-        frames, axes = self._chain(self._joint_values(q), all_frames=False)
-        tool = self._tool_pose(frames[-1])
-        t0, t1, t2 = tool[9], tool[10], tool[11]
-        # Column i: [z_i x (p_tool - o_i); z_i] for joint axis z_i through point o_i.
-        columns: list[float] = []
-        for z0, z1, z2, o0, o1, o2 in axes:
-            d0 = t0 - o0
-            d1 = t1 - o1
-            d2 = t2 - o2
-            columns += (z1 * d2 - z2 * d1, z2 * d0 - z0 * d2, z0 * d1 - z1 * d0, z0, z1, z2)
-        # One numpy conversion for both outputs: T's 16 entries, then J column by column.
-        out = np.array(_matrix_rows(tool) + columns)
-        return out[:16].reshape(4, 4), out[16:].reshape(len(axes), 6).T.copy()
+        data = self._data
+        J: FloatArray = pin.computeFrameJacobian(self._model, data, self.check_q(q),
+                                                 self._tool_id, _LWA)
+        if J.ndim == 1:  # eigenpy returns a 6x1 matrix as a vector
+            J = J.reshape(6, 1)
+        return data.oMf[self._tool_id].homogeneous, J
 
 
-_IDENTITY: Frame = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+# ------------------------------------------------------------------ model builders
+def _se3(T: FloatArray) -> Any:
+    """Convert a 4x4 pose to a ``pinocchio.SE3``."""
+    return pin.SE3(np.array(T[:3, :3]), np.array(T[:3, 3]))
 
 
-# Kinds of chain step (see the module docstring).
-_Z, _X, _X_QUARTER, _X_SHIFT = 0, 1, 2, 3
+def _dh_model(dh: DHTable) -> tuple[Any, list[int], int]:
+    """Pinocchio chain of a DH table (see the module docstring).
 
-
-class _Step(NamedTuple):
-    """One screw motion of the chain.
-
-    ``kind == _Z``: ``Rot_z(q[joint] + u) Trans_z(v)`` (``u`` the joint offset [rad],
-    ``v`` = d [m]). Otherwise ``Trans_x(u) Rot_x(alpha)`` (``u`` = a [m]) with
-    ``v = cos(alpha)``, ``w = sin(alpha)``; ``_X_QUARTER`` marks alpha = +-pi/2 and
-    ``_X_SHIFT`` alpha = 0, which skip the multiplications. ``record``: a link frame
-    ends after this step.
+    Returns the model (universe = DH frame 0), the ids of its frames 0..n and the id of
+    the flange frame (frame n).
     """
-
-    kind: int
-    joint: int
-    u: float
-    v: float
-    w: float
-    record: bool
-
-
-def _screw_steps(dh: DHTable) -> list[_Step]:
-    """Build the chain of :class:`_Step` for a DH table, leaving out identity X steps."""
-    steps: list[_Step] = []
-
-    def add_x(a: float, alpha: float, record: bool) -> None:
-        if a == 0.0 and alpha == 0.0:
-            if record:  # the link frame ends at the previous step instead
-                steps[-1] = steps[-1]._replace(record=True)
-            return
-        kind = _X
-        ca, sa = math.cos(alpha), math.sin(alpha)
-        if alpha == 0.0:
-            kind = _X_SHIFT
-        elif abs(abs(alpha) - 0.5 * math.pi) < 1e-15:
-            kind, ca, sa = _X_QUARTER, 0.0, math.copysign(1.0, alpha)
-        steps.append(_Step(kind, -1, a, ca, sa, record))
-
+    model = pin.Model()
+    model.name = f"dh_{dh.convention}"
+    links = [model.addFrame(pin.Frame(_BASE, 0, 0, pin.SE3.Identity(),
+                                      pin.FrameType.OP_FRAME))]
     standard = dh.convention == "standard"
-    for j in range(dh.n):
-        a, alpha = float(dh.a[j]), float(dh.alpha[j])
-        if not standard:
-            add_x(a, alpha, False)
-        steps.append(_Step(_Z, j, float(dh.offset[j]), float(dh.d[j]), 0.0, not standard))
-        if standard:
-            add_x(a, alpha, True)
-    return steps
+    post_prev = np.eye(4)
+    for i in range(dh.n):
+        a, alpha, d, offset = (float(dh.a[i]), float(dh.alpha[i]), float(dh.d[i]),
+                               float(dh.offset[i]))
+        x_step = _trans(a, 0.0, 0.0) @ _rot(rot_x(alpha))  # Trans_x(a) Rot_x(alpha)
+        pre, post = (np.eye(4), _trans(0.0, 0.0, d) @ x_step) if standard else (
+            x_step, _trans(0.0, 0.0, d))
+        placement = post_prev @ pre @ _rot(rot_z(offset))
+        joint = model.addJoint(model.njoints - 1, pin.JointModelRZ(),
+                               _se3(placement), f"joint{i + 1}")
+        links.append(model.addFrame(pin.Frame(f"{_LINK}{i + 1}", joint, links[-1],
+                                              _se3(post), pin.FrameType.OP_FRAME)))
+        post_prev = post
+    return model, links, links[-1]
 
 
-def _frame_of(T: FloatArray) -> Frame:
-    """Convert a 4x4 pose to a 12-float :data:`Frame`."""
-    c = T[:3].T.ravel().tolist()  # columns x, y, z, p
-    return (c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11])
+def _chain_model(source: Any, tip: str | None, name: str) -> tuple[Any, list[int], int]:
+    """Check that ``source`` is one chain of revolute joints and copy it with our frames.
+
+    Returns the copy, the ids of its frames 0..n (the base, then one frame on each
+    joint) and the id of the flange frame ``tip``.
+    """
+    label = source.name or name
+    if source.njoints < 2:
+        raise InvalidInputError(f"{label}: the model has no joints")
+    for j in range(1, source.njoints):
+        if source.parents[j] != j - 1:
+            raise InvalidInputError(
+                f"{label}: not a single chain: the parent of joint {source.names[j]!r} is "
+                f"{source.names[source.parents[j]]!r}, not the joint before it")
+        check_revolute(source, j, label)
+    model = pin.Model(source)
+    last = model.njoints - 1
+    if tip is None:
+        flange = model.addFrame(pin.Frame(f"{_LINK}_flange", last, 0, pin.SE3.Identity(),
+                                          pin.FrameType.OP_FRAME))
+    else:
+        flange = frame_id(model, tip, "tip", label)
+        if model.frames[flange].parentJoint != last:
+            raise InvalidInputError(
+                f"{label}: joint {model.names[last]!r} does not move the tip frame {tip!r}; "
+                "the chain must end at the tip")
+    links = [model.addFrame(pin.Frame(_BASE, 0, 0, pin.SE3.Identity(),
+                                      pin.FrameType.OP_FRAME))]
+    for j in range(1, model.njoints):
+        links.append(model.addFrame(pin.Frame(f"{_LINK}{j}", j, 0, pin.SE3.Identity(),
+                                              pin.FrameType.OP_FRAME)))
+    return model, links, flange
 
 
-def _matrix_rows(f: Frame) -> list[float]:
-    """Return the 16 entries, row by row, of the 4x4 pose of a :data:`Frame`."""
-    return [f[0], f[3], f[6], f[9], f[1], f[4], f[7], f[10], f[2], f[5], f[8], f[11],
-            0.0, 0.0, 0.0, 1.0]
+def check_revolute(model: Any, j: int, label: str) -> None:
+    """Raise :class:`InvalidInputError` unless joint ``j`` of ``model`` is revolute, 1 dof."""
+    joint = model.joints[j]
+    kind = joint.shortname()
+    if kind in REVOLUTE_JOINTS and joint.nq == 1 and joint.nv == 1:
+        return
+    what = kind.removeprefix("JointModel")
+    if kind.startswith("JointModelRUB"):
+        what = "continuous (an unbounded revolute joint, nq = 2)"
+    elif kind.startswith(("JointModelP", "JointModelPrismatic")):
+        what = "prismatic"
+    raise InvalidInputError(
+        f"{label}: joint {model.names[j]!r} is {what}; an arm has revolute joints with one "
+        "coordinate only (give a continuous joint limits in the URDF, type 'revolute')")
 
 
-def _compose(f: Frame, g: Frame) -> Frame:
-    """Return the frame ``F @ G`` for world frame ``F`` and ``G`` relative to ``F``."""
-    x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2 = f
-    out = []
-    for k in range(0, 12, 3):  # each column of G: axis (rotate) or origin (rotate, shift)
-        a, b, c = g[k], g[k + 1], g[k + 2]
-        out += [a * x0 + b * y0 + c * z0, a * x1 + b * y1 + c * z1, a * x2 + b * y2 + c * z2]
-    out[9] += p0
-    out[10] += p1
-    out[11] += p2
-    return (out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8],
-            out[9], out[10], out[11])
+def frame_id(model: Any, frame: str, what: str, label: str) -> int:
+    """Index of the frame named ``frame`` (a link's body frame first), or a clear error."""
+    ids = [i for i, f in enumerate(model.frames) if f.name == frame]
+    if not ids:
+        links = sorted(f.name for f in model.frames if f.type == pin.FrameType.BODY)
+        shown = ", ".join(links[:40]) + (", ..." if len(links) > 40 else "")
+        raise InvalidInputError(f"{label}: {what} frame {frame!r} not found (links: {shown})")
+    body = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
+    return (body or ids)[0]
+
+
+def _model_limits(model: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Read the model's joint ranges and speed limits; huge values (or zero speed): none."""
+    lo = np.array(model.lowerPositionLimit, dtype=np.float64)
+    hi = np.array(model.upperPositionLimit, dtype=np.float64)
+    vel = np.array(model.velocityLimit, dtype=np.float64)
+    lo[lo <= -_NO_LIMIT] = -np.inf
+    hi[hi >= _NO_LIMIT] = np.inf
+    vel[(vel <= 0.0) | (vel >= _NO_LIMIT)] = np.inf
+    return lo, hi, vel
+
+
+def _trans(x: float, y: float, z: float) -> FloatArray:
+    T = np.eye(4)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def _rot(R: FloatArray) -> FloatArray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    return T
 
 
 def checked_pose(value: Any, name: str) -> FloatArray:

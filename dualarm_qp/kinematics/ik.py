@@ -1,4 +1,4 @@
-"""Numerical inverse kinematics for any DH arm: damped least squares (Levenberg-Marquardt).
+"""Numerical inverse kinematics for any arm: damped least squares (Levenberg-Marquardt).
 
 The residual is the world-frame pose error ``e = [p* - p; log(R* R^T)]`` ([m]; [rad])
 and the model is the geometric Jacobian: ``e(q + dq) ~ e(q) - J dq``. Each iteration
@@ -79,7 +79,7 @@ def ik_dls(
     Parameters
     ----------
     arm : SerialArm
-        Any DH arm; its base and tool are taken into account.
+        Any arm (DH or URDF chain); its base and tool are taken into account.
     T_target : array_like, shape (4, 4)
         Desired ``T_world_tool`` [m].
     q0 : array_like, shape (n,)
@@ -126,7 +126,7 @@ def ik_dls(
     lo = arm.q_min.tolist() if respect_limits else [-math.inf] * n
     hi = arm.q_max.tolist() if respect_limits else [math.inf] * n
     qs = [min(max(x, a), b)
-          for x, a, b in zip(arm._joint_values(q0, "q0"), lo, hi, strict=True)]
+          for x, a, b in zip(arm.check_q(q0, "q0").tolist(), lo, hi, strict=True)]
     q = np.array(qs)
 
     T, J = arm.fk_jacobian(q)

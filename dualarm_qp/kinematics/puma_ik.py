@@ -112,6 +112,10 @@ def _geometry(arm: SerialArm) -> _Geometry:
     if not isinstance(arm, SerialArm):
         raise InvalidInputError(f"arm must be a SerialArm, got {type(arm).__name__}")
     dh = arm.dh
+    if dh is None:
+        raise InvalidInputError(
+            f"{arm.name}: closed-form PUMA 560 IK needs an arm built from a DH table "
+            f"(this one is a {arm.model.name!r} model); use ik_dls for other arms")
     problems = []
     a, alpha, d = dh.a.tolist(), dh.alpha.tolist(), dh.d.tolist()
     if dh.n != 6 or dh.convention != "standard":

@@ -1,13 +1,18 @@
-"""Forward kinematics and Jacobians of DH arms (both conventions) and of the PUMA 560."""
+"""Forward kinematics and Jacobians of DH arms (both conventions) and of the PUMA 560.
+
+The arms compute with Pinocchio; ``dh_oracle`` is an independent textbook DH chain.
+"""
 
 from __future__ import annotations
 
+import dh_oracle
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.kinematics import DHTable, SerialArm, puma560
+from dualarm_qp.kinematics.puma560 import PUMA560_A, PUMA560_ALPHA, PUMA560_D
 from dualarm_qp.se3 import exp_so3, log_so3, make_pose, rot_x, rot_z
 
 SETTINGS = settings(max_examples=60, deadline=None)
@@ -21,21 +26,8 @@ def trans(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
     return make_pose(None, np.array([x, y, z]))
 
 
-def reference_link(row: np.ndarray, q: float, convention: str) -> np.ndarray:
-    """The link transform written straight from the textbook formula."""
-    a, alpha, d, offset = row
-    theta = q + offset
-    Rz, Rx = make_pose(rot_z(theta)), make_pose(rot_x(alpha))
-    if convention == "standard":  # Rot_z(theta) Trans_z(d) Trans_x(a) Rot_x(alpha)
-        return Rz @ trans(z=d) @ trans(x=a) @ Rx
-    return Rx @ trans(x=a) @ Rz @ trans(z=d)  # Rot_x(alpha) Trans_x(a) Rot_z(theta) Trans_z(d)
-
-
 def reference_fk(arm: SerialArm, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
-    T = arm.base.copy()
-    for row, qi in zip(rows, q, strict=True):
-        T = T @ reference_link(row, qi, arm.dh.convention)
-    return T @ arm.tool
+    return dh_oracle.fk(rows, q, arm.dh.convention, arm.base, arm.tool)
 
 
 def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
@@ -80,6 +72,46 @@ def dh_arms(draw: st.DrawFn) -> tuple[SerialArm, np.ndarray, np.ndarray]:
 def test_fk_matches_textbook_formula(case: tuple[SerialArm, np.ndarray, np.ndarray]) -> None:
     arm, rows, q = case
     np.testing.assert_allclose(arm.fk(q), reference_fk(arm, rows, q), atol=1e-12)
+
+
+@SETTINGS
+@given(dh_arms())
+def test_jacobian_and_frames_match_the_oracle(
+    case: tuple[SerialArm, np.ndarray, np.ndarray],
+) -> None:
+    arm, rows, q = case
+    convention = arm.dh.convention
+    T, J = arm.fk_jacobian(q)
+    np.testing.assert_allclose(T, dh_oracle.fk(rows, q, convention, arm.base, arm.tool),
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(J, dh_oracle.jacobian(rows, q, convention, arm.base, arm.tool),
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(arm.link_frames(q),
+                               dh_oracle.frames(rows, q, convention, arm.base),
+                               rtol=0, atol=1e-12)
+
+
+def test_puma_matches_the_oracle_with_random_bases_and_tools() -> None:
+    rows = np.column_stack([PUMA560_A, PUMA560_ALPHA, PUMA560_D, np.zeros(6)])
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        base, tool = random_pose(rng), random_pose(rng, 0.2)
+        arm = puma560(base=base, tool=tool)
+        q = rng.uniform(arm.q_min, arm.q_max)
+        T, J = arm.fk_jacobian(q)
+        np.testing.assert_allclose(T, dh_oracle.fk(rows, q, "standard", base, tool),
+                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(J, dh_oracle.jacobian(rows, q, "standard", base, tool),
+                                   rtol=0, atol=1e-12)
+
+
+def test_data_is_allocated_once_per_arm() -> None:
+    arm = puma560()
+    data = arm.data
+    arm.fk_jacobian(np.zeros(6))
+    arm.link_frames(np.ones(6))
+    assert arm.data is data
+    assert arm.with_base(random_pose(np.random.default_rng(0))).data is not data
 
 
 @SETTINGS

@@ -1,0 +1,213 @@
+"""Arms from robot descriptions: one chain of a URDF, or of a robot of example-robot-data.
+
+Both builders return a :class:`~dualarm_qp.kinematics.SerialArm`, like a DH table does.
+The chain runs from a ``root`` frame to a ``tip`` frame (link names of the URDF): the
+joints between them are the arm's joints, every other joint of the robot (the other arm
+of a dual-arm robot, a head, grippers) is locked at its neutral position (zero), and
+the root becomes the arm's base frame (frame 0), so ``base`` places the root in the
+world. Joint ranges and speed limits are the URDF's unless given.
+
+Robot files of ``example-robot-data`` (``pip install "dualarm-qp[robots]"``) are found
+by path under the installed package's ``share/example-robot-data/robots`` folder; its
+Python loader package is not needed. Nothing is downloaded.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+from pathlib import Path
+from typing import Any
+
+import pinocchio as pin
+
+from ..errors import InvalidInputError
+from .arm import SerialArm, check_revolute, frame_id
+
+#: Robots of example-robot-data by name: URDF path under its ``robots`` folder.
+EXAMPLE_ROBOTS: dict[str, str] = {
+    "baxter": "baxter_description/urdf/baxter.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "ur3": "ur_description/urdf/ur3_robot.urdf",
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "ur10": "ur_description/urdf/ur10_robot.urdf",
+    "xarm7": "xarm_description/urdf/xarm7.urdf",
+    "z1": "z1_description/urdf/z1.urdf",
+}
+
+#: How to install the robot descriptions.
+ROBOTS_HINT = "pip install 'dualarm-qp[robots]' (the example-robot-data package)"
+
+
+class RobotModelError(InvalidInputError):
+    """A robot description cannot give the requested arm.
+
+    Attributes
+    ----------
+    field : str
+        What is wrong: ``"file"``, ``"name"``, ``"root"``, ``"tip"`` or ``"chain"``.
+    """
+
+    def __init__(self, message: str, field: str) -> None:
+        self.field = field
+        super().__init__(message)
+
+
+def urdf_arm(
+    file: str | Path,
+    root: str,
+    tip: str,
+    *,
+    q_min: Any = None,
+    q_max: Any = None,
+    qd_max: Any = None,
+    base: Any = None,
+    tool: Any = None,
+    name: str | None = None,
+) -> SerialArm:
+    """Build the arm from frame ``root`` to frame ``tip`` of a URDF file.
+
+    Parameters
+    ----------
+    file : str or Path
+        The URDF file (meshes are not read).
+    root, tip : str
+        Names of the base and flange frames (URDF link names; joint names also work).
+        ``tip`` must lie below ``root`` in the robot's tree.
+    q_min, q_max, qd_max : array_like, shape (n,), optional
+        Joint ranges [rad] and speed limits [rad/s]; default the URDF's ``limit``
+        tags (a zero ``velocity`` means no speed limit).
+    base : array_like, shape (4, 4), optional
+        ``T_world_root`` [m]; identity by default.
+    tool : array_like, shape (4, 4), optional
+        ``T_tip_tool`` [m]; identity by default.
+    name : str, optional
+        Label used in messages; default ``"<robot>:<tip>"``.
+
+    Returns
+    -------
+    SerialArm
+
+    Raises
+    ------
+    RobotModelError
+        No such file, unreadable URDF, unknown frame, ``tip`` not below ``root``, or a
+        joint between them that is not revolute with one coordinate (continuous or
+        prismatic joints); ``field`` says which.
+    """
+    path = Path(file)
+    if not path.is_file():
+        raise RobotModelError(f"URDF file not found: {path}", "file")
+    try:
+        full = pin.buildModelFromUrdf(str(path))
+    except (RuntimeError, ValueError) as err:
+        raise RobotModelError(f"cannot read URDF {path}: {err}", "file") from None
+    label = full.name or path.stem
+    try:
+        root_id = frame_id(full, root, "root", label)
+    except InvalidInputError as err:
+        raise RobotModelError(str(err), "root") from None
+    try:
+        tip_id = frame_id(full, tip, "tip", label)
+    except InvalidInputError as err:
+        raise RobotModelError(str(err), "tip") from None
+    if not _below(full, tip_id, root_id):
+        raise RobotModelError(f"{label}: tip {tip!r} is not below root {root!r} in the "
+                              "robot's tree", "tip")
+    root_joint = full.frames[root_id].parentJoint
+    support = list(full.supports[full.frames[tip_id].parentJoint])
+    chain = support[support.index(root_joint) + 1:]
+    if not chain:
+        raise RobotModelError(f"{label}: no joint between root {root!r} and tip {tip!r}",
+                              "tip")
+    for j in chain:
+        try:
+            check_revolute(full, j, label)
+        except InvalidInputError as err:
+            raise RobotModelError(str(err), "chain") from None
+    locked = [j for j in range(1, full.njoints) if j not in chain]
+    model = pin.buildReducedModel(full, locked, pin.neutral(full)) if locked else full
+    model.name = label
+    # Re-root: the root frame becomes the universe (the arm's base frame).
+    to_root = model.frames[frame_id(model, root, "root", label)].placement.inverse()
+    for j in range(1, model.njoints):
+        if model.parents[j] == 0:
+            model.jointPlacements[j] = to_root * model.jointPlacements[j]
+    for frame in model.frames:
+        if frame.parentJoint == 0:
+            frame.placement = to_root * frame.placement
+    return SerialArm(model, tip=tip, q_min=q_min, q_max=q_max, qd_max=qd_max, base=base,
+                     tool=tool, name=name or f"{label}:{tip}")
+
+
+def _below(model: Any, frame: int, ancestor: int) -> bool:
+    """Whether frame ``ancestor`` is ``frame`` or lies on its path up to the universe."""
+    seen = set()
+    while frame != ancestor:
+        if frame == 0 or frame in seen:
+            return False
+        seen.add(frame)
+        frame = model.frames[frame].parentFrame
+    return True
+
+
+def example_robots_dir() -> Path | None:
+    """Return the ``robots`` folder of the installed example-robot-data, or None."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    folder = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    return folder if folder.is_dir() else None
+
+
+def example_robot_urdf(robot: str) -> Path:
+    """Path of the URDF of an example-robot-data robot.
+
+    Parameters
+    ----------
+    robot : str
+        A name of :data:`EXAMPLE_ROBOTS` (``"ur5"``, ``"panda"``, ``"baxter"``, ...) or
+        a ``.urdf`` path relative to the package's ``robots`` folder
+        (e.g. ``"panda_description/urdf/panda_collision.urdf"``).
+
+    Raises
+    ------
+    RobotModelError
+        example-robot-data is not installed, or the name is unknown (``field`` "name").
+    """
+    folder = example_robots_dir()
+    if folder is None:
+        raise RobotModelError(f"example-robot-data is not installed: {ROBOTS_HINT}", "name")
+    relative = EXAMPLE_ROBOTS.get(robot)
+    if relative is None:
+        if not robot.endswith(".urdf") or ".." in Path(robot).parts:
+            raise RobotModelError(f"unknown robot {robot!r} (known: "
+                                  f"{', '.join(sorted(EXAMPLE_ROBOTS))}, or a .urdf path "
+                                  "under example-robot-data's robots folder)", "name")
+        relative = robot
+    path = folder / relative
+    if not path.is_file():
+        raise RobotModelError(f"no file {relative} in example-robot-data ({folder})", "name")
+    return path
+
+
+def example_robot_arm(
+    robot: str,
+    root: str,
+    tip: str,
+    *,
+    q_min: Any = None,
+    q_max: Any = None,
+    qd_max: Any = None,
+    base: Any = None,
+    tool: Any = None,
+    name: str | None = None,
+) -> SerialArm:
+    """Build one chain of an example-robot-data robot (see :func:`urdf_arm`).
+
+    Examples: ``example_robot_arm("ur5", "base_link", "tool0")``,
+    ``example_robot_arm("panda", "panda_link0", "panda_link8")`` and
+    ``example_robot_arm("baxter", "left_arm_mount", "left_gripper")``.
+    """
+    return urdf_arm(example_robot_urdf(robot), root, tip, q_min=q_min, q_max=q_max,
+                    qd_max=qd_max, base=base, tool=tool, name=name or f"{robot}:{tip}")
