@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import signal
 import sys
 import tempfile
 import traceback
@@ -20,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from . import __version__
-from ._io import InterruptHandlers
+from ._signals import InterruptHandlers, SignalHold, interrupt_requested
 from .errors import DualArmError, InvalidInputError
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -84,11 +83,18 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
     print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "
           f"{s['leader_rot_err_max_rad']:.3g} rad; closure error max: "
           f"{s['closure_pos_err_max_m']:.3g} m, {s['closure_rot_err_max_rad']:.3g} rad")
-    limits = "hard limits" if s["hard_limits"] else "limits not enforced by this solver"
-    print(f"  realised motion, worst share of each limit ({limits}; above 1 is outside):")
+    limits = ("hard limits: a variable that starts outside may not move further out"
+              if s["hard_limits"] else "limits not enforced by this solver")
+    print(f"  realised motion, worst share of each limit, above 1 is outside ({limits}):")
     for part, r in s["realised_limits"].items():
-        print(f"    {part:<9} range {r['range_ratio_max']:.3g} ({r['worst_range']}), "
-              f"speed {r['speed_ratio_max']:.3g} ({r['worst_speed'] or '-'})")
+        start = r["range_ratio_start"]
+        started = (f"; started outside, at {start:.3g}"
+                   if start is not None and start > 1.0 else "")
+        speed = r["speed_ratio_max"]
+        speed_text = ("n/a (no limit)" if speed is None or speed != speed
+                      else f"{speed:.3g} ({r['worst_speed']})")
+        print(f"    {part:<9} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
+              f"speed {speed_text}")
     print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
           f"smallest singular value: leader {s['sigma_min']['leader']:.3g}, "
           f"follower {s['sigma_min']['follower']:.3g}")
@@ -154,7 +160,6 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench.interrupt import EXIT_INTERRUPTED, StopGuard
     from .bench.report import format_table, write_report
     from .bench.runner import BenchInterrupted, BenchSettings, run_bench
     from .experiments.reproduce import BENCH_CONFIGS, bundled_config
@@ -176,24 +181,22 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     settings = BenchSettings(repeat=args.repeat, duration=args.duration,
                              solver_options=solver_options)
     out = _output_folder(args.out)
-    with StopGuard() as guard:  # a signal during the report: finish it, then exit 130
-        try:
-            result = run_bench(configs, solvers, out, settings=settings,
-                               log=None if args.quiet
-                               else lambda line: print(line, file=sys.stderr))
-        except BenchInterrupted as stop:
-            result = stop.result
-        meta = {"machine": result.machine, "settings": settings.as_dict(),
-                "configs": [str(c) for c in configs], "solvers": solvers,
-                "jobs_computed_this_run": result.computed, "jobs_planned": result.planned,
-                "interrupted": result.interrupted}
-        with guard.deferred():
-            rows = write_report(out, result.records, meta, plots=not args.no_plots)
-            print(format_table(rows))
-            print(f"outputs: {out}/bench.json, bench.csv"
-                  + ("" if args.no_plots else ", bench.png")
-                  + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
-            sys.stdout.flush()
+    try:
+        result = run_bench(configs, solvers, out, settings=settings,
+                           log=None if args.quiet else lambda line: print(line, file=sys.stderr))
+    except BenchInterrupted as stop:
+        result = stop.result
+    meta = {"machine": result.machine, "settings": settings.as_dict(),
+            "configs": [str(c) for c in configs], "solvers": solvers,
+            "jobs_computed_this_run": result.computed, "jobs_planned": result.planned,
+            "interrupted": result.interrupted}
+    with SignalHold():  # a signal during the report: finish it, then exit 130
+        rows = write_report(out, result.records, meta, plots=not args.no_plots)
+        print(format_table(rows))
+        print(f"outputs: {out}/bench.json, bench.csv"
+              + ("" if args.no_plots else ", bench.png")
+              + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
+        sys.stdout.flush()
     if result.interrupted is not None:
         _err(f"interrupted ({result.interrupted}): {len(result.records)} of "
              f"{result.planned} jobs done and stored, the job under way was not stored; "
@@ -289,7 +292,7 @@ def _quiet_swallowed_interrupts() -> Iterator[None]:
 
     One raised inside a weak-reference callback or a finaliser is printed as
     "Exception ignored in ..." and dropped; the interrupt handlers have recorded it,
-    and the command stops on it (:func:`~dualarm_qp._io.interrupt_requested`).
+    and the command stops on it (:func:`~dualarm_qp._signals.interrupt_requested`).
     """
     previous = sys.unraisablehook
 
@@ -304,8 +307,11 @@ def _quiet_swallowed_interrupts() -> Iterator[None]:
         sys.unraisablehook = previous
 
 
-def _run_command(args: argparse.Namespace, handlers: InterruptHandlers) -> int:
-    """Run the command and map what happened to an exit code and one message."""
+def _run_command(args: argparse.Namespace) -> int:
+    """Run the command and map what happened to an exit code and one message.
+
+    An error that an interrupt caused (an import cut short) is reported as the interrupt.
+    """
     try:
         code = int(args.func(args))
         sys.stdout.flush()  # a closed pipe shows here, not in the flush at exit
@@ -316,20 +322,21 @@ def _run_command(args: argparse.Namespace, handlers: InterruptHandlers) -> int:
         _err(f"interrupted ({stop})" if str(stop) else "interrupted")
         return EXIT_INTERRUPTED
     except DualArmError as err:
-        if handlers.signum is None:
+        if interrupt_requested() is None:
             _err(str(err))
             return EXIT_BAD_INPUT
         code = EXIT_FAILED  # came from the interrupt: reported below
     except Exception as err:
         if args.debug:
             traceback.print_exc()
-        if handlers.signum is None:  # an internal error: say so plainly, no traceback
+        if interrupt_requested() is None:  # an internal error: say so plainly, no traceback
             _err(f"internal error: {type(err).__name__}: {err} "
                  "(rerun with --debug for details)")
             return EXIT_FAILED
         code = EXIT_FAILED  # caused by the interrupt (an import cut short): reported below
-    if handlers.signum is not None and code != EXIT_INTERRUPTED:
-        _err(f"interrupted ({signal.Signals(handlers.signum).name})")
+    stopped = interrupt_requested()
+    if stopped is not None and code != EXIT_INTERRUPTED:
+        _err(f"interrupted ({stopped})")
         return EXIT_INTERRUPTED
     return code
 
@@ -356,8 +363,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     # SIGTERM stops a run the way Ctrl-C does; both are remembered even if swallowed.
     try:
-        with InterruptHandlers(final=argv is None) as handlers, _quiet_swallowed_interrupts():
-            return _run_command(args, handlers)
+        with InterruptHandlers(final=argv is None), _quiet_swallowed_interrupts():
+            return _run_command(args)
     except KeyboardInterrupt:  # another one while the first was being reported
         return EXIT_INTERRUPTED
 

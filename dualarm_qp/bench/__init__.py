@@ -8,8 +8,8 @@ may import from everything below it, and nothing below imports it.
 * :mod:`.suite`: scoring of solvers on a file of recorded step problems, the way
   qpbenchmark scores QP solvers;
 * :mod:`.report`: table, CSV, JSON and plot;
-* :mod:`.store`, :mod:`.interrupt`: the result store shared by concurrent benches, and
-  stopping on SIGINT / SIGTERM without storing a cut-short job.
+* :mod:`.store`: the result store shared by concurrent benches (a job cut short by
+  SIGINT / SIGTERM is never stored: see :mod:`.runner` and :mod:`dualarm_qp._signals`).
 """
 
 from .report import COLUMNS, format_table, objective_gaps, write_report

@@ -19,11 +19,13 @@ format, and a digest of the package's source code, :func:`code_digest`) and appe
 ``results.jsonl`` as soon as it is finished; a bench run into the same folder skips
 every job whose key is already stored, so changed code is measured afresh.
 
-Interrupts and sharing (see :mod:`.interrupt` and :mod:`.store`): a job cut short by
-SIGINT or SIGTERM, or whose backend reports that a signal interrupted a solve, is never
-stored; the bench stops with what finished (:class:`BenchInterrupted`). Benches run
-together on one folder claim each job before computing it, so every job is computed
-and stored once; a bench waits for the jobs another one is computing.
+Interrupts and sharing (see :mod:`dualarm_qp._signals` and :mod:`.store`): a job cut
+short by SIGINT or SIGTERM, or whose backend reports that a signal interrupted a solve
+(:class:`BackendInterrupted`), is never stored, and a finished job is stored whole (under
+a :class:`~dualarm_qp._signals.SignalHold`); the bench stops with what finished
+(:class:`BenchInterrupted`). Benches run together on one folder claim each job before
+computing it, so every job is computed and stored once; a bench waits for the jobs
+another one is computing.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ import json
 import math
 import os
 import platform
+import re
 import signal
 import time
 import warnings
@@ -48,6 +51,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import __version__
+from .._signals import (
+    Interrupted,
+    InterruptHandlers,
+    SignalHold,
+    pass_on_sigint,
+    raise_if_interrupted,
+    signal_name,
+)
 from ..control.controller import ControlOutput, DualArmController
 from ..control.rollout import rollout
 from ..errors import DualArmError, InvalidInputError
@@ -59,14 +70,6 @@ from ..solvers.policy import solve_step
 from ..solvers.registry import get_solver, solver_info
 from ..step.build import DualArmState
 from ..step.problem import StepProblem
-from .interrupt import (
-    BackendInterrupted,
-    Interrupted,
-    StopGuard,
-    backend_interrupted,
-    pass_on_sigint,
-    signal_name,
-)
 from .store import append_result, claim_job, load_results
 
 FloatArray = NDArray[np.float64]
@@ -86,6 +89,8 @@ RESULTS_FILE = "results.jsonl"
 #: How often a job is run again when its backend reported an interrupt that the process
 #: ignores (SIGINT inherited as ignored: osqp still catches it during a solve).
 BACKEND_INTERRUPT_RETRIES = 2
+
+_INTERRUPT_WORDS = re.compile(r"\binterrupt", re.IGNORECASE)
 
 
 @functools.lru_cache(maxsize=1)
@@ -205,6 +210,19 @@ class BenchInterrupted(Interrupted):
     def __init__(self, result: BenchResult, signum: int | None) -> None:
         super().__init__(signum)
         self.result = result
+
+
+class BackendInterrupted(Exception):
+    """A backend reported that a signal interrupted its solve (the job's numbers are void)."""
+
+
+def backend_interrupted(status: Any) -> bool:
+    """Whether a backend status or message says that a signal interrupted the solve.
+
+    osqp reports ``"interrupted"`` (``OSQP_SIGINT``) when its own SIGINT handler caught a
+    Ctrl-C during the solve; its answer then carries no solution.
+    """
+    return bool(_INTERRUPT_WORDS.search(str(status)))
 
 
 def job_failure(rec: dict[str, Any]) -> str | None:
@@ -588,7 +606,7 @@ def run_bench(
         return BenchResult(recs, computed, out, machine, planned=len(pairs),
                            interrupted=interrupted)
 
-    def compute(cfg: BenchConfig, solver: str, key: str, guard: StopGuard) -> dict[str, Any]:
+    def compute(cfg: BenchConfig, solver: str, key: str) -> dict[str, Any]:
         for attempt in range(BACKEND_INTERRUPT_RETRIES + 1):
             try:
                 if settings.replay and cfg.path not in canonical:
@@ -600,19 +618,18 @@ def run_bench(
             except BackendInterrupted as err:
                 # Only reached when SIGINT is ignored here (otherwise the interrupt was
                 # raised): the process goes on, but this attempt's numbers are void.
-                guard.check()
+                raise_if_interrupted()
                 if attempt == BACKEND_INTERRUPT_RETRIES:  # someone keeps sending SIGINT
                     raise Interrupted(signal.SIGINT) from err
                 say(f"{cfg.name} / {solver}: {err}; running the job again")
                 continue
-            guard.check()  # an interrupt that was swallowed on the way still counts
+            raise_if_interrupted()  # an interrupt that was swallowed on the way still counts
             rec.update(key=key, settings=settings.as_dict(), machine=machine,
                        code=code_digest())
             return rec
         raise AssertionError("unreachable")  # pragma: no cover
 
-    def run_one(cfg: BenchConfig, solver: str, key: str, guard: StopGuard,
-                wait: bool) -> bool:
+    def run_one(cfg: BenchConfig, solver: str, key: str, wait: bool) -> bool:
         """Run one job unless stored or claimed elsewhere; False if left to another bench."""
         nonlocal computed
         if wait:
@@ -627,8 +644,8 @@ def run_bench(
                 claim.release(stored=True)
                 say(f"{cfg.name} / {solver}: stored by another bench, reused")
                 return True
-            rec = compute(cfg, solver, key, guard)
-            with guard.deferred():  # a finished job is stored whole, or not at all
+            rec = compute(cfg, solver, key)
+            with SignalHold():  # a finished job is stored whole, or not at all
                 append_result(store, rec)
                 claim.release(stored=True)
                 finished[key] = rec
@@ -636,7 +653,7 @@ def run_bench(
                 say(_line(rec))
         return True
 
-    with StopGuard() as guard:
+    with InterruptHandlers() as handlers:
         try:
             done = load_results(store)
             for _, _, key in pairs:
@@ -651,14 +668,14 @@ def run_bench(
                     if key in done:
                         say(f"{cfg.name} / {solver}: stored result reused")
                     continue
-                if not run_one(cfg, solver, key, guard, wait=False):
+                if not run_one(cfg, solver, key, wait=False):
                     say(f"{cfg.name} / {solver}: another bench is computing it")
                     later.append((cfg, solver, key))
             for cfg, solver, key in later:
                 if key not in finished:
-                    run_one(cfg, solver, key, guard, wait=True)
+                    run_one(cfg, solver, key, wait=True)
         except KeyboardInterrupt as err:
-            signum = guard.signum if guard.signum is not None else getattr(err, "signum", None)
+            signum = handlers.signum or getattr(err, "signum", None)
             raise BenchInterrupted(result(signal_name(signum)), signum) from None
     return result()
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .._io import SignalHold
+from .._signals import SignalHold
 from .config import load_config
 from .outputs import owned_entries, remove_owned, write_json
 from .run import OUTPUT_FILES, RunOutcome, remove_run_outputs, run_and_write

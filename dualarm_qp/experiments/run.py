@@ -2,10 +2,10 @@
 
 The outputs of a run form one set: ``summary.json`` is written last and lists the
 other files, so a folder whose ``summary.json`` exists holds exactly what it lists.
-The set is written with SIGINT and SIGTERM held (:class:`~dualarm_qp._io.SignalHold`):
-an interrupt during the rollout stops it and the samples done so far are written as
-an ``interrupted`` run; an interrupt while the files are written waits until they all
-are.
+The set is written with SIGINT and SIGTERM held
+(:class:`~dualarm_qp._signals.SignalHold`): an interrupt during the rollout stops it and
+the samples done so far are written as an ``interrupted`` run; an interrupt while the
+files are written waits until they all are.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._io import SignalHold, interrupt_requested
+from .._signals import SignalHold, raise_if_interrupted
 from ..control.rollout import RolloutResult, rollout
 from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
@@ -69,7 +69,7 @@ def _progress(total: int, label: str, show: bool) -> tuple[Any, Any]:
     """Return a progress bar (or None) and the rollout's per-sample callback.
 
     The callback also stops the rollout when the command line received an interrupt
-    that some code swallowed (:func:`~dualarm_qp._io.interrupt_requested`).
+    that some code swallowed (:func:`~dualarm_qp._signals.raise_if_interrupted`).
     """
     bar = None
     if show:
@@ -78,9 +78,7 @@ def _progress(total: int, label: str, show: bool) -> tuple[Any, Any]:
         bar = tqdm(total=total, desc=label, unit="step", leave=False, file=sys.stderr)
 
     def update(done: int, _total: int) -> None:
-        swallowed = interrupt_requested()
-        if swallowed:
-            raise KeyboardInterrupt(swallowed)
+        raise_if_interrupted()
         if bar is not None:
             bar.update(done - bar.n)
 
@@ -223,7 +221,7 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     The earlier run's files go first (:func:`remove_run_outputs`), then
     ``trajectory.csv`` and the plots are written, each atomically, and ``summary.json``
     comes last, its ``outputs`` listing exactly the other files written. Call it
-    inside a :class:`~dualarm_qp._io.SignalHold` for an all-or-nothing set.
+    inside a :class:`~dualarm_qp._signals.SignalHold` for an all-or-nothing set.
 
     Returns
     -------
@@ -241,7 +239,8 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
         tag = f"{exp.name} ({exp.solver_name})"
         plot_joints(out / "joints.png", result.trace, task.leader, task.follower, title=tag)
         plot_grasp(out / "grasp.png", result.trace, task.surface, title=tag)
-        plot_closure(out / "closure.png", result.trace, title=tag)
+        plot_closure(out / "closure.png", result.trace, title=tag,
+                     tolerance=exp.limits.closure)
         written += ["joints.png", "grasp.png", "closure.png"]
     summary["outputs"] = list(written)
     write_json(out / "summary.json", summary)

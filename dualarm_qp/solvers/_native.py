@@ -8,19 +8,20 @@ iteration (and, for osqp, time) limit. The QP is the shifted one of :mod:`.qp`:
 divided by ``max(S)`` (:func:`cost_weights`; the minimiser is the same).
 
 An osqp call that a SIGINT interrupted returns no ``x``, and the signal is raised again
-in Python (:func:`_reraise_sigint`): osqp's own handler swallows it during the solve.
+in Python (:func:`~dualarm_qp._signals.pass_on_sigint`): osqp's own handler swallows it
+during the solve.
 """
 
 from __future__ import annotations
 
 import importlib.util
-import signal
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._signals import pass_on_sigint
 from ..step.problem import StepProblem
 
 FloatArray = NDArray[np.float64]
@@ -71,15 +72,6 @@ def cost_weights(weights: FloatArray) -> FloatArray:
     """
     top = float(weights.max())
     return weights / top if top > 0.0 else weights.copy()
-
-
-def _reraise_sigint() -> None:
-    """Hand a SIGINT that a backend swallowed back to Python's own handler.
-
-    With the default handler this raises KeyboardInterrupt here; a program that set
-    its own handler (or ignores SIGINT) gets that behaviour instead.
-    """
-    signal.raise_signal(signal.SIGINT)
 
 
 def _box(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -192,7 +184,7 @@ class OSQPNative:
             self._solver = None  # a failed state is not a good warm start: set up anew
             self._ext = None
         if interrupted:  # osqp caught the user's Ctrl-C: never an answer, pass it on
-            _reraise_sigint()
+            pass_on_sigint()
         return answer
 
 

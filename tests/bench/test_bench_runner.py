@@ -11,10 +11,10 @@ from typing import Any
 
 import pytest
 
+from dualarm_qp._signals import InterruptHandlers, SignalHold, interrupt_requested
 from dualarm_qp.bench import BenchSettings, run_bench, run_job, runner, write_report
-from dualarm_qp.bench.interrupt import BackendInterrupted, StopGuard
 from dualarm_qp.bench.report import COLUMNS
-from dualarm_qp.bench.runner import BenchInterrupted
+from dualarm_qp.bench.runner import BackendInterrupted, BenchInterrupted
 from dualarm_qp.bench.store import append_result, load_results
 from dualarm_qp.errors import ConfigError, SolverNotFoundError
 from dualarm_qp.experiments.reproduce import bundled_config
@@ -169,24 +169,37 @@ def test_a_transient_backend_interrupt_is_retried(tmp_path: Path) -> None:
     assert len((tmp_path / "results.jsonl").read_text().splitlines()) == 1
 
 
-def test_stop_guard_keeps_an_ignored_sigint_ignored() -> None:
+def test_handlers_keep_an_ignored_sigint_ignored() -> None:
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        with StopGuard() as guard:
+        with InterruptHandlers() as handlers, SignalHold() as hold:
             assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
             signal.raise_signal(signal.SIGINT)
-            assert not guard.stopped
+        assert handlers.signum is None and hold.signum is None
     finally:
         signal.signal(signal.SIGINT, previous)
 
 
-def test_stop_guard_defers_inside_a_critical_block() -> None:
+def test_a_hold_defers_a_signal_to_the_end_of_its_block() -> None:
     done = []
-    with StopGuard() as guard, pytest.raises(KeyboardInterrupt):
-        with guard.deferred():
+    with InterruptHandlers() as handlers, pytest.raises(KeyboardInterrupt):
+        with SignalHold(), SignalHold():  # nested: passed on once, by the outer hold
             signal.raise_signal(signal.SIGTERM)
             done.append(True)  # reached: the block runs to its end
-    assert done == [True] and guard.signum == signal.SIGTERM
+        done.append(False)  # not reached: raised when the outer hold ends
+    assert done == [True] and handlers.signum == signal.SIGTERM
+
+
+def test_nested_handlers_record_in_the_outer_ones() -> None:
+    """A bench's handlers inside the command line's: both know of the signal."""
+    with InterruptHandlers() as outer:
+        with InterruptHandlers() as inner:
+            with pytest.raises(KeyboardInterrupt, match="SIGTERM"):
+                signal.raise_signal(signal.SIGTERM)
+            assert interrupt_requested() == "SIGTERM"
+        assert signal.getsignal(signal.SIGTERM) is outer  # restored to the outer
+    assert inner.signum == outer.signum == signal.SIGTERM
+    assert interrupt_requested() is None
 
 
 def test_changed_code_invalidates_stored_rows(tmp_path: Path,

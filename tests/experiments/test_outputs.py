@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from dualarm_qp._io import InterruptHandlers, SignalHold, atomic_write_with
+from dualarm_qp._io import atomic_write_with
+from dualarm_qp._signals import InterruptHandlers, SignalHold
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments import run as run_module
