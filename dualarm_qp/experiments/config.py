@@ -92,6 +92,9 @@ Num = Annotated[float, BeforeValidator(_number), AllowInfNan(False),
 #: A number that may be infinite (a joint limit that does not limit); never NaN.
 LimitNum = Annotated[float, BeforeValidator(_number), AfterValidator(_not_nan)]
 
+#: A yes/no setting: only ``true`` or ``false`` (YAML 1.2), never ``yes``, ``on``, 1 or text.
+Flag = Annotated[bool, Field(strict=True)]
+
 Vec3 = Annotated[list[Num], Field(min_length=3, max_length=3)]
 
 
@@ -378,15 +381,15 @@ class ControllerSpec(_Model):
     dt: Num
     duration: Num
     weights: WeightsSpec = Field(default_factory=WeightsSpec)
-    velocity_limits: bool = True
+    velocity_limits: Flag = True
     grasp_speed_max: Num | None = None
     correction_gain: Num | None = None
     leader_gain: Num | None = None
     centre_horizon: Num | None = None
     recovery_fraction: Num = 0.0
     policy: Literal["scale", "relax", "stop"] = "scale"
-    exact_orientation: bool = False
-    projection: bool | None = None
+    exact_orientation: Flag = False
+    projection: Flag | None = None
     closure_tolerance: Annotated[list[Num], Field(min_length=2, max_length=2)] | None = None
     tracking_tolerance: Annotated[list[Num], Field(min_length=2, max_length=2)] | None = None
     singular_value_min: Num = 1e-3
@@ -622,7 +625,20 @@ def _config_error(err: ValidationError, path: str) -> ConfigError:
 
 
 class _Loader(yaml.SafeLoader):
-    """SafeLoader that reads ``1e-9`` as a number (YAML 1.1 reads it as text)."""
+    """SafeLoader with YAML 1.2 scalars.
+
+    ``1e-9`` is a number (YAML 1.1 reads it as text) and only ``true``/``false`` are
+    booleans (YAML 1.1 also takes yes, no, on, off).
+    """
+
+
+_Loader.yaml_implicit_resolvers = {
+    first: [(tag, rx) for tag, rx in resolvers if tag != "tag:yaml.org,2002:bool"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
+    list("tTfF"))
 
 
 _Loader.add_implicit_resolver(

@@ -143,6 +143,8 @@ CASES: list[Case] = [
      "controller.weights.grasp", ("not true",), ()),
     ("weights-joints-list-bool", "paper", _set("controller.weights.joints", [1, True, 1]),
      "controller.weights.joints.1", ("not true",), ()),
+    ("velocity-limits-yes", "paper", _set("controller.velocity_limits", "yes"),
+     "controller.velocity_limits", ("boolean",), ()),
     ("velocity-bool", "paper", _set("trajectory.velocity", [True, 0, 0]),
      "trajectory.velocity.0", ("not true",), ()),
     ("base-position-bool", "paper", _set("leader.base.position", [0, False, 0]),

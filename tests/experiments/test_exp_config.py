@@ -361,3 +361,15 @@ def test_numbers_in_yaml_1_2_notation_are_numbers(tmp_path):
     path = tmp_path / "exp.yaml"
     path.write_text(text)
     assert load_config(path).controller.dt == pytest.approx(0.031)
+
+
+def test_yaml_booleans_are_only_true_and_false(tmp_path):
+    """YAML 1.2: `velocity_limits: yes` (YAML 1.1's true) is refused, naming the key."""
+    text = (CONFIGS / "puma_beam_limits.yaml").read_text()
+    assert "velocity_limits: true" in text
+    path = tmp_path / "yes.yaml"
+    path.write_text(text.replace("velocity_limits: true", "velocity_limits: yes"))
+    with pytest.raises(ConfigError, match=r"controller\.velocity_limits"):
+        load_config(path)
+    path.write_text(text.replace("velocity_limits: true", "velocity_limits: false"))
+    assert load_config(path).controller.velocity_limits is False
