@@ -30,6 +30,7 @@ COLUMNS: tuple[str, ...] = (
     "assembly_time_median_s", "assembly_time_p99_s",
     "solve_time_median_s", "solve_time_p99_s",
     "verify_time_median_s", "verify_time_p99_s",
+    "leader_time_median_s", "leader_time_p99_s",
     "bound_violation_max", "eq_residual_max",
     "closure_pos_err_max_m", "closure_rot_err_max_rad",
     "margin_qf_min_rad", "margin_ql_min_rad", "margin_grasp_min_m",
@@ -116,6 +117,7 @@ TABLE: tuple[tuple[str, str, str], ...] = (
     ("asm med", "assembly_time_median_s", "us"),
     ("solve med", "solve_time_median_s", "us"),
     ("verify med", "verify_time_median_s", "us"),
+    ("leader med", "leader_time_median_s", "us"),
     ("solve/bare", "solve_over_bare", "ratio"),
     ("bound viol", "bound_violation_max", "sci"),
     ("eq resid", "eq_residual_max", "sci"),
@@ -184,7 +186,8 @@ def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(configs), 1, squeeze=False)
     parts = (("kinematics", "kinematics_time_median_s"), ("assembly", "assembly_time_median_s"),
-             ("solve", "solve_time_median_s"), ("verify", "verify_time_median_s"))
+             ("solve", "solve_time_median_s"), ("verify", "verify_time_median_s"),
+             ("leader", "leader_time_median_s"))
     for ax, cfg in zip(axes[:, 0], configs, strict=True):
         rs = [r for r in good if r["experiment"] == cfg]
         y = np.arange(len(rs))
