@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..errors import DualArmError, InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
-from ..se3 import rotation_error
 from ..step.build import DualArmState
 from .controller import DualArmController
 from .realised import LimitReport, measure
@@ -546,7 +546,7 @@ def _reresolve(controller: DualArmController, q_l: FloatArray, q_f: FloatArray,
     task = controller.task
     T_target = task.follower_target(q_l, sigma)
     T_f, J = task.follower.fk_jacobian(q_f)
-    dw = rotation_error(T_target[:3, :3], T_f[:3, :3])
+    dw = pin.log3(T_target[:3, :3] @ T_f[:3, :3].T)
     twist = np.concatenate((np.zeros(3), dw))
     try:
         dq = np.linalg.lstsq(J, twist, rcond=1e-9)[0]

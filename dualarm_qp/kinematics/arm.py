@@ -47,7 +47,6 @@ from numpy.typing import NDArray
 
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
-from ..se3 import rot_x, rot_z
 
 FloatArray = NDArray[np.float64]
 Convention = Literal["standard", "modified"]
@@ -394,10 +393,11 @@ def _dh_model(dh: DHTable) -> tuple[Any, list[int], int]:
     for i in range(dh.n):
         a, alpha, d, offset = (float(dh.a[i]), float(dh.alpha[i]), float(dh.d[i]),
                                float(dh.offset[i]))
-        x_step = _trans(a, 0.0, 0.0) @ _rot(rot_x(alpha))  # Trans_x(a) Rot_x(alpha)
+        # Trans_x(a) Rot_x(alpha)
+        x_step = _trans(a, 0.0, 0.0) @ _rot(pin.rpy.rpyToMatrix(alpha, 0.0, 0.0))
         pre, post = (np.eye(4), _trans(0.0, 0.0, d) @ x_step) if standard else (
             x_step, _trans(0.0, 0.0, d))
-        placement = post_prev @ pre @ _rot(rot_z(offset))
+        placement = post_prev @ pre @ _rot(pin.rpy.rpyToMatrix(0.0, 0.0, offset))
         joint = model.addJoint(model.njoints - 1, pin.JointModelRZ(),
                                _se3(placement), f"joint{i + 1}")
         links.append(model.addFrame(pin.Frame(f"{_LINK}{i + 1}", joint, links[-1],

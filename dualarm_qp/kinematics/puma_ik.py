@@ -54,10 +54,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from .._validate import as_array, as_pose
 from ..errors import IKError, InvalidInputError
-from ..se3 import inv_pose
 from .arm import FloatArray, SerialArm
 
 #: Relative tolerance for the reach tests: a pose this far outside the workspace
@@ -265,7 +265,7 @@ def _sign(x: float) -> int:
 def _flange_pose(arm: SerialArm, T_world_tool: Any) -> FloatArray:
     """``T_base_flange`` for a desired ``T_world_tool``."""
     T = as_pose(T_world_tool, "T_world_tool")
-    return inv_pose(arm.base) @ T @ inv_pose(arm.tool)
+    return (pin.SE3(arm.base).inverse() * pin.SE3(T) * pin.SE3(arm.tool).inverse()).homogeneous
 
 
 def _reference(arm: SerialArm, q_ref: Any) -> list[float]:

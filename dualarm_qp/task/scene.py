@@ -16,12 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._validate import as_pose
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
-from ..se3 import inv_pose, log_so3
 from .surfaces import GraspSurface
 from .trajectory import Trajectory
 
@@ -58,11 +58,11 @@ class DualArmTask:
     @property
     def H1_inv(self) -> FloatArray:
         """``T_object_leader``."""
-        return inv_pose(self.H1)
+        return pin.SE3(self.H1).inverse().homogeneous
 
     def leader_target(self, t: float) -> FloatArray:
         """Pose the leader's tool must take for the object to be at ``D(t)``."""
-        return self.trajectory.pose(t) @ inv_pose(self.H1)
+        return self.trajectory.pose(t) @ self.H1_inv
 
     def object_pose(self, q_l: FloatArray) -> FloatArray:
         """``T_world_object`` carried by the leader at joints ``q_l``."""
@@ -77,7 +77,7 @@ class DualArmTask:
         T_target = self.follower_target(q_l, sigma)
         T_f = self.follower.fk(q_f)
         dp = float(np.linalg.norm(T_target[:3, 3] - T_f[:3, 3]))
-        dw = float(np.linalg.norm(log_so3(T_target[:3, :3] @ T_f[:3, :3].T)))
+        dw = float(np.linalg.norm(pin.log3(T_target[:3, :3] @ T_f[:3, :3].T)))
         return dp, dw
 
     def follower_base_from_grasp(self, q_f: FloatArray, sigma: float, t: float) -> FloatArray:
@@ -87,4 +87,5 @@ class DualArmTask:
         unstated follower base is recovered from Table 2 (see docs/reproduction.md).
         """
         T_base_tool = self.follower.with_base(np.eye(4)).fk(q_f)
-        return self.trajectory.pose(t) @ self.surface.pose(sigma) @ inv_pose(T_base_tool)
+        tool_base = pin.SE3(T_base_tool).inverse().homogeneous
+        return self.trajectory.pose(t) @ self.surface.pose(sigma) @ tool_base

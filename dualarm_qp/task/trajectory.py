@@ -21,11 +21,11 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._validate import as_array, as_pose
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
-from ..se3 import exp_so3, log_so3
 
 FloatArray = NDArray[np.float64]
 
@@ -234,7 +234,7 @@ class WaypointTrajectory(Trajectory):
     (zero velocity and acceleration) at every waypoint; position and rotation follow the
     same timing, so the path is a screw-free "straight line plus geodesic" per segment.
     When consecutive orientations differ by exactly pi rad the geodesic is not unique;
-    :func:`~dualarm_qp.se3.log_so3` then picks one of the two.
+    ``pinocchio.log3`` then picks one of the two.
 
     Parameters
     ----------
@@ -277,7 +277,7 @@ class WaypointTrajectory(Trajectory):
         self._segments = []
         for k in range(ts.size - 1):
             Rk, Rn = Ts[k][:3, :3], Ts[k + 1][:3, :3]
-            w = log_so3(Rk.T @ Rn)
+            w = pin.log3(Rk.T @ Rn)
             self._segments.append(
                 (
                     Ts[k][:3, 3].copy(),  # p_k
@@ -317,7 +317,7 @@ class WaypointTrajectory(Trajectory):
         p, dp, Rk, w, _, _ = self._segments[k]
         s = min_jerk(tau)[0]
         T = np.eye(4)
-        T[:3, :3] = Rk @ exp_so3(s * w)
+        T[:3, :3] = Rk @ pin.exp3(s * w)
         T[:3, 3] = p + s * dp
         return T
 

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp import puma560
 from dualarm_qp.control import controller as controller_module
 from dualarm_qp.control.controller import DualArmController
-from dualarm_qp.se3 import inv_pose
 from dualarm_qp.solvers import get_solver
 from dualarm_qp.solvers.base import Status, StepSolution, Tolerance, verify
 from dualarm_qp.step.build import DualArmState, StepOptions
@@ -26,7 +26,7 @@ def make_controller(solver, **kw):
     surface = PlaneBar()
     sigma = 0.2
     target = leader.fk(q_l) @ surface.pose(sigma)
-    follower = puma560(base=target @ inv_pose(puma560().fk(q_f)))
+    follower = puma560(base=target @ pin.SE3(puma560().fk(q_f)).inverse().homogeneous)
     start = leader.fk(q_l)
     traj = LinearTrajectory(start[:3, 3], np.array([0.02, 0.0, 0.0]), R0=start[:3, :3], tf=1.0)
     task = DualArmTask(leader, follower, np.eye(4), surface, traj)

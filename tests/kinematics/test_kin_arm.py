@@ -7,23 +7,23 @@ from __future__ import annotations
 
 import dh_oracle
 import numpy as np
+import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.kinematics import DHTable, SerialArm, puma560
 from dualarm_qp.kinematics.puma560 import PUMA560_A, PUMA560_ALPHA, PUMA560_D
-from dualarm_qp.se3 import exp_so3, log_so3, make_pose, rot_x, rot_z
 
 SETTINGS = settings(max_examples=60, deadline=None)
 
 
 def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
-    return make_pose(exp_so3(rng.normal(size=3)), scale * rng.normal(size=3))
+    return pin.SE3(pin.exp3(rng.normal(size=3)), scale * rng.normal(size=3)).homogeneous
 
 
 def trans(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
-    return make_pose(None, np.array([x, y, z]))
+    return pin.SE3(np.eye(3), np.array([x, y, z])).homogeneous
 
 
 def reference_fk(arm: SerialArm, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -38,7 +38,7 @@ def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
         dq[i] = h
         Tp, Tm = arm.fk(q + dq), arm.fk(q - dq)
         J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
-        J[3:, i] = log_so3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+        J[3:, i] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
     return J
 
 
@@ -159,7 +159,8 @@ def test_standard_equals_shifted_modified(rows: list, seed: int) -> None:
     a_n, alpha_n = rows_std[-1, :2]
     std = SerialArm(DHTable.from_rows(rows_std, "standard"), base=base)
     mod = SerialArm(DHTable.from_rows(rows_mod, "modified"), base=base,
-                    tool=trans(x=a_n) @ make_pose(rot_x(alpha_n)))
+                    tool=trans(x=a_n) @ pin.SE3(pin.rpy.rpyToMatrix(alpha_n, 0.0, 0.0),
+                                                np.zeros(3)).homogeneous)
     q = rng.uniform(-np.pi, np.pi, size=std.n)
     T_s, J_s = std.fk_jacobian(q)
     T_m, J_m = mod.fk_jacobian(q)
@@ -178,7 +179,8 @@ def test_planar_arm_same_in_both_conventions() -> None:
     expected = np.array([0.5 * c1 + 0.4 * c12 + 0.3 * c123, 0.5 * s1 + 0.4 * s12 + 0.3 * s123, 0])
     for arm in (std, mod):
         np.testing.assert_allclose(arm.fk(q)[:3, 3], expected, atol=1e-14)
-        np.testing.assert_allclose(arm.fk(q)[:3, :3], rot_z(q.sum()), atol=1e-14)
+        np.testing.assert_allclose(arm.fk(q)[:3, :3], pin.rpy.rpyToMatrix(0.0, 0.0, q.sum()),
+                                   atol=1e-14)
     np.testing.assert_allclose(std.jacobian(q), mod.jacobian(q), atol=1e-14)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp.errors import IKError, InvalidInputError
@@ -15,13 +16,13 @@ from dualarm_qp.kinematics import (
     puma560_ik,
     puma560_indicators,
 )
-from dualarm_qp.se3 import exp_so3, make_pose, pose_error
+from dualarm_qp.se3 import pose_error
 
 TOL = 1e-9  # [m] and [rad]
 
 
 def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
-    return make_pose(exp_so3(rng.normal(size=3)), scale * rng.normal(size=3))
+    return pin.SE3(pin.exp3(rng.normal(size=3)), scale * rng.normal(size=3)).homogeneous
 
 
 def assert_reaches(arm: SerialArm, sol: IKSolution, T: np.ndarray) -> None:
@@ -110,12 +111,12 @@ def test_ik_branch_returns_each_branch_or_raises() -> None:
 
 def test_unreachable_pose() -> None:
     arm = puma560()
-    far = make_pose(None, np.array([2.0, 0.0, 0.0]))
+    far = pin.SE3(np.eye(3), np.array([2.0, 0.0, 0.0])).homogeneous
     assert puma560_ik(arm, far) == []
     with pytest.raises(IKError, match="out of reach"):
         ik_branch(arm, far, 1, 1, 1)
     # Inside the cylinder of radius d2 around the z0 axis: unreachable too.
-    inner = make_pose(None, np.array([0.0, 0.05, 0.2 + 0.05625]))
+    inner = pin.SE3(np.eye(3), np.array([0.0, 0.05, 0.2 + 0.05625])).homogeneous
     assert puma560_ik(arm, inner) == []
 
 

@@ -6,6 +6,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp.errors import InvalidInputError
@@ -18,7 +19,6 @@ from dualarm_qp.kinematics import (
     urdf_arm,
 )
 from dualarm_qp.kinematics.robots import example_robot_urdf, example_robots_dir
-from dualarm_qp.se3 import exp_so3, log_so3, make_pose
 
 needs_robots = pytest.mark.skipif(
     example_robots_dir() is None,
@@ -34,7 +34,7 @@ CHAINS = [
 
 
 def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
-    return make_pose(exp_so3(rng.normal(size=3)), scale * rng.normal(size=3))
+    return pin.SE3(pin.exp3(rng.normal(size=3)), scale * rng.normal(size=3)).homogeneous
 
 
 def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
@@ -45,7 +45,7 @@ def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
         dq[i] = h
         Tp, Tm = arm.fk(q + dq), arm.fk(q - dq)
         J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
-        J[3:, i] = log_so3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+        J[3:, i] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
     return J
 
 
@@ -103,8 +103,6 @@ def test_shipped_chain_limits_come_from_the_urdf(robot: str, root: str, tip: str
 @needs_robots
 def test_baxter_arms_are_the_full_robot_with_the_rest_at_zero() -> None:
     """Left and right chains agree with Pinocchio's whole Baxter (other joints at 0)."""
-    import pinocchio as pin
-
     full = pin.buildModelFromUrdf(str(example_robot_urdf("baxter")))
     data = full.createData()
     rng = np.random.default_rng(2)

@@ -5,11 +5,12 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp import puma560
 from dualarm_qp.errors import NonFiniteError, ShapeError
-from dualarm_qp.se3 import compose_rows, exp_so3, inv_pose, make_pose, pose_error, pose_error_rows
+from dualarm_qp.se3 import compose_rows, pose_error, pose_error_rows
 from dualarm_qp.step.build import (
     DualArmState,
     StepBuilder,
@@ -27,15 +28,16 @@ FIELDS = [f.name for f in dataclasses.fields(StepProblem)]
 
 def make_task(rng, surface, *, identity_h1=False):
     """A leader at a random pose and a follower whose base closes the grasp at q_f."""
-    leader = puma560(base=make_pose(exp_so3(rng.normal(size=3) * 0.3), rng.normal(size=3) * 0.2))
+    leader = puma560(base=pin.SE3(pin.exp3(rng.normal(size=3) * 0.3),
+                                  rng.normal(size=3) * 0.2).homogeneous)
     q_l = rng.uniform(leader.q_min, leader.q_max) * 0.6
     q_f = rng.uniform(leader.q_min, leader.q_max) * 0.6
     sigma = rng.uniform(surface.sigma_min, surface.sigma_max)
-    H1 = make_pose(exp_so3(rng.normal(size=3)), rng.normal(size=3) * 0.1)
+    H1 = pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3) * 0.1).homogeneous
     if identity_h1:
         H1 = np.eye(4)
     target = leader.fk(q_l) @ H1 @ surface.pose(sigma)
-    follower = puma560(base=target @ inv_pose(puma560().fk(q_f)))
+    follower = puma560(base=target @ pin.SE3(puma560().fk(q_f)).inverse().homogeneous)
     traj = LinearTrajectory(np.zeros(3), np.array([0.05, 0.0, 0.0]), tf=1.0)
     return DualArmTask(leader, follower, H1, surface, traj), q_l, q_f, sigma
 
@@ -141,8 +143,8 @@ def test_rate_bounds_match_the_vectorised_formula(seed):
 def test_row_helpers_match_numpy():
     rng = np.random.default_rng(8)
     for _ in range(50):
-        T1 = make_pose(exp_so3(rng.normal(size=3) * 2), rng.normal(size=3))
-        T2 = make_pose(exp_so3(rng.normal(size=3) * 2), rng.normal(size=3))
+        T1 = pin.SE3(pin.exp3(rng.normal(size=3) * 2), rng.normal(size=3)).homogeneous
+        T2 = pin.SE3(pin.exp3(rng.normal(size=3) * 2), rng.normal(size=3)).homogeneous
         np.testing.assert_allclose(compose_rows(T1.tolist(), T2.tolist()), (T1 @ T2)[:3],
                                    atol=1e-15)
         np.testing.assert_allclose(pose_error_rows(T1.tolist(), T2.tolist()),

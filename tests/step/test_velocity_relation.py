@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError
-from dualarm_qp.se3 import exp_so3, inv_pose, make_pose, pose_error
+from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.build import DualArmState, StepOptions, build_step, grasp_rate_range
 from dualarm_qp.task.scene import DualArmTask
 from dualarm_qp.task.surfaces import CurvedBar, CylinderSurface, PlaneBar
@@ -18,14 +19,15 @@ RNG = np.random.default_rng(7)
 
 def random_task(surface, rng):
     """A leader at a random pose, a follower whose base closes the grasp at q_f."""
-    leader = puma560(base=make_pose(exp_so3(rng.normal(size=3) * 0.3), rng.normal(size=3) * 0.2))
+    leader = puma560(base=pin.SE3(pin.exp3(rng.normal(size=3) * 0.3),
+                                  rng.normal(size=3) * 0.2).homogeneous)
     q_l = rng.uniform(leader.q_min, leader.q_max) * 0.6
     q_f = rng.uniform(leader.q_min, leader.q_max) * 0.6
     sigma = rng.uniform(surface.sigma_min, surface.sigma_max)
-    H1 = make_pose(exp_so3(rng.normal(size=3)), rng.normal(size=3) * 0.1)
+    H1 = pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3) * 0.1).homogeneous
     target = leader.fk(q_l) @ H1 @ surface.pose(sigma)
     follower_local = puma560()
-    base_f = target @ inv_pose(follower_local.fk(q_f))
+    base_f = target @ pin.SE3(follower_local.fk(q_f)).inverse().homogeneous
     follower = puma560(base=base_f)
     traj = LinearTrajectory(np.zeros(3), np.zeros(3), tf=1.0)
     task = DualArmTask(leader, follower, H1, surface, traj)

@@ -5,12 +5,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
-from dualarm_qp.se3 import exp_so3, log_so3, make_pose, rot_x, rot_z
 from dualarm_qp.task import (
     PAPER_R0,
     LinearTrajectory,
@@ -27,7 +27,7 @@ def fd_twist(traj: Trajectory, t: float, h: float = H) -> np.ndarray:
     Tp, Tm = traj.pose(t + h), traj.pose(t - h)
     out = np.empty(6)
     out[:3] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
-    out[3:] = log_so3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+    out[3:] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
     return out
 
 
@@ -52,7 +52,8 @@ def test_paper_trajectory_values() -> None:
 
 
 def test_linear_twist_matches_finite_differences() -> None:
-    traj = LinearTrajectory([0.1, -0.2, 0.3], [0.05, -0.01, 0.02], R0=rot_z(0.4), tf=3.0)
+    traj = LinearTrajectory([0.1, -0.2, 0.3], [0.05, -0.01, 0.02],
+                            R0=pin.rpy.rpyToMatrix(0.0, 0.0, 0.4), tf=3.0)
     for t in (0.1, 1.0, 2.9):
         np.testing.assert_allclose(traj.twist(t), fd_twist(traj, t), atol=1e-9)
         np.testing.assert_array_equal(traj.acceleration(t), np.zeros(6))
@@ -109,9 +110,9 @@ def test_min_jerk_boundary_conditions() -> None:
 
 def _three_waypoints() -> WaypointTrajectory:
     poses = [
-        make_pose(np.eye(3), np.array([0.0, 0.0, 0.0])),
-        make_pose(rot_z(1.0) @ rot_x(0.5), np.array([0.3, -0.1, 0.2])),
-        make_pose(rot_x(-2.5), np.array([0.1, 0.4, 0.0])),
+        pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.0])).homogeneous,
+        pin.SE3(pin.rpy.rpyToMatrix(0.5, 0.0, 1.0), np.array([0.3, -0.1, 0.2])).homogeneous,
+        pin.SE3(pin.rpy.rpyToMatrix(-2.5, 0.0, 0.0), np.array([0.1, 0.4, 0.0])).homogeneous,
     ]
     return WaypointTrajectory([0.5, 1.5, 3.5], poses)
 
@@ -159,7 +160,7 @@ def test_waypoint_properties(
     frac: float,
 ) -> None:
     n = len(w)
-    poses = [make_pose(exp_so3(np.array(w[i])), np.array(p[i])) for i in range(n)]
+    poses = [pin.SE3(pin.exp3(np.array(w[i])), np.array(p[i])).homogeneous for i in range(n)]
     times = np.concatenate([[0.0], np.cumsum(dts[: n - 1])])
     traj = WaypointTrajectory(times, poses)
     for k in range(n):
