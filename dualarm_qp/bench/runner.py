@@ -68,7 +68,6 @@ from ..experiments.setup import Experiment, build_experiment
 from ..solvers.base import DEFAULT_TOLERANCE, Status, Tolerance, verify
 from ..solvers.policy import solve_step
 from ..solvers.registry import get_solver, solver_info
-from ..step.build import DualArmState
 from ..step.problem import StepProblem
 from .store import append_result, claim_job, load_results
 
@@ -311,28 +310,20 @@ def _check_solution(sol: Any) -> None:
                                  f"({sol.message})")
 
 
-class _CheckedController(DualArmController):
-    """A controller that refuses step answers of a backend interrupted by a signal."""
-
-    def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
-        out = super().step(state, scale_max=scale_max)
-        _check_solution(out.solution)
-        _check_solution(out.leader_solution)
-        return out
+def _check_output(out: ControlOutput) -> None:
+    """Refuse a controller step answered by a backend that a signal interrupted."""
+    _check_solution(out.solution)
+    _check_solution(out.leader_solution)
 
 
-class _RecordingController(_CheckedController):
-    """A controller that keeps the step problem of every step it computes."""
+def _controller(exp: Experiment, settings: BenchSettings,
+                on_step: Callable[[ControlOutput], None] = _check_output) -> DualArmController:
+    """Return the experiment's controller as the bench runs it.
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.problems: list[StepProblem] = []
-
-    def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
-        out = super().step(state, scale_max=scale_max)
-        if out.build is not None:
-            self.problems.append(out.build.problem)
-        return out
+    With the bench's tolerance and no fallback (each solver's own success is measured);
+    ``on_step`` (default: refuse an answer of an interrupted backend) sees every step.
+    """
+    return exp.controller(fallback=False, tolerance=settings.tolerance, on_step=on_step)
 
 
 def _experiment(config: BenchConfig, solver: str, settings: BenchSettings) -> Experiment:
@@ -346,16 +337,16 @@ def _experiment(config: BenchConfig, solver: str, settings: BenchSettings) -> Ex
 def canonical_steps(config: BenchConfig, settings: BenchSettings) -> list[StepProblem]:
     """Step problems met along the configuration's rollout with the exact solver."""
     exp = _experiment(config, CANONICAL_SOLVER, settings)
-    ctrl = _RecordingController(exp.task, get_solver(CANONICAL_SOLVER, **_opts(exp)),
-                                exp.options, leader_gain=exp.leader_gain, policy=exp.policy,
-                                tolerance=settings.tolerance)
-    rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project, limits=exp.limits)
-    return ctrl.problems
+    problems: list[StepProblem] = []
 
+    def keep(out: ControlOutput) -> None:
+        _check_output(out)
+        if out.build is not None:
+            problems.append(out.build.problem)
 
-def _opts(exp: Experiment) -> dict[str, Any]:
-    """Return the configured solver options if the configured solver is the canonical one."""
-    return dict(exp.solver_options) if exp.solver_name == CANONICAL_SOLVER else {}
+    rollout(_controller(exp, settings, keep), exp.initial, duration=exp.duration,
+            project=exp.project, limits=exp.limits)
+    return problems
 
 
 def _stats(values: FloatArray, prefix: str) -> dict[str, float]:
@@ -386,15 +377,12 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
     """
     t_start = time.perf_counter()
     exp = _experiment(config, solver, settings)
-    opts = exp.solver_options if solver == exp.solver_name else {}
+    opts = exp.solver_options
     planned = math.floor(exp.duration / exp.options.dt + 1e-9) + 1
     runs = []
     for _ in range(settings.repeat):
-        ctrl = _CheckedController(exp.task, get_solver(solver, **opts), exp.options,
-                                  leader_gain=exp.leader_gain, policy=exp.policy,
-                                  tolerance=settings.tolerance)
-        runs.append(rollout(ctrl, exp.initial, duration=exp.duration, project=exp.project,
-                            limits=exp.limits))
+        runs.append(rollout(_controller(exp, settings), exp.initial, duration=exp.duration,
+                            project=exp.project, limits=exp.limits))
     first = runs[0]
     tr = first.trace
     planned = max(planned, len(tr))  # a slowed task runs past its nominal samples

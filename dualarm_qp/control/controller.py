@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -152,6 +153,10 @@ class DualArmController:
     fallback : StepSolver, optional
         Solver for a step on which ``solver`` fails although the step is feasible (the
         exact ``nullspace`` solver is the usual choice); None lets such a step fail.
+    on_step : callable, optional
+        Called with every :class:`ControlOutput` before :meth:`step` returns it (to
+        record the step problems, or to refuse an answer by raising); what it raises
+        leaves :meth:`step`.
 
     Notes
     -----
@@ -171,6 +176,7 @@ class DualArmController:
         policy: Policy = "scale",
         tolerance: Tolerance = DEFAULT_TOLERANCE,
         fallback: StepSolver | None = None,
+        on_step: Callable[[ControlOutput], None] | None = None,
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
@@ -182,6 +188,7 @@ class DualArmController:
         self.policy = policy
         self.tolerance = tolerance
         self.fallback = fallback
+        self.on_step = on_step
         try:
             self._hard_bounds = solver_info(solver.name).hard_bounds
         except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
@@ -272,11 +279,11 @@ class DualArmController:
         n_f = self._builder.n - 1
         if not leader_sol.status.usable:
             self._x_prev = None
-            return ControlOutput(
+            return self._done(ControlOutput(
                 ql_dot=np.zeros(self.task.leader.n), qf_dot=np.zeros(n_f), m=0.0, scale=0.0,
                 status=leader_sol.status, solution=leader_sol, build=None, leader=lead,
                 leader_solution=leader_sol, sigma_min=sigma_min,
-                times=StepTimes(t1 - t0, 0.0, 0.0, 0.0, t3 - t1), applied=False)
+                times=StepTimes(t1 - t0, 0.0, 0.0, 0.0, t3 - t1), applied=False))
         ql_dot = _inside(leader_sol.x, lead.problem) if self._hard_bounds else leader_sol.x
         build = self._builder.build(state, ql_dot, leader_kin=leader_kin,
                                     follower_kin=follower_kin, x_prev=self._x_prev)
@@ -311,7 +318,7 @@ class DualArmController:
         self._x_prev = x if usable_x else None
         follower_scale = min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
         scale = scale_max * leader_sol.scale * follower_scale
-        return ControlOutput(
+        return self._done(ControlOutput(
             ql_dot=ql_dot if follower_scale == 1.0 else ql_dot * follower_scale,
             qf_dot=x[:n_f].copy(),
             m=float(x[n_f]),
@@ -324,7 +331,13 @@ class DualArmController:
             sigma_min=sigma_min,
             times=StepTimes(t1 - t0, t4 - t3, t5 - t4, t6 - t5, t3 - t1),
             applied=usable_x,
-        )
+        ))
+
+    def _done(self, out: ControlOutput) -> ControlOutput:
+        """Hand ``out`` to the ``on_step`` hook, then return it."""
+        if self.on_step is not None:
+            self.on_step(out)
+        return out
 
 
 def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:

@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..control.controller import DualArmController
+from ..control.controller import ControlOutput, DualArmController
 from ..control.rollout import RunLimits
 from ..errors import ConfigError, DualArmError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
@@ -20,7 +21,7 @@ from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
 from ..kinematics.robots import EXAMPLE_ROBOTS, RobotModelError, example_robot_arm, urdf_arm
-from ..se3 import log_so3, make_pose, rot_x, rot_y, rot_z
+from ..solvers.base import DEFAULT_TOLERANCE, Tolerance
 from ..solvers.policy import Policy
 from ..solvers.registry import (
     SolverInfo,
@@ -113,11 +114,29 @@ class Experiment:
     fallback: str | None = "nullspace"
     notes: dict[str, Any] = field(default_factory=dict)
 
-    def controller(self, *, fallback: bool = True) -> DualArmController:
+    def controller(
+        self,
+        *,
+        fallback: bool = True,
+        tolerance: Tolerance | None = None,
+        on_step: Callable[[ControlOutput], None] | None = None,
+    ) -> DualArmController:
         """Return a fresh controller with the configured solver.
 
-        ``fallback=False`` leaves out the fallback solver (the bench measures each
-        solver's own success).
+        The one place a controller is built from an experiment (runs, the bench, the
+        step-suite generator).
+
+        Parameters
+        ----------
+        fallback : bool
+            False leaves out the fallback solver (the bench measures each solver's own
+            success).
+        tolerance : Tolerance, optional
+            What counts as meeting the equality and the bounds (default
+            :data:`~dualarm_qp.solvers.base.DEFAULT_TOLERANCE`).
+        on_step : callable, optional
+            Called with every step's :class:`~dualarm_qp.control.controller.ControlOutput`
+            (see :class:`~dualarm_qp.control.controller.DualArmController`).
         """
         solver = get_solver(self.solver_name, **self.solver_options)
         backup = None
@@ -126,7 +145,8 @@ class Experiment:
             backup = get_solver(self.fallback)
         return DualArmController(self.task, solver, self.options,
                                  leader_gain=self.leader_gain, policy=self.policy,
-                                 fallback=backup)
+                                 tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
+                                 fallback=backup, on_step=on_step)
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
@@ -137,10 +157,10 @@ def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
         R = u @ vt
     elif spec.rpy is not None:
         r, p, y = (v * sc.angle for v in spec.rpy)
-        R = rot_z(y) @ rot_y(p) @ rot_x(r)
+        R = pin.rpy.rpyToMatrix(r, p, y)  # Rz(y) Ry(p) Rx(r)
     else:
         R = np.eye(3)
-    return make_pose(R, np.asarray(spec.position, dtype=float) * sc.length)
+    return pin.SE3(R, np.asarray(spec.position, dtype=float) * sc.length).homogeneous
 
 
 T = TypeVar("T")
@@ -492,7 +512,7 @@ def _solver_info_or_none(name: str) -> SolverInfo | None:
 def _pose_gap(T_a: FloatArray, T_b: FloatArray) -> tuple[float, float]:
     """Distance [m] and angle [rad] between two poses."""
     dp = float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3]))
-    dw = float(np.linalg.norm(log_so3(T_a[:3, :3] @ T_b[:3, :3].T)))
+    dw = float(np.linalg.norm(pin.log3(T_a[:3, :3] @ T_b[:3, :3].T)))
     return dp, dw
 
 

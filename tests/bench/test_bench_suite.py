@@ -40,6 +40,10 @@ def test_committed_suite_is_small_and_varied(suite) -> None:  # type: ignore[no-
     assert {"rollout", "rollout_infeasible", "pinched", "empty_box"} <= set(suite.kind)
     assert np.isfinite(suite.objective_star[suite.feasible]).all()
     assert len(suite.meta["scenarios"]) >= 20
+    # s7 as the shipped configs mean it (grasp_unit: m): 1, 100 or 1000 in SI.
+    assert {sc["grasp_weight_unit"] for sc in suite.meta["scenarios"]} == {"m"}
+    s7 = np.array([p.weights[-1] for p in suite.problems])
+    assert set(np.unique(s7).tolist()) <= {1.0, 100.0, 1000.0}
 
 
 def test_reduced_suite_scores(suite) -> None:  # type: ignore[no-untyped-def]

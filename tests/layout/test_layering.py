@@ -68,3 +68,39 @@ def test_no_module_imports_from_a_higher_layer(parts, path):
             if name == "step":
                 assert dotted.startswith("dualarm_qp.step.problem"), (
                     f"solvers may only use the step problem, not {dotted}")
+
+
+#: The one module that builds a DualArmController (Experiment.controller).
+CONTROLLER_BUILDER = ("experiments", "setup.py")
+
+
+def _sources():
+    root = PACKAGE.parent
+    for path in sorted([*PACKAGE.rglob("*.py"), *(root / "benchmarks").rglob("*.py")]):
+        yield path.relative_to(root), path
+
+
+def _named(node: ast.expr) -> str | None:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        return node.attr
+    return None
+
+
+@pytest.mark.parametrize(("rel", "path"), list(_sources()), ids=lambda v: str(v))
+def test_only_experiment_controller_builds_a_controller(rel, path):
+    """The package and the benchmark scripts get their controller from Experiment.controller
+    (no direct DualArmController(...) call, no subclass of it), so runs, the bench and the
+    suite generator step the same controller."""
+    tree = ast.parse(path.read_text())
+    calls = [n.lineno for n in ast.walk(tree)
+             if isinstance(n, ast.Call) and _named(n.func) == "DualArmController"]
+    subclasses = [n.name for n in ast.walk(tree) if isinstance(n, ast.ClassDef)
+                  and any(_named(b) == "DualArmController" for b in n.bases)]
+    assert not subclasses, f"{rel} subclasses DualArmController: {subclasses}"
+    if rel.parts[-2:] == CONTROLLER_BUILDER and rel.parts[0] == "dualarm_qp":
+        assert len(calls) == 1, f"{rel} should build the controller once, in controller()"
+    else:
+        assert not calls, f"{rel} builds a DualArmController (lines {calls}); use " \
+                          "Experiment.controller"

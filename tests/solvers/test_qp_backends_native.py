@@ -3,7 +3,6 @@ every call is bounded (iteration caps, a Ctrl-C passed on, no banner)."""
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import signal
 import subprocess
@@ -18,6 +17,7 @@ import pytest
 
 from dualarm_qp.bench.suite import load_suite
 from dualarm_qp.solvers import Status, _native, available_solvers, get_solver
+from dualarm_qp.step.problem import StepProblem
 
 SUITE = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "step_suite.npz"
 
@@ -48,16 +48,23 @@ def test_osqp_extension_path_matches_the_public_api(monkeypatch: pytest.MonkeyPa
 
 # --- the guards: proxqp's iteration caps, osqp's swallowed SIGINT, HiGHS's banner -------
 
-#: A recorded step on which proxqp, with the raw cost and its default inner limit
-#: (``max_iter_in`` = 1500), stalled for 126,250 iterations (1.9 s).
-PATHOLOGICAL_STEP = 1032
+#: A recorded step (s7 = 1e9) on which proxqp, with the raw cost and its default inner
+#: limit (``max_iter_in`` = 1500), stalled for 126,250 iterations (1.9 s); kept as a file
+#: of its own since the step suite was regenerated in the configs' units.
+PATHOLOGICAL_FILE = Path(__file__).resolve().parent / "data" / "proxqp_pathological_step.npz"
+
+
+def _pathological_step() -> StepProblem:
+    with np.load(PATHOLOGICAL_FILE) as d:
+        return StepProblem(A=d["A"], b=d["b"], weights=d["weights"], center=d["center"],
+                           lower=d["lower"], upper=d["upper"], n_grasp=int(d["n_grasp"]))
 
 
 @pytest.mark.skipif("proxqp" not in _native.NATIVE, reason="proxsuite is not installed")
 def test_proxsuite_profile_caps_inner_and_outer_iterations() -> None:
     solver = get_solver("qp:proxsuite")
     assert solver.options["max_iter"] * (solver.options["max_iter_in"] + 1) <= 50_000
-    problem = load_suite(SUITE).problems[PATHOLOGICAL_STEP]
+    problem = _pathological_step()
     sol = solver.solve(problem)
     assert sol.status is Status.OPTIMAL, sol.message
     settings = solver._native._qp.settings  # the options reached the backend
@@ -70,7 +77,7 @@ def test_proxsuite_pathological_call_returns_within_a_second(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The raw cost and no preconditioner (the old set-up) stall proxqp on this step;
     the profile's iteration caps end the call well within a second."""
-    problem = dataclasses.replace(load_suite(SUITE).problems[PATHOLOGICAL_STEP], x_prev=None)
+    problem = _pathological_step()
     monkeypatch.setattr(_native, "cost_weights", lambda w: np.array(w, dtype=float))
     options = {**get_solver("qp:proxsuite").options, "compute_preconditioner": False,
                "eps_primal_inf": 1e-4}
