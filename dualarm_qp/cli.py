@@ -128,6 +128,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
               f"{c['q3_max_deg']:7.2f}] deg, samples outside range: "
               f"{c['q3_samples_outside']:4d}, grasp {s['grasp_start_m'] * 1e3:.1f} -> "
               f"{s['grasp_end_m'] * 1e3:.1f} mm" + mark)
+        for warning in s.get("warnings", []):
+            print(f"      warning: {warning}")
     if rep.interrupted is not None:
         _err(f"interrupted in case ({rep.interrupted}); the cases done are written, "
              "without the figures; see reproduce.json")
