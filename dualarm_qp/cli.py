@@ -49,7 +49,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .experiments.config import load_config, safe_name
     from .experiments.options import check_solver_options, parse_solver_options
     from .experiments.outputs import check_unused_folder
-    from .experiments.run import run_experiment
+    from .experiments.run import OUTPUT_FILES, run_experiment
     from .experiments.setup import build_experiment
 
     solver_options = parse_solver_options(args.solver_option)
@@ -59,7 +59,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
-    check_unused_folder(out, force=args.force, what="a run")
+    check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
     out = _output_folder(out)
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                              plots=not args.no_plots)

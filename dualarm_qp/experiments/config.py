@@ -43,6 +43,10 @@ TIME_SCALE = {"s": 1.0, "ms": 1e-3}
 #: ``duration``). Each sample keeps about 60 numbers, so this is about 1 GB at most.
 MAX_SAMPLES = 2_000_000
 
+#: Shortest sampling interval [s] after unit conversion (a 1 MHz loop): below it the
+#: path time no longer advances reliably in floating point.
+MIN_DT_S = 1e-6
+
 #: Largest experiment file read, in bytes.
 MAX_FILE_BYTES = 1_000_000
 
@@ -157,11 +161,11 @@ class DHSpec(_Model):
 
 
 class IKBranch(_Model):
-    """Closed-form IK branch indicators (+1 / -1) for the PUMA 560."""
+    """Closed-form IK branch indicators (+1 / -1) for the PUMA 560, all three required."""
 
-    arm: Indicator = 1
-    elbow: Indicator = 1
-    wrist: Indicator = 1
+    arm: Indicator
+    elbow: Indicator
+    wrist: Indicator
 
 
 class InitialSpec(_Model):

@@ -69,7 +69,8 @@ def remove_owned(folder: Path, names: Iterable[str]) -> list[str]:
     return removed
 
 
-def check_unused_folder(folder: Path, *, force: bool, what: str = "a run") -> None:
+def check_unused_folder(folder: Path, *, force: bool, what: str = "a run",
+                        names: Iterable[str] = ()) -> None:
     """Refuse an output folder that already holds files, unless ``force``.
 
     Parameters
@@ -81,13 +82,23 @@ def check_unused_folder(folder: Path, *, force: bool, what: str = "a run") -> No
         it owns (:func:`owned_entries`) and keeps the others.
     what : str
         What writes there, for the message.
+    names : iterable of str
+        The file names the command writes there: one that exists as something other than
+        a file (a folder) cannot be replaced, even with ``force``.
 
     Raises
     ------
     InvalidInputError
-        The folder holds files and ``force`` is False.
+        The folder holds files and ``force`` is False, or an owned name is not a file.
     """
-    if force or not folder.is_dir():
+    if not folder.is_dir():
+        return
+    for name in names:
+        entry = folder / name
+        if entry.exists() and not (entry.is_file() or entry.is_symlink()):
+            raise InvalidInputError(f"{entry} is in the way: {what} writes a file there "
+                                    "and will not replace a folder; move it away")
+    if force:
         return
     entries = sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir())
     if entries:

@@ -37,6 +37,7 @@ from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
 from .config import (
     ANGLE_SCALE,
     LENGTH_SCALE,
+    MIN_DT_S,
     TIME_SCALE,
     ArmSpec,
     ExperimentConfig,
@@ -216,6 +217,12 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
         return arm
     lo = arm.q_min if q_min is None else q_min
     hi = arm.q_max if q_max is None else q_max
+    for key, values, wrong in (("q_min", q_min, np.inf), ("q_max", q_max, -np.inf)):
+        if values is not None and (values == wrong).any():
+            i = int(np.flatnonzero(values == wrong)[0])
+            raise ConfigError(f"joint {i + 1}: {key} is {wrong:+g}, which no joint can reach "
+                              f"(an open side is {-wrong:+g})", path=path,
+                              key=f"{role}.{key}")
     crossed = np.flatnonzero(lo > hi)
     if crossed.size:
         i = int(crossed[0])
@@ -386,6 +393,9 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
                 TIME_SCALE[cfg.units.time])
     c = cfg.controller
     dt, duration = c.dt * sc.time, c.duration * sc.time
+    if dt < MIN_DT_S:
+        raise ConfigError(f"dt is {dt:.3g} s; the shortest sampling interval is "
+                          f"{MIN_DT_S:g} s", path=path, key="controller.dt")
     notes: dict[str, Any] = {}
     with _at("object.surface", path):
         surface = _surface(cfg, sc)

@@ -110,6 +110,15 @@ def test_force_replaces_only_what_a_run_owns(tmp_path):
     assert summary(out)["outputs"] == ["trajectory.csv"]
 
 
+def test_a_folder_in_the_way_of_an_owned_file_is_bad_input(tmp_path, capsys):
+    out = tmp_path / "o"
+    (out / "summary.json").mkdir(parents=True)
+    assert run(short_config(tmp_path), out, "--force", "--no-plots") == 2
+    err = capsys.readouterr().err
+    assert "summary.json is in the way" in err and "internal error" not in err
+    assert (out / "summary.json").is_dir()
+
+
 def test_force_into_a_fresh_folder_is_fine(tmp_path):
     assert run(short_config(tmp_path), tmp_path / "o", "--force", "--no-plots") == 0
 
