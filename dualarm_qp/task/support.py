@@ -13,7 +13,7 @@ Model (the paper's assumptions a-c, all vectors in object coordinates):
   balanced this way; ``M g_y`` and ``M g_z`` are assumed to be taken by the leader
   (the paper's note after Eq. 8, which neglects the moment of those components).
 
-Equilibrium (Eqs. 7-8, with the symbols as corrected in NOTES.md)::
+Equilibrium (Eqs. 7-8, with the symbols as corrected in docs/paper_corrections.md)::
 
     r1 x f_l + r2 x f_f = 0,        f_l + f_f + M g~ = 0.
 
