@@ -111,6 +111,23 @@ def test_import_selects_no_backend_and_no_pyplot(tmp_path):
     assert (tmp_path / "closure.png").stat().st_size > 1000
 
 
+def test_the_library_and_the_help_import_no_optimiser():
+    """`import dualarm_qp` and `dualarm-qp --help` stay light: no scipy.optimize either."""
+    proc = _python("""
+        import sys
+        import dualarm_qp
+        from dualarm_qp.cli import main
+        try:
+            main(["--help"])
+        except SystemExit:
+            pass
+        heavy = [m for m in ("scipy.optimize", "matplotlib") if m in sys.modules]
+        assert not heavy, heavy
+        print("ok")
+    """)
+    assert proc.returncode == 0, proc.stderr
+
+
 def test_importing_the_library_or_the_help_imports_no_matplotlib():
     proc = _python("""
         import sys
