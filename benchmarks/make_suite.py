@@ -8,7 +8,7 @@ is made infeasible on purpose: the task scaled beyond reach, a joint pinned wher
 task cannot use it, an empty box. Fast paths with speed limits also give naturally
 infeasible steps.
 
-Every label is computed here independently of the library's solvers: the 6 x 7
+Every label is computed here independently of the library's solvers: the step
 equality is parametrised with an SVD (x = x0 + t z), feasibility is the intersection of
 the per-variable intervals of t, and the optimum clamps the scalar minimiser to it.
 
@@ -78,8 +78,7 @@ def record(cfg: dict[str, Any]) -> list[StepProblem]:
     problems: list[StepProblem] = []
 
     def keep(out: ControlOutput) -> None:
-        if out.build is not None:
-            problems.append(out.build.problem)
+        problems.append(out.build.problem)
 
     rollout(exp.controller(fallback=False, on_step=keep), exp.initial, duration=exp.duration)
     return problems
@@ -87,11 +86,12 @@ def record(cfg: dict[str, Any]) -> list[StepProblem]:
 
 def affine(p: StepProblem) -> tuple[np.ndarray, np.ndarray] | None:
     """x = x0 + t z for every solution of A x = b (one-dimensional null space)."""
+    m = p.m
     u, s, vt = np.linalg.svd(p.A)
-    if s[-1] < 1e-9 * s[0]:
+    if p.n != m + 1 or s[-1] < 1e-9 * s[0]:
         return None
-    x0 = vt[:6].T @ ((u.T @ p.b) / s)
-    return x0, vt[6]
+    x0 = vt[:m].T @ ((u.T @ p.b) / s)
+    return x0, vt[m]
 
 
 def t_interval(p: StepProblem, x0: np.ndarray, z: np.ndarray) -> tuple[float, float]:

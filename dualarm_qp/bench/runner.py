@@ -313,7 +313,6 @@ def _check_solution(sol: Any) -> None:
 def _check_output(out: ControlOutput) -> None:
     """Refuse a controller step answered by a backend that a signal interrupted."""
     _check_solution(out.solution)
-    _check_solution(out.leader_solution)
 
 
 def _controller(exp: Experiment, settings: BenchSettings,
@@ -388,10 +387,9 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
     planned = max(planned, len(tr))  # a slowed task runs past its nominal samples
     counts = Counter(tr.status)
     usable = sum(counts.get(s.value, 0) for s in Status if s.usable)
-    k_all, a_all, s_all, l_all, t_all = (
+    k_all, a_all, s_all, t_all = (
         np.concatenate([getattr(r.trace, name) for r in runs])
-        for name in ("kinematics_time_s", "assembly_time_s", "solve_time_s", "leader_time_s",
-                     "step_time_s"))
+        for name in ("kinematics_time_s", "assembly_time_s", "solve_time_s", "step_time_s"))
     rec: dict[str, Any] = {
         "config": config.path,
         "experiment": config.name,
@@ -407,8 +405,7 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
         **_stats(k_all, "kinematics_time"),
         **_stats(a_all, "assembly_time"),
         **_stats(s_all, "solve_time"),
-        **_stats(l_all, "leader_time"),
-        **_stats(t_all - k_all - a_all - s_all - l_all, "verify_time"),
+        **_stats(t_all - k_all - a_all - s_all, "verify_time"),
         "bound_violation_max": _fmax(tr.bound_violation),
         "eq_residual_max": _fmax(tr.eq_residual),
         "closure_pos_err_max_m": _fmax(tr.closure_pos_err),

@@ -1,4 +1,4 @@
-"""The per-step controller: measured state in, joint rates and sliding speed out.
+"""The per-step controller: measured state in, both arms' rates and sliding speeds out.
 
 The controller stands on its own so that it can be dropped into a real control loop:
 call :meth:`DualArmController.step` once per sample with the measured joints of both
@@ -26,11 +26,9 @@ from ..solvers.base import (
     equality_limit,
     verify,
 )
-from ..solvers.nullspace import NullspaceSolver
 from ..solvers.policy import POLICIES, Policy, solve_step
 from ..solvers.registry import solver_info
 from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
-from ..step.leader import LeaderBuild, LeaderStepBuilder
 from ..step.problem import StepProblem
 from ..task.scene import DualArmTask
 
@@ -41,21 +39,19 @@ FloatArray = NDArray[np.float64]
 class StepTimes:
     """Wall-clock split of one controller step [s].
 
-    ``kinematics`` holds both arms' forward kinematics, Jacobians and smallest singular
-    values; ``assembly``, ``solve`` and ``verify`` the follower's problem; ``leader`` the
-    leader's whole step (assembly and solve).
+    ``kinematics`` holds both arms' and the carried object's poses, Jacobians and
+    smallest singular values; ``assembly``, ``solve`` and ``verify`` the step problem.
     """
 
     kinematics: float
     assembly: float
     solve: float
     verify: float
-    leader: float = 0.0
 
     @property
     def total(self) -> float:
         """Whole controller step [s]."""
-        return self.kinematics + self.assembly + self.solve + self.verify + self.leader
+        return self.kinematics + self.assembly + self.solve + self.verify
 
 
 @dataclass(frozen=True)
@@ -69,28 +65,20 @@ class ControlOutput:
     qf_dot : ndarray, shape (n_f,)
         Follower joint rates [rad/s].
     m : float
-        Grasp sliding speed [m/s].
+        Follower grasp sliding speed [m/s].
+    m_leader : float
+        Leader grasp sliding speed [m/s] (0 when the leader grasps rigidly).
     scale : float
         Path-time rate of this step: the path advances by ``scale * dt`` (1.0 = full
-        speed). The product of the ``scale_max`` asked for, the leader's task scale and
-        the follower's.
+        speed): the ``scale_max`` asked for times the solver's task scale.
     status : Status
-        Follower solver status, or RECOVERING when a follower variable started outside
-        its range and the solver met the bounds that pull it back; the leader's status
-        when the leader's step was unusable (the follower's was then not solved).
+        Solver status, or RECOVERING when a variable started outside its range and the
+        solver met the bounds that pull it back.
     solution : StepSolution
-        The verified follower solver output (``extras["fallback"]`` when the step was
-        solved by the fallback solver after the configured one failed).
+        The verified solver output (``extras["fallback"]`` when the step was solved by
+        the fallback solver after the configured one failed).
     build : StepBuild
-        The follower step problem and what the builder noticed (None when the leader's
-        step was unusable and the follower's was not built).
-    leader : LeaderBuild
-        The leader's step problem and its tracking error.
-    leader_solution : StepSolution
-        The leader's verified step (its ``scale`` is the leader's task scale).
-    sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's joint Jacobian
-        (rows ``[v; w]`` in m/s and rad/s per rad/s).
+        The step problem and every quantity computed on the way (errors, kinematics).
     times : StepTimes
         Timing split of the step.
     applied : bool
@@ -103,49 +91,52 @@ class ControlOutput:
     ql_dot: FloatArray
     qf_dot: FloatArray
     m: float
+    m_leader: float
     scale: float
     status: Status
     solution: StepSolution
-    build: StepBuild | None
-    leader: LeaderBuild
-    leader_solution: StepSolution
-    sigma_min: tuple[float, float]
+    build: StepBuild
     times: StepTimes
     applied: bool
 
     @property
     def leader_error(self) -> FloatArray:
-        """Leader tool pose error to its target ``D(t) H1^-1`` [m, rad]."""
-        return self.leader.error
+        """Object pose error to ``D(t)`` [m, rad] (the leader's tracking error)."""
+        return self.build.leader_error
+
+    @property
+    def sigma_min(self) -> tuple[float, float]:
+        """Smallest singular value of the leader's and the follower's tool Jacobian."""
+        return self.build.sigma_min
 
     @property
     def fallback(self) -> bool:
-        """Whether the fallback solver produced this step's follower command."""
+        """Whether the fallback solver produced this step's command."""
         return "fallback" in self.solution.extras
 
 
 class DualArmController:
-    """Leader tracking plus the redundancy-resolved follower step, both within limits.
+    """One step problem for both arms and every sliding grasp, within every limit.
 
-    Each step solves two problems in turn. The leader's (:mod:`dualarm_qp.step.leader`):
-    its rates that move the object along ``D(t)``, inside the leader's joint ranges and
-    speed limits when the solver claims hard limits. Then the follower's (Eqs. 25-40)
-    for those leader rates. Both go through the same infeasible-step policy: under
-    ``"scale"`` the leader's largest feasible task scale slows the path for both arms,
-    and the follower may slow it further (the leader's rates are scaled with it, which
-    keeps them in their box, since a box of rates always holds 0 and scaling
-    shrinks the rates towards it).
+    Each step builds one problem (:mod:`dualarm_qp.step.build`) whose decision vector
+    holds both arms' joint rates and every sliding speed: the object follows ``D(t)``
+    (the leader's task) and the follower's tool stays on its grasp (the closure), each
+    variable inside its range and speed limit when the solver claims hard limits, at
+    the Eq. 37 optimum. With a six-joint leader that grasps rigidly this is the paper's
+    leader step followed by its 7-dof follower step (Eqs. 25-40). An infeasible step
+    goes through the policy once: under ``"scale"`` the largest feasible task scale
+    slows the path for both arms together.
 
     Parameters
     ----------
     task : DualArmTask
-        Arms, object, surface and desired path.
+        Arms, object, surfaces and desired path.
     solver : StepSolver
         Any solver from the registry (``dualarm_qp.solvers.get_solver``).
     options : StepOptions
         Step-problem settings (dt, weights, limits, correction gain).
     leader_gain : float, optional
-        Feedback gain [1/s] of the leader's tracking of ``D(t)``; default ``1/dt``.
+        Feedback gain [1/s] of the object's tracking of ``D(t)``; default ``1/dt``.
     policy : {"scale", "relax", "stop"}
         What to do with an infeasible step (see :func:`dualarm_qp.solvers.solve_step`).
     tolerance : Tolerance
@@ -160,10 +151,8 @@ class DualArmController:
 
     Notes
     -----
-    The leader's problem is square (six joints, six task rows): it has at most one
-    solution, which the exact ``nullspace`` solver finds. The paper's methods
-    (``reference``, ``fixed_grasp``) ignore limits by design; for them the leader's box
-    is left open.
+    The paper's methods (``reference``, ``fixed_grasp``) ignore limits by design; for
+    them the leader's box is left open too.
     """
 
     def __init__(
@@ -180,8 +169,6 @@ class DualArmController:
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
-        if leader_gain is None:
-            leader_gain = 1.0 / options.dt
         self.task = task
         self.solver = solver
         self.options = options
@@ -193,27 +180,30 @@ class DualArmController:
             self._hard_bounds = solver_info(solver.name).hard_bounds
         except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
             self._hard_bounds = True
-        self._builder = StepBuilder(task, options)
-        self._leader_builder = LeaderStepBuilder(task, options, 0.0, bounds=self._hard_bounds)
-        self.leader_gain = leader_gain  # checked by the setter
-        self._leader_solver = NullspaceSolver(tol=tolerance)
+        self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds)
+        self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
         self._x_prev: FloatArray | None = None
 
     @property
     def leader_gain(self) -> float:
-        """Feedback gain [1/s] of the leader's tracking of ``D(t)``."""
-        return self._leader_builder.gain
+        """Feedback gain [1/s] of the object's tracking of ``D(t)``."""
+        return self._builder.leader_gain
 
     @leader_gain.setter
     def leader_gain(self, value: float) -> None:
         if not (np.isfinite(value) and value >= 0):
             raise InvalidInputError("leader_gain must be a finite number >= 0 [1/s]")
-        self._leader_builder.gain = float(value)
+        self._builder.leader_gain = float(value)
 
     @property
     def hard_bounds(self) -> bool:
         """Whether the solver claims hard limits (False for the paper's methods)."""
         return self._hard_bounds
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the decision variables: ``ql1.., qf1.., m`` and ``m_l`` if it slides."""
+        return self._builder.names
 
     def reset(self) -> None:
         """Forget the warm start (call between unrelated runs)."""
@@ -225,13 +215,15 @@ class DualArmController:
         q_f = self.task.follower.check_q(state.q_f, "follower joints q_f")
         try:
             t, sigma = float(state.t), float(state.sigma)
+            sigma_l = float(state.sigma_leader)
         except (TypeError, ValueError) as err:
             raise InvalidInputError(f"state t and sigma must be numbers: {err}") from err
-        if not (math.isfinite(t) and math.isfinite(sigma)):
-            raise NonFiniteError("state t or sigma")
-        if q_l is state.q_l and q_f is state.q_f and t is state.t and sigma is state.sigma:
+        if not (math.isfinite(t) and math.isfinite(sigma) and math.isfinite(sigma_l)):
+            raise NonFiniteError("state t, sigma or sigma_leader")
+        if (q_l is state.q_l and q_f is state.q_f and t is state.t and sigma is state.sigma
+                and sigma_l is state.sigma_leader):
             return state
-        return DualArmState(t, q_l, q_f, sigma)
+        return DualArmState(t, q_l, q_f, sigma, sigma_l)
 
     def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
         """Compute one step's command from the measured ``state``.
@@ -239,7 +231,7 @@ class DualArmController:
         Parameters
         ----------
         state : DualArmState
-            Measured joints of both arms, grasp coordinate and path time.
+            Measured joints of both arms, grasp coordinates and path time.
         scale_max : float
             Largest path-time rate of this step in [0, 1]: the path's feed-forward is
             scaled by it (a rollout passes less than 1 when the path ends within the
@@ -248,7 +240,7 @@ class DualArmController:
         Never raises for an infeasible step under the "scale" and "relax" policies:
         the status says what happened. Under "stop" an infeasible step raises
         :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting bounds
-        (``ql<i>`` for the leader, with its smallest singular value).
+        (``ql<i>``, ``qf<i>``, ``m``), with both arms' smallest singular values.
 
         Raises
         ------
@@ -256,46 +248,26 @@ class DualArmController:
             A joint vector of the wrong length or with NaN, a non-finite grasp or time,
             ``scale_max`` outside [0, 1].
         """
-        t0 = time.perf_counter()
         if not 0.0 <= scale_max <= 1.0:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         state = self._checked(state)
-        leader_kin = self.task.leader.fk_jacobian(state.q_l)
-        follower_kin = self.task.follower.fk_jacobian(state.q_f)
-        sigma_min = (_smallest_singular_value(leader_kin[1]),
-                     _smallest_singular_value(follower_kin[1]))
-        t1 = time.perf_counter()
-        lead = self._leader_builder.build(state.t, state.q_l, *leader_kin, scale_max=scale_max)
-        try:
-            leader_sol = solve_step(self._leader_solver, lead.problem, policy=self.policy,
-                                    tol=self.tolerance)
-        except InfeasibleStepError as err:
-            raise InfeasibleStepError(
-                f"the leader's step is infeasible within its limits (smallest singular "
-                f"value of its Jacobian {sigma_min[0]:.3g})", conflicts=err.conflicts) from None
-        if lead.recovering.any() and (leader_sol.status is Status.OPTIMAL):
-            leader_sol = replace(leader_sol, status=Status.RECOVERING)
-        t3 = time.perf_counter()
-        n_f = self._builder.n - 1
-        if not leader_sol.status.usable:
-            self._x_prev = None
-            return self._done(ControlOutput(
-                ql_dot=np.zeros(self.task.leader.n), qf_dot=np.zeros(n_f), m=0.0, scale=0.0,
-                status=leader_sol.status, solution=leader_sol, build=None, leader=lead,
-                leader_solution=leader_sol, sigma_min=sigma_min,
-                times=StepTimes(t1 - t0, 0.0, 0.0, 0.0, t3 - t1), applied=False))
-        ql_dot = _inside(leader_sol.x, lead.problem) if self._hard_bounds else leader_sol.x
-        build = self._builder.build(state, ql_dot, leader_kin=leader_kin,
-                                    follower_kin=follower_kin, x_prev=self._x_prev)
+        build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev)
+        problem = build.problem
         t4 = time.perf_counter()
-        solution = solve_step(self.solver, build.problem, policy=self.policy,
-                              tol=self.tolerance, fallback=self.fallback)
+        try:
+            solution = solve_step(self.solver, problem, policy=self.policy,
+                                  tol=self.tolerance, fallback=self.fallback)
+        except InfeasibleStepError as err:
+            sv_l, sv_f = build.sigma_min
+            raise InfeasibleStepError(
+                f"{err} (smallest singular values of the arms' Jacobians: leader "
+                f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
         t5 = time.perf_counter()
         # Every solution is verified with our tolerances before it is applied; registered
         # solvers already did that (they verify before returning), so it is done here
         # only for a solution verified otherwise or not at all.
         if not _verified_with(solution, self.tolerance):
-            solution = verify(build.problem, solution, self.tolerance,
+            solution = verify(problem, solution, self.tolerance,
                               claims_bounds=self._hard_bounds)
         t6 = time.perf_counter()
 
@@ -306,30 +278,29 @@ class DualArmController:
         if not self._hard_bounds and status is Status.VIOLATION:
             # The paper's methods ignore the bounds by design: integrate a bound
             # violation and report it, but never a step whose equality is broken.
-            usable_x = solution.eq_residual <= equality_limit(build.problem, self.tolerance)
+            usable_x = solution.eq_residual <= equality_limit(problem, self.tolerance)
         else:
             usable_x = status.usable
         if not usable_x:
-            x = np.zeros(n_f + 1)
+            x = np.zeros(problem.n)
         elif self._hard_bounds:
-            x = _inside(solution.x, build.problem)
+            x = _inside(solution.x, problem)
         else:
             x = solution.x
         self._x_prev = x if usable_x else None
-        follower_scale = min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
-        scale = scale_max * leader_sol.scale * follower_scale
+        scale = scale_max * min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
+        b = self._builder
+        n_l, n_f = b.n_l, b.n_f
         return self._done(ControlOutput(
-            ql_dot=ql_dot if follower_scale == 1.0 else ql_dot * follower_scale,
-            qf_dot=x[:n_f].copy(),
-            m=float(x[n_f]),
+            ql_dot=x[:n_l].copy(),
+            qf_dot=x[n_l:n_l + n_f].copy(),
+            m=float(x[n_l + n_f]),
+            m_leader=float(x[n_l + n_f + 1]) if b.n_grasp == 2 else 0.0,
             scale=scale,
             status=status,
             solution=solution,
             build=build,
-            leader=lead,
-            leader_solution=leader_sol,
-            sigma_min=sigma_min,
-            times=StepTimes(t1 - t0, t4 - t3, t5 - t4, t6 - t5, t3 - t1),
+            times=StepTimes(build.kinematics_time, build.assembly_time, t5 - t4, t6 - t5),
             applied=usable_x,
         ))
 
@@ -348,18 +319,6 @@ def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:
     than to ``tolerance * dt``. It moves ``A x`` by at most ``|A|`` times that much.
     """
     return np.minimum(np.maximum(x, problem.lower), problem.upper)
-
-
-def _smallest_singular_value(J: FloatArray) -> float:
-    """Smallest singular value of the joint Jacobian ``J``.
-
-    0 when ``J`` has fewer columns than rows (fewer joints than task rows: the arm is
-    singular in the task space everywhere) or none.
-    """
-    m, n = J.shape
-    if n < m or n == 0:
-        return 0.0
-    return float(np.linalg.svd(J, compute_uv=False)[-1])
 
 
 def _verified_with(solution: StepSolution, tol: Tolerance) -> bool:

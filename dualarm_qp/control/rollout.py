@@ -220,7 +220,6 @@ class RolloutResult:
             "path_completed_pct": 100.0 * self.path_completed,
             "time_lost_to_scaling_s": round(self.time_lost, 12),
             "status_counts": dict(sorted(Counter(tr.status).items())),
-            "leader_status_counts": dict(sorted(Counter(tr.leader_status).items())),
             "fallback_steps": int(np.nansum(tr.fallback)),
             "hard_limits": self.hard_bounds,
             "realised_limits": {k: v.as_dict() for k, v in self.realised.items()},
@@ -237,6 +236,8 @@ class RolloutResult:
             "grasp_end_m": float(tr.grasp[-1]) if n else float("nan"),
             "grasp_min_m": fmin(tr.grasp),
             "grasp_max_m": fmax(tr.grasp),
+            "grasp_leader_start_m": float(tr.grasp_leader[0]) if n else float("nan"),
+            "grasp_leader_end_m": float(tr.grasp_leader[-1]) if n else float("nan"),
             "margin_qf_min_rad": fmin(tr.margin_qf),
             "margin_qf_start_rad": fmin(tr.margin_qf[:1]),
             "margin_qf_min_after_start_rad": fmin(tr.margin_qf[1:]),
@@ -247,6 +248,7 @@ class RolloutResult:
             "end_inside_all_ranges": bool(
                 n and np.nanmin(tr.margin_qf[-1]) >= -1e-9
                 and np.nanmin(tr.margin_ql[-1]) >= -1e-9 and tr.margin_grasp[-1] >= -1e-9
+                and not tr.margin_grasp_leader[-1] < -1e-9
             ),
             "bound_violation_max": fmax(tr.bound_violation),
             "eq_residual_max": fmax(tr.eq_residual),
@@ -353,6 +355,7 @@ def rollout(
     q_l = leader.check_q(initial.q_l, "initial q_l").copy()
     q_f = follower.check_q(initial.q_f, "initial q_f").copy()
     sigma = float(initial.sigma)
+    sigma_l = float(initial.sigma_leader)
     tau = path_start
     t_wall = path_start
     pre: tuple[float, float] | None = None  # closure error before correction, if any
@@ -367,7 +370,7 @@ def rollout(
     interrupted: KeyboardInterrupt | None = None
     try:
         for k in range(max_rows):
-            state = DualArmState(tau, q_l, q_f, sigma)
+            state = DualArmState(tau, q_l, q_f, sigma, sigma_l)
             at_end = tau >= path_end - end_tol
             scale_max = 0.0 if at_end else min(1.0, (path_end - tau) / dt)
             try:
@@ -397,8 +400,8 @@ def rollout(
                         "stalled", k, t_wall, tau - window[1], 0.01 * (t_wall - window[0]),
                         f"step {k} at t = {t_wall:.4f} s: path stalled: the object advanced "
                         f"{tau - window[1]:.3g} s along its path in "
-                        f"{t_wall - window[0]:.3g} s (task scale {tr.scale[k]:.3g}, leader's "
-                        f"{tr.leader_scale[k]:.3g}; smallest singular values: leader "
+                        f"{t_wall - window[0]:.3g} s (task scale {tr.scale[k]:.3g}; "
+                        f"smallest singular values: leader "
                         f"{tr.sigma_min_l[k]:.3g}, follower {tr.sigma_min_f[k]:.3g}); last "
                         f"solver message: {out.solution.message}")
                 window = (t_wall, tau)
@@ -411,17 +414,19 @@ def rollout(
             q_l = q_l + dt * out.ql_dot
             q_f = q_f + dt * out.qf_dot
             sigma = sigma + dt * out.m
+            sigma_l = sigma_l + dt * out.m_leader
             tau = tau + dt * out.scale
             t_wall = t_wall + dt
             pre, corr = None, (0.0, 0.0)
             if reresolve_orientation or project:
-                pre = task.closure_error(q_l, q_f, sigma)
+                pre = task.closure_error(q_l, q_f, sigma, sigma_l)
                 q_l0, q_f0 = q_l, q_f
                 if reresolve_orientation:
-                    q_f = _reresolve(controller, q_l, q_f, sigma)
+                    q_f = _reresolve(controller, q_l, q_f, sigma, sigma_l)
                 if project:
-                    q_l, ok_l = _project(leader, task.leader_target(tau), q_l)
-                    q_f, ok_f = _project(follower, task.follower_target(q_l, sigma), q_f)
+                    q_l, ok_l = _project(leader, task.leader_target(tau, sigma_l), q_l)
+                    q_f, ok_f = _project(follower, task.follower_target(q_l, sigma, sigma_l),
+                                         q_f)
                     projection_failures += (not ok_l) + (not ok_f)
                 corr = (float(np.abs(q_l - q_l0).max(initial=0.0)),
                         float(np.abs(q_f - q_f0).max(initial=0.0)))
@@ -512,6 +517,11 @@ def _realised(controller: DualArmController, trace: Trace, dt: float
                                np.array([surface.sigma_max]),
                                np.array([opts.grasp_speed_max]), dt, ["grasp"],
                                speed_rule=speed_rule)
+    lead = task.leader_surface
+    if lead is not None:
+        reports["grasp_leader"] = measure(
+            trace.grasp_leader[:, None], np.array([lead.sigma_min]), np.array([lead.sigma_max]),
+            np.array([opts.grasp_speed_max]), dt, ["grasp_leader"], speed_rule=speed_rule)
     return reports
 
 
@@ -541,10 +551,10 @@ def _project(arm: SerialArm, T_target: FloatArray, q: FloatArray) -> tuple[Float
 
 
 def _reresolve(controller: DualArmController, q_l: FloatArray, q_f: FloatArray,
-               sigma: float) -> FloatArray:
+               sigma: float, sigma_l: float) -> FloatArray:
     """Sec. 3.3: turn the follower's hand to the grasp frame at the new ``sigma``."""
     task = controller.task
-    T_target = task.follower_target(q_l, sigma)
+    T_target = task.follower_target(q_l, sigma, sigma_l)
     T_f, J = task.follower.fk_jacobian(q_f)
     dw = pin.log3(T_target[:3, :3] @ T_f[:3, :3].T)
     twist = np.concatenate((np.zeros(3), dw))

@@ -28,8 +28,9 @@ class Trace:
     rates are the differences of consecutive states over ``dt``; without a
     position-level correction they equal the commanded ones.
 
-    ``leader_time_s`` is the leader's step (its assembly and solve);
-    ``kinematics_time_s`` holds both arms. ``closure_*_err_pre`` is the grasp closure
+    ``kinematics_time_s`` holds both arms and the carried object. ``grasp_leader``,
+    ``m_leader`` and ``margin_grasp_leader`` are the leader's sliding grasp (NaN when the
+    leader grasps rigidly). ``closure_*_err_pre`` is the grasp closure
     error of the integrated state before any position-level correction (the paper's
     re-resolution, or the drift projection of the paper's methods) made row k's state;
     ``correction_l`` and ``correction_f`` are the largest joint change [rad] that
@@ -44,7 +45,9 @@ class Trace:
     q_l: FloatArray
     q_f: FloatArray
     grasp: FloatArray
+    grasp_leader: FloatArray
     m: FloatArray
+    m_leader: FloatArray
     ql_dot: FloatArray
     qf_dot: FloatArray
     closure_pos_err: FloatArray
@@ -62,10 +65,9 @@ class Trace:
     margin_qf: FloatArray
     margin_ql: FloatArray
     margin_grasp: FloatArray
+    margin_grasp_leader: FloatArray
     scale: FloatArray
-    leader_scale: FloatArray
     status: list[str]
-    leader_status: list[str]
     fallback: FloatArray
     objective: FloatArray
     eq_residual: FloatArray
@@ -73,7 +75,6 @@ class Trace:
     kinematics_time_s: FloatArray
     assembly_time_s: FloatArray
     solve_time_s: FloatArray
-    leader_time_s: FloatArray
     step_time_s: FloatArray
 
     @classmethod
@@ -83,7 +84,7 @@ class Trace:
                   "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f}
         values: dict[str, Any] = {}
         for f in fields(cls):
-            if f.name in ("status", "leader_status"):
+            if f.name == "status":
                 values[f.name] = [""] * rows
             elif f.name in widths:
                 values[f.name] = np.full((rows, widths[f.name]), np.nan)
@@ -106,24 +107,23 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
     tr.m[k] = out.m
     tr.ql_dot[k] = out.ql_dot
     tr.qf_dot[k] = out.qf_dot
-    le = out.leader.error
+    if controller.task.leader_surface is not None:
+        tr.m_leader[k] = out.m_leader
+    le = out.build.leader_error
     tr.leader_pos_err[k] = math.hypot(*le[:3].tolist())
     tr.leader_rot_err[k] = math.hypot(*le[3:].tolist())
-    tr.sigma_min_l[k], tr.sigma_min_f[k] = out.sigma_min
-    if out.build is not None:
-        err = out.build.closure_error
-        tr.closure_pos_err[k] = math.hypot(*err[:3].tolist())
-        tr.closure_rot_err[k] = math.hypot(*err[3:].tolist())
-        # K e as it entered the step: scaled with the follower's task when it was.
-        gain = float(controller.options.correction_gain or 0.0)
-        if out.applied:
-            gain *= out.solution.scale
-        tr.feedback_pos[k] = gain * tr.closure_pos_err[k]
-        tr.feedback_rot[k] = gain * tr.closure_rot_err[k]
+    tr.sigma_min_l[k], tr.sigma_min_f[k] = out.build.sigma_min
+    err = out.build.closure_error
+    tr.closure_pos_err[k] = math.hypot(*err[:3].tolist())
+    tr.closure_rot_err[k] = math.hypot(*err[3:].tolist())
+    # K e as it entered the step: scaled with the task when it was.
+    gain = float(controller.options.correction_gain or 0.0)
+    if out.applied:
+        gain *= out.solution.scale
+    tr.feedback_pos[k] = gain * tr.closure_pos_err[k]
+    tr.feedback_rot[k] = gain * tr.closure_rot_err[k]
     tr.scale[k] = out.scale
-    tr.leader_scale[k] = out.leader_solution.scale if out.leader_solution.status.usable else 0.0
     tr.status[k] = out.status.value
-    tr.leader_status[k] = out.leader_solution.status.value
     tr.fallback[k] = float(out.fallback)
     sol = out.solution
     tr.objective[k] = sol.objective
@@ -132,7 +132,6 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
     tr.kinematics_time_s[k] = out.times.kinematics
     tr.assembly_time_s[k] = out.times.assembly
     tr.solve_time_s[k] = out.times.solve
-    tr.leader_time_s[k] = out.times.leader
     tr.step_time_s[k] = out.times.total
 
 
@@ -145,11 +144,13 @@ def record_state(tr: Trace, k: int, t: float, state: DualArmState,
     """
     _record_state(tr, k, t, state, controller.task)
     tr.m[k] = 0.0
+    if controller.task.leader_surface is not None:
+        tr.m_leader[k] = 0.0
     tr.ql_dot[k] = 0.0
     tr.qf_dot[k] = 0.0
-    tr.scale[k] = tr.leader_scale[k] = 0.0
+    tr.scale[k] = 0.0
     tr.fallback[k] = 0.0
-    tr.status[k] = tr.leader_status[k] = "error"
+    tr.status[k] = "error"
     tr.correction_l[k] = tr.correction_f[k] = 0.0
 
 
@@ -165,6 +166,9 @@ def _record_state(tr: Trace, k: int, t: float, state: DualArmState, task: DualAr
     tr.margin_qf[k] = np.minimum(state.q_f - follower.q_min, follower.q_max - state.q_f)
     tr.margin_ql[k] = np.minimum(state.q_l - leader.q_min, leader.q_max - state.q_l)
     tr.margin_grasp[k] = grasp_margin(task.surface, state.sigma)
+    if task.leader_surface is not None:
+        tr.grasp_leader[k] = state.sigma_leader
+        tr.margin_grasp_leader[k] = grasp_margin(task.leader_surface, state.sigma_leader)
 
 
 def grasp_margin(surface: GraspSurface, sigma: float) -> float:

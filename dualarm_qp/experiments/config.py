@@ -298,11 +298,31 @@ class SurfaceSpec(_Model):
 
 
 class ObjectSpec(_Model):
-    """The carried object."""
+    """The carried object.
 
-    H1: PoseSpec = Field(default_factory=PoseSpec)
+    ``surface`` and ``grasp_initial`` are the follower's sliding path and its start.
+    ``leader_surface`` and ``leader_grasp_initial`` (both or neither) let the leader's
+    grasp slide too, on its own path in object coordinates; the object is then placed
+    by that path (``H1`` must be left out).
+    """
+
+    H1: PoseSpec | None = None
     surface: SurfaceSpec = Field(default_factory=SurfaceSpec)
     grasp_initial: Num
+    leader_surface: SurfaceSpec | None = None
+    leader_grasp_initial: Num | None = None
+
+    @model_validator(mode="after")
+    def _leader_grasp(self) -> ObjectSpec:
+        if (self.leader_surface is None) != (self.leader_grasp_initial is None):
+            missing = "leader_grasp_initial" if self.leader_grasp_initial is None \
+                else "leader_surface"
+            raise _keyed(missing, "a sliding leader grasp needs both 'leader_surface' and "
+                         "'leader_grasp_initial'")
+        if self.leader_surface is not None and self.H1 is not None:
+            raise _keyed("H1", "with a sliding leader grasp the object is placed by "
+                         "'leader_surface': leave 'H1' out")
+        return self
 
 
 class Waypoint(_Model):
@@ -348,7 +368,8 @@ class TrajectorySpec(_Model):
 class WeightsSpec(_Model):
     """Diagonal of S (Eq. 37).
 
-    ``joints`` weighs follower joint rates in (rad/s)^-2 whatever the file's angle unit;
+    ``joints`` weighs follower joint rates in (rad/s)^-2 whatever the file's angle unit,
+    ``leader_joints`` the leader's (they matter when it has more than six joints);
     ``grasp`` (the paper's s7) weighs the sliding speed in (grasp_unit / s)^-2, where
     ``grasp_unit`` defaults to the file's length unit: ``grasp: 100`` with
     ``grasp_unit: mm`` is 1e8 in SI, with ``grasp_unit: m`` it is 100.
@@ -356,10 +377,12 @@ class WeightsSpec(_Model):
 
     joints: Annotated[list[Num], BeforeValidator(_scalar_to_list),
                       Field(min_length=1)] = Field(default_factory=lambda: [1.0])
+    leader_joints: Annotated[list[Num], BeforeValidator(_scalar_to_list),
+                             Field(min_length=1)] = Field(default_factory=lambda: [1.0])
     grasp: Num = 1.0
     grasp_unit: Literal["m", "mm"] | None = None
 
-    @field_validator("joints", "grasp")
+    @field_validator("joints", "leader_joints", "grasp")
     @classmethod
     def _positive(cls, v: Any) -> Any:
         if not all(w > 0 for w in (v if isinstance(v, list) else [v])):
@@ -818,6 +841,20 @@ def load_config(path: str | Path) -> ExperimentConfig:
     ConfigError
         Missing file, unreadable YAML, or an invalid document (see :func:`parse_config`).
     """
+    return parse_config(read_yaml_document(path), str(Path(path)))
+
+
+def read_yaml_document(path: str | Path) -> Any:
+    """Read a YAML file as an experiment file is read, without checking its keys.
+
+    The same size limit, encoding, YAML 1.2 scalars, duplicate-key and depth checks as
+    :func:`load_config`; the document comes back as plain data (mappings, lists, scalars).
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, or text that is not valid YAML.
+    """
     p = Path(path)
     try:
         size = p.stat().st_size
@@ -842,4 +879,4 @@ def load_config(path: str | Path) -> ExperimentConfig:
                           path=str(p)) from None
     except RecursionError:
         raise ConfigError(f"nested more than {MAX_DEPTH} levels deep", path=str(p)) from None
-    return parse_config(data, str(p))
+    return data

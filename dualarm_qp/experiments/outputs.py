@@ -147,8 +147,6 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     cols["solve_time_s"] = trace.solve_time_s
     cols["step_time_s"] = trace.step_time_s
     # Added with the realised-motion checks (appended: earlier columns keep their place).
-    cols["leader_scale"] = trace.leader_scale
-    cols["leader_status"] = trace.leader_status
     cols["fallback"] = trace.fallback
     cols["sigma_min_l"] = trace.sigma_min_l
     cols["sigma_min_f"] = trace.sigma_min_f
@@ -158,7 +156,10 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     cols["correction_f"] = trace.correction_f
     cols["feedback_pos"] = trace.feedback_pos
     cols["feedback_rot"] = trace.feedback_rot
-    cols["leader_time_s"] = trace.leader_time_s
+    if len(trace) and not np.isnan(trace.grasp_leader).all():  # the leader's grasp slides
+        cols["grasp_leader"] = trace.grasp_leader
+        cols["m_leader"] = trace.m_leader
+        cols["margin_grasp_leader"] = trace.margin_grasp_leader
     return cols
 
 

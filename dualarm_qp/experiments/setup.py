@@ -43,6 +43,7 @@ from .config import (
     ExperimentConfig,
     InitialSpec,
     PoseSpec,
+    SurfaceSpec,
 )
 from .options import SolverFlagError, SolverOptions, flag_error, options_for
 
@@ -269,15 +270,14 @@ def _model_key(spec: ArmSpec, role: str) -> str:
     return f"{role}.{key}.rows" if key == "dh" else f"{role}.{key}"
 
 
-def _surface(cfg: ExperimentConfig, sc: Scales) -> GraspSurface:
-    s = cfg.object.surface
+def _surface(s: SurfaceSpec, sc: Scales, key: str) -> GraspSurface:
     if s.type == "plane_bar":
         r_min = np.zeros(3) if s.r_min is None else np.asarray(s.r_min, dtype=float) * sc.length
         r_max = (np.array([0.0, 0.0, 0.4]) if s.r_max is None
                  else np.asarray(s.r_max, dtype=float) * sc.length)
         return PlaneBar(r_min=r_min, r_max=r_max)
-    radius = _required(s.radius, "object.surface.radius") * sc.length
-    lo, hi = (v * sc.length for v in _required(s.grasp_range, "object.surface.grasp_range"))
+    radius = _required(s.radius, f"{key}.radius") * sc.length
+    lo, hi = (v * sc.length for v in _required(s.grasp_range, f"{key}.grasp_range"))
     if s.type == "cylinder":
         azimuth = 0.0 if s.azimuth is None else s.azimuth * sc.angle
         return CylinderSurface(radius, azimuth=azimuth, sigma_min=lo, sigma_max=hi)
@@ -398,14 +398,22 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
                           f"{MIN_DT_S:g} s", path=path, key="controller.dt")
     notes: dict[str, Any] = {}
     with _at("object.surface", path):
-        surface = _surface(cfg, sc)
+        surface = _surface(cfg.object.surface, sc, "object.surface")
     with _at("trajectory", path):
         trajectory = _trajectory(cfg, sc, duration)
     with _at("object.H1", path):
-        H1 = _pose(cfg.object.H1, sc)
+        H1 = np.eye(4) if cfg.object.H1 is None else _pose(cfg.object.H1, sc)
     sigma0 = cfg.object.grasp_initial * sc.length
     with _at("object.grasp_initial", path):
         surface.pose(sigma0)
+    leader_surface: GraspSurface | None = None
+    sigma_l0 = 0.0
+    if cfg.object.leader_surface is not None and cfg.object.leader_grasp_initial is not None:
+        with _at("object.leader_surface", path):
+            leader_surface = _surface(cfg.object.leader_surface, sc, "object.leader_surface")
+        sigma_l0 = cfg.object.leader_grasp_initial * sc.length
+        with _at("object.leader_grasp_initial", path):
+            leader_surface.pose(sigma_l0)
 
     def tolerance(value: list[float] | None) -> tuple[float, float]:
         return (1e-3, 1e-2) if value is None else (value[0] * sc.length, value[1] * sc.angle)
@@ -453,19 +461,27 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
             base_f = _pose(f_spec.base, sc)
     with _at("follower", path):
         follower = follower.with_base(base_f)
-        task = DualArmTask(leader, follower, H1, surface, trajectory)
-    q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking)
+        task = DualArmTask(leader, follower, H1, surface, trajectory,
+                           leader_surface=leader_surface)
+    q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking, sigma_l0)
     if q_f0 is None:
-        q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure)
+        q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,
+                                 sigma_l0)
 
     weights = np.asarray(c.weights.joints, dtype=float)
     if weights.size not in (1, follower.n):
         raise ConfigError(f"needs one weight or {follower.n} (one per follower joint), got "
                           f"{weights.size}", path=path, key="controller.weights.joints")
+    leader_weights = np.asarray(c.weights.leader_joints, dtype=float)
+    if leader_weights.size not in (1, leader.n):
+        raise ConfigError(f"needs one weight or {leader.n} (one per leader joint), got "
+                          f"{leader_weights.size}", path=path,
+                          key="controller.weights.leader_joints")
     with _at("controller", path):
         options = StepOptions(
             dt=dt,
             joint_weights=np.broadcast_to(weights, (follower.n,)).copy(),
+            leader_joint_weights=np.broadcast_to(leader_weights, (leader.n,)).copy(),
             grasp_weight=c.weights.grasp / LENGTH_SCALE[c.weights.grasp_unit
                                                         or cfg.units.length]**2,
             velocity_limits=c.velocity_limits,
@@ -497,7 +513,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
         name=cfg.name,
         path=path,
         task=task,
-        initial=DualArmState(trajectory.t0, q_l0, q_f0, sigma0),
+        initial=DualArmState(trajectory.t0, q_l0, q_f0, sigma0, sigma_l0),
         options=options,
         solver_name=solver_name,
         solver_options=solver_options,
@@ -577,11 +593,12 @@ def _solve_initial(spec: InitialSpec, arm: SerialArm, preset: str | None, T: Flo
 
 
 def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
-                    notes: dict[str, Any], tracking: tuple[float, float]) -> FloatArray:
+                    notes: dict[str, Any], tracking: tuple[float, float],
+                    sigma_l0: float) -> FloatArray:
     spec = cfg.leader.initial
     leader = task.leader
     with _at("trajectory", path):
-        T = task.leader_target(task.trajectory.t0)
+        T = task.leader_target(task.trajectory.t0, sigma_l0)
     if spec.joints is None:
         return _solve_initial(spec, leader, cfg.leader.preset, T, sc, "leader",
                               "D(t0) H1^-1", path, notes)
@@ -599,12 +616,12 @@ def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: 
 
 def _follower_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
                       notes: dict[str, Any], q_l0: FloatArray, sigma0: float,
-                      closure: tuple[float, float]) -> FloatArray:
+                      closure: tuple[float, float], sigma_l0: float) -> FloatArray:
     """Return the follower's joints with an explicit base: given (and checked) or solved."""
     spec = cfg.follower.initial
     follower = task.follower
     with _at("object.grasp_initial", path):
-        T = task.follower_target(q_l0, sigma0)
+        T = task.follower_target(q_l0, sigma0, sigma_l0)
     if spec.joints is None:
         return _solve_initial(spec, follower, cfg.follower.preset, T, sc, "follower",
                               "the grasp D(t0) H2(grasp_initial)", path, notes)

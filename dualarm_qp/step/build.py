@@ -1,19 +1,32 @@
-"""Pure functions that build one :class:`~dualarm_qp.step.StepProblem` (Eqs. 25-40).
+"""Build the one step problem of both arms and every sliding grasp (Eqs. 14, 25-40).
 
-Derivation (world frame, see docs/derivation.md). With ``d = p_f - p_l`` the vector
-from the leader's tool origin to the grasp point, and ``R_o = R_l R_H1`` the object
-orientation, the closure (Eq. 15) differentiates to
+The decision vector holds the leader's joint rates, the follower's joint rates and
+the sliding speed of every sliding grasp, in this order:
 
-    v_f = v_l + w_l x d + R_o s*(sigma) m                (position, Eq. 23)
-    w_f = w_l (+ R_o kappa(sigma) m on a curved path)    (orientation, Eq. 22)
+    x = [ql_dot (n_l), qf_dot (n_f), m (follower grasp), m_l (leader grasp, if it slides)]
 
-so ``J_f [qf_dot; m] = J_l ql_dot`` with
+with two blocks of six equality rows (world frame, ``[v; w]``), both read from the
+carried-object model (:class:`~dualarm_qp.task.carry.CarryModel`, where every sliding
+grasp is a joint):
 
-    J_f = [[Jp_f, -R_o s*], [Ja_f, -R_o kappa]]            (Eq. 26)
-    J_l = [[Jp_l - [d]x Ja_l], [Ja_l]]                     (Eq. 27: L1 + L2 = -[d]x Ja_l)
+    J_o [ql_dot; m_l] = s V_o(t) + K_l e_l                       (Eq. 14 differentiated)
+    J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c                    (Eqs. 25-27)
 
-The paper freezes the orientation (kappa = 0 in Eq. 26) and re-resolves it after the
-step (Sec. 3.3); ``exact_orientation=True`` keeps the curvature term instead.
+``J_o`` is the Jacobian of the object frame (the leader's task: the object follows
+``D(t)``, with path twist ``V_o`` and the feedback of its pose error ``e_l``); ``J_t`` is
+the Jacobian of the follower's target frame ``T_l H1 H2(sigma)`` and ``J_f`` the
+follower's tool Jacobian; ``e_c`` is the grasp closure error. With a rigid leader grasp
+and a six-joint leader the first block fixes ``ql_dot`` and the second is the paper's
+6x7 follower problem ``[J_f, -R_o s*] [qf_dot; m] = J_l' ql_dot + K e`` (Eqs. 25-27):
+the columns of ``J_t`` over ``ql`` are ``[[Jp_l - [d]x Ja_l], [Ja_l]]`` (Eq. 27) and its
+sliding column is ``[R_o s*; R_o kappa]`` (Eq. 26). The paper freezes the orientation
+(kappa = 0 in Eq. 26) and re-resolves it after the step (Sec. 3.3);
+``exact_orientation=True`` keeps the curvature term of the follower's grasp instead.
+
+Every variable has a box from its range and its speed limit (Eqs. 30-36) and a centre
+(Eqs. 38-40), weighted per variable (Eq. 37). ``s`` is the task scale of the
+infeasible-step policy (:func:`~dualarm_qp.solvers.solve_step`), which multiplies the
+whole right-hand side.
 """
 
 from __future__ import annotations
@@ -21,14 +34,15 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._validate import as_array
-from ..errors import InvalidInputError, NonFiniteError, ShapeError
-from ..se3 import compose_rows, pose_error_rows
+from ..errors import InvalidInputError, NonFiniteError
+from ..se3 import pose_error
+from ..task.carry import CarryKinematics, CarryModel
 from ..task.scene import DualArmTask
 from .problem import StepProblem
 
@@ -46,13 +60,17 @@ class DualArmState:
     q_l, q_f : ndarray, shape (n_l,), (n_f,)
         Leader and follower joints [rad].
     sigma : float
-        Follower grasp coordinate along the sliding path [m].
+        Follower grasp coordinate along its sliding path [m].
+    sigma_leader : float
+        Leader grasp coordinate along its sliding path [m]; ignored (0) when the leader
+        grasps rigidly.
     """
 
     t: float
     q_l: FloatArray
     q_f: FloatArray
     sigma: float
+    sigma_leader: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -63,32 +81,32 @@ class StepOptions:
     ----------
     dt : float
         Sampling interval ``Delta T`` [s] (Eqs. 30-36).
-    joint_weights : ndarray, shape (n_f,)
+    joint_weights : ndarray, shape (n_f,) or (1,)
         Diagonal of S for the follower joints (Eq. 37) [1/(rad/s)^2].
     grasp_weight : float
-        ``s7``, the weight of the sliding speed in SI units [1/(m/s)^2].
+        ``s7``, the weight of every sliding speed in SI units [1/(m/s)^2].
     velocity_limits : bool
         Intersect the position boxes with the joint speed limits and the grasp speed
         limit (the paper's closing remark). Default True.
     grasp_speed_max : float
-        Limit on ``|m|`` [m/s]; ``inf`` for none.
+        Limit on every ``|m|`` [m/s]; ``inf`` for none.
     correction_gain : float, optional
-        Gain ``K`` [1/s] of the closure-error feedback added to the right-hand side,
-        ``b = J_l ql_dot + K e``; 0 disables it. Default ``1/dt``, which removes the
-        whole error in one step (to first order).
+        Gain ``K`` [1/s] of the closure-error feedback, ``b = ... + K e``; 0 disables it.
+        Default ``1/dt``, which removes the whole error in one step (to first order).
     centre_horizon : float, optional
         Time [s] in which the range centres of Eqs. 39-40 ask each variable to reach the
         middle of its range: the centre rate is ``(middle - x) / centre_horizon``.
-        Default ``dt``, the paper's choice; the centring pull per step then does not
-        shrink with ``dt``. A longer horizon makes the centring gentler.
+        Default ``dt``, the paper's choice. A longer horizon makes the centring gentler.
     recovery_fraction : float
         A variable that starts outside its range may never move further out; its
         centre (Eq. 39/40) pulls it back. With ``recovery_fraction > 0`` it must also
-        move back at least at this fraction of its speed limit (or all the way in one
-        step when unlimited). Default 0: a forced return rate can make a step
-        infeasible (the box then excludes every motion the equality allows).
+        move back at least at this fraction of its speed limit. Default 0: a forced
+        return rate can make a step infeasible.
     exact_orientation : bool
-        Keep the curvature term of the grasp frame in J_f (see module docstring).
+        Keep the curvature term of the follower's grasp frame (see module docstring).
+    leader_joint_weights : ndarray, shape (n_l,) or (1,), optional
+        Diagonal of S for the leader joints [1/(rad/s)^2]; default 1. It matters only
+        when the leader has more joints than the six rows of its task.
     """
 
     dt: float
@@ -100,14 +118,20 @@ class StepOptions:
     recovery_fraction: float = 0.0
     exact_orientation: bool = False
     centre_horizon: float | None = None
+    leader_joint_weights: FloatArray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
             raise InvalidInputError(f"dt must be a positive number of seconds, got {self.dt}")
         w = as_array(np.atleast_1d(self.joint_weights), "joint_weights", (-1,))
-        if (w <= 0).any() or not (np.isfinite(self.grasp_weight) and self.grasp_weight > 0):
+        lw = as_array(np.atleast_1d(1.0 if self.leader_joint_weights is None
+                                    else self.leader_joint_weights),
+                      "leader_joint_weights", (-1,))
+        if ((w <= 0).any() or (lw <= 0).any()
+                or not (np.isfinite(self.grasp_weight) and self.grasp_weight > 0)):
             raise InvalidInputError("weights must be finite and strictly positive")
         object.__setattr__(self, "joint_weights", w)
+        object.__setattr__(self, "leader_joint_weights", lw)
         if not self.grasp_speed_max > 0:
             raise InvalidInputError("grasp_speed_max must be positive")
         if self.correction_gain is None:
@@ -124,24 +148,38 @@ class StepOptions:
 
 @dataclass(frozen=True)
 class StepBuild:
-    """A built step: the problem and what the builder noticed on the way.
+    """A built step: the problem and every quantity computed on the way.
 
     Attributes
     ----------
     problem : StepProblem
-        The problem handed to the solver.
+        The problem handed to the solver (rows: leader task, then closure).
     recovering : ndarray of bool, shape (n,)
         Variables that start outside their range (the box forces them back).
     closure_error : ndarray, shape (6,)
         ``[dp; dw]`` from the follower's tool to its target [m, rad].
-    leader_rhs : ndarray, shape (6,)
-        ``J_l ql_dot`` alone (without correction).
+    leader_error : ndarray, shape (6,)
+        ``[dp; dw]`` from the object frame to ``D(t)`` [m, rad].
+    carry : CarryKinematics
+        Leader, object and target poses and Jacobians at this state.
+    T_f, J_f : ndarray
+        Follower tool pose (4, 4) and Jacobian (6, n_f).
+    sigma_min : tuple of float
+        Smallest singular value of the leader's and the follower's tool Jacobian.
+    kinematics_time, assembly_time : float
+        Seconds spent in the kinematics and in assembling the problem.
     """
 
     problem: StepProblem
     recovering: NDArray[np.bool_]
     closure_error: FloatArray
-    leader_rhs: FloatArray = field(repr=False)
+    leader_error: FloatArray
+    carry: CarryKinematics
+    T_f: FloatArray
+    J_f: FloatArray
+    sigma_min: tuple[float, float]
+    kinematics_time: float
+    assembly_time: float
 
 
 def rate_bounds(
@@ -170,45 +208,31 @@ def rate_bounds(
     lower, upper : ndarray
         Hard bounds on the rate.
     center : ndarray
-        Centre of the position-derived range (Eq. 39); 0 where the range is unbounded.
+        Centre of the position-derived rate range (Eq. 39); 0 where the range is
+        unbounded.
     recovering : ndarray of bool
         Positions outside their box.
     """
-    lo = np.asarray((np.asarray(x_min) - x) / dt, dtype=np.float64)
-    hi = np.asarray((np.asarray(x_max) - x) / dt, dtype=np.float64)
-    v = np.broadcast_to(np.asarray(v_max, dtype=np.float64), lo.shape)
-    lower, upper, center, recovering = _clip_rates(
-        lo.ravel().tolist(), hi.ravel().tolist(), v.ravel().tolist(), recovery_fraction
-    )
-    shape = lo.shape
-    return (np.array(lower).reshape(shape), np.array(upper).reshape(shape),
-            np.array(center).reshape(shape), np.array(recovering, dtype=bool).reshape(shape))
+    with np.errstate(invalid="ignore"):
+        lo = (np.asarray(x_min, dtype=np.float64) - x) / dt
+        hi = (np.asarray(x_max, dtype=np.float64) - x) / dt
+    return clip_rates(lo, hi, np.broadcast_to(np.asarray(v_max, dtype=np.float64), lo.shape),
+                      recovery_fraction)
 
 
-def _clip_rates(
-    lo: list[float], hi: list[float], v_max: list[float], recovery_fraction: float
-) -> tuple[list[float], list[float], list[float], list[bool]]:
-    """:func:`rate_bounds` from the position-derived rate range ``[lo, hi]``.
-
-    Python floats: for a handful of variables numpy's per-call cost exceeds the work.
-    """
-    lower, upper, center, recovering = [], [], [], []
-    inf = math.inf
-    for lo_i, hi_i, v_i in zip(lo, hi, v_max, strict=True):
-        center.append(0.5 * (lo_i + hi_i) if -inf < lo_i < inf and -inf < hi_i < inf else 0.0)
-        # Below the box: may not move further down; with a recovery fraction it must
-        # move up at least at that share of its speed limit. Above the box: mirrored.
-        rec = recovery_fraction * v_i if recovery_fraction > 0.0 else 0.0
-        if lo_i > 0.0:
-            lower.append(min(lo_i, rec))
-        else:
-            lower.append(max(lo_i, -v_i))
-        if hi_i < 0.0:
-            upper.append(max(hi_i, -rec))
-        else:
-            upper.append(min(hi_i, v_i))
-        recovering.append(lo_i > 0.0 or hi_i < 0.0)
-    return lower, upper, center, recovering
+def clip_rates(lo: FloatArray, hi: FloatArray, v_max: FloatArray, recovery_fraction: float
+               ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+    """:func:`rate_bounds` from the position-derived rate range ``[lo, hi]``."""
+    bounded = np.isfinite(lo) & np.isfinite(hi)
+    center = np.where(bounded, 0.5 * (np.where(bounded, lo, 0.0) + np.where(bounded, hi, 0.0)),
+                      0.0)
+    # Below the box: may not move further down; with a recovery fraction it must
+    # move up at least at that share of its speed limit. Above the box: mirrored.
+    rec = recovery_fraction * v_max if recovery_fraction > 0.0 else np.zeros_like(v_max)
+    below, above = lo > 0.0, hi < 0.0
+    lower = np.where(below, np.minimum(lo, rec), np.maximum(lo, -v_max))
+    upper = np.where(above, np.maximum(hi, -rec), np.minimum(hi, v_max))
+    return lower, upper, center, below | above
 
 
 def grasp_rate_range(
@@ -235,186 +259,146 @@ def grasp_rate_range(
     return rho_min, rho_max
 
 
-class StepBuilder:
-    """Builds the step problems of one task under fixed options (Eqs. 25-40).
+def smallest_singular_value(J: FloatArray) -> float:
+    """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
+    m, n = J.shape
+    if n < m or n == 0:
+        return 0.0
+    return float(np.linalg.svd(J, compute_uv=False)[-1])
 
-    What does not change from step to step (variable names, the weights, the
-    follower's limits, the surface's box) is prepared once here; :meth:`build` then
-    does only the per-step work, in Python floats where numpy's per-call cost would
-    dominate. The builder reads ``task`` and ``options`` when it is created: make a
-    new one if either changes. :func:`build_step` is the one-off form.
+
+class StepBuilder:
+    """Builds the step problems of one task under fixed options.
+
+    What does not change from step to step (variable names, weights, limits, the
+    carried-object model) is prepared once here; :meth:`build` does the per-step work:
+    both arms' kinematics (once), the problem, the errors the trace records.
 
     Parameters
     ----------
     task : DualArmTask
-        Arms, object, surface and path.
+        Arms, object, surfaces and path.
     options : StepOptions
         Weights, limits and gains.
+    leader_gain : float, optional
+        Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``; default ``1/dt``.
+    leader_bounds : bool
+        Impose the leader's joint ranges and speed limits (hard-limit solvers); False
+        leaves its box open (the paper's methods, which ignore limits by design).
 
     Raises
     ------
     InvalidInputError
-        ``options.joint_weights`` has neither 1 nor ``task.follower.n`` entries.
+        A weight vector of the wrong length.
     """
 
-    def __init__(self, task: DualArmTask, options: StepOptions) -> None:
-        follower, surface = task.follower, task.surface
-        n_f = follower.n
-        if options.joint_weights.shape[0] not in (1, n_f):
-            raise InvalidInputError(
-                f"joint_weights has {options.joint_weights.shape[0]} entries, follower has {n_f}"
-            )
+    def __init__(self, task: DualArmTask, options: StepOptions, *,
+                 leader_gain: float | None = None, leader_bounds: bool = True) -> None:
+        leader, follower, surface = task.leader, task.follower, task.surface
+        n_l, n_f = leader.n, follower.n
+        for w, n, who in ((options.joint_weights, n_f, "joint_weights (follower)"),
+                          (options.leader_joint_weights, n_l, "leader_joint_weights")):
+            if w is not None and w.shape[0] not in (1, n):
+                raise InvalidInputError(f"{who} has {w.shape[0]} entries, the arm has {n}")
         self.task = task
         self.options = options
-        self.n = n_f + 1
-        self.names: tuple[str, ...] = (*(f"qf{i + 1}" for i in range(n_f)), "m")
-        weights = np.empty(n_f + 1)
-        weights[:n_f] = options.joint_weights
-        weights[n_f] = options.grasp_weight
+        self.carry = CarryModel(leader, surface, task.H1, task.leader_surface)
+        k = self.carry.n_grasp
+        self.n_l, self.n_f, self.n_grasp = n_l, n_f, k
+        self.n = n_l + n_f + k
+        self.names: tuple[str, ...] = (*(f"ql{i + 1}" for i in range(n_l)),
+                                       *(f"qf{i + 1}" for i in range(n_f)),
+                                       "m", *(("m_l",) if k == 2 else ()))
+        weights = np.empty(self.n)
+        weights[:n_l] = options.leader_joint_weights if options.leader_joint_weights is not None \
+            else 1.0
+        weights[n_l:n_l + n_f] = options.joint_weights
+        weights[n_l + n_f:] = options.grasp_weight
         weights.flags.writeable = False  # shared by every problem this builder makes
         self.weights = weights
-        # The object frame is often the leader's tool frame: skip composing with I.
-        self._H1 = None if np.array_equal(task.H1, np.eye(4)) else task.H1.tolist()
-        self._q_min = follower.q_min.tolist()
-        self._q_max = follower.q_max.tolist()
-        v_max = follower.qd_max.tolist() if options.velocity_limits else [math.inf] * n_f
-        m_max = options.grasp_speed_max if options.velocity_limits else math.inf
-        self._v_max = [*v_max, m_max]
-        self._r_min = surface.r_min.tolist()
-        self._r_max = surface.r_max.tolist()
+        inf = math.inf
+        limits = options.velocity_limits
+        m_max = options.grasp_speed_max if limits else inf
+        self._x_min = np.r_[leader.q_min if leader_bounds else np.full(n_l, -inf),
+                            follower.q_min]
+        self._x_max = np.r_[leader.q_max if leader_bounds else np.full(n_l, inf),
+                            follower.q_max]
+        self._v_max = np.r_[leader.qd_max if leader_bounds and limits else np.full(n_l, inf),
+                            follower.qd_max if limits else np.full(n_f, inf),
+                            np.full(k, m_max)]
+        self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
+        self._surfaces = [surface] + ([] if task.leader_surface is None
+                                      else [task.leader_surface])
 
-    def build(
-        self,
-        state: DualArmState,
-        ql_dot: FloatArray,
-        *,
-        leader_kin: tuple[FloatArray, FloatArray],
-        follower_kin: tuple[FloatArray, FloatArray],
-        x_prev: FloatArray | None = None,
-    ) -> StepBuild:
-        """Build the step problem for the current state; see :func:`build_step`."""
-        t_start = time.perf_counter()
-        task, options = self.task, self.options
-        surface = task.surface
-        n_f = self.n - 1
-        T_l, J_l = leader_kin
-        T_f, J_fq = follower_kin
-        sigma = state.sigma
-        dt = options.dt
+    def build(self, state: DualArmState, *, scale_max: float = 1.0,
+              x_prev: FloatArray | None = None) -> StepBuild:
+        """Build the step problem for ``state``.
 
-        # Follower target T_l H1 H2(sigma) (Eq. 15), as rows of Python floats.
-        # H2 = surface.pose(sigma), from its parts: cheaper than the 4x4 array.
-        R2 = surface.frame(sigma).tolist()
-        r2 = surface.point(sigma).tolist()
-        H2 = [[*R2[0], r2[0]], [*R2[1], r2[1]], [*R2[2], r2[2]]]
-        l_rows = T_l.tolist()
-        object_rows = l_rows if self._H1 is None else compose_rows(l_rows, self._H1)
-        target = compose_rows(object_rows, H2)
-        # R_o s* is the target's x axis (R_o = R_l R_H1, s* = R_H2 e_x).
-        column = [-target[0][0], -target[1][0], -target[2][0]]
-        if options.exact_orientation:
-            R_o = T_l[:3, :3] @ task.H1[:3, :3]
-            column += (-(R_o @ surface.angular_rate(sigma))).tolist()
-        else:
-            column += (0.0, 0.0, 0.0)
-        if not math.isfinite(sum(column)):
-            raise NonFiniteError("A")
-        # Eq. 27: leader side, J_l ql_dot with L1 + L2 = -[d]x Ja_l, d = p_target - p_l.
-        v0, v1, v2, w0, w1, w2 = (J_l @ ql_dot).tolist()
-        d0 = target[0][3] - l_rows[0][3]
-        d1 = target[1][3] - l_rows[1][3]
-        d2 = target[2][3] - l_rows[2][3]
-        rhs = [v0 + (w1 * d2 - w2 * d1), v1 + (w2 * d0 - w0 * d2), v2 + (w0 * d1 - w1 * d0),
-               w0, w1, w2]
-        err = pose_error_rows(target, T_f.tolist())
-        gain = float(options.correction_gain or 0.0)
-        b = [r + gain * e for r, e in zip(rhs, err, strict=True)] if gain > 0 else rhs
-        if not math.isfinite(sum(b)):
-            raise NonFiniteError("b")
+        Parameters
+        ----------
+        state : DualArmState
+            Joints [rad], grasp coordinates [m] and path time [s] (checked by the caller).
+        scale_max : float
+            Share in [0, 1] of the path's feed-forward twist (1: full speed).
+        x_prev : ndarray, optional
+            Previous step's solution (warm start).
 
-        # Eqs. 34-36 for the joints; Eqs. 30-33 for the grasp, also kept inside the
-        # path's own range; Eqs. 39-40 for the centre.
-        q = state.q_f.tolist()
-        lo = [(lo_i - q_i) / dt for lo_i, q_i in zip(self._q_min, q, strict=True)]
-        hi = [(hi_i - q_i) / dt for hi_i, q_i in zip(self._q_max, q, strict=True)]
-        s_star = (R2[0][0], R2[1][0], R2[2][0])
-        rho_min, rho_max = grasp_rate_range(r2, s_star, self._r_min, self._r_max, dt)
-        lo.append(max(rho_min, (surface.sigma_min - sigma) / dt))
-        hi.append(min(rho_max, (surface.sigma_max - sigma) / dt))
-        lower, upper, center, recovering = _clip_rates(
-            lo, hi, self._v_max, options.recovery_fraction
-        )
-        horizon = options.centre_horizon or dt
+        Raises
+        ------
+        NonFiniteError
+            The problem would hold NaN or infinity.
+        """
+        t0 = time.perf_counter()
+        task, opts = self.task, self.options
+        n_l, n_f, n = self.n_l, self.n_f, self.n
+        sigma, sigma_l = state.sigma, state.sigma_leader
+        kin = self.carry.update(state.q_l, sigma, sigma_l)
+        T_f, J_f = task.follower.fk_jacobian(state.q_f)
+        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
+        t1 = time.perf_counter()
+
+        dt = opts.dt
+        traj = task.trajectory
+        e_l = pose_error(traj.pose(state.t), kin.T_object)
+        e_c = pose_error(kin.T_target, T_f)
+        A = np.zeros((12, n))
+        b = np.empty(12)
+        grasps = slice(n_l + n_f, n)
+        # Leader task: the object frame follows D(t).
+        A[:6, :n_l] = kin.J_object[:, :n_l]
+        A[:6, grasps] = kin.J_object[:, n_l:]
+        b[:6] = scale_max * traj.twist(state.t) + self.leader_gain * e_l
+        # Closure: the follower's tool moves with its target.
+        A[6:, :n_l] = -kin.J_target[:, :n_l]
+        A[6:, n_l:n_l + n_f] = J_f
+        A[6:, grasps] = -kin.J_target[:, n_l:]
+        if not opts.exact_orientation:
+            A[9:, n_l + n_f] = 0.0  # the paper's frozen orientation of the follower's grasp
+        b[6:] = float(opts.correction_gain or 0.0) * e_c
+        if not (np.isfinite(A).all() and np.isfinite(b).all()):
+            raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
+
+        # Eqs. 34-36 for the joints; Eqs. 30-33 for the grasps, also kept inside their
+        # paths' own ranges; Eqs. 39-40 for the centres.
+        lo = np.empty(n)
+        hi = np.empty(n)
+        q = np.r_[state.q_l, state.q_f]
+        with np.errstate(invalid="ignore"):
+            lo[:n_l + n_f] = (self._x_min - q) / dt
+            hi[:n_l + n_f] = (self._x_max - q) / dt
+        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:self.n_grasp],
+                                          strict=True)):
+            r2 = surf.point(s)
+            rho_min, rho_max = grasp_rate_range(r2, surf.tangent(s), surf.r_min, surf.r_max, dt)
+            lo[n_l + n_f + i] = max(rho_min, (surf.sigma_min - s) / dt)
+            hi[n_l + n_f + i] = min(rho_max, (surf.sigma_max - s) / dt)
+        lower, upper, center, recovering = clip_rates(lo, hi, self._v_max,
+                                                      opts.recovery_fraction)
+        horizon = opts.centre_horizon or dt
         if horizon != dt:  # the centre rates were computed for dt
-            ratio = dt / horizon
-            center = [c * ratio for c in center]
-
-        A = np.empty((6, n_f + 1))
-        A[:, :n_f] = J_fq
-        A[:, n_f] = column
-        # One conversion for every float output, then views of it.
-        n = self.n
-        values = np.array(b + center + lower + upper + err + rhs)
-        problem = StepProblem.trusted(
-            A, values[:6], self.weights, values[6:6 + n], values[6 + n:6 + 2 * n],
-            values[6 + 2 * n:6 + 3 * n],
-            names=self.names, x_prev=_checked_x_prev(x_prev, n),
-            build_time=time.perf_counter() - t_start,
-        )
-        e0 = 6 + 3 * n
-        return StepBuild(problem, np.array(recovering), values[e0:e0 + 6], values[e0 + 6:])
-
-
-def _checked_x_prev(x_prev: FloatArray | None, n: int) -> FloatArray | None:
-    """``x_prev`` as a float (n,) array, as :class:`StepProblem` would check it."""
-    if x_prev is None or (isinstance(x_prev, np.ndarray) and x_prev.dtype == np.float64
-                          and x_prev.shape == (n,)):
-        return x_prev
-    xp = np.asarray(x_prev, dtype=np.float64)
-    if xp.shape != (n,):
-        raise ShapeError("x_prev", (n,), xp.shape)
-    return xp
-
-
-def build_step(
-    task: DualArmTask,
-    state: DualArmState,
-    ql_dot: FloatArray,
-    options: StepOptions,
-    *,
-    leader_kin: tuple[FloatArray, FloatArray],
-    follower_kin: tuple[FloatArray, FloatArray],
-    x_prev: FloatArray | None = None,
-) -> StepBuild:
-    """Build the step problem of Eqs. 25-40 for the current state.
-
-    One-off form of :class:`StepBuilder` (a controller keeps a builder instead).
-
-    Parameters
-    ----------
-    task : DualArmTask
-        Arms, object, surface and path.
-    state : DualArmState
-        Current joints and grasp coordinate.
-    ql_dot : ndarray, shape (n_l,)
-        The leader's joint rates this step [rad/s].
-    options : StepOptions
-        Weights, limits and gains.
-    leader_kin, follower_kin : tuple of ndarray
-        ``(T, J)`` from ``arm.fk_jacobian`` at the current joints (computed by the
-        caller so that kinematics is timed apart from assembly).
-    x_prev : ndarray, optional
-        Previous step's solution (warm start).
-
-    Returns
-    -------
-    StepBuild
-
-    Raises
-    ------
-    NonFiniteError
-        The problem would hold NaN or infinity (e.g. a non-finite ``ql_dot``).
-    """
-    return StepBuilder(task, options).build(
-        state, ql_dot, leader_kin=leader_kin, follower_kin=follower_kin, x_prev=x_prev
-    )
+            center = center * (dt / horizon)
+        problem = StepProblem(A, b, self.weights, center, lower, upper,
+                              n_grasp=self.n_grasp, names=self.names, x_prev=x_prev)
+        t2 = time.perf_counter()
+        return StepBuild(problem, recovering, e_c, e_l, kin, T_f, J_f, sigma_min,
+                         t1 - t0, t2 - t1)

@@ -4,10 +4,13 @@ Frames (all poses are 4x4 homogeneous matrices, metres):
 
 - ``T_world_leader = leader.fk(q_l)``: the leader's tool (the paper's T_B^n(q^l));
 - ``H1 = T_leader_object``: the object frame in the leader's tool frame (Eq. 14),
-  constant because the leader grasps rigidly;
+  constant when the leader grasps rigidly; when the leader's grasp slides too (the
+  paper's future work) it is ``G_l(sigma_l)^-1``, with ``G_l = leader_surface.pose``;
 - ``H2(sigma) = T_object_follower``: the follower's grasp frame on the object surface
   (Eq. 16), a function of the grasp coordinate ``sigma`` [m] along the sliding path;
 - the grasp closure (Eq. 15): ``leader.fk(q_l) @ H1 @ H2(sigma) == follower.fk(q_f)``;
+- the carried-object model (:mod:`~dualarm_qp.task.carry`) holds every sliding grasp as a
+  joint;
 - the desired object path ``D(t) = T_world_object(t)`` (Eq. 14).
 """
 
@@ -42,6 +45,10 @@ class DualArmTask:
         The object surface and the follower's sliding path on it.
     trajectory : Trajectory
         Desired object pose ``D(t)`` in the world.
+    leader_surface : GraspSurface, optional
+        The leader's own sliding path on the object (object coordinates); None (the
+        default): the leader grasps rigidly at ``H1``. When given, ``H1`` must be the
+        identity: the leader's grasp frame is ``leader_surface.pose(sigma_l)``.
     """
 
     leader: SerialArm
@@ -49,32 +56,50 @@ class DualArmTask:
     H1: FloatArray
     surface: GraspSurface
     trajectory: Trajectory
+    leader_surface: GraspSurface | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "H1", as_pose(self.H1, "H1"))
         if not isinstance(self.leader, SerialArm) or not isinstance(self.follower, SerialArm):
             raise InvalidInputError("leader and follower must be SerialArm instances")
+        if self.leader_surface is not None and not np.allclose(self.H1, np.eye(4),
+                                                               rtol=0.0, atol=1e-12):
+            raise InvalidInputError("a sliding leader grasp places the object by its "
+                                    "surface: H1 must be the identity")
+
+    @property
+    def n_grasp(self) -> int:
+        """Sliding grasps: 1 (the follower's) or 2 (the leader's slides too)."""
+        return 1 if self.leader_surface is None else 2
+
+    def H1_at(self, sigma_l: float = 0.0) -> FloatArray:
+        """``T_leader_object`` at the leader's grasp coordinate ``sigma_l`` [m]."""
+        if self.leader_surface is None:
+            return self.H1
+        return pin.SE3(self.leader_surface.pose(sigma_l)).inverse().homogeneous
 
     @property
     def H1_inv(self) -> FloatArray:
-        """``T_object_leader``."""
+        """``T_object_leader`` of a rigid leader grasp."""
         return pin.SE3(self.H1).inverse().homogeneous
 
-    def leader_target(self, t: float) -> FloatArray:
+    def leader_target(self, t: float, sigma_l: float = 0.0) -> FloatArray:
         """Pose the leader's tool must take for the object to be at ``D(t)``."""
-        return self.trajectory.pose(t) @ self.H1_inv
+        return self.trajectory.pose(t) @ pin.SE3(self.H1_at(sigma_l)).inverse().homogeneous
 
-    def object_pose(self, q_l: FloatArray) -> FloatArray:
+    def object_pose(self, q_l: FloatArray, sigma_l: float = 0.0) -> FloatArray:
         """``T_world_object`` carried by the leader at joints ``q_l``."""
-        return self.leader.fk(q_l) @ self.H1
+        return self.leader.fk(q_l) @ self.H1_at(sigma_l)
 
-    def follower_target(self, q_l: FloatArray, sigma: float) -> FloatArray:
+    def follower_target(self, q_l: FloatArray, sigma: float, sigma_l: float = 0.0
+                        ) -> FloatArray:
         """Pose the follower's tool must take: ``T_l(q_l) H1 H2(sigma)`` (Eq. 15)."""
-        return self.leader.fk(q_l) @ self.H1 @ self.surface.pose(sigma)
+        return self.object_pose(q_l, sigma_l) @ self.surface.pose(sigma)
 
-    def closure_error(self, q_l: FloatArray, q_f: FloatArray, sigma: float) -> tuple[float, float]:
+    def closure_error(self, q_l: FloatArray, q_f: FloatArray, sigma: float,
+                      sigma_l: float = 0.0) -> tuple[float, float]:
         """Grasp closure error ``(position [m], rotation [rad])`` of Eq. 15."""
-        T_target = self.follower_target(q_l, sigma)
+        T_target = self.follower_target(q_l, sigma, sigma_l)
         T_f = self.follower.fk(q_f)
         dp = float(np.linalg.norm(T_target[:3, 3] - T_f[:3, 3]))
         dw = float(np.linalg.norm(pin.log3(T_target[:3, :3] @ T_f[:3, :3].T)))

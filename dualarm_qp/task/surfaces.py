@@ -44,6 +44,7 @@ FloatArray = NDArray[np.float64]
 
 __all__ = [
     "GraspSurface",
+    "SlideJoint",
     "PlaneBar",
     "CylinderSurface",
     "CurvedBar",
@@ -92,6 +93,37 @@ def _frame_from(s: FloatArray, a: FloatArray) -> FloatArray:
     R[:, 1] = np.cross(a, s)
     R[:, 2] = a
     return R
+
+
+@dataclass(frozen=True)
+class SlideJoint:
+    """The sliding path as one joint: ``H2(sigma) = P @ M(rate * sigma) @ C``.
+
+    ``M(theta)`` is the motion of a one-dof joint about or along the x or y axis of its
+    own frame: a translation by ``theta`` [m] (``kind="prismatic"``) or a rotation by
+    ``theta`` [rad] (``kind="revolute"``). A straight path is a prismatic joint, a
+    circular arc a revolute joint about its centre of curvature.
+
+    Attributes
+    ----------
+    kind : {"prismatic", "revolute"}
+        Joint type.
+    axis : {"x", "y"}
+        Joint axis in the joint frame.
+    placement : ndarray, shape (4, 4)
+        ``P``: the joint frame in object coordinates [m].
+    child : ndarray, shape (4, 4)
+        ``C``: the hand frame in the moving joint frame [m].
+    rate : float
+        ``d theta / d sigma``: 1 for a prismatic joint, the signed curvature [rad/m]
+        for a revolute one.
+    """
+
+    kind: str
+    axis: str
+    placement: FloatArray
+    child: FloatArray
+    rate: float
 
 
 class GraspSurface(ABC):
@@ -155,6 +187,10 @@ class GraspSurface(ABC):
         Exact inverse of :meth:`point` on the path: ``sigma_of(point(s)) == s``. The
         result is not clipped to the grasp range.
         """
+
+    @abstractmethod
+    def slide_joint(self) -> SlideJoint:
+        """Return the sliding path as one joint (see :class:`SlideJoint`)."""
 
     # --- shared helpers --------------------------------------------------------------
     def tangent(self, sigma: float) -> FloatArray:
@@ -288,6 +324,10 @@ class PlaneBar(GraspSurface):
         """``s* . (r - origin)`` [m], the foot of the perpendicular from ``r``."""
         return float(self._s @ (as_array(r, "r", (3,)) - self.origin))
 
+    def slide_joint(self) -> SlideJoint:
+        """Return a prismatic joint along ``s*`` (the x axis of ``R2``) at ``origin``."""
+        return SlideJoint("prismatic", "x", self.pose(0.0), np.eye(4), 1.0)
+
 
 def _line_box_range(
     o: FloatArray, s: FloatArray, lo: FloatArray, hi: FloatArray, tol: float = 1e-9
@@ -388,6 +428,10 @@ class CylinderSurface(GraspSurface):
     def sigma_of(self, r: Any) -> float:
         """``z`` of ``r`` [m]."""
         return float(as_array(r, "r", (3,))[2])
+
+    def slide_joint(self) -> SlideJoint:
+        """Return a prismatic joint along the generator (the x axis of ``R2``)."""
+        return SlideJoint("prismatic", "x", self.pose(0.0), np.eye(4), 1.0)
 
 
 class CurvedBar(GraspSurface):
@@ -513,6 +557,16 @@ class CurvedBar(GraspSurface):
         v = as_array(r, "r", (3,))
         k = self._k
         return math.atan2(k * v[2], k * (v[0] - self._cx)) / k
+
+    def slide_joint(self) -> SlideJoint:
+        """Return a revolute joint about the object y axis through the centre of curvature.
+
+        ``H2(sigma) = T(c) rot_y(-k sigma) T(-c) H2(0)``: joint angle ``-k sigma``.
+        """
+        P, C = np.eye(4), self.pose(0.0)
+        P[0, 3] = self._cx
+        C[0, 3] -= self._cx
+        return SlideJoint("revolute", "y", P, C, -self._k)
 
 
 @dataclass(frozen=True)

@@ -49,7 +49,7 @@ def test_leader_speed_limit_slows_the_path_for_both_arms(solver):
                   limits=RunLimits(duration_cap=4.0))
     tr = res.trace
     assert res.completed, res.message
-    assert np.min(tr.leader_scale) < 1.0  # the leader's limit did the slowing
+    assert np.min(tr.scale) < 1.0  # the leader's limit did the slowing
     assert tr.tau[-1] == pytest.approx(exp.initial.t + exp.duration, abs=1e-12)
     assert tr.t[-1] > exp.duration  # it took longer than the nominal duration
     assert speed_ratio(tr.q_l, 0.05, exp.options.dt) <= 1 + 1e-6
@@ -63,7 +63,7 @@ def test_leader_limit_under_stop_names_the_leader_joint():
     res = rollout(exp.controller(), exp.initial, duration=exp.duration)
     assert not res.completed
     assert res.failure is not None and res.failure.criterion == "solver"
-    assert "leader" in res.message and "ql" in res.message
+    assert "ql" in res.message and "leader" in res.message
     assert "singular value" in res.message
 
 

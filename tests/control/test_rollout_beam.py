@@ -12,7 +12,7 @@ from dualarm_qp.control.rollout import rollout
 from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.solvers import available_solvers, get_solver
-from dualarm_qp.step.build import DualArmState, build_step
+from dualarm_qp.step.build import DualArmState
 from dualarm_qp.step.problem import StepProblem
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -58,30 +58,30 @@ def test_reference_with_grasp_held_is_the_fixed_grasp_answer(seed):
     """m = 0: the paper's step on Eq. 25 without the sliding column is Zheng-Luh's."""
     exp = experiment()
     ctrl = exp.controller()
-    task, st = exp.task, exp.initial
+    st = exp.initial
     rng = np.random.default_rng(seed)
     q_l = st.q_l + rng.normal(scale=0.05, size=6)
-    lk = task.leader.fk_jacobian(q_l)
-    fk = task.follower.fk_jacobian(st.q_f)
-    ql_dot = ctrl.step(DualArmState(st.t, q_l, st.q_f, st.sigma)).leader_solution.x
-    prob = build_step(task, dataclasses.replace(st, q_l=q_l), ql_dot, exp.options,
-                      leader_kin=lk, follower_kin=fk).problem
+    prob = ctrl.step(DualArmState(st.t, q_l, st.q_f, st.sigma)).build.problem
+    assert prob.n == 13 and prob.n_grasp == 1
     fixed = get_solver("fixed_grasp").solve(prob).x
-    assert fixed[6] == 0.0
-    held = StepProblem(A=prob.A[:, :6], b=prob.b, weights=prob.weights[:6],
-                       center=prob.center[:6], lower=prob.lower[:6], upper=prob.upper[:6],
+    assert fixed[12] == 0.0
+    held = StepProblem(A=prob.A[:, :12], b=prob.b, weights=prob.weights[:12],
+                       center=prob.center[:12], lower=prob.lower[:12], upper=prob.upper[:12],
                        n_grasp=0)
     ref = get_solver("reference").solve(held).x
-    np.testing.assert_allclose(ref, fixed[:6], rtol=1e-12, atol=1e-12)
-    # Independent check: the follower's own 6x6 Jacobian equation.
-    np.testing.assert_allclose(fk[1] @ fixed[:6], prob.b, atol=1e-10)
+    np.testing.assert_allclose(ref, fixed[:12], rtol=1e-9, atol=1e-9)
+    # Independent check: the leader's 6x6 equation, then the follower's.
+    J_f = exp.task.follower.jacobian(st.q_f)
+    np.testing.assert_allclose(prob.A[:6, :6] @ fixed[:6], prob.b[:6], atol=1e-10)
+    np.testing.assert_allclose(J_f @ fixed[6:12], prob.b[6:] - prob.A[6:, :6] @ fixed[:6],
+                               atol=1e-10)
     # And as s7 grows with the grasp centre at 0, the reference tends to the fixed grasp.
     gaps = []
     for s7 in (1e4, 1e8):
         w = prob.weights.copy()
-        w[6] = s7
+        w[12] = s7
         c = prob.center.copy()
-        c[6] = 0.0
+        c[12] = 0.0
         x = get_solver("reference").solve(dataclasses.replace(prob, weights=w, center=c)).x
         gaps.append(np.abs(x - fixed).max())
     assert gaps[1] < gaps[0] * 1e-3

@@ -1,0 +1,157 @@
+"""The carried object as part of the leader's kinematic model: grasps are joints.
+
+One Pinocchio model holds the leader arm (its base and tool), the object frame and a
+one-dof virtual joint per sliding grasp (:meth:`GraspSurface.slide_joint`: prismatic
+along a straight path, revolute about the centre of curvature of an arc):
+
+    leader base -> leader joints -> tool --[leader grasp joint]--> object
+                                                      object --[follower grasp joint]--> target
+
+``target`` is the pose the follower's tool must take (Eq. 15). Its frame Jacobian with
+respect to ``[q_l, sigma_f, sigma_l]`` is the leader side and the sliding column of
+Eqs. 25-27 at once; the object frame's Jacobian is the leader's task (Eq. 14). With a
+rigid leader grasp the object frame sits at ``T_l H1``; with a sliding leader grasp at
+``T_l G_l(sigma_l)^-1``, where ``G_l(sigma_l) = P M(rate sigma_l) C`` is the leader's
+grasp on its own path, so that its inverse is ``C^-1 M(-rate sigma_l) P^-1``.
+
+Every quantity is computed in one pass per state (:meth:`CarryModel.update`) and read
+from there by the step builder, the trace and the checks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from ..kinematics.arm import SerialArm
+from .surfaces import GraspSurface, SlideJoint
+
+FloatArray = NDArray[np.float64]
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_JOINTS = {("prismatic", "x"): pin.JointModelPX, ("prismatic", "y"): pin.JointModelPY,
+           ("revolute", "x"): pin.JointModelRX, ("revolute", "y"): pin.JointModelRY}
+
+
+def _se3(T: FloatArray) -> pin.SE3:
+    return pin.SE3(np.array(T[:3, :3]), np.array(T[:3, 3]))
+
+
+@dataclass(frozen=True)
+class CarryKinematics:
+    """The carried object's kinematics at one state (world frame, SI).
+
+    Attributes
+    ----------
+    T_tool : ndarray, shape (4, 4)
+        Leader tool pose ``T_world_leader`` [m].
+    J_tool : ndarray, shape (6, n_l)
+        Leader tool Jacobian ``[v; w]`` per joint rate (``LOCAL_WORLD_ALIGNED``).
+    T_object : ndarray, shape (4, 4)
+        Object pose ``T_world_object`` [m].
+    J_object : ndarray, shape (6, n_l + k)
+        Object frame Jacobian over ``[q_l, grasp rates]`` [m/s, rad/s per rad/s or m/s].
+    T_target : ndarray, shape (4, 4)
+        Follower target ``T_world_object H2(sigma_f)`` [m] (Eq. 15).
+    J_target : ndarray, shape (6, n_l + k)
+        Target frame Jacobian over ``[q_l, sigma_f rate, sigma_l rate]``: its grasp
+        columns are per m/s of sliding speed.
+    """
+
+    T_tool: FloatArray
+    J_tool: FloatArray
+    T_object: FloatArray
+    J_object: FloatArray
+    T_target: FloatArray
+    J_target: FloatArray
+
+
+class CarryModel:
+    """Leader arm, object and sliding grasps as one Pinocchio model.
+
+    Parameters
+    ----------
+    leader : SerialArm
+        The leader (its model carries its base and tool).
+    surface : GraspSurface
+        The follower's sliding path, object coordinates.
+    H1 : ndarray, shape (4, 4)
+        ``T_leader_object`` for a rigid leader grasp (ignored when ``leader_surface``
+        is given).
+    leader_surface : GraspSurface, optional
+        The leader's sliding path on the object (object coordinates); None: the leader
+        grasps rigidly.
+
+    Attributes
+    ----------
+    n_l : int
+        Leader joints.
+    n_grasp : int
+        Sliding grasps: 1 (follower) or 2 (follower, then leader).
+    """
+
+    def __init__(self, leader: SerialArm, surface: GraspSurface, H1: FloatArray,
+                 leader_surface: GraspSurface | None = None) -> None:
+        model = pin.Model(leader.model)
+        tool = model.frames[leader.tool_frame_id]
+        parent, at_parent = tool.parentJoint, pin.SE3(tool.placement)
+        self.n_l = leader.n
+        self._rates: list[float] = []
+        if leader_surface is None:
+            object_at = at_parent * _se3(H1)
+        else:
+            joint = leader_surface.slide_joint()
+            # G_l^-1 = C^-1 M(-rate sigma_l) P^-1: the joint frame is C^-1 from the tool.
+            parent = model.addJoint(parent, _JOINTS[(joint.kind, joint.axis)](),
+                                    at_parent * _se3(joint.child).inverse(), "grasp_leader")
+            object_at = _se3(joint.placement).inverse()
+            self._leader_rate = -joint.rate
+        self._object = model.addFrame(pin.Frame("object", parent, 0, object_at,
+                                                pin.FrameType.OP_FRAME))
+        joint_f: SlideJoint = surface.slide_joint()
+        follower_joint = model.addJoint(
+            parent, _JOINTS[(joint_f.kind, joint_f.axis)](), object_at * _se3(joint_f.placement),
+            "grasp_follower")
+        self._target = model.addFrame(pin.Frame("target", follower_joint, 0,
+                                                _se3(joint_f.child), pin.FrameType.OP_FRAME))
+        self._tool = leader.tool_frame_id
+        self._follower_rate = joint_f.rate
+        self.n_grasp = 1 if leader_surface is None else 2
+        # Configuration order is Pinocchio's: [q_l, (grasp_leader), grasp_follower].
+        # Decision order is [q_l, sigma_f, (sigma_l)]: columns are permuted below.
+        n_l = self.n_l
+        if leader_surface is None:
+            self._cols = [*range(n_l), n_l]
+            self._col_rate = np.r_[np.ones(n_l), joint_f.rate]
+        else:
+            self._cols = [*range(n_l), n_l + 1, n_l]
+            self._col_rate = np.r_[np.ones(n_l), joint_f.rate, self._leader_rate]
+        self.model = model
+        self.data = model.createData()
+        self._q = np.zeros(model.nq)
+
+    def update(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0) -> CarryKinematics:
+        """Compute every pose and Jacobian at ``(q_l [rad], sigma_f [m], sigma_l [m])``."""
+        model, data, q = self.model, self.data, self._q
+        n_l = self.n_l
+        q[:n_l] = q_l
+        if self.n_grasp == 2:
+            q[n_l] = self._leader_rate * sigma_l
+            q[n_l + 1] = self._follower_rate * sigma_f
+        else:
+            q[n_l] = self._follower_rate * sigma_f
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        cols, rate = self._cols, self._col_rate
+        J_tool = pin.getFrameJacobian(model, data, self._tool, _LWA)[:, :n_l]
+        J_object = pin.getFrameJacobian(model, data, self._object, _LWA)[:, cols] * rate
+        J_target = pin.getFrameJacobian(model, data, self._target, _LWA)[:, cols] * rate
+        return CarryKinematics(
+            data.oMf[self._tool].homogeneous, J_tool, data.oMf[self._object].homogeneous,
+            J_object, data.oMf[self._target].homogeneous, J_target)
+
+
+__all__ = ["CarryKinematics", "CarryModel"]
