@@ -4,14 +4,15 @@ A step problem is a value, built once per control step by pure functions
 (:mod:`dualarm_qp.step.build`) and handed unchanged to any solver in the registry.
 It knows nothing of robots: only the linear algebra of Eqs. 25 and 33-40 of the paper.
 
-Find ``x`` (the follower's joint rates [rad/s] followed by the grasp sliding speeds
-[m/s]) that minimises the weighted distance to the centre of the admissible ranges,
+Find ``x`` (both arms' joint rates [rad/s] followed by the grasp sliding speeds [m/s],
+see :mod:`dualarm_qp.step.build`) that minimises the weighted distance to the centre of
+the admissible ranges,
 
     minimise    (x - center)^T diag(weights) (x - center)          (Eq. 37)
     subject to  A x = b                                             (Eq. 25)
                 lower <= x <= upper                                 (Eqs. 33-34)
 
-with ``A = J_f`` (6 x (n+k)) and ``b = J_l ql_dot`` (+ a closure correction term).
+with the object's path and the grasp closure as the equality rows.
 The last ``n_grasp`` variables are grasp sliding speeds; the fixed-grasp method of
 Zheng and Luh holds them at zero.
 """
@@ -36,9 +37,9 @@ class StepProblem:
     Parameters
     ----------
     A : ndarray, shape (m, n)
-        Equality matrix ``J_f`` (Eq. 26); m = 6 for a full pose closure.
+        Equality matrix (Eqs. 14 and 25-27: m = 12 for a controller step).
     b : ndarray, shape (m,)
-        Right-hand side ``J_l ql_dot`` [m/s; rad/s] (Eq. 25), plus any correction.
+        Right-hand side [m/s; rad/s], feedback terms included.
     weights : ndarray, shape (n,)
         Diagonal of the positive definite weighting matrix ``S`` (Eq. 37).
     center : ndarray, shape (n,)
@@ -105,46 +106,6 @@ class StepProblem:
             object.__setattr__(self, "names", tuple(f"x{i + 1}" for i in range(n)))
         elif len(self.names) != n:
             raise ShapeError("names", (n,), (len(self.names),))
-
-    @classmethod
-    def trusted(
-        cls,
-        A: FloatArray,
-        b: FloatArray,
-        weights: FloatArray,
-        center: FloatArray,
-        lower: FloatArray,
-        upper: FloatArray,
-        *,
-        names: tuple[str, ...],
-        n_grasp: int = 1,
-        x_prev: FloatArray | None = None,
-        task_scale_max: float = 1.0,
-        build_time: float = 0.0,
-    ) -> StepProblem:
-        """Build a problem without the constructor's checks (for step builders only).
-
-        The constructor converts and checks every field, which costs more than a whole
-        fast solve. A builder that guarantees what it checks may skip it: every array
-        float64 of the shape listed above, ``A``, ``b``, ``weights`` and ``center``
-        finite, the bounds free of NaN, ``weights > 0``, ``0 <= n_grasp <= n`` and
-        ``len(names) == n``. The result is then equal to ``StepProblem(...)`` with the
-        same arguments. Anything else: use the constructor.
-        """
-        problem = object.__new__(cls)
-        set_field = object.__setattr__  # the dataclass is frozen
-        set_field(problem, "A", A)
-        set_field(problem, "b", b)
-        set_field(problem, "weights", weights)
-        set_field(problem, "center", center)
-        set_field(problem, "lower", lower)
-        set_field(problem, "upper", upper)
-        set_field(problem, "n_grasp", n_grasp)
-        set_field(problem, "x_prev", x_prev)
-        set_field(problem, "names", names)
-        set_field(problem, "task_scale_max", task_scale_max)
-        set_field(problem, "build_time", build_time)
-        return problem
 
     @property
     def n(self) -> int:
