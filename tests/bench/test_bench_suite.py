@@ -34,7 +34,7 @@ def suite():  # type: ignore[no-untyped-def]
 def test_committed_suite_is_small_and_varied(suite) -> None:  # type: ignore[no-untyped-def]
     assert DATA.stat().st_size < 4e6
     assert 2000 <= len(suite) <= 5000
-    assert {p.A.shape for p in suite.problems} == {(12, 13)}  # both arms and the grasp: one decision vector
+    assert {p.A.shape for p in suite.problems} == {(12, 13)}
     share = float((~suite.feasible).mean())
     assert 0.05 < share < 0.5
     assert {"rollout", "rollout_infeasible", "pinched", "empty_box"} <= set(suite.kind)

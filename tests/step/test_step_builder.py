@@ -49,7 +49,7 @@ def test_paper_special_case_eqs_25_27(seed):
     A = build.problem.A
     assert A.shape == (12, 13) and build.problem.names[-1] == "m"
     T_l, J_l = task.leader.fk_jacobian(q_l)
-    T_f, J_f = task.follower.fk_jacobian(q_f)
+    J_f = task.follower.jacobian(q_f)
     target = T_l @ task.H1 @ surface.pose(sigma)
     d = target[:3, 3] - T_l[:3, 3]
     J_lp = J_l.copy()

@@ -1,4 +1,4 @@
-"""The step's equality keeps the closure to second order (Eqs. 25-27), also with both grasps sliding."""
+"""The step's equality keeps the closure to second order (Eqs. 25-27), both grasps sliding too."""
 
 from __future__ import annotations
 
