@@ -1,0 +1,79 @@
+"""animation.html in a real, headless Chromium with the network blocked.
+
+Skipped only when no ``chromium`` is installed (CI installs Debian's, see .ci/run).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+PIL = pytest.importorskip("PIL.Image", reason="Pillow (a matplotlib dependency) reads PNGs")
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed "
+                                "(apt-get install -y chromium; CI installs it)")
+
+WIDTH, HEIGHT = 1280, 800
+FLAGS = ["--headless", "--no-sandbox", "--use-gl=angle", "--use-angle=swiftshader",
+         "--enable-unsafe-swiftshader", f"--window-size={WIDTH},{HEIGHT}",
+         "--virtual-time-budget=8000", "--hide-scrollbars", "--no-first-run",
+         "--disable-extensions", "--disable-background-networking",
+         "--proxy-server=http://127.0.0.1:9", "--proxy-bypass-list=<-loopback>"]
+LEADER, FOLLOWER = (0x3B, 0x6F, 0xB6), (0xC9, 0x83, 0x2F)
+
+
+def _chromium(tmp: Path, *args: str) -> str:
+    proc = subprocess.run([CHROMIUM, *FLAGS, f"--user-data-dir={tmp / 'profile'}", *args],
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout
+
+
+def _screenshot(tmp: Path, url: str, name: str) -> np.ndarray:
+    png = tmp / name
+    _chromium(tmp, f"--screenshot={png}", url)
+    return np.asarray(PIL.open(png).convert("RGB"), dtype=np.int16)
+
+
+def _near(img: np.ndarray, rgb: tuple[int, int, int], tol: int = 60) -> np.ndarray:
+    return np.abs(img - np.array(rgb)).sum(axis=2) < tol
+
+
+@pytest.fixture(scope="module")
+def page(run_dir):
+    return (run_dir / "animation.html").as_uri()
+
+
+def test_the_page_loads_offline_without_errors_or_requests(page, tmp_path):
+    dom = _chromium(tmp_path, "--dump-dom", page + "#t=0.5")
+    status = re.search(r'<div id="dualarm-status"[^>]*>', dom)
+    assert status, dom[-2000:]
+    attrs = dict(re.findall(r'data-([a-z-]+)="([^"]*)"', status.group(0)))
+    errors = re.search(r'<pre id="dualarm-errors">(.*?)</pre>', dom, re.S)
+    assert attrs.get("ready") == "1", attrs
+    assert attrs["errors"] == "0", errors.group(1) if errors else dom[-2000:]
+    assert attrs["requests"] == "0", errors.group(1) if errors else ""
+    assert int(attrs["frame"]) > 0  # #t= chose a later sample
+    assert "grasp" in dom and 'id="r-status">' in dom
+
+
+def test_two_timeline_positions_differ_where_the_arms_are(page, run_dir, tmp_path):
+    start = _screenshot(tmp_path, page + "#t=0", "start.png")
+    end = _screenshot(tmp_path, page + "#t=100", "end.png")  # past the end: the last sample
+    view = slice(0, HEIGHT - 120)  # the 3D pane; the panel with the readout is below
+    for img in (start, end):
+        pane = img[view]
+        assert pane.std() > 10, "blank canvas"
+        assert _near(pane, LEADER).sum() > 300 and _near(pane, FOLLOWER).sum() > 300
+    arms_start = _near(start[view], LEADER) | _near(start[view], FOLLOWER)
+    arms_end = _near(end[view], LEADER) | _near(end[view], FOLLOWER)
+    moved = arms_start ^ arms_end
+    assert moved.sum() > 200, "the arms did not move between the two positions"
+    changed = np.abs(start[view] - end[view]).sum(axis=2) > 30
+    assert (changed & moved).sum() > 0.5 * moved.sum()
