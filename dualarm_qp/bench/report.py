@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write_with, jsonable, write_text
+from .._io import jsonable, write_text
 from .._io import write_json as _write_json_file
 from .runner import STATUSES, job_failure
 from .table import render_table
@@ -30,7 +30,6 @@ COLUMNS: tuple[str, ...] = (
     "assembly_time_median_s", "assembly_time_p99_s",
     "solve_time_median_s", "solve_time_p99_s",
     "verify_time_median_s", "verify_time_p99_s",
-    "leader_time_median_s", "leader_time_p99_s",
     "bound_violation_max", "eq_residual_max",
     "closure_pos_err_max_m", "closure_rot_err_max_rad",
     "margin_qf_min_rad", "margin_ql_min_rad", "margin_grasp_min_m",
@@ -117,7 +116,6 @@ TABLE: tuple[tuple[str, str, str], ...] = (
     ("asm med", "assembly_time_median_s", "us"),
     ("solve med", "solve_time_median_s", "us"),
     ("verify med", "verify_time_median_s", "us"),
-    ("leader med", "leader_time_median_s", "us"),
     ("solve/bare", "solve_over_bare", "ratio"),
     ("bound viol", "bound_violation_max", "sci"),
     ("eq resid", "eq_residual_max", "sci"),
@@ -174,39 +172,14 @@ def write_json(path: Path, rows: Sequence[dict[str, Any]], meta: dict[str, Any])
 
 
 def plot(path: Path, rows: Sequence[dict[str, Any]]) -> None:
-    """Median step time split per solver (stacked bars, linear axis), p99 as a tick."""
-    # The object interface on an Agg canvas: no pyplot, the user's backend untouched.
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    """Write ``bench.png``: step time (log axis), success and accuracy per solver.
 
-    good = [r for r in rows if not r.get("error")]
-    configs = list(dict.fromkeys(str(r["experiment"]) for r in good)) or ["(none)"]
-    height = 0.8 * len(configs) + 0.35 * max(len(good), 1) + 0.8
-    fig = Figure(figsize=(8, height))
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(len(configs), 1, squeeze=False)
-    parts = (("kinematics", "kinematics_time_median_s"), ("assembly", "assembly_time_median_s"),
-             ("solve", "solve_time_median_s"), ("verify", "verify_time_median_s"),
-             ("leader", "leader_time_median_s"))
-    for ax, cfg in zip(axes[:, 0], configs, strict=True):
-        rs = [r for r in good if r["experiment"] == cfg]
-        y = np.arange(len(rs))
-        left = np.zeros(len(rs))
-        for label, col in parts:
-            w = np.array([max(float(r.get(col) or 0.0), 0.0) * 1e6 for r in rs])
-            ax.barh(y, w, left=left, label=label)
-            left += w
-        p99 = [float(r.get("step_time_p99_s") or np.nan) * 1e6 for r in rs]
-        ax.plot(p99, y, "k|", markersize=12, label="step p99")
-        ax.set_yticks(y, [f"{r['solver']} ({r['success_rate']:.2f})" for r in rs])
-        ax.set_title(cfg, fontsize=9)
-        ax.invert_yaxis()
-    axes[-1, 0].set_xlabel("controller step time [us] (median split; | = p99); "
-                           "(success rate)")
-    handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, fontsize=7, loc="upper center", ncol=5, frameon=False)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / height))
-    atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    See :func:`~.figure.bench_figure`.
+    """
+    from ..experiments.figures.canvas import save_png
+    from .figure import bench_figure
+
+    save_png(bench_figure(rows), path)
 
 
 def write_report(out_dir: Path, records: Sequence[dict[str, Any]], meta: dict[str, Any],

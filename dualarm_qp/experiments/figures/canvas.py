@@ -1,0 +1,175 @@
+"""Drawing primitives shared by every figure: the canvas, limit lines, shaded spans.
+
+Figures are drawn with matplotlib's object interface (:class:`~matplotlib.figure.Figure`
+on an Agg canvas), never through :mod:`matplotlib.pyplot`: drawing leaves the user's
+backend choice and pyplot's figures alone. Values arrive in SI units; the callers pass
+the factor that converts them for display (mm, deg) at drawing time.
+
+Artists carry a ``gid`` saying what they show (``"limit:<name>"``, ``"outside:<name>"``)
+so that tests, and anyone post-processing a figure, can find them.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+from ..._io import atomic_write_with
+
+FloatArray = NDArray[np.float64]
+
+#: Resolution of the PNG files [dots per inch].
+DPI = 110
+
+#: Colour of limit lines and of the shading of samples outside their range.
+LIMIT_COLOUR = "C3"
+
+
+def new_figure(**kwargs: Any) -> Figure:
+    """Return a figure on its own Agg canvas (no pyplot, no global state)."""
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save_png(fig: Figure, path: Path) -> None:
+    """Write ``fig`` to ``path`` as a PNG, atomically."""
+    atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
+
+
+def png_bytes(fig: Figure) -> bytes:
+    """Return ``fig`` rendered as PNG bytes."""
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=DPI, format="png")
+    return buf.getvalue()
+
+
+def outside_mask(y: Any, lo: float = -np.inf, hi: float = np.inf, *,
+                 tol: float = 1e-9) -> NDArray[np.bool_]:
+    """Flag the samples of ``y`` outside ``[lo - tol, hi + tol]`` (NaN counts as inside).
+
+    Parameters
+    ----------
+    y : array_like
+        Values, in the units of the bounds.
+    lo, hi : float
+        The range; infinite bounds never hold anything out.
+    tol : float
+        Slack, in the units of ``y``, so that a value held exactly at a bound by a
+        hard-limit solver (rounding included) is not shaded.
+    """
+    v = np.asarray(y, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.asarray((v < lo - tol) | (v > hi + tol))
+
+
+def outside_spans(t: Any, outside: Any) -> list[tuple[float, float]]:
+    """Time intervals [s] covering the runs of consecutive samples flagged ``outside``.
+
+    A run from sample ``i`` to sample ``j`` covers ``[t_i - h, t_j + h]`` with ``h`` half
+    the sampling interval (clipped to the sampled time), so that a single sample
+    outside is still a visible band.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s], increasing.
+    outside : array_like of bool, shape (n,)
+        Which samples are outside.
+
+    Returns
+    -------
+    list of (float, float)
+        ``(start, end)`` [s] of each run, in time order.
+    """
+    t = np.asarray(t, dtype=float)
+    flags = np.asarray(outside, dtype=bool)
+    if t.size == 0 or not flags.any():
+        return []
+    half = 0.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    edges = np.diff(np.concatenate(([0], flags.astype(np.int8), [0])))
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1) - 1
+    return [(max(float(t[i]) - half, float(t[0])), min(float(t[j]) + half, float(t[-1])))
+            for i, j in zip(starts, ends, strict=True)]
+
+
+def shade_spans(ax: Any, spans: Sequence[tuple[float, float]], name: str, *,
+                colour: str = LIMIT_COLOUR, alpha: float = 0.15,
+                label: str | None = None) -> list[Any]:
+    """Shade the time intervals ``spans`` on ``ax`` (gid ``"outside:<name>"``).
+
+    ``label`` goes on the first band only (one legend entry).
+    """
+    patches = []
+    for k, (a, b) in enumerate(spans):
+        patch = ax.axvspan(a, b, color=colour, alpha=alpha, lw=0,
+                           label=label if k == 0 else None)
+        patch.set_gid(f"outside:{name}")
+        patches.append(patch)
+    return patches
+
+
+def limit_lines(ax: Any, values: Sequence[float], name: str, *, scale: float = 1.0,
+                colour: str = LIMIT_COLOUR, label: str | None = None,
+                ls: str = "--") -> list[Any]:
+    """Draw the finite ``values`` (SI) times ``scale`` as horizontal lines.
+
+    Each line's gid is ``"limit:<name>"``; ``label`` goes on the first line only.
+    """
+    lines: list[Any] = []
+    for v in values:
+        if v is None or not np.isfinite(v):
+            continue
+        line = ax.axhline(float(v) * scale, color=colour, ls=ls, lw=0.9,
+                          label=label if not lines else None)
+        line.set_gid(f"limit:{name}")
+        lines.append(line)
+    return lines
+
+
+def speed_axis(ax: Any, limit: float | None, peak: float) -> None:
+    """Scale the y axis of a speed panel against its limit (display units).
+
+    When the largest ``|speed|`` (``peak``) stays within ``1.05 * limit`` the axis is
+    linear over ``+-1.15 * limit``: the data read against the limit. When it goes
+    beyond (the unbounded first step of the paper's method, thousands of times the
+    limit), the axis is symmetric-logarithmic, linear inside ``+-limit``, so that one
+    huge sample does not squeeze everything else to a line. Without a finite,
+    positive limit the threshold is the power of ten nearest ``peak / 100`` (linear
+    when ``peak`` is 0).
+    """
+    lin = float(limit) if limit is not None and np.isfinite(limit) and limit > 0 else 0.0
+    if lin and peak <= 1.05 * lin:
+        ax.set_ylim(-1.15 * lin, 1.15 * lin)
+        return
+    if not lin:
+        if not peak > 0:
+            return
+        lin = float(10.0 ** np.round(np.log10(peak / 100.0)))
+    ax.set_yscale("symlog", linthresh=lin, linscale=1.5)
+    top = 10.0 ** np.ceil(np.log10(max(peak, lin) * 1.0001))
+    decades = 10.0 ** np.arange(np.floor(np.log10(lin)) + 1, np.log10(top) + 0.5)
+    decades = decades[decades >= 3.0 * lin]  # apart from the labels at +-lin
+    ticks = np.concatenate((-decades[::-1], [-lin, -lin / 2, 0.0, lin / 2, lin], decades))
+    ticks = np.unique(ticks)
+    ax.set_yticks(ticks, [f"{v:.3g}" for v in ticks])
+    ax.set_ylim(-1.6 * peak, 1.6 * peak)
+
+
+def finite_max_abs(*arrays: Any) -> float:
+    """Largest finite absolute value in the arrays (0 if none)."""
+    best = 0.0
+    for a in arrays:
+        v = np.abs(np.asarray(a, dtype=float))
+        v = v[np.isfinite(v)]
+        if v.size:
+            best = max(best, float(v.max()))
+    return best

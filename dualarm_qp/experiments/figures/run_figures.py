@@ -1,0 +1,315 @@
+"""The figures of one run, drawn from its ``trajectory.csv`` and the limits it had.
+
+One function per figure returns the :class:`~matplotlib.figure.Figure` (so that tests
+can read what was drawn); :func:`write_run_figures` writes them all as PNG files:
+
+- ``joints.png``: every joint [deg] against its range, shaded where outside;
+- ``rates.png``: every joint rate [deg/s], commanded and realised (finite differences
+  of the recorded joints), against its speed limit, shaded where the realised rate is
+  over it;
+- ``grasp.png``: the grasp coordinate [mm] against its range, and the sliding speed
+  [mm/s] against its limit;
+- ``tracking.png``: the leader's tracking error, the smallest singular value of each
+  arm's Jacobian and the task scale;
+- ``closure.png``: the grasp closure error (Eq. 15).
+
+Speed axes are symmetric-logarithmic, linear inside the limit
+(:func:`~.canvas.speed_axis`): the paper's unbounded first step, thousands of times the
+limit, stays on the axis without flattening the rest.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .canvas import (
+    finite_max_abs,
+    limit_lines,
+    new_figure,
+    outside_mask,
+    outside_spans,
+    save_png,
+    shade_spans,
+    speed_axis,
+)
+from .rundata import PlotLimits, RunData, realised_rate
+
+if TYPE_CHECKING:
+    from ..setup import Experiment
+
+#: The PNG files of a run, in the order they are written.
+RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.png")
+
+_ARMS = (("l", "leader"), ("f", "follower"))
+DEG = 180.0 / np.pi
+MM = 1e3
+
+
+def _speed_note(limits: PlotLimits) -> str:
+    return ("speed limit" if limits.speed_limits_enforced
+            else "speed limit (not enforced in this run)")
+
+
+def _arm_grid(data: RunData, height: float, bottom: float) -> tuple[Figure, Any, int]:
+    """Return a 2 x n grid (leader, follower) with fixed margins [in].
+
+    Fixed margins rather than ``tight_layout``, which costs more than the drawing on
+    grids this size.
+    """
+    n = max(data.n_joints("l"), data.n_joints("f"), 1)
+    width = 2.4 * n + 0.8
+    fig = new_figure(figsize=(width, height))
+    axes = fig.subplots(2, n, sharex=True, squeeze=False)
+    fig.subplots_adjust(left=0.75 / width, right=1 - 0.15 / width, top=1 - 0.75 / height,
+                        bottom=bottom / height, wspace=0.38, hspace=0.32)
+    return fig, axes, n
+
+
+def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Both arms' joints [deg] against time, range limits dashed, outside shaded."""
+    fig, axes, n = _arm_grid(data, 5.2, 0.55)
+    t = data.t
+    for row, (arm, label) in enumerate(_ARMS):
+        q = data.joints(arm)
+        lim = limits.arm(arm)
+        for j in range(n):
+            ax = axes[row][j]
+            if j >= q.shape[1]:
+                ax.set_visible(False)
+                continue
+            name = f"q{arm}{j + 1}"
+            ax.plot(t, q[:, j] * DEG, color="C2" if row == 0 else "C0", lw=1.2)
+            limit_lines(ax, (lim.q_min[j], lim.q_max[j]), name, scale=DEG)
+            shade_spans(ax, outside_spans(t, outside_mask(q[:, j], lim.q_min[j],
+                                                          lim.q_max[j])), name)
+            ax.set_title(f"{label} q{j + 1}", fontsize=9)
+            ax.tick_params(labelsize=7)
+            if row == 1:
+                ax.set_xlabel("t [s]", fontsize=8)
+        axes[row][0].set_ylabel("[deg]", fontsize=8)
+    fig.suptitle((title + ": " if title else "")
+                 + "joints against their ranges (dashed; shaded: outside)", fontsize=10)
+    return fig
+
+
+def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Joint rates [deg/s], commanded and realised, against the speed limits.
+
+    The realised rate is the finite difference of the recorded joints; it differs
+    from the commanded one where a position-level correction moved the joints. The
+    shading marks the samples whose realised rate is over the limit. The last row's
+    command, computed but never applied, is left out.
+    """
+    fig, axes, n = _arm_grid(data, 5.6, 0.85)
+    t = data.t
+    for row, (arm, label) in enumerate(_ARMS):
+        cmd = data.commanded_rates(arm)
+        real = data.realised_rates(arm)
+        lim = limits.arm(arm)
+        for j in range(n):
+            ax = axes[row][j]
+            if j >= cmd.shape[1]:
+                ax.set_visible(False)
+                continue
+            name = f"q{arm}_dot{j + 1}"
+            vmax = float(lim.qd_max[j])
+            ax.plot(t[:-1], cmd[:-1, j] * DEG, color="C0", lw=1.1, label="commanded")
+            ax.plot(t, real[:, j] * DEG, color="C1", lw=0.9, ls=":", label="realised")
+            limit_lines(ax, (-vmax, vmax), name, scale=DEG, label=_speed_note(limits))
+            shade_spans(ax, outside_spans(t, outside_mask(real[:, j], -vmax, vmax)), name,
+                        label="realised over the limit")
+            speed_axis(ax, vmax * DEG, finite_max_abs(cmd[:, j], real[:, j]) * DEG)
+            ax.set_title(f"{label} q{j + 1}", fontsize=9)
+            ax.tick_params(labelsize=7)
+            if row == 1:
+                ax.set_xlabel("t [s]", fontsize=8)
+        axes[row][0].set_ylabel("[deg/s]", fontsize=8)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
+    fig.suptitle((title + ": " if title else "")
+                 + "joint rates against their speed limits (dashed)", fontsize=10)
+    return fig
+
+
+def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Grasp coordinate [mm] against its range, sliding speed [mm/s] against its limit.
+
+    The commanded sliding speed is the ``m`` column (without the last row's, never
+    applied), the realised one the finite difference of the recorded grasp. A
+    ``grasp_leader`` column (a leader whose grasp also slides) is drawn beside the
+    follower's, with ``m_leader`` and the leader's grasp range when known.
+    """
+    fig = new_figure(figsize=(8, 6))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    t = data.t
+    lo, hi = limits.grasp_range
+    grasp = data.col("grasp")
+    ax1.plot(t, grasp * MM, color="C0", label="follower grasp")
+    limit_lines(ax1, (lo, hi), "grasp", scale=MM, label="grasp range")
+    shade_spans(ax1, outside_spans(t, outside_mask(grasp, lo, hi)), "grasp",
+                label="outside the range")
+    if data.has("grasp_leader"):
+        g_l = data.col("grasp_leader")
+        ax1.plot(t, g_l * MM, color="C2", label="leader grasp")
+        if limits.leader_grasp_range is not None:
+            lo_l, hi_l = limits.leader_grasp_range
+            limit_lines(ax1, (lo_l, hi_l), "grasp_leader", scale=MM, colour="C2",
+                        label="leader grasp range")
+            shade_spans(ax1, outside_spans(t, outside_mask(g_l, lo_l, hi_l)), "grasp_leader",
+                        colour="C2")
+    ax1.set_ylabel("grasp [mm]")
+    ax1.legend(fontsize=7)
+
+    speed = limits.grasp_speed_max
+    real = realised_rate(t, grasp)
+    m = data.col("m")[:-1]
+    ax2.plot(t[:-1], m * MM, color="C0", lw=1.1, label="commanded m")
+    ax2.plot(t, real * MM, color="C1", lw=0.9, ls=":", label="realised")
+    peak = finite_max_abs(m, real) * MM
+    if data.has("grasp_leader"):
+        real_l = realised_rate(t, data.col("grasp_leader"))
+        ax2.plot(t, real_l * MM, color="C2", lw=0.9, ls=":", label="leader grasp, realised")
+        peak = max(peak, finite_max_abs(real_l) * MM)
+        if data.has("m_leader"):
+            ax2.plot(t[:-1], data.col("m_leader")[:-1] * MM, color="C2", lw=1.1,
+                     label="leader grasp, commanded")
+            peak = max(peak, finite_max_abs(data.col("m_leader")[:-1]) * MM)
+    if np.isfinite(speed):
+        limit_lines(ax2, (-speed, speed), "grasp_speed", scale=MM,
+                    label=f"speed limit {speed * MM:g} mm/s")
+        shade_spans(ax2, outside_spans(t, outside_mask(real, -speed, speed)), "grasp_speed",
+                    label="realised over the limit")
+    else:
+        ax2.plot([], [], color="none", label="no sliding speed limit in this run")
+    speed_axis(ax2, speed * MM, peak)
+    ax2.set_ylabel("sliding speed [mm/s]")
+    ax2.set_xlabel("t [s]")
+    ax2.legend(fontsize=7, title=f"largest |speed| {peak:.4g} mm/s", title_fontsize=7)
+    fig.suptitle((title + ": " if title else "") + "grasp position along the bar",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Leader tracking error, smallest singular values and task scale against time."""
+    fig = new_figure(figsize=(8, 7.5))
+    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+    t = data.t
+    floor = 1e-16
+    ax1.semilogy(t, np.maximum(data.col("leader_pos_err"), floor), color="C0",
+                 label="position [m]")
+    ax1.semilogy(t, np.maximum(data.col("leader_rot_err"), floor), color="C1",
+                 label="rotation [rad]")
+    limit_lines(ax1, (limits.tracking[0],), "tracking_pos", colour="C0",
+                label=f"tolerance {limits.tracking[0]:g} m")
+    limit_lines(ax1, (limits.tracking[1],), "tracking_rot", colour="C1",
+                label=f"tolerance {limits.tracking[1]:g} rad")
+    ax1.set_ylabel("leader error to D(t)")
+    ax1.legend(fontsize=7, ncol=2)
+
+    for name, colour, label in (("sigma_min_l", "C2", "leader"),
+                                ("sigma_min_f", "C0", "follower")):
+        ax2.semilogy(t, np.maximum(data.col(name), floor), color=colour, label=label)
+    s_min = limits.singular_value_min
+    if s_min > 0:
+        limit_lines(ax2, (s_min,), "singular_value_min",
+                    label=f"singularity threshold {s_min:g}")
+        near = outside_mask(data.col("sigma_min_l"), s_min) | outside_mask(
+            data.col("sigma_min_f"), s_min)
+        shade_spans(ax2, outside_spans(t, near), "singular_value_min",
+                    label="an arm below the threshold")
+    ax2.set_ylabel("smallest singular\nvalue of J")
+    ax2.legend(fontsize=7, ncol=2)
+
+    # The last row's command is computed but never applied (its scale is 0 where the
+    # path ends): left out.
+    scale = data.col("scale")[:-1]
+    ax3.plot(t[:-1], scale, color="C0", label="task scale")
+    if data.has("leader_scale"):
+        ax3.plot(t[:-1], data.col("leader_scale")[:-1], color="C2", ls="--", lw=0.9,
+                 label="leader task scale")
+    shade_spans(ax3, outside_spans(t[:-1], outside_mask(scale, 1.0)), "scale",
+                colour="0.5", label="scaled down (< 1)")
+    ax3.set_ylim(-0.05, 1.1)
+    ax3.set_ylabel("task scale")
+    ax3.set_xlabel("t [s]")
+    ax3.legend(fontsize=7, ncol=3)
+    fig.suptitle((title + ": " if title else "")
+                 + "leader tracking, conditioning, task scale", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Grasp closure error (Eq. 15) against time, log scale, with its tolerance.
+
+    Where a position-level correction ran (the paper's methods), the error of the
+    integrated state before it is drawn too.
+    """
+    fig = new_figure(figsize=(8, 3.8))
+    ax = fig.subplots()
+    t = data.t
+    floor = 1e-16
+    marker = "o" if len(data) < 20 else None
+    ax.semilogy(t, np.maximum(data.col("closure_pos_err"), floor), marker=marker,
+                color="C0", label="position [m]")
+    ax.semilogy(t, np.maximum(data.col("closure_rot_err"), floor), marker=marker,
+                color="C1", label="rotation [rad]")
+    if np.nanmax(data.col("correction_f"), initial=0.0) > 0.0:
+        ax.semilogy(t, np.maximum(data.col("closure_pos_err_pre"), floor), color="C0",
+                    ls=":", lw=0.9, label="position before the position-level correction")
+    limit_lines(ax, (limits.closure[0],), "closure_pos", colour="C0",
+                label=f"tolerance {limits.closure[0]:g} m (the run fails above)")
+    limit_lines(ax, (limits.closure[1],), "closure_rot", colour="C1",
+                label=f"tolerance {limits.closure[1]:g} rad")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("closure error")
+    ax.legend(fontsize=7)
+    ax.set_title((title + ": " if title else "") + "grasp closure error", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None,
+                      title: str | None = None) -> list[str]:
+    """Write the PNG figures of a run (:data:`RUN_FIGURES`) into ``out``.
+
+    Parameters
+    ----------
+    out : Path
+        The run folder.
+    exp : Experiment
+        The experiment the run was made with: the limits are read from it.
+    data : RunData, optional
+        The trajectory; default: read ``out/trajectory.csv``.
+    title : str, optional
+        Title prefix; default ``"<experiment> (<solver>)"``.
+
+    Returns
+    -------
+    list of str
+        The file names written, in :data:`RUN_FIGURES` order (none for an empty run).
+    """
+    if data is None:
+        data = RunData.read(out / "trajectory.csv")
+    if not len(data):
+        return []
+    limits = PlotLimits.from_experiment(exp)
+    tag = f"{exp.name} ({exp.solver_name})" if title is None else title
+    draw = {"joints.png": joints_figure, "rates.png": rates_figure,
+            "grasp.png": grasp_figure, "tracking.png": tracking_figure,
+            "closure.png": closure_figure}
+    written = []
+    for name in RUN_FIGURES:
+        save_png(draw[name](data, limits, tag), out / name)
+        written.append(name)
+    return written
+
+
+__all__ = ["RUN_FIGURES", "closure_figure", "grasp_figure", "joints_figure",
+           "rates_figure", "tracking_figure", "write_run_figures"]

@@ -1,0 +1,213 @@
+"""What the figures of a run draw: the recorded trajectory and the limits it had.
+
+:class:`RunData` reads ``trajectory.csv`` (SI units, one row per sample); the joint
+counts come from its header (``ql1..qlN``, ``qf1..qfN``), so arms of any size, and the
+optional ``grasp_leader`` column of a leader whose grasp also slides, are read alike.
+:class:`PlotLimits` holds the ranges and speed limits, taken from the
+:class:`~dualarm_qp.experiments.setup.Experiment` (a run folder does not record them).
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from ..setup import Experiment
+
+FloatArray = NDArray[np.float64]
+
+#: Columns holding text, not numbers.
+TEXT_COLUMNS = ("status", "leader_status")
+
+
+@dataclass(frozen=True)
+class RunData:
+    """The columns of one run's ``trajectory.csv``.
+
+    Attributes
+    ----------
+    columns : dict of str to ndarray
+        Every column by its header name: floats (SI units), or strings for
+        :data:`TEXT_COLUMNS`.
+    """
+
+    columns: dict[str, NDArray[Any]]
+
+    @classmethod
+    def read(cls, path: str | Path) -> RunData:
+        """Read a ``trajectory.csv`` written by :func:`~..outputs.write_trace_csv`.
+
+        Raises
+        ------
+        InvalidInputError
+            The file has no header, no ``t`` column, or a row of the wrong length.
+        """
+        path = Path(path)
+        with path.open(newline="") as fh:
+            rows = list(csv.reader(fh))
+        if not rows or "t" not in rows[0]:
+            raise InvalidInputError(f"{path} is not a trajectory.csv (no header with a "
+                                    "'t' column)")
+        header, body = rows[0], rows[1:]
+        for k, row in enumerate(body):
+            if len(row) != len(header):
+                raise InvalidInputError(f"{path}: row {k + 2} has {len(row)} cells, the "
+                                        f"header {len(header)}")
+        cols: dict[str, NDArray[Any]] = {}
+        for j, name in enumerate(header):
+            cells = [row[j] for row in body]
+            if name in TEXT_COLUMNS:
+                cols[name] = np.array(cells, dtype=str)
+            else:
+                cols[name] = np.array([float(c) if c else np.nan for c in cells], dtype=float)
+        return cls(cols)
+
+    def __len__(self) -> int:
+        return int(self.columns["t"].shape[0])
+
+    def has(self, name: str) -> bool:
+        """Whether the column ``name`` was recorded."""
+        return name in self.columns
+
+    def col(self, name: str) -> FloatArray:
+        """Return the numeric column ``name`` (NaN everywhere when it was not recorded)."""
+        if name not in self.columns:
+            return np.full(len(self), np.nan)
+        return np.asarray(self.columns[name], dtype=float)
+
+    def _numbered(self, prefix: str) -> list[str]:
+        pat = re.compile(rf"{re.escape(prefix)}(\d+)")
+        found = [(int(m.group(1)), n) for n in self.columns if (m := pat.fullmatch(n))]
+        return [n for _, n in sorted(found)]
+
+    def n_joints(self, arm: str) -> int:
+        """Joint count of ``arm`` (``"l"`` leader, ``"f"`` follower), from the header."""
+        return len(self._numbered(f"q{arm}"))
+
+    def joints(self, arm: str) -> FloatArray:
+        """Return the recorded (realised) joints of ``arm`` [rad], shape (samples, n)."""
+        return self._stack(self._numbered(f"q{arm}"))
+
+    def commanded_rates(self, arm: str) -> FloatArray:
+        """Commanded joint rates of ``arm`` [rad/s] (row k: applied over the next sample)."""
+        return self._stack(self._numbered(f"q{arm}_dot"))
+
+    def realised_rates(self, arm: str) -> FloatArray:
+        """Realised joint rates of ``arm`` [rad/s]: finite differences of the joints.
+
+        Row k is ``(q[k+1] - q[k]) / (t[k+1] - t[k])``, the rate over the sample the
+        command of row k was applied; the last row is NaN.
+        """
+        return realised_rate(self.col("t"), self.joints(arm))
+
+    @property
+    def t(self) -> FloatArray:
+        """Sample times [s]."""
+        return self.col("t")
+
+    def _stack(self, names: list[str]) -> FloatArray:
+        if not names:
+            return np.zeros((len(self), 0))
+        return np.column_stack([self.col(n) for n in names])
+
+
+def realised_rate(t: Any, values: Any) -> FloatArray:
+    """Forward finite differences of ``values`` over ``t``; the last row is NaN.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s].
+    values : array_like, shape (n,) or (n, k)
+        Recorded values (SI units).
+
+    Returns
+    -------
+    ndarray, same shape as ``values``
+        Rates in SI units per second.
+    """
+    t = np.asarray(t, dtype=float)
+    v = np.asarray(values, dtype=float)
+    out = np.full(v.shape, np.nan)
+    if t.size > 1:
+        dt = np.diff(t)
+        out[:-1] = np.diff(v, axis=0) / (dt[:, None] if v.ndim == 2 else dt)
+    return out
+
+
+@dataclass(frozen=True)
+class ArmLimits:
+    """Range [rad] and speed limit [rad/s] of each joint of one arm."""
+
+    q_min: FloatArray
+    q_max: FloatArray
+    qd_max: FloatArray
+
+
+@dataclass(frozen=True)
+class PlotLimits:
+    """The limits a run's figures draw, in SI units.
+
+    Attributes
+    ----------
+    leader, follower : ArmLimits
+        Joint ranges [rad] and speed limits [rad/s].
+    grasp_range : (float, float)
+        Follower grasp range ``(sigma_min, sigma_max)`` [m].
+    grasp_speed_max : float
+        Sliding speed limit [m/s]; infinite when the run has none.
+    speed_limits_enforced : bool
+        Whether the run's step kept the speed limits (``velocity_limits``); when it
+        did not, the arms' speed limits are drawn as a reference only.
+    closure, tracking : (float, float)
+        ``(position [m], rotation [rad])`` tolerances of the closure and the leader.
+    singular_value_min : float
+        Singularity threshold on the smallest singular value (0: none).
+    leader_grasp_range : (float, float) or None
+        Range [m] of the leader's grasp when it slides too (None: a rigid grasp).
+    """
+
+    leader: ArmLimits
+    follower: ArmLimits
+    grasp_range: tuple[float, float]
+    grasp_speed_max: float
+    speed_limits_enforced: bool
+    closure: tuple[float, float]
+    tracking: tuple[float, float]
+    singular_value_min: float
+    leader_grasp_range: tuple[float, float] | None = None
+
+    @classmethod
+    def from_experiment(cls, exp: Experiment) -> PlotLimits:
+        """Read the limits from the experiment a run was made with."""
+        task = exp.task
+
+        def arm(a: Any) -> ArmLimits:
+            return ArmLimits(np.asarray(a.q_min, dtype=float), np.asarray(a.q_max, dtype=float),
+                             np.asarray(a.qd_max, dtype=float))
+
+        opts = exp.options
+        speed = float(opts.grasp_speed_max) if opts.velocity_limits else float("inf")
+        leader_surface = getattr(task, "leader_surface", None)  # a sliding leader grasp
+        leader_range = None if leader_surface is None else (
+            float(leader_surface.sigma_min), float(leader_surface.sigma_max))
+        return cls(leader=arm(task.leader), follower=arm(task.follower),
+                   grasp_range=(float(task.surface.sigma_min), float(task.surface.sigma_max)),
+                   grasp_speed_max=speed, speed_limits_enforced=bool(opts.velocity_limits),
+                   closure=(float(exp.limits.closure[0]), float(exp.limits.closure[1])),
+                   tracking=(float(exp.limits.tracking[0]), float(exp.limits.tracking[1])),
+                   singular_value_min=float(exp.limits.singular_value_min),
+                   leader_grasp_range=leader_range)
+
+    def arm(self, arm: str) -> ArmLimits:
+        """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""
+        return self.leader if arm == "l" else self.follower

@@ -1,0 +1,343 @@
+"""Figures of a run, of the reproduction and of the bench, and the run's report.html.
+
+The figures are checked through the matplotlib Figure objects the drawing functions
+return: limit lines (gid ``limit:<name>``) sit at the limits, shaded spans (gid
+``outside:<name>``) cover exactly the samples outside, speed axes turn logarithmic only
+beyond their limit.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.experiments.figures import (
+    RUN_FIGURES,
+    Curve,
+    PlotLimits,
+    RunData,
+    comparison_figure,
+    grasp_figure,
+    joints_figure,
+    rates_figure,
+    tracking_figure,
+)
+from dualarm_qp.experiments.figures.canvas import outside_spans
+from dualarm_qp.experiments.figures.rundata import ArmLimits
+from dualarm_qp.experiments.html_report import write_run_report
+from dualarm_qp.experiments.run import run_experiment
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+DEG = 180.0 / np.pi
+
+
+def short_limits_experiment(tmp_path: Path, duration: float = 0.31):
+    d = yaml.safe_load((CONFIGS / "puma_beam_limits.yaml").read_text())
+    d["controller"]["duration"] = duration  # 11 samples
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump(d))
+    return build_experiment(load_config(path), str(path))
+
+
+@pytest.fixture(scope="module")
+def limits_run(tmp_path_factory):
+    """A short run of the beam with speed limits, written with its figures."""
+    tmp = tmp_path_factory.mktemp("run")
+    exp = short_limits_experiment(tmp)
+    out = tmp / "out"
+    outcome = run_experiment(exp, out, progress=False)
+    return exp, out, outcome
+
+
+def lines(fig, gid: str) -> list:
+    return [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_gid() == gid]
+
+
+def line_levels(fig, gid: str) -> list[float]:
+    return sorted(float(ln.get_ydata()[0]) for ln in lines(fig, gid))
+
+
+def axis_levels(ax, gid: str) -> list[float]:
+    return sorted(float(ln.get_ydata()[0]) for ln in ax.get_lines() if ln.get_gid() == gid)
+
+
+def spans(ax, gid: str) -> list[float]:
+    """The shaded intervals of ``gid`` on ``ax``, flat: ``[start0, end0, start1, ...]``."""
+    out = []
+    for p in ax.patches:
+        if p.get_gid() != gid:
+            continue
+        if hasattr(p, "get_width"):
+            out.append((float(p.get_x()), float(p.get_x() + p.get_width())))
+        else:  # older matplotlib: a Polygon
+            xs = np.asarray(p.get_xy())[:, 0]
+            out.append((float(xs.min()), float(xs.max())))
+    return [x for pair in sorted(out) for x in pair]
+
+
+def flat(pairs) -> list[float]:
+    return [x for pair in pairs for x in pair]
+
+
+def synthetic(n_joints: int = 6, *, leader_grasp: bool = False) -> RunData:
+    """Ten samples, 0.1 s apart, with known excursions."""
+    t = np.arange(10) * 0.1
+    cols: dict = {"t": t}
+    for arm in ("l", "f"):
+        for j in range(n_joints):
+            cols[f"q{arm}{j + 1}"] = np.zeros(10)
+            cols[f"q{arm}_dot{j + 1}"] = np.zeros(10)
+    cols["qf3"] = np.array([0, 0, 2.0, 2.0, 2.0, 0, 0, 0, 0, 2.0])  # range +-1 rad
+    cols["grasp"] = np.array([0.45, 0.41, 0.39, 0.2, 0.2, 0.2, 0.5, 0.5, 0.2, 0.2])
+    cols["m"] = np.concatenate(([-8.3], np.full(9, -0.01)))
+    cols["scale"] = np.array([1, 1, 0.5, 1, 1, 1, 1, 1, 1, 0.0])
+    cols["sigma_min_l"] = np.full(10, 0.1)
+    cols["sigma_min_f"] = np.array([0.1, 0.1, 1e-4, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1])
+    for name in ("leader_pos_err", "leader_rot_err", "closure_pos_err", "closure_rot_err"):
+        cols[name] = np.full(10, 1e-9)
+    if leader_grasp:
+        cols["grasp_leader"] = np.linspace(0.0, 0.09, 10)
+        cols["m_leader"] = np.full(10, 0.1)
+    cols["status"] = np.array(["optimal"] * 10)
+    return RunData(cols)
+
+
+def synthetic_limits(n_joints: int = 6, *, leader_grasp_range=None) -> PlotLimits:
+    arm = ArmLimits(np.full(n_joints, -1.0), np.full(n_joints, 1.0), np.arange(1, n_joints + 1)
+                    * 1.0)
+    return PlotLimits(leader=arm, follower=arm, grasp_range=(0.0, 0.4), grasp_speed_max=0.1,
+                      speed_limits_enforced=True, closure=(1e-3, 1e-2), tracking=(1e-3, 1e-2),
+                      singular_value_min=1e-3, leader_grasp_range=leader_grasp_range)
+
+
+# --- a run's outputs --------------------------------------------------------------------
+
+def test_a_run_writes_its_figures_and_lists_them(limits_run):
+    _, out, outcome = limits_run
+    for name in (*RUN_FIGURES, "report.html"):
+        assert (out / name).stat().st_size > 1000, name
+    listed = json.loads((out / "summary.json").read_text())["outputs"]
+    mine = ["trajectory.csv", *RUN_FIGURES, "report.html"]
+    assert [f for f in listed if f in mine] == mine  # in the order they are written
+    assert sorted(listed) == sorted(p.name for p in out.iterdir() if p.name != "summary.json")
+    assert outcome.summary["outputs"] == listed
+
+
+def test_the_report_is_self_contained(limits_run):
+    _, out, _ = limits_run
+    page = (out / "report.html").read_text()
+    assert page.count('src="data:image/png;base64,') == len(RUN_FIGURES)
+    refs = re.findall(r"""(?:src|href)\s*=\s*["']?([^"'\s>]+)""", page, flags=re.I)
+    assert refs, "no reference found at all: the pattern is wrong"
+    external = [r for r in refs if re.match(r"(https?:)?//", r, flags=re.I)]
+    assert not external, external
+    assert "<script" not in page.lower() and "@import" not in page
+    assert "animation.html" not in page  # none in the folder
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["experiment"] in page and summary["status"] in page
+
+
+def test_the_report_shows_an_animation_beside_it(limits_run, tmp_path):
+    _, out, _ = limits_run
+    folder = tmp_path / "copy"
+    folder.mkdir()
+    for p in out.iterdir():
+        (folder / p.name).write_bytes(p.read_bytes())
+    (folder / "animation.html").write_text("<html></html>")
+    assert write_run_report(folder) == "report.html"  # from summary.json, as after a run
+    page = (folder / "report.html").read_text()
+    assert '<iframe src="animation.html"' in page and 'href="animation.html"' in page
+    assert page.count("data:image/png;base64,") == len(RUN_FIGURES)
+
+
+def test_no_plots_means_no_figures_and_no_report(tmp_path):
+    exp = short_limits_experiment(tmp_path, duration=0.062)
+    outcome = run_experiment(exp, tmp_path / "o", progress=False, plots=False)
+    written = {p.name for p in (tmp_path / "o").iterdir()}
+    assert not written & {*RUN_FIGURES, "report.html"}
+    assert "report.html" not in outcome.summary["outputs"]
+
+
+# --- limit lines at the limits ----------------------------------------------------------
+
+def test_run_figures_draw_the_experiments_limits(limits_run):
+    exp, out, _ = limits_run
+    data = RunData.read(out / "trajectory.csv")
+    limits = PlotLimits.from_experiment(exp)
+    leader, follower = exp.task.leader, exp.task.follower
+    rates = rates_figure(data, limits)
+    for j in range(follower.n):
+        v = follower.qd_max[j] * DEG
+        assert line_levels(rates, f"limit:qf_dot{j + 1}") == pytest.approx([-v, v])
+        v = leader.qd_max[j] * DEG
+        assert line_levels(rates, f"limit:ql_dot{j + 1}") == pytest.approx([-v, v])
+    joints = joints_figure(data, limits)
+    assert line_levels(joints, "limit:qf3") == pytest.approx(
+        [follower.q_min[2] * DEG, follower.q_max[2] * DEG])
+    grasp = grasp_figure(data, limits)
+    surface = exp.task.surface
+    assert line_levels(grasp, "limit:grasp") == pytest.approx(
+        [surface.sigma_min * 1e3, surface.sigma_max * 1e3])
+    assert exp.options.grasp_speed_max == pytest.approx(0.1)
+    assert line_levels(grasp, "limit:grasp_speed") == pytest.approx([-100.0, 100.0])
+    tracking = tracking_figure(data, limits)
+    assert line_levels(tracking, "limit:singular_value_min") == pytest.approx(
+        [exp.limits.singular_value_min])
+    assert line_levels(tracking, "limit:tracking_pos") == pytest.approx(
+        [exp.limits.tracking[0]])
+
+
+def test_the_follower_starts_outside_and_the_figures_say_so(limits_run):
+    """Table 2 starts q1 and the grasp outside their ranges: both are shaded from t = 0."""
+    exp, out, _ = limits_run
+    data = RunData.read(out / "trajectory.csv")
+    limits = PlotLimits.from_experiment(exp)
+    joints = joints_figure(data, limits)
+    ax_q1 = next(ax for ax in joints.axes if ax.get_title() == "follower q1")
+    shaded = spans(ax_q1, "outside:qf1")
+    assert shaded and shaded[0] == pytest.approx(0.0)
+    grasp = data.col("grasp")
+    expected = outside_spans(data.t, (grasp > exp.task.surface.sigma_max + 1e-9))
+    ax_g = grasp_figure(data, limits).axes[0]
+    assert spans(ax_g, "outside:grasp") == pytest.approx(flat(expected))
+    assert expected  # 11 samples of 31 ms: the grasp is still sliding back at 100 mm/s
+
+
+# --- shading and axes on known data -----------------------------------------------------
+
+def test_shading_spans_exactly_the_samples_outside():
+    data, limits = synthetic(), synthetic_limits()
+    ax_g = grasp_figure(data, limits).axes[0]
+    # grasp outside [0, 0.4] m at samples 0-1 and 6-7, sampled every 0.1 s
+    assert spans(ax_g, "outside:grasp") == pytest.approx(flat([(0.0, 0.15), (0.55, 0.75)]))
+    joints = joints_figure(data, limits)
+    ax = next(ax for ax in joints.axes if ax.get_title() == "follower q3")
+    assert spans(ax, "outside:qf3") == pytest.approx(flat([(0.15, 0.45), (0.85, 0.9)]))
+    ax = next(ax for ax in joints.axes if ax.get_title() == "follower q2")
+    assert spans(ax, "outside:qf2") == []
+    tracking = tracking_figure(data, limits)
+    assert spans(tracking.axes[1], "outside:singular_value_min") == pytest.approx(
+        [0.15, 0.25])
+    # the last row's scale (0: its command is never applied) is not shaded
+    assert spans(tracking.axes[2], "outside:scale") == pytest.approx(flat([(0.15, 0.25)]))
+
+
+def test_realised_rates_are_finite_differences():
+    data = synthetic()
+    real = data.realised_rates("f")
+    assert real[1, 2] == pytest.approx((2.0 - 0.0) / 0.1)
+    assert real[4, 2] == pytest.approx(-20.0)
+    assert np.isnan(real[-1]).all()
+    rates = rates_figure(data, synthetic_limits())
+    ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3")
+    # the realised rate (20 rad/s) is over the 3 rad/s limit at samples 1 and 4 (and 8)
+    assert spans(ax, "outside:qf_dot3") == pytest.approx(flat([(0.05, 0.15), (0.35, 0.45),
+                                                          (0.75, 0.85)]))
+    assert ax.get_yscale() == "symlog"
+
+
+def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():
+    data, limits = synthetic(), synthetic_limits()
+    ax = grasp_figure(data, limits).axes[1]
+    assert ax.get_yscale() == "symlog"  # the -8.3 m/s first sample: 83 times the limit
+    assert ax.get_yscale() == "symlog" and ax.yaxis.get_transform().linthresh == 100.0
+    low, high = ax.get_ylim()
+    assert low < -8300 and high > 8300
+    calm = synthetic()
+    calm.columns["m"] = np.full(10, -0.05)
+    calm.columns["grasp"] = np.full(10, 0.2)
+    ax = grasp_figure(calm, limits).axes[1]
+    assert ax.get_yscale() == "linear"
+    assert ax.get_ylim() == pytest.approx((-115.0, 115.0))
+
+
+def test_joint_counts_come_from_the_header_and_a_sliding_leader_grasp_is_drawn():
+    data = synthetic(7, leader_grasp=True)
+    assert data.n_joints("l") == data.n_joints("f") == 7
+    limits = synthetic_limits(7, leader_grasp_range=(0.0, 0.05))
+    joints = joints_figure(data, limits)
+    assert len([ax for ax in joints.axes if ax.get_visible()]) == 14
+    assert line_levels(rates_figure(data, limits), "limit:qf_dot7") == pytest.approx(
+        [-7 * DEG, 7 * DEG])
+    grasp = grasp_figure(data, limits)
+    labels = [ln.get_label() for ln in grasp.axes[0].get_lines()]
+    assert "leader grasp" in labels
+    assert line_levels(grasp, "limit:grasp_leader") == pytest.approx([0.0, 50.0])
+    assert spans(grasp.axes[0], "outside:grasp_leader") == pytest.approx(flat([(0.55, 0.9)]))
+
+
+def test_reading_a_file_that_is_not_a_trajectory_fails(tmp_path):
+    bad = tmp_path / "x.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(InvalidInputError, match="not a trajectory"):
+        RunData.read(bad)
+    bad.write_text("t,a\n0,1\n0.1\n")
+    with pytest.raises(InvalidInputError, match="row 3"):
+        RunData.read(bad)
+
+
+# --- the reproduction's comparison figures ----------------------------------------------
+
+def test_comparison_figure_zooms_shades_and_draws_both_limits():
+    t = np.arange(120) * 0.031
+    jump = np.concatenate(([0.45], np.full(119, 0.19)))  # one-sample jump, like case (b)
+    slide = np.maximum(0.45 - 0.1 * t, 0.1)  # 100 mm/s, like case (d)
+    fig = comparison_figure(
+        [Curve("(b)", t, jump, "C1"), Curve("(d)", t, slide, "C4")],
+        value_range=(0.0, 0.4), speed_limit=0.1, scale=1e3, value_label="grasp [mm]",
+        speed_label="speed [mm/s]", title="Fig. 6", zoom=0.5)
+    (full, zoom), (speed, _) = np.reshape(fig.axes, (2, 2))
+    assert zoom.get_xlim() == pytest.approx((-0.0155, 0.5))
+    assert axis_levels(full, "limit:range") == pytest.approx([0, 400])
+    assert axis_levels(zoom, "limit:range") == pytest.approx([400])  # 0 mm: far below
+    assert line_levels(fig, "limit:speed") == pytest.approx([-100, -100, 100, 100])
+    assert spans(full, "outside:range:(b)") == pytest.approx(flat([(0.0, 0.0155)]))
+    outside_d = slide > 0.4 + 1e-9
+    assert spans(full, "outside:range:(d)") == pytest.approx(flat(outside_spans(t, outside_d)))
+    # (b)'s realised speed, 260 mm over 31 ms, is over the limit in its first sample only
+    assert spans(speed, "outside:speed:(b)") == pytest.approx(flat([(0.0, 0.0155)]))
+    assert spans(speed, "outside:speed:(d)") == []
+    assert speed.get_yscale() == "symlog"
+
+
+def test_a_range_limit_far_from_the_data_is_named_not_drawn():
+    t = np.arange(5) * 0.1
+    fig = comparison_figure([Curve("(a)", t, np.radians([-31, -40, -50, -40, -31]), "C0")],
+                            value_range=(np.radians(-45), np.radians(225)),
+                            speed_limit=None, scale=DEG, value_label="q3 [deg]",
+                            speed_label="[deg/s]", title="Fig. 5")
+    assert line_levels(fig, "limit:range") == pytest.approx([-45, -45])
+    labels = [ln.get_label() for ln in fig.axes[0].get_lines()]
+    assert any("off the axis" in lab and "225" in lab for lab in labels)
+    assert spans(fig.axes[0], "outside:range:(a)") == pytest.approx(flat([(0.15, 0.25)]))
+
+
+# --- the bench figure -------------------------------------------------------------------
+
+def test_bench_figure_has_a_log_time_axis_and_success_and_accuracy(tmp_path):
+    from dualarm_qp.bench.figure import bench_figure
+    from dualarm_qp.bench.report import plot
+
+    rows = [{"experiment": cfg, "solver": s, "success_rate": rate,
+             "step_time_median_s": 1e-4, "step_time_p99_s": p99,
+             "solve_time_median_s": 5e-5, "bound_violation_max": 0.0,
+             "eq_residual_max": 1e-15, "closure_pos_err_max_m": 1e-5}
+            for cfg in ("beam", "bar") for s, rate, p99 in (("nullspace", 1.0, 1.3e-2),
+                                                              ("reference", 0.9, 2e-4))]
+    fig = bench_figure(rows)
+    assert len(fig.axes) == 6
+    time_ax, success_ax, accuracy_ax = fig.axes[:3]
+    assert time_ax.get_xscale() == "log" and accuracy_ax.get_xscale() == "log"
+    medians = [ln for ln in time_ax.get_lines() if ln.get_label() == "step median"]
+    assert list(medians[0].get_xdata()) == pytest.approx([100.0, 100.0])
+    widths = sorted(p.get_width() for p in success_ax.patches)
+    assert widths == pytest.approx([0.9, 1.0])
+    plot(tmp_path / "bench.png", rows)
+    assert (tmp_path / "bench.png").stat().st_size > 1000
