@@ -1,0 +1,229 @@
+"""Figures of a sweep's table: maps over two swept keys, curves over one.
+
+Each function takes the table's rows (dicts by column) and the swept keys and returns a
+:class:`matplotlib.figure.Figure` on its own Agg canvas (no pyplot, no global state).
+A swept key whose values are all numbers is a numeric axis; any other key is an axis of
+categories in sorted order. Points that share the two mapped values (other keys swept
+too) are summed up per cell: the mean completion, the worst ratio, the smallest margin.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import TwoSlopeNorm
+from matplotlib.figure import Figure
+
+from .points import START_UNREACHABLE
+
+#: Most distinct values of a numeric key drawn one by one; more are binned.
+MAX_LEVELS = 12
+
+#: The swept key of the solver's name.
+SOLVER_KEY = "solver.name"
+
+Rows = Sequence[dict[str, Any]]
+
+
+def _figure(**kwargs: Any) -> Figure:
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value)
+
+
+def _is_numeric(values: Sequence[Any]) -> bool:
+    return bool(values) and all(_finite(v) for v in values)
+
+
+class _Axis:
+    """Positions of a swept key's values on a plot axis."""
+
+    def __init__(self, key: str, values: Sequence[Any]) -> None:
+        self.key = key
+        self.numeric = _is_numeric(values)
+        self.levels: list[Any] = (sorted(set(values)) if self.numeric
+                                  else sorted(set(values), key=str))
+
+    def pos(self, value: Any) -> float:
+        return float(value) if self.numeric else float(self.levels.index(value))
+
+    def edges(self) -> np.ndarray:
+        """Cell edges around each level (midpoints; half a step beyond the ends)."""
+        p = np.array([self.pos(v) for v in self.levels], dtype=float)
+        if len(p) == 1:
+            return np.array([p[0] - 0.5, p[0] + 0.5])
+        mid = (p[1:] + p[:-1]) / 2
+        return np.concatenate([[p[0] - (mid[0] - p[0])], mid, [p[-1] + (p[-1] - mid[-1])]])
+
+    def label(self, ax: Any, which: str) -> None:
+        getattr(ax, f"set_{which}label")(self.key)
+        if not self.numeric:
+            getattr(ax, f"set_{which}ticks")(range(len(self.levels)),
+                                             [str(v) for v in self.levels])
+
+
+def _cells(rows: Rows, kx: str, ky: str, metric: Callable[[dict[str, Any]], float],
+           agg: Callable[[list[float]], float]) -> dict[tuple[Any, Any], float]:
+    """Return the metric summed up per (x, y) value pair (points with no number left out)."""
+    groups: dict[tuple[Any, Any], list[float]] = defaultdict(list)
+    for r in rows:
+        v = metric(r)
+        if _finite(v):
+            groups[(r[kx], r[ky])].append(float(v))
+    return {k: agg(v) for k, v in groups.items()}
+
+
+def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
+              values: dict[tuple[Any, Any], float], label: str, **style: Any) -> None:
+    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots."""
+    xa = _Axis(kx, [r[kx] for r in rows])
+    ya = _Axis(ky, [r[ky] for r in rows])
+    full = len({(r[kx], r[ky]) for r in rows}) == len(xa.levels) * len(ya.levels)
+    if full and len(xa.levels) * len(ya.levels) > 1:
+        grid = np.full((len(ya.levels), len(xa.levels)), np.nan)
+        for (x, y), v in values.items():
+            grid[ya.levels.index(y), xa.levels.index(x)] = v
+        art = ax.pcolormesh(xa.edges(), ya.edges(), np.ma.masked_invalid(grid), **style)
+    else:
+        pts = list(values.items())
+        art = ax.scatter([xa.pos(x) for (x, _), _ in pts], [ya.pos(y) for (_, y), _ in pts],
+                         c=[v for _, v in pts], s=36, **style)
+    fig.colorbar(art, ax=ax, label=label)
+    xa.label(ax, "x")
+    ya.label(ax, "y")
+    dead = {(r[kx], r[ky]) for r in rows if r.get("criterion") == START_UNREACHABLE}
+    alive = {(r[kx], r[ky]) for r in rows if r.get("criterion") != START_UNREACHABLE}
+    crossed = sorted(dead - alive, key=str)
+    if crossed:
+        ax.plot([xa.pos(x) for x, _ in crossed], [ya.pos(y) for _, y in crossed], "x",
+                color="black", ms=5, label="start unreachable")
+        ax.legend(loc="upper right", fontsize=7)
+
+
+def _draw_curve(ax: Any, rows: Rows, key: str, metric: Callable[[dict[str, Any]], float],
+                agg: Callable[[list[float]], float], label: str,
+                axis: _Axis | None = None) -> None:
+    axis = axis or _Axis(key, [r[key] for r in rows])
+    groups: dict[Any, list[float]] = defaultdict(list)
+    for r in rows:
+        v = metric(r)
+        if _finite(v):
+            groups[r[key]].append(float(v))
+    levels = [v for v in axis.levels if v in groups]
+    ax.plot([axis.pos(v) for v in levels], [agg(groups[v]) for v in levels], "o-")
+    axis.label(ax, "x")
+    ax.set_ylabel(label)
+    ax.grid(True, alpha=0.3)
+
+
+def _mean(v: list[float]) -> float:
+    return float(np.mean(v))
+
+
+def _completion(r: dict[str, Any]) -> float:
+    return float(r["path_completed_pct"]) if r["status"] != "interrupted" else math.nan
+
+
+def completion_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+    """Path completed [%] over the first two swept keys (or along the only one)."""
+    fig = _figure(figsize=(7.5, 5.5), layout="constrained")
+    ax = fig.subplots()
+    if len(swept) >= 2:
+        _draw_map(fig, ax, rows, swept[0], swept[1],
+                  _cells(rows, swept[0], swept[1], _completion, _mean),
+                  "path completed [%] (mean)", cmap="RdYlGn", vmin=0.0, vmax=100.0)
+    else:
+        _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)")
+        ax.set_ylim(-5, 105)
+    ax.set_title("Completion")
+    return fig
+
+
+def _ratio(r: dict[str, Any]) -> float:
+    v: Any = r.get("worst_limit_ratio")
+    return float(v) if _finite(v) else math.nan
+
+
+def _margin_deg(r: dict[str, Any]) -> float:
+    v: Any = r.get("joint_margin_min_rad")
+    return math.degrees(v) if _finite(v) else math.nan
+
+
+def limits_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+    """Worst realised limit ratio and smallest joint margin [deg] over the first two keys."""
+    fig = _figure(figsize=(13, 5.2), layout="constrained")
+    ax_r, ax_m = fig.subplots(1, 2)
+    if len(swept) >= 2:
+        kx, ky = swept[0], swept[1]
+        ratios = _cells(rows, kx, ky, _ratio, max)
+        top = max([*ratios.values(), 1.01])
+        _draw_map(fig, ax_r, rows, kx, ky, ratios, "worst realised limit ratio (max)",
+                  cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
+        margins = _cells(rows, kx, ky, _margin_deg, min)
+        _draw_map(fig, ax_m, rows, kx, ky, margins, "smallest joint margin [deg] (min)",
+                  cmap="viridis")
+    else:
+        _draw_curve(ax_r, rows, swept[0], _ratio, max, "worst realised limit ratio (max)")
+        ax_r.axhline(1.0, color="red", lw=0.8)
+        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, "smallest joint margin [deg]")
+        ax_m.axhline(0.0, color="red", lw=0.8)
+    ax_r.set_title("Worst realised range or speed ratio (above 1: outside a limit)")
+    ax_m.set_title("Smallest joint margin (below 0: outside a range)")
+    return fig
+
+
+def _binned(axis_values: Sequence[Any]) -> Callable[[Any], Any]:
+    """Return the level a value is drawn at: itself, or its bin's centre."""
+    levels = sorted(set(axis_values), key=str)
+    if not _is_numeric(list(levels)) or len(levels) <= MAX_LEVELS:
+        return lambda v: v
+    edges = np.histogram_bin_edges(np.asarray(levels, dtype=float), bins=10)
+    centres = (edges[1:] + edges[:-1]) / 2
+
+    def level(v: Any) -> Any:
+        i = int(np.clip(np.searchsorted(edges, float(v), side="right") - 1, 0, len(centres) - 1))
+        return float(centres[i])
+    return level
+
+
+def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+    """Share of points completed against one swept key, one line per solver.
+
+    The key is the first swept key that is not the solver's name; with the solver the
+    only one, a bar per solver.
+    """
+    fig = _figure(figsize=(7.5, 4.8), layout="constrained")
+    ax = fig.subplots()
+    ran = [r for r in rows if r["status"] != "interrupted"]
+    solvers = sorted({str(r.get("solver") or r.get(SOLVER_KEY)) for r in ran})
+    key = next((k for k in swept if k != SOLVER_KEY), None)
+    if key is None:
+        share = [np.mean([r["status"] == "completed" for r in ran
+                          if str(r.get("solver") or r.get(SOLVER_KEY)) == s]) for s in solvers]
+        ax.bar(solvers, share)
+        ax.set_xlabel("solver")
+    else:
+        level = _binned([r[key] for r in ran])
+        axis = _Axis(key, [level(r[key]) for r in ran])
+        for s in solvers:
+            mine = [{**r, key: level(r[key]), "ok": float(r["status"] == "completed")}
+                    for r in ran if str(r.get("solver") or r.get(SOLVER_KEY)) == s]
+            if mine:
+                _draw_curve(ax, mine, key, lambda r: r["ok"], _mean, "share completed",
+                            axis)
+                ax.lines[-1].set_label(s)
+        ax.legend(title="solver", fontsize=8)
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_ylabel("share of points completed")
+    ax.set_title(f"Success by solver{'' if key is None else ' against ' + key}")
+    return fig

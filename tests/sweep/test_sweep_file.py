@@ -1,0 +1,115 @@
+"""Sweep files: expansion into points, and bad input stopped (exit 2) naming the key."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+from sweep_tools import BASE, write_sweep
+
+from dualarm_qp.cli import main
+from dualarm_qp.errors import ConfigError
+from dualarm_qp.sweep.points import point_document, point_key, prepare_points, set_key
+from dualarm_qp.sweep.spec import expand, load_sweep, parse_sweep
+
+
+def test_grid_expands_last_key_fastest_with_every_random_sample():
+    spec = parse_sweep({"base": "b.yaml", "grid": {"a.x": [1, 2], "b": ["p", "q", "r"]},
+                        "random": {"n": 2, "seed": 3, "c.0": {"uniform": [0, 1]}}}, "s.yaml")
+    pts = expand(spec)
+    assert len(pts) == 12
+    assert [(p.values["a.x"], p.values["b"]) for p in pts[:4]] == [(1, "p"), (1, "p"),
+                                                                  (1, "q"), (1, "q")]
+    assert [p.index for p in pts] == list(range(12))
+    draws = [p.values["c.0"] for p in pts[:2]]
+    assert draws[0] != draws[1] and all(0 <= d <= 1 for d in draws)
+    assert [p.values["c.0"] for p in pts[2:4]] == draws  # the same samples at every point
+    again = expand(spec)
+    assert [p.values for p in again] == [p.values for p in pts]  # seeded: resumable
+
+
+def test_random_distributions_are_drawn_as_given():
+    spec = parse_sweep({"base": "b.yaml", "random": {
+        "n": 200, "seed": 1, "a": {"normal": [10, 0.5]}, "b": {"choice": ["x", "y"]}}},
+        "s.yaml")
+    pts = expand(spec)
+    a = [p.values["a"] for p in pts]
+    assert 9.5 < sum(a) / len(a) < 10.5
+    assert {p.values["b"] for p in pts} == {"x", "y"}
+
+
+def test_set_key_replaces_list_items_and_nested_keys():
+    doc = {"follower": {"base": {"position": [1, 2, 3]}}, "solver": {"name": "x"}}
+    set_key(doc, "follower.base.position.1", 20, spec_path="s.yaml")
+    set_key(doc, "solver.options.eps", 1e-6, spec_path="s.yaml")
+    assert doc["follower"]["base"]["position"] == [1, 20, 3]
+    assert doc["solver"] == {"name": "x", "options": {"eps": 1e-6}}
+    with pytest.raises(ConfigError, match="index 5 is out of range") as err:
+        set_key(doc, "follower.base.position.5", 0, spec_path="s.yaml")
+    assert err.value.key == "follower.base.position.5" and err.value.path == "s.yaml"
+    with pytest.raises(ConfigError, match="not a mapping or a list"):
+        set_key(doc, "solver.name.x", 0, spec_path="s.yaml")
+
+
+def test_point_key_follows_content_and_code(tmp_path):
+    spec = load_sweep(write_sweep(tmp_path))
+    base = yaml.safe_load(BASE.read_text())
+    p0, p1 = expand(spec)[:2]
+    d0 = point_document(base, spec, p0)
+    assert point_key(d0, 1, "c") == point_key(point_document(base, spec, p0), 1, "c")
+    assert point_key(d0, 1, "c") != point_key(point_document(base, spec, p1), 1, "c")
+    assert point_key(d0, 1, "c") != point_key(d0, 2, "c")
+    assert point_key(d0, 1, "c") != point_key(d0, 1, "other code")
+
+
+def test_an_unreachable_start_is_a_result_not_bad_input(tmp_path):
+    spec = load_sweep(write_sweep(tmp_path))
+    tasks = prepare_points(spec, "code")
+    unreachable = {(t.values["follower.base.position.0"], t.values["follower.base.position.1"])
+                   for t in tasks if t.start_failure}
+    assert (0, 1000) in unreachable and (300, 1380) not in unreachable
+    bad = write_sweep(tmp_path, "nowhere", grid={"follower.base.position.0": [5000, 6000]})
+    with pytest.raises(ConfigError, match="no point can start"):
+        prepare_points(load_sweep(bad), "code")
+
+
+def _exit_and_error(capsys, path, out):
+    code = main(["sweep", str(path), "--out", str(out), "--quiet"])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("extra", "grid", "named", "says"), [
+    ({"grids": {}}, None, "grids", "valid: name, description, base, set, grid"),
+    ({}, {"follower.bse.position.0": [1, 2]}, "follower.bse", "unknown key"),
+    ({}, {"solver.name": ["nullspace", "qp:nope"]}, "solver.name", "unknown solver 'qp:nope'"),
+    ({}, {"controller.dt": [0.031, "fast"]}, "controller.dt", "not text"),
+    ({}, {"follower.base.position.7": [1]}, "follower.base.position.7", "out of range"),
+    ({}, {"solver.policy": ["scale"]}, "solver.policy", "unknown key"),
+    ({"random": {"n": 3, "controller.dt": {"uniform": [0, 1]}}}, None, "random.seed",
+     "missing 'seed'"),
+    ({"random": {"n": 3, "seed": 1, "controller.dt": {"beta": [0, 1]}}}, None,
+     "controller.dt", "valid: uniform, normal, choice"),
+    ({"repeat": 0}, None, "repeat", ">= 1"),
+])
+def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, grid, named,
+                                                     says):
+    path = write_sweep(tmp_path, grid=grid, extra=extra)
+    out = tmp_path / "out"
+    code, err = _exit_and_error(capsys, path, out)
+    assert code == 2, err
+    assert str(path) in err and f"key '{named}" in err and says in err, err
+    assert "Traceback" not in err
+    assert not (out / "points.jsonl").exists()  # nothing ran
+
+
+def test_a_missing_base_file_names_it(tmp_path, capsys):
+    path = write_sweep(tmp_path, extra={"base": "missing.yaml"})
+    code, err = _exit_and_error(capsys, path, tmp_path / "out")
+    assert code == 2 and "missing.yaml" in err and "file not found" in err
+
+
+def test_a_folder_holding_other_files_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    code, err = _exit_and_error(capsys, write_sweep(tmp_path), out)
+    assert code == 2 and "holds other files" in err

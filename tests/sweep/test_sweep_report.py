@@ -1,0 +1,67 @@
+"""The report: self-contained HTML, maps over any kind of key; imports stay lazy."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import pytest
+
+from dualarm_qp.sweep.points import PointTask
+from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
+from dualarm_qp.sweep.table import build_rows, read_table, write_table
+from dualarm_qp.sweep.worker import empty_record
+
+
+def _rows(values: list[dict], statuses: list[str]) -> tuple[list[dict], list[str]]:
+    swept = list(values[0])
+    tasks = [PointTask(i, f"k{i}", v, {}, "base.yaml", 1) for i, v in enumerate(values)]
+    records = {}
+    for i, status in enumerate(statuses):
+        if status == "interrupted":
+            continue
+        rec = empty_record(status, None if status == "completed" else "stalled", "")
+        rec.update(key=f"k{i}", solver=values[i].get("solver.name", "nullspace"),
+                   path_completed_pct=100.0 if status == "completed" else 10.0 * i,
+                   worst_limit_ratio=0.5 + 0.1 * i, joint_margin_min_rad=0.1 - 0.01 * i)
+        records[f"k{i}"] = rec
+    return build_rows(tasks, swept, records), swept
+
+
+@pytest.mark.parametrize("values", [
+    [{"a.0": x, "b": y} for x in (1, 2, 3) for y in (0.5, 1.5)],           # a full grid
+    [{"a.0": 0.1 * i, "b": 0.37 * i % 1} for i in range(6)],               # scattered
+    [{"solver.name": s, "v": x} for s in ("nullspace", "qp:daqp") for x in (1, 2, 3)],
+    [{"v": x} for x in range(6)],                                          # one key
+])
+def test_report_draws_every_kind_of_sweep_into_one_file(tmp_path, values):
+    statuses = ["completed", "failed", "completed", "interrupted", "failed", "completed"]
+    rows, swept = _rows(values, statuses)
+    write_table(tmp_path, rows, swept)
+    back = read_table(tmp_path)
+    assert [r["point"] for r in back] == list(range(6))
+    assert [r["status"] for r in back] == statuses
+    assert math.isnan(back[3]["path_completed_pct"])
+    pngs = draw_figures(back, swept)
+    assert all(data.startswith(b"\x89PNG") for data in pngs.values())
+    html = render_report(back, {"name": "t", "swept_keys": swept}, pngs)
+    assert html.count("data:image/png;base64,") == 3
+    assert "src='http" not in html and "<script" not in html and "<link" not in html
+
+
+def test_worst_points_put_failures_first():
+    rows, _ = _rows([{"x": i} for i in range(6)],
+                    ["completed", "failed", "completed", "interrupted", "failed", "completed"])
+    worst = worst_points(rows, 4)
+    assert [r["point"] for r in worst] == [1, 4, 3, 5]
+
+
+def test_importing_the_sweep_package_imports_no_dask_pyarrow_or_matplotlib():
+    code = ("import sys, dualarm_qp.sweep\n"
+            "bad = [m for m in ('dask', 'distributed', 'pyarrow', 'matplotlib') "
+            "if m in sys.modules]\n"
+            "assert not bad, bad\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr
