@@ -1,8 +1,33 @@
-"""dualarm_qp: coordinate two robot arms carrying one object, with a sliding grasp."""
+"""dualarm_qp: coordinate two robot arms carrying one object, with a sliding grasp.
 
-from .errors import DualArmError
+The names below are the public API; ``docs/api.md`` lists them with their units (SI:
+m, rad, s). Arms, surfaces, trajectories, the task, the state and the step options
+are imported with the package. The controller, the solvers and the experiments pull in
+the QP backends and SciPy, so they are imported on first use (``dualarm_qp.rollout``,
+``from dualarm_qp import get_solver``): ``import dualarm_qp`` stays light.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+from .errors import (
+    ConfigError,
+    DualArmError,
+    IKError,
+    InfeasibleStepError,
+    InvalidInputError,
+    KinematicsError,
+    LimitsError,
+    NonFiniteError,
+    ShapeError,
+    SolverError,
+    SolverNotFoundError,
+)
 from .kinematics import (
     DHTable,
+    RobotModelError,
     SerialArm,
     example_robot_arm,
     ik_dls,
@@ -10,17 +35,115 @@ from .kinematics import (
     puma560_ik,
     urdf_arm,
 )
+from .step.build import DualArmState, StepOptions
+from .step.problem import StepProblem
+from .task.scene import DualArmTask
+from .task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
+from .task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
+
+if TYPE_CHECKING:
+    from .control import ControlOutput, DualArmController, RolloutResult, RunLimits, rollout
+    from .experiments import Experiment, build_experiment, load_config, run_experiment
+    from .solvers import (
+        Status,
+        StepSolution,
+        StepSolver,
+        get_solver,
+        list_solvers,
+        solve_step,
+    )
+    from .solvers.registry import SolverOptionError
 
 __version__ = "0.1.0"
 
+#: Names imported on first access, and the subpackage each comes from.
+_LAZY = {
+    "ControlOutput": "control",
+    "DualArmController": "control",
+    "RolloutResult": "control",
+    "RunLimits": "control",
+    "rollout": "control",
+    "Status": "solvers",
+    "StepSolution": "solvers",
+    "StepSolver": "solvers",
+    "get_solver": "solvers",
+    "list_solvers": "solvers",
+    "solve_step": "solvers",
+    "SolverOptionError": "solvers.registry",
+    "Experiment": "experiments",
+    "build_experiment": "experiments",
+    "load_config": "experiments",
+    "run_experiment": "experiments",
+}
+
 __all__ = [
+    # kinematics
     "DHTable",
-    "DualArmError",
     "SerialArm",
-    "__version__",
     "example_robot_arm",
     "ik_dls",
     "puma560",
     "puma560_ik",
     "urdf_arm",
+    # task
+    "CurvedBar",
+    "CylinderSurface",
+    "DualArmTask",
+    "GraspSurface",
+    "LinearTrajectory",
+    "PlaneBar",
+    "Trajectory",
+    "WaypointTrajectory",
+    # step
+    "DualArmState",
+    "StepOptions",
+    "StepProblem",
+    # solvers
+    "Status",
+    "StepSolution",
+    "StepSolver",
+    "get_solver",
+    "list_solvers",
+    "solve_step",
+    # control
+    "ControlOutput",
+    "DualArmController",
+    "RolloutResult",
+    "RunLimits",
+    "rollout",
+    # experiments
+    "Experiment",
+    "build_experiment",
+    "load_config",
+    "run_experiment",
+    # errors
+    "ConfigError",
+    "DualArmError",
+    "IKError",
+    "InfeasibleStepError",
+    "InvalidInputError",
+    "KinematicsError",
+    "LimitsError",
+    "NonFiniteError",
+    "RobotModelError",
+    "ShapeError",
+    "SolverError",
+    "SolverNotFoundError",
+    "SolverOptionError",
+    "__version__",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a name of :data:`_LAZY` from its subpackage on first access."""
+    where = _LAZY.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{where}", __name__), name)
+    globals()[name] = value  # later accesses skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    """Every public name, the lazy ones included (for completion and ``dir()``)."""
+    return sorted(set(globals()) | set(__all__))
