@@ -149,6 +149,16 @@ class SerialArm:
     name : str
         Label used in messages.
 
+    Attributes
+    ----------
+    source : str
+        Where the model came from, for records such as ``summary.json``:
+        ``"dh:standard"`` / ``"dh:modified"`` for a DH table and
+        ``"pinocchio:<model name>"`` for a model; the builders replace it with their own
+        (``"preset:puma560"``, ``"urdf:<file> <root>-><tip>"``,
+        ``"example_robot:<robot> <root>-><tip>"``). Copies made by :meth:`with_base`
+        and :meth:`with_limits` keep it.
+
     Raises
     ------
     ShapeError, NonFiniteError, LimitsError, InvalidInputError
@@ -169,15 +179,18 @@ class SerialArm:
     ) -> None:
         self.name = name
         self.dh: DHTable | None
+        self.source: str
         if isinstance(source, DHTable):
             if tip is not None:
                 raise InvalidInputError("'tip' names a frame of a Pinocchio model; the "
                                         "flange of a DH arm is its last DH frame")
             self.dh = source
+            self.source = f"dh:{source.convention}"
             template, links, flange = _dh_model(source)
             lo = hi = vel = None
         elif isinstance(source, pin.Model):
             self.dh = None
+            self.source = f"pinocchio:{source.name or name}"
             template, links, flange = _chain_model(source, tip, name)
             lo, hi, vel = _model_limits(template)
         else:

@@ -63,7 +63,7 @@ def puma560(base: Any = None, *, tool: Any = None, qd_max: Any = None,
         A 6-joint standard-DH arm with Table 1 joint ranges.
     """
     dh = DHTable(PUMA560_A, PUMA560_ALPHA, PUMA560_D, np.zeros(6), "standard")
-    return SerialArm(
+    arm = SerialArm(
         dh,
         q_min=PUMA560_Q_MIN,
         q_max=PUMA560_Q_MAX,
@@ -72,3 +72,5 @@ def puma560(base: Any = None, *, tool: Any = None, qd_max: Any = None,
         tool=tool,
         name=name,
     )
+    arm.source = "preset:puma560"
+    return arm

@@ -135,8 +135,10 @@ def urdf_arm(
     for frame in model.frames:
         if frame.parentJoint == 0:
             frame.placement = to_root * frame.placement
-    return SerialArm(model, tip=tip, q_min=q_min, q_max=q_max, qd_max=qd_max, base=base,
-                     tool=tool, name=name or f"{label}:{tip}")
+    arm = SerialArm(model, tip=tip, q_min=q_min, q_max=q_max, qd_max=qd_max, base=base,
+                    tool=tool, name=name or f"{label}:{tip}")
+    arm.source = f"urdf:{path} {root}->{tip}"
+    return arm
 
 
 def _below(model: Any, frame: int, ancestor: int) -> bool:
@@ -209,5 +211,7 @@ def example_robot_arm(
     ``example_robot_arm("panda", "panda_link0", "panda_link8")`` and
     ``example_robot_arm("baxter", "left_arm_mount", "left_gripper")``.
     """
-    return urdf_arm(example_robot_urdf(robot), root, tip, q_min=q_min, q_max=q_max,
-                    qd_max=qd_max, base=base, tool=tool, name=name or f"{robot}:{tip}")
+    arm = urdf_arm(example_robot_urdf(robot), root, tip, q_min=q_min, q_max=q_max,
+                   qd_max=qd_max, base=base, tool=tool, name=name or f"{robot}:{tip}")
+    arm.source = f"example_robot:{robot} {root}->{tip}"
+    return arm

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ RANGE_TOL = 1e-9       # the distance outside [lo, hi] may not grow by more than
 PATH_TOL = 1e-9        # last path_t == t0 + duration
 POSITION_TOL = 1e-3    # leader tracking and grasp closure, metres
 
-LEADER = [f"ql{i}" for i in range(1, 7)]
+LEADER = [f"ql{i}" for i in range(1, 7)]     # the PUMA 560's columns
 FOLLOWER = [f"qf{i}" for i in range(1, 7)]
 FAILURE_CRITERIA = frozenset({"solver", "closure", "tracking", "singularity", "stalled",
                               "path_incomplete", "range", "speed"})
@@ -67,24 +68,46 @@ class Limits:
     speeds: dict[str, float]                 # column -> v_max
 
 
+def joint_columns(traj: dict[str, np.ndarray], prefix: str) -> list[str]:
+    """The CSV's joint columns ``<prefix>1``, ``<prefix>2``, ... in order (any joint count)."""
+    found = sorted((int(m.group(1)), c) for c in traj
+                   if (m := re.fullmatch(rf"{prefix}(\d+)", c)))
+    return [c for _, c in found]
+
+
 def limits_of(exp: Any) -> Limits:
+    """Every joint's range and speed limit (any joint count), the grasp's, and the
+    leader's grasp's when it slides (column ``grasp_leader``)."""
     task, opts = exp.task, exp.options
     bounds: dict[str, tuple[float, float]] = {}
     speeds: dict[str, float] = {}
-    for cols, arm in ((LEADER, task.leader), (FOLLOWER, task.follower)):
-        for i, c in enumerate(cols):
-            bounds[c] = (float(arm.q_min[i]), float(arm.q_max[i]))
-            speeds[c] = float(arm.qd_max[i])
-    bounds["grasp"] = (float(task.surface.sigma_min), float(task.surface.sigma_max))
-    speeds["grasp"] = float(opts.grasp_speed_max)
+    for prefix, arm in (("ql", task.leader), ("qf", task.follower)):
+        for i in range(arm.n):
+            bounds[f"{prefix}{i + 1}"] = (float(arm.q_min[i]), float(arm.q_max[i]))
+            speeds[f"{prefix}{i + 1}"] = float(arm.qd_max[i])
+    surfaces = [("grasp", task.surface)]
+    if task.leader_surface is not None:
+        surfaces.append(("grasp_leader", task.leader_surface))
+    for c, surface in surfaces:
+        bounds[c] = (float(surface.sigma_min), float(surface.sigma_max))
+        speeds[c] = float(opts.grasp_speed_max)
     return Limits(dt=float(opts.dt), t_end=float(exp.initial.t) + float(exp.duration),
                   speed_limits=bool(opts.velocity_limits), bounds=bounds, speeds=speeds)
 
 
 def check_valid(traj: dict[str, np.ndarray]) -> list[str]:
-    """Every row finite in t, path_t, the joints and the grasp; at least one row."""
+    """Every row finite in t, path_t, the joints and the grasp(s); at least one row.
+
+    The joint columns are read from the header (``ql1..``, ``qf1..``: any joint count,
+    at least one each).
+    """
     out = []
-    for c in ["t", "path_t", *LEADER, *FOLLOWER, "grasp"]:
+    leader, follower = joint_columns(traj, "ql"), joint_columns(traj, "qf")
+    for prefix, cols in (("ql", leader), ("qf", follower)):
+        if not cols:
+            out.append(f"missing column {prefix}1")
+    extra = ["grasp_leader"] if "grasp_leader" in traj else []
+    for c in ["t", "path_t", *leader, *follower, "grasp", *extra]:
         if c not in traj:
             out.append(f"missing column {c}")
             continue

@@ -18,17 +18,27 @@ from dualarm_qp.kinematics import (
     puma560_ik,
     urdf_arm,
 )
-from dualarm_qp.kinematics.robots import example_robot_urdf, example_robots_dir
+from dualarm_qp.kinematics.robots import (
+    EXAMPLE_ROBOTS,
+    example_robot_urdf,
+    example_robots_dir,
+)
 
 needs_robots = pytest.mark.skipif(
     example_robots_dir() is None,
     reason="example-robot-data is not installed (pip install -e '.[robots]'; '.[dev]' has it)")
 
-#: (robot, root, tip) of every shipped chain we support.
+#: (robot, root, tip) of every shipped chain we support: each robot of
+#: ``EXAMPLE_ROBOTS``, and Baxter's two arms from their mounts and from the robot's base.
 CHAINS = [
+    ("ur3", "base_link", "tool0"),
     ("ur5", "base_link", "tool0"),
+    ("ur10", "base_link", "tool0"),
     ("panda", "panda_link0", "panda_link8"),
+    ("xarm7", "link_base", "link_eef"),
+    ("z1", "link00", "link06"),
     ("baxter", "left_arm_mount", "left_gripper"),
+    ("baxter", "base", "left_gripper"),
     ("baxter", "base", "right_gripper"),
 ]
 
@@ -52,7 +62,7 @@ def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
 def urdf_limits(path: Path, joints: list[str]) -> tuple[np.ndarray, ...]:
     """``lower``, ``upper`` and ``velocity`` of the joints' limit tags, read as XML."""
     tags = {j.get("name"): j.find("limit") for j in ET.parse(path).getroot().findall("joint")}
-    lo, hi, vel = ([float(tags[name].get(k)) for name in joints]  # type: ignore[union-attr]
+    lo, hi, vel = ([float(tags[name].get(k)) for name in joints]  # type: ignore[union-attr, arg-type]
                    for k in ("lower", "upper", "velocity"))
     return np.array(lo), np.array(hi), np.array(vel)
 
@@ -81,6 +91,11 @@ def test_puma_from_dh_jacobian_matches_finite_differences() -> None:
 def test_shipped_chain_jacobian_matches_finite_differences(robot: str, root: str,
                                                             tip: str) -> None:
     check_jacobian(example_robot_arm(robot, root, tip), 1)
+
+
+def test_every_shipped_robot_has_a_checked_chain() -> None:
+    """A robot added to EXAMPLE_ROBOTS without a chain here would go untested."""
+    assert {robot for robot, _, _ in CHAINS} == set(EXAMPLE_ROBOTS)
 
 
 @needs_robots
