@@ -37,7 +37,8 @@ class Trace:
     correction applied. Both equal the plain values (and 0) when no correction ran.
     ``feedback_pos`` and ``feedback_rot`` are the closure feedback ``K e`` in the
     follower's right-hand side [m/s, rad/s]: the velocity-level correction, which the
-    step's limits bound.
+    step's limits bound. ``support_force`` is the push ``h`` [N] of a supporting
+    follower (Case 2) at the row's state (NaN for a grasp, and for a step that raised).
     """
 
     t: FloatArray
@@ -76,6 +77,7 @@ class Trace:
     assembly_time_s: FloatArray
     solve_time_s: FloatArray
     step_time_s: FloatArray
+    support_force: FloatArray
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
@@ -133,6 +135,7 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
     tr.assembly_time_s[k] = out.times.assembly
     tr.solve_time_s[k] = out.times.solve
     tr.step_time_s[k] = out.times.total
+    tr.support_force[k] = out.build.support_force
 
 
 def record_state(tr: Trace, k: int, t: float, state: DualArmState,

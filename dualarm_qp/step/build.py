@@ -43,7 +43,9 @@ from .._validate import as_array
 from ..errors import InvalidInputError, NonFiniteError
 from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
+from ..task.contact import SupportContact
 from ..task.scene import DualArmTask
+from ..task.support import SupportLine
 from .problem import StepProblem
 
 FloatArray = NDArray[np.float64]
@@ -168,6 +170,8 @@ class StepBuild:
         Smallest singular value of the leader's and the follower's tool Jacobian.
     kinematics_time, assembly_time : float
         Seconds spent in the kinematics and in assembling the problem.
+    support_force : float
+        Follower push ``h`` [N] of a Case 2 support at this state (NaN for a grasp).
     """
 
     problem: StepProblem
@@ -180,6 +184,7 @@ class StepBuild:
     sigma_min: tuple[float, float]
     kinematics_time: float
     assembly_time: float
+    support_force: float = math.nan
 
 
 def rate_bounds(
@@ -329,6 +334,7 @@ class StepBuilder:
         self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
         self._surfaces = [surface] + ([] if task.leader_surface is None
                                       else [task.leader_surface])
+        self._contact = task.contact
 
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
               x_prev: FloatArray | None = None) -> StepBuild:
@@ -347,12 +353,17 @@ class StepBuilder:
         ------
         NonFiniteError
             The problem would hold NaN or infinity.
+        InvalidInputError
+            A supporting follower (Case 2) would have to pull at this state.
         """
         t0 = time.perf_counter()
         task, opts = self.task, self.options
         n_l, n_f, n = self.n_l, self.n_f, self.n
         sigma, sigma_l = state.sigma, state.sigma_leader
         kin = self.carry.update(state.q_l, sigma, sigma_l)
+        support_force = math.nan
+        if self._contact is not None:
+            kin, support_force = self._support(self._contact, kin, state)
         T_f, J_f = task.follower.fk_jacobian(state.q_f)
         sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
         t1 = time.perf_counter()
@@ -401,4 +412,33 @@ class StepBuilder:
                               n_grasp=self.n_grasp, names=self.names, x_prev=x_prev)
         t2 = time.perf_counter()
         return StepBuild(problem, recovering, e_c, e_l, kin, T_f, J_f, sigma_min,
-                         t1 - t0, t2 - t1)
+                         t1 - t0, t2 - t1, support_force)
+
+    def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
+                 ) -> tuple[CarryKinematics, float]:
+        """Case 2: put the follower's path on the support line of this step; its push.
+
+        The line is computed for the object's orientation at ``state`` and frozen for
+        the step (as the paper freezes the grasp frame, Sec. 3.3). When it moved, the
+        follower's grasp joint is re-placed and the kinematics recomputed; the target
+        then jumps by the line's motion at ``sigma``, which the closure feedback
+        removes. The grasp bounds of the step are the line's (``h > 0``).
+
+        Raises
+        ------
+        InvalidInputError
+            No pushing support for this orientation, the line reversed (gravity's
+            component along the push changed sign), or ``h <= 0`` at ``sigma``.
+        """
+        line = contact.line(kin.T_object[:3, :3])
+        current = self._surfaces[0]
+        if (isinstance(current, SupportLine)
+                and float(line.tangent(0.0) @ current.tangent(0.0)) < 0.0):
+            raise InvalidInputError(
+                "support lost: the support line reversed (gravity's component along the "
+                "surface normal changed sign), so the follower would have to pull")
+        if not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12):
+            self.carry.place_follower(line)
+            kin = self.carry.update(state.q_l, state.sigma, state.sigma_leader)
+        self._surfaces[0] = line
+        return kin, contact.force(line, state.sigma)

@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from .surfaces import GraspSurface, SlideJoint
 
@@ -117,6 +118,8 @@ class CarryModel:
             "grasp_follower")
         self._target = model.addFrame(pin.Frame("target", follower_joint, 0,
                                                 _se3(joint_f.child), pin.FrameType.OP_FRAME))
+        self._follower_joint, self._follower_at = follower_joint, object_at
+        self._follower_kind = (joint_f.kind, joint_f.axis)
         self._tool = leader.tool_frame_id
         self._follower_rate = joint_f.rate
         self.n_grasp = 1 if leader_surface is None else 2
@@ -132,6 +135,30 @@ class CarryModel:
         self.model = model
         self.data = model.createData()
         self._q = np.zeros(model.nq)
+
+    def place_follower(self, surface: GraspSurface) -> None:
+        """Put the follower's grasp joint on a new path of the same kind.
+
+        For a path that changes between steps (a Case 2 support line follows gravity in
+        object coordinates, :mod:`~dualarm_qp.task.contact`): the joint's placement
+        ``P`` and the target's ``C`` are replaced, the model is otherwise unchanged.
+
+        Raises
+        ------
+        InvalidInputError
+            The new path's joint is of another kind or axis.
+        """
+        joint = surface.slide_joint()
+        if (joint.kind, joint.axis) != self._follower_kind:
+            raise InvalidInputError(
+                f"the follower's grasp joint is {self._follower_kind[0]} along "
+                f"{self._follower_kind[1]}; a {joint.kind} joint along {joint.axis} cannot "
+                "replace it")
+        model = self.model
+        model.jointPlacements[self._follower_joint] = self._follower_at * _se3(joint.placement)
+        model.frames[self._target].placement = _se3(joint.child)
+        self._follower_rate = joint.rate
+        self._col_rate[self.n_l] = joint.rate
 
     def update(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0) -> CarryKinematics:
         """Compute every pose and Jacobian at ``(q_l [rad], sigma_f [m], sigma_l [m])``."""

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from .._validate import as_pose
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
+from .contact import SupportContact
 from .surfaces import GraspSurface
 from .trajectory import Trajectory
 
@@ -49,6 +50,12 @@ class DualArmTask:
         The leader's own sliding path on the object (object coordinates); None (the
         default): the leader grasps rigidly at ``H1``. When given, ``H1`` must be the
         identity: the leader's grasp frame is ``leader_surface.pose(sigma_l)``.
+    contact : SupportContact, optional
+        None (the default): the follower grasps the object (Case 1) and ``surface`` is
+        its fixed path. A :class:`~dualarm_qp.task.contact.SupportContact`: the follower
+        only supports it (Case 2); ``surface`` is then the support line at the start,
+        and the step builder replaces it by the line for the object's orientation at
+        every step (docs/support.md). Needs a rigid leader grasp.
     """
 
     leader: SerialArm
@@ -57,6 +64,7 @@ class DualArmTask:
     surface: GraspSurface
     trajectory: Trajectory
     leader_surface: GraspSurface | None = None
+    contact: SupportContact | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "H1", as_pose(self.H1, "H1"))
@@ -66,6 +74,12 @@ class DualArmTask:
                                                                rtol=0.0, atol=1e-12):
             raise InvalidInputError("a sliding leader grasp places the object by its "
                                     "surface: H1 must be the identity")
+        if self.contact is not None:
+            if not isinstance(self.contact, SupportContact):
+                raise InvalidInputError("contact must be None (a grasp) or a SupportContact")
+            if self.leader_surface is not None:
+                raise InvalidInputError("a supporting follower needs a rigid leader grasp "
+                                        "(no leader_surface)")
 
     @property
     def n_grasp(self) -> int:

@@ -4,9 +4,11 @@ Model (the paper's assumptions a-c, all vectors in object coordinates):
 
 * the leader's hand, at ``r1`` [m] (the paper's ``r1^0``: the leader-hand origin seen
   from the object origin), can apply any force ``f_l`` [N] but no moment;
-* the object's mass ``M`` [kg] is concentrated at its mass centre, which we take to be
-  the origin of the object frame (the paper does so implicitly: Eq. 7 has no moment of
-  gravity about the origin);
+* the object's mass ``M`` [kg] is concentrated at its mass centre ``r_c`` [m]. The
+  paper takes it at the origin of the object frame (implicitly: Eq. 7 has no moment of
+  gravity about the origin), which is our default; for any other ``r_c`` every formula
+  below holds with ``r1`` replaced by ``r1 - r_c`` in the moment (the equations written
+  about the mass centre), see "Mass centre" below;
 * the follower's hand at ``r2`` can only push along the surface normal,
   ``f_f = h a*(r2)`` with ``h > 0`` [N] (Eq. 10);
 * only ``g~ = [g_x, 0, 0]`` of the gravity vector ``g = [g_x, g_y, g_z]`` [m/s^2] is
@@ -32,6 +34,18 @@ this gives ``r* = [0, r1y (1 + M g_x / h), -zmax (1 + M g_x / h)]``. The printed
 has the opposite sign on both ``M g_x / h`` terms; it satisfies Eq. 9 only with ``g~``
 replaced by ``-g~``. Eqs. 12 and 13 hold either way (the locus is the same line). See
 ``docs/paper_corrections.md``, section "Case 2 support (Eqs. 9-13)".
+
+Mass centre. With the mass centre at ``r_c`` (object coordinates), Eq. 7 about the
+object origin gains the moment of the weight, ``r1 x f_l + r2 x f_f + r_c x M g~ = 0``;
+eliminating ``f_l`` as before gives ``(r2 - r1) x f_f = M (r1 - r_c) x g~``: Eq. 9 written
+about the mass centre. So ``c = M (r1 - r_c) x g~`` and the line is
+``r2(h) = r_inf + (a* x c) / h`` with ``r_inf`` still the projection of ``r1`` on the
+plane. With ``r_c = 0`` this is the paper's model exactly.
+
+The line's place and direction depend on gravity only through the sign of ``g_x``:
+``c = M g_x (r1 - r_c) x e_x``, so ``|g_x|`` scales the push ``h`` at every point of the
+line (``h`` is proportional to ``|g_x|``) but does not move the line; a change of sign
+of ``g_x`` reverses it (the pushing half-line is then on the other side of ``r_inf``).
 """
 
 from __future__ import annotations
@@ -123,9 +137,18 @@ def gravity_tilde(gravity: Any) -> FloatArray:
 
 
 def equilibrium_residual(
-    r1: Any, r2: Any, f_leader: Any, f_follower: Any, *, mass: float, gravity: Any
+    r1: Any,
+    r2: Any,
+    f_leader: Any,
+    f_follower: Any,
+    *,
+    mass: float,
+    gravity: Any,
+    mass_centre: Any = (0.0, 0.0, 0.0),
 ) -> FloatArray:
-    """Residual of Eqs. 7-8: ``[r1 x f_l + r2 x f_f; f_l + f_f + M g~]`` [N m; N].
+    """Residual of Eqs. 7-8: ``[r1 x f_l + r2 x f_f + r_c x M g~; f_l + f_f + M g~]``.
+
+    In [N m; N], moments about the object origin (``r_c = 0``: the paper's Eq. 7).
 
     Parameters
     ----------
@@ -137,23 +160,36 @@ def equilibrium_residual(
         Object mass [kg].
     gravity : array_like, shape (3,), keyword-only
         Gravity in object coordinates [m/s^2]; only ``g_x`` is used.
+    mass_centre : array_like, shape (3,), keyword-only
+        Mass centre ``r_c`` [m], object coordinates; default the origin.
     """
     a1 = as_array(r1, "r1", (3,))
     a2 = as_array(r2, "r2", (3,))
     fl = as_array(f_leader, "f_leader", (3,))
     ff = as_array(f_follower, "f_follower", (3,))
+    rc = as_array(mass_centre, "mass_centre", (3,))
+    weight = _mass(mass) * gravity_tilde(gravity)
     out = np.empty(6)
-    out[:3] = np.cross(a1, fl) + np.cross(a2, ff)
-    out[3:] = fl + ff + _mass(mass) * gravity_tilde(gravity)
+    out[:3] = np.cross(a1, fl) + np.cross(a2, ff) + np.cross(rc, weight)
+    out[3:] = fl + ff + weight
     return out
 
 
 def _solution(
-    r1: FloatArray, r2: FloatArray, h: float, a: FloatArray, mass: float, gt: FloatArray
+    r1: FloatArray,
+    r2: FloatArray,
+    h: float,
+    a: FloatArray,
+    mass: float,
+    gt: FloatArray,
+    rc: FloatArray | None = None,
 ) -> SupportSolution:
     ff = h * a
     fl = -ff - mass * gt
-    res = np.concatenate([np.cross(r1, fl) + np.cross(r2, ff), fl + ff + mass * gt])
+    moment = np.cross(r1, fl) + np.cross(r2, ff)
+    if rc is not None:
+        moment = moment + np.cross(rc, mass * gt)
+    res = np.concatenate([moment, fl + ff + mass * gt])
     return SupportSolution(
         r2=r2,
         h=h,
@@ -165,7 +201,10 @@ def _solution(
 
 
 def _moment(r1: FloatArray, mass: float, gt: FloatArray, a: FloatArray) -> FloatArray:
-    """``c = M r1 x g~`` [N m], checking the solvability condition ``c . a* = 0``."""
+    """``c = M r1 x g~`` [N m], checking the solvability condition ``c . a* = 0``.
+
+    ``r1`` is the leader-hand origin seen from the mass centre (``r1 - r_c``).
+    """
     c = mass * np.cross(r1, gt)
     scale = max(float(np.linalg.norm(c)), 1e-300)
     if abs(float(c @ a)) > 1e-9 * scale:
@@ -185,6 +224,7 @@ def support_point(
     h: float,
     normal: Any = (1.0, 0.0, 0.0),
     offset: float = 0.0,
+    mass_centre: Any = (0.0, 0.0, 0.0),
 ) -> SupportSolution:
     """Follower contact point on the plane ``a* . r = offset`` for a push ``h`` (Eq. 9).
 
@@ -206,6 +246,8 @@ def support_point(
         Plane normal ``a*`` (normalised here); the follower pushes along ``+a*``.
     offset : float, keyword-only
         Plane offset ``d`` [m] in ``a* . r = d``.
+    mass_centre : array_like, shape (3,), keyword-only
+        Mass centre ``r_c`` [m], object coordinates; default the origin (the paper's).
 
     Raises
     ------
@@ -213,14 +255,15 @@ def support_point(
         Non-positive mass or ``h``, or no equilibrium (``c . a* != 0``).
     """
     a1 = as_array(r1, "r1", (3,))
+    rc = as_array(mass_centre, "mass_centre", (3,))
     m, hh = _mass(mass), _push(h)
     gt = gravity_tilde(gravity)
     a = _unit(normal, "normal")
     d = _as_sigma(offset, "offset")
-    c = _moment(a1, m, gt, a)
+    c = _moment(a1 - rc, m, gt, a)
     r_inf = a1 - (float(a @ a1) - d) * a
     r2 = r_inf + np.cross(a, c) / hh
-    return _solution(a1, r2, hh, a, m, gt)
+    return _solution(a1, r2, hh, a, m, gt, rc)
 
 
 class SupportLine(PlaneBar):
@@ -229,8 +272,9 @@ class SupportLine(PlaneBar):
     A :class:`~dualarm_qp.task.surfaces.PlaneBar` whose line is
     ``r2(h) = r_inf + (a* x c) / h`` (``h > 0``), with sliding vector
     ``s* = (a* x c) / |a* x c|`` (Eq. 13 for the paper's example) and ``sigma`` measured
-    from the foot of the perpendicular from the object origin (the mass centre) onto
-    the line. Build it with :func:`support_line`.
+    from the foot of the perpendicular from the object origin onto the line (with the
+    mass centre at the origin, the paper's case, that is the mass centre's foot). Build
+    it with :func:`support_line`.
 
     Attributes
     ----------
@@ -238,10 +282,12 @@ class SupportLine(PlaneBar):
         Leader-hand origin [m], object coordinates.
     mass : float
         Object mass [kg].
+    mass_centre : ndarray, shape (3,)
+        Mass centre ``r_c`` [m], object coordinates.
     g_tilde : ndarray, shape (3,)
         ``[g_x, 0, 0]`` [m/s^2].
     moment : ndarray, shape (3,)
-        ``c = M r1 x g~`` [N m].
+        ``c = M (r1 - r_c) x g~`` [N m].
     r_inf : ndarray, shape (3,)
         Limit of ``r2`` as ``h -> inf`` [m].
     sigma_inf : float
@@ -259,15 +305,18 @@ class SupportLine(PlaneBar):
         r_min: Any,
         r_max: Any,
         h_max: float | None,
+        mass_centre: FloatArray | None = None,
     ) -> None:
         a = _unit(normal, "normal")
-        c = _moment(r1, mass, g_tilde, a)
+        rc = np.zeros(3) if mass_centre is None else mass_centre
+        c = _moment(r1 - rc, mass, g_tilde, a)
         axc = np.cross(a, c)
         lever = float(np.linalg.norm(axc))
         if lever < 1e-12 * max(1.0, mass * float(np.linalg.norm(g_tilde))):
             raise InvalidInputError(
-                "degenerate support: M r1 x g~ = 0 (g_x = 0 or r1 parallel to g~), so the "
-                "support point does not move with h and there is no sliding line"
+                "degenerate support: M (r1 - r_c) x g~ = 0 (g_x = 0, or the leader's hand "
+                "and the mass centre on one line along x), so the support point does not "
+                "move with h and there is no sliding line"
             )
         s = axc / lever
         r_inf = r1 - (float(a @ r1) - offset) * a
@@ -276,7 +325,7 @@ class SupportLine(PlaneBar):
         lo_box, hi_box = _as_bound(r_min, "r_min"), _as_bound(r_max, "r_max")
         lo, hi = _line_box_range(origin, s, lo_box, hi_box)
         lo = max(lo, sigma_inf if h_max is None else sigma_inf + lever / _push(h_max))
-        if lo > hi:
+        if lo > hi or hi <= sigma_inf:  # only the leader's hand, where h is infinite
             raise InvalidInputError(
                 "no support point with h > 0 (and h <= h_max) inside the box r_min/r_max"
             )
@@ -296,6 +345,7 @@ class SupportLine(PlaneBar):
         )
         self.r1 = r1.copy()
         self.mass = mass
+        self.mass_centre = rc.copy()
         self.g_tilde = g_tilde.copy()
         self.moment = c
         self.r_inf = r_inf
@@ -323,7 +373,8 @@ class SupportLine(PlaneBar):
                 f"sigma = {sigma:g} m needs h = {h:g} N: no pushing support there "
                 f"(physical supports have sigma > {self.sigma_inf:g} m)"
             )
-        return _solution(self.r1, self.point(sigma), h, self._a, self.mass, self.g_tilde)
+        return _solution(self.r1, self.point(sigma), h, self._a, self.mass, self.g_tilde,
+                         self.mass_centre)
 
 
 def support_line(
@@ -336,6 +387,7 @@ def support_line(
     r_min: Any = (-math.inf, -math.inf, -math.inf),
     r_max: Any = (math.inf, math.inf, math.inf),
     h_max: float | None = None,
+    mass_centre: Any = (0.0, 0.0, 0.0),
 ) -> SupportLine:
     """Sliding path of Case 2 support points on the plane ``a* . r = offset``.
 
@@ -354,6 +406,8 @@ def support_line(
     h_max : float or None, keyword-only
         Largest admissible push [N]; sets ``sigma_min``. Without it ``sigma_min`` is at
         least ``sigma_inf`` (where ``h`` would be infinite).
+    mass_centre : array_like, shape (3,), keyword-only
+        Mass centre ``r_c`` [m], object coordinates; default the origin (the paper's).
 
     Returns
     -------
@@ -375,6 +429,7 @@ def support_line(
         r_min=r_min,
         r_max=r_max,
         h_max=h_max,
+        mass_centre=as_array(mass_centre, "mass_centre", (3,)),
     )
 
 

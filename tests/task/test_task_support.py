@@ -8,13 +8,21 @@ checks the corrected formula (see docs/paper_corrections.md).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError, LimitsError
+from dualarm_qp.experiments.config import load_config
+from dualarm_qp.experiments.setup import Experiment, build_experiment
+from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions
 from dualarm_qp.task import (
     CurvedBar,
     CylinderSurface,
@@ -25,6 +33,8 @@ from dualarm_qp.task import (
     support_point,
     support_sliding_vector,
 )
+from dualarm_qp.task.carry import CarryModel
+from dualarm_qp.task.contact import SupportContact
 
 M = 3.0  # kg
 G = 9.81  # m/s^2
@@ -186,3 +196,171 @@ def test_general_solver_reports_no_equilibrium() -> None:
         solve_support(
             plane, [0.1, 0.0, -0.4], mass=M, gravity=GRAV_UP_X, h=10.0, r2_guess=[0, 0, 0]
         )
+
+
+# --- The mass centre, the support contact and its line per orientation ------------------
+
+BEAM_BOX: dict[str, Any] = {"r_min": (0.0, -0.2, -0.1), "r_max": (0.0, 0.2, 0.5)}
+
+
+@pytest.mark.parametrize("h", [10.0, 29.43, 80.0])
+def test_mass_centre_is_a_shift_of_coordinates(h: float) -> None:
+    # Writing everything about the mass centre r_c (r -> r - r_c, the plane offset with
+    # it) must give the same contact point, shifted back.
+    rc = np.array([0.0, 0.03, 0.2])
+    sol = support_point(R1, mass=M, gravity=GRAV_UP_X, h=h, mass_centre=rc)
+    shifted = support_point(R1 - rc, mass=M, gravity=GRAV_UP_X, h=h, offset=-rc[0])
+    np.testing.assert_allclose(sol.r2, shifted.r2 + rc, atol=1e-15)
+    assert sol.residual < 1e-12
+    res = equilibrium_residual(R1, sol.r2, sol.f_leader, sol.f_follower, mass=M,
+                               gravity=GRAV_UP_X, mass_centre=rc)
+    np.testing.assert_allclose(res, 0.0, atol=1e-12)
+    # The same forces without the weight's moment about the origin do not balance.
+    assert np.max(np.abs(equilibrium_residual(R1, sol.r2, sol.f_leader, sol.f_follower,
+                                              mass=M, gravity=GRAV_UP_X))) > 1.0
+    # Pushing with the whole weight puts the follower under the mass centre.
+    under = support_point(R1, mass=M, gravity=GRAV_UP_X, h=M * G, mass_centre=rc)
+    np.testing.assert_allclose(under.r2, rc, atol=1e-15)
+
+
+def test_support_line_through_leader_and_mass_centre() -> None:
+    rc = np.array([0.0, 0.04, 0.1])
+    line = support_line(R1, mass=M, gravity=GRAV_UP_X, mass_centre=rc, **BEAM_BOX)
+    d = rc - R1
+    np.testing.assert_allclose(line.tangent(0.0), d / np.linalg.norm(d), atol=1e-15)
+    for h in (20.0, M * G, 60.0):
+        sigma = line.sigma_at(h)
+        sol = line.solution(sigma)
+        assert sol.h == pytest.approx(h, rel=1e-12) and sol.residual < 1e-12
+    # h = M g at the mass centre, h -> inf at the leader's hand.
+    assert line.force(line.sigma_of(rc)) == pytest.approx(M * G, rel=1e-12)
+    assert line.point(line.sigma_inf) == pytest.approx(R1, abs=1e-15)
+    np.testing.assert_allclose(line.mass_centre, rc)
+
+
+def _R_x_up() -> np.ndarray:
+    """Object x along world z (up), as in the paper's Fig. 4 and the PUMA beam."""
+    return np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+
+
+def _contact(rc: Any = (0.0, 0.0, 0.25), box: dict[str, Any] | None = None) -> SupportContact:
+    b = box or {"r_min": (0.0, 0.0, 0.0), "r_max": (0.0, 0.0, 0.4)}
+    return SupportContact(mass=4.0, mass_centre=rc, gravity=[0.0, 0.0, -G],
+                          plane=PlaneBar(**b), H1=np.eye(4))
+
+
+def test_turning_object_moves_the_support_line_as_gravity_predicts() -> None:
+    contact = _contact()
+    R0 = _R_x_up()
+    line0 = contact.line(R0)
+    np.testing.assert_allclose(contact.gravity_in_object(R0), [-G, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(line0.tangent(0.0), [0, 0, 1], atol=1e-15)
+    # Predicted push (moment about the leader's hand at the origin): h z = M |g_x| 0.25.
+    for z in (0.1, 0.25, 0.4):
+        assert contact.force(line0, z) == pytest.approx(4.0 * G * 0.25 / z, rel=1e-12)
+    # Turning about object x keeps g_x: the same line and the same forces.
+    R_spin = R0 @ pin.exp3(np.array([0.7, 0.0, 0.0]))
+    spun = contact.line(R_spin)
+    np.testing.assert_allclose(spun.pose(0.0), line0.pose(0.0), atol=1e-15)
+    assert spun.force(0.3) == pytest.approx(line0.force(0.3), rel=1e-12)
+    # Tilting object x away from up by theta: g_o = R^T g has g_x = -g cos(theta). The
+    # line (Eq. 9 about the mass centre) is fixed in the object while g_x keeps its sign,
+    # and the push at every point scales with |g_x|.
+    for theta in (0.3, 1.0, 1.4):
+        R_tilt = R0 @ pin.exp3(np.array([0.0, theta, 0.0]))
+        g_o = contact.gravity_in_object(R_tilt)
+        assert g_o[0] == pytest.approx(-G * math.cos(theta), rel=1e-12)
+        tilted = contact.line(R_tilt)
+        np.testing.assert_allclose(tilted.pose(0.0), line0.pose(0.0), atol=1e-12)
+        for z in (0.1, 0.4):
+            assert contact.force(tilted, z) == pytest.approx(
+                4.0 * G * math.cos(theta) * 0.25 / z, rel=1e-9)
+    # x horizontal: the push carries none of the weight.
+    with pytest.raises(InvalidInputError, match="no component along the object's x axis"):
+        contact.line(R0 @ pin.exp3(np.array([0.0, math.pi / 2, 0.0])))
+    # Upside down on this bar: pushing supports would lie behind the leader (z < 0),
+    # outside the bar; the follower would have to pull.
+    upside_down = R0 @ pin.exp3(np.array([0.0, math.pi, 0.0]))
+    with pytest.raises(InvalidInputError, match=r"support lost.*h > 0"):
+        contact.line(upside_down)
+    # On a bar that extends behind the leader the line reverses: the pushing half-line
+    # is now z < 0, where g_x > 0 and the follower presses down as a lever.
+    long = _contact(box={"r_min": (0.0, 0.0, -0.4), "r_max": (0.0, 0.0, 0.4)})
+    flipped = long.line(upside_down)
+    np.testing.assert_allclose(flipped.tangent(0.0), [0, 0, -1], atol=1e-12)
+    assert flipped.sigma_min == pytest.approx(0.0, abs=1e-12)  # from the leader's hand
+    assert flipped.point(0.2)[2] == pytest.approx(-0.2, abs=1e-12)
+    assert long.force(flipped, 0.2) == pytest.approx(4.0 * G * 0.25 / 0.2, rel=1e-9)
+    with pytest.raises(InvalidInputError, match="support lost at grasp"):
+        long.force(long.line(R0), -0.1)
+
+
+def test_support_contact_checks() -> None:
+    with pytest.raises(InvalidInputError, match="mass"):
+        SupportContact(mass=0.0, mass_centre=(0, 0, 0), gravity=[0, 0, -G],
+                       plane=PlaneBar(), H1=np.eye(4))
+    with pytest.raises(InvalidInputError, match="gravity"):
+        SupportContact(mass=1.0, mass_centre=(0, 0, 0), gravity=[0, 0, 0],
+                       plane=PlaneBar(), H1=np.eye(4))
+    with pytest.raises(InvalidInputError, match="PlaneBar"):
+        SupportContact(mass=1.0, mass_centre=(0, 0, 0), gravity=[0, 0, -G],
+                       plane=CylinderSurface(0.05), H1=np.eye(4))  # type: ignore[arg-type]
+    # The leader's hand in object coordinates is the translation of H1^-1.
+    H1 = np.eye(4)
+    H1[:3, 3] = (0.0, 0.0, 0.1)
+    c = SupportContact(mass=1.0, mass_centre=(0, 0, 0), gravity=[0, 0, -G],
+                       plane=PlaneBar(), H1=H1)
+    np.testing.assert_allclose(c.r1, [0.0, 0.0, -0.1])
+
+
+def test_place_follower_equals_a_fresh_model() -> None:
+    arm = puma560()
+    H1 = np.eye(4)
+    first = PlaneBar(r_min=(0, -1, -1), r_max=(0, 1, 1))
+    other = PlaneBar(origin=(0.0, 0.05, 0.02), sliding=(0.0, 0.6, 0.8), r_min=(0, -1, -1),
+                     r_max=(0, 1, 1))
+    model = CarryModel(arm, first, H1)
+    q = np.array([0.3, -0.4, 0.2, 0.1, 0.5, -0.2])
+    before = model.update(q, 0.1)
+    model.place_follower(other)
+    after = model.update(q, 0.1)
+    fresh = CarryModel(arm, other, H1).update(q, 0.1)
+    assert not np.allclose(before.T_target, after.T_target)
+    np.testing.assert_allclose(after.T_target, fresh.T_target, atol=1e-15)
+    np.testing.assert_allclose(after.J_target, fresh.J_target, atol=1e-15)
+    np.testing.assert_allclose(after.T_target, after.T_object @ other.pose(0.1), atol=1e-14)
+    with pytest.raises(InvalidInputError, match="revolute"):
+        model.place_follower(CurvedBar(0.5, sigma_min=-0.1, sigma_max=0.1))
+
+
+def _beam_support_task() -> Experiment:
+    path = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_support.yaml"
+    return build_experiment(load_config(path), str(path))
+
+
+def test_builder_puts_the_follower_on_the_support_line_and_records_h() -> None:
+    exp = _beam_support_task()
+    task, s0 = exp.task, exp.initial
+    opts = StepOptions(dt=0.031, joint_weights=np.ones(1), grasp_weight=100.0)
+    line = task.surface
+    # Start the builder on another path: its first step re-places the follower's joint
+    # on the support line of the object's orientation.
+    off = PlaneBar(origin=(0.0, 0.0, 0.03), r_min=(0, 0, 0), r_max=(0, 0, 0.4))
+    builder = StepBuilder(replace(task, surface=off), opts)
+    b = builder.build(s0)
+    np.testing.assert_allclose(b.carry.T_target, b.carry.T_object @ line.pose(s0.sigma),
+                               atol=1e-14)
+    assert b.support_force == pytest.approx(4.0 * G * 0.25 / s0.sigma, rel=1e-12)
+    ref = StepBuilder(task, opts).build(s0)
+    np.testing.assert_allclose(b.problem.A, ref.problem.A, atol=1e-14)
+    # A grasp records no force.
+    grasp = StepBuilder(replace(task, contact=None), opts).build(s0)
+    assert math.isnan(grasp.support_force)
+    # A state whose grasp is behind the leader's hand needs a pull: the step refuses.
+    with pytest.raises(InvalidInputError, match="support lost at grasp"):
+        builder.build(DualArmState(s0.t, s0.q_l, s0.q_f, -0.01))
+    # Turning the object upside down loses the support.
+    q_l = s0.q_l.copy()
+    q_l[5] += math.pi  # spins the hand about its approach (world x): object x goes down
+    with pytest.raises(InvalidInputError, match="support lost"):
+        builder.build(DualArmState(s0.t, q_l, s0.q_f, s0.sigma))

@@ -1,0 +1,147 @@
+"""The paper's Case 2 on the PUMA beam (configs/puma_beam_support.yaml), checked from its outputs.
+
+The run must complete. Its statics are then checked from trajectory.csv alone with a
+force balance written here: the object's orientation from the leader's joints by the
+independent PUMA forward kinematics (oracle.py), gravity in object coordinates, the
+contact point from the CSV's grasp coordinate, and Eqs. 7-8 solved for the leader's
+force and the follower's push by least squares. Bad files exit with code 2 and name
+the key.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from csv_check import check_valid, read_trajectory
+from oracle import inv_pose, puma_fk
+
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_support.yaml"
+EXE = Path(sys.executable).with_name("dualarm-qp")
+
+
+def _cli(cfg: Path, out: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([str(EXE), "run", str(cfg), "--out", str(out), "--no-plots",
+                           "--quiet"], capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    out = tmp_path_factory.mktemp("support") / "out"
+    proc = _cli(CONFIG, out)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    return read_trajectory(out / "trajectory.csv"), summary
+
+
+def test_support_config_runs_and_completes(run: tuple[dict[str, np.ndarray], dict[str, Any]]
+                                           ) -> None:
+    traj, summary = run
+    assert summary["completed"], summary["message"]
+    assert summary["solver"] == "nullspace"
+    assert summary["path_completed_pct"] == pytest.approx(100.0)
+    assert not check_valid(traj)
+    assert len(traj["support_force"]) == summary["samples"] == 501
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def test_support_statics_from_the_csv(run: tuple[dict[str, np.ndarray], dict[str, Any]]
+                                      ) -> None:
+    """Eqs. 7-8 about the object origin hold with h > 0 at every recorded sample."""
+    traj, summary = run
+    spec = yaml.safe_load(CONFIG.read_text())["object"]
+    mass = float(spec["mass"])                                   # kg
+    r_c = np.array(spec["mass_centre"], dtype=float) / 1000.0   # mm -> m
+    g_world = np.array(spec["gravity"], dtype=float) / 1000.0   # mm/s^2 -> m/s^2
+    assert spec["H1"] == {"position": [0, 0, 0]}  # object frame = leader's hand frame
+    r1 = np.zeros(3)        # the leader's hand origin in object coordinates
+    a = np.array([1.0, 0.0, 0.0])  # the face x = 0; the follower pushes along +x
+    # The beam's support line: the plane x = 0 through the leader's hand (origin) and
+    # the mass centre (on the z axis) is the z axis; the grasp coordinate is z.
+    assert r_c[0] == r_c[1] == 0.0
+
+    q_l = np.column_stack([traj[f"ql{i}"] for i in range(1, 7)])
+    q_f = np.column_stack([traj[f"qf{i}"] for i in range(1, 7)])
+    base_f = np.eye(4)
+    base_f[:3, :3] = summary["reconstruction"]["follower_base_rotation"]
+    base_f[:3, 3] = summary["reconstruction"]["follower_base_m"]
+    h_all, residuals, neglected, hand_gap = [], [], [], []
+    for k in range(len(traj["t"])):
+        T_obj = puma_fk(q_l[k])                 # world <- object (H1 = identity)
+        g = T_obj[:3, :3].T @ g_world           # gravity in object coordinates
+        g_t = np.array([g[0], 0.0, 0.0])        # the part a normal push balances (Eq. 8)
+        r2 = np.array([0.0, 0.0, traj["grasp"][k]])
+        # Unknowns x = [f_l (3), h]: r1 x f_l + r2 x h a + r_c x M g~ = 0,
+        # f_l + h a + M g~ = 0.
+        A = np.zeros((6, 4))
+        A[:3, :3] = _skew(r1)
+        A[:3, 3] = np.cross(r2, a)
+        A[3:, :3] = np.eye(3)
+        A[3:, 3] = a
+        b = np.concatenate([-np.cross(r_c, mass * g_t), -mass * g_t])
+        x = np.linalg.lstsq(A, b, rcond=None)[0]
+        residuals.append(float(np.max(np.abs(A @ x - b))))
+        h_all.append(float(x[3]))
+        neglected.append(float(np.hypot(g[1], g[2])))
+        # The follower's hand is where the CSV says it pushes.
+        p_hand = (inv_pose(T_obj) @ puma_fk(q_f[k], base=base_f))[:3, 3]
+        hand_gap.append(float(np.linalg.norm(p_hand - r2)))
+    h = np.array(h_all)
+    assert max(residuals) < 1e-9          # [N m, N]: an exact balance
+    assert h.min() > 0.0                  # the follower only pushes
+    np.testing.assert_allclose(traj["support_force"], h, rtol=1e-9)
+    # The parts of gravity the model hands to the leader stay negligible: the beam
+    # does not turn (x_o stays up).
+    assert max(neglected) < 1e-3 * np.linalg.norm(g_world)
+    assert max(hand_gap) < 1e-4  # [m]
+    # The push: M g r_cz / z, from 0.556 M g at the start (450 mm) upwards.
+    assert h[0] == pytest.approx(mass * 9.81 * 0.25 / 0.45, rel=1e-6)
+
+
+def _bad(data: dict[str, Any], path: Path) -> Path:
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _with(edit: dict[str, Any], drop: tuple[str, ...] = ()) -> dict[str, Any]:
+    data = yaml.safe_load(CONFIG.read_text())
+    obj = copy.deepcopy(data["object"])
+    obj.update(edit)
+    for key in drop:
+        obj.pop(key)
+    data["object"] = obj
+    return data
+
+
+BAD = {
+    "no_mass": (_with({}, drop=("mass",)), "object.mass"),
+    "zero_mass": (_with({"mass": 0}), "object.mass"),
+    "unknown_contact": (_with({"contact": "glue"}), "object.contact"),
+    "mass_with_grasp": (_with({"contact": "grasp"}), "object.mass"),
+    "curved_surface": (_with({"surface": {"type": "curved_bar", "radius": 800,
+                                          "grasp_range": [-200, 200]}}),
+                       "object.surface.type"),
+    "zero_gravity": (_with({"gravity": [0, 0, 0]}), "object.gravity"),
+    "gravity_across": (_with({"gravity": [9810, 0, 0]}), "object.gravity"),
+    "gravity_up": (_with({"gravity": [0, 0, 9810]}), "object.mass_centre"),
+    "centre_off_bar": (_with({"mass_centre": [0, 30, 250]}), "object.mass_centre"),
+    "start_needs_pull": (_with({"grasp_initial": -20}), "object.grasp_initial"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_support_configs_exit_2_naming_the_key(case: str, tmp_path: Path) -> None:
+    data, key = BAD[case]
+    proc = _cli(_bad(data, tmp_path / f"{case}.yaml"), tmp_path / "out")
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    assert f"'{key}'" in proc.stderr, proc.stderr
