@@ -1,4 +1,6 @@
-"""Command-line interface: ``dualarm-qp run | reproduce | bench | solvers``.
+"""Command-line interface of ``dualarm-qp``.
+
+Commands: run, animate, reproduce, bench, sweep, sweep-report, solvers.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
 input (configuration, arguments, missing solver, an output folder in use), 130
@@ -62,7 +64,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
     out = _output_folder(out)
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
-                             plots=not args.no_plots)
+                             plots=not args.no_plots, animate=args.animate)
     print_run_summary(outcome.summary, str(out))
     if outcome.interrupted:
         _err(f"{outcome.summary['message']}; the samples done are written")
@@ -106,6 +108,14 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
     if s["failure"] is not None and status != "interrupted":
         print(f"  failed on: {s['failure']['criterion']}")
     print(f"  outputs: {out}/")
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from .viz.animation import animate_run
+
+    path = animate_run(args.run_dir, args.out)
+    print(f"animation: {path} (open it in a web browser; it needs no server or network)")
+    return EXIT_OK
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
@@ -213,6 +223,51 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep.cluster import quiet_dask_logs
+    from .sweep.runner import SchedulerLost, SweepSettings, check_sweep_folder, run_sweep
+    from .sweep.spec import load_sweep
+
+    spec = load_sweep(args.sweep)
+    settings = SweepSettings(workers=args.workers, scheduler=args.scheduler, batch=args.batch,
+                             progress=not args.quiet)
+    out = _output_folder(check_sweep_folder(Path(args.out)))
+    try:
+        with quiet_dask_logs(restore=False):  # Dask's own lines: the process ends after
+            result = run_sweep(spec, out, settings=settings, log=None if args.quiet
+                               else lambda line: print(line, file=sys.stderr))
+    except SchedulerLost as err:
+        _err(f"{err} (the table holds the points done)")
+        return EXIT_FAILED
+    done = result.finished
+    print(f"sweep {spec.name}: {result.planned} points, {done} done "
+          f"({result.computed} computed now), {len(result.failures)} failed -> "
+          f"{out}/results.parquet, results.csv")
+    if result.interrupted is not None:
+        _err(f"interrupted ({result.interrupted}): {done} of {result.planned} points stored; "
+             "run the same command again to resume")
+        return EXIT_INTERRUPTED
+    return _sweep_report(out, unrun=len(result.unrun))
+
+
+def _sweep_report(out: Path, *, unrun: int = 0) -> int:
+    from .sweep.report import write_report
+
+    with SignalHold():  # a signal during the report: finish it, then exit 130
+        path = write_report(out)
+        print(f"report: {path}")
+        sys.stdout.flush()
+    if unrun:
+        _err(f"{unrun} points could not be run (their workers died repeatedly); they are "
+             "listed as interrupted; run the same command again to resume")
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _cmd_sweep_report(args: argparse.Namespace) -> int:
+    return _sweep_report(Path(args.dir))
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for documentation and tests)."""
     p = argparse.ArgumentParser(
@@ -238,7 +293,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write into a folder that holds files: replace the files a run "
                         "writes, keep the others")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--animate", action="store_true",
+                   help="also write animation.html, a 3D animation of the run that opens "
+                        "offline in a web browser")
     r.set_defaults(func=_cmd_run)
+
+    a = sub.add_parser("animate", help="write the 3D animation (animation.html) of a "
+                                       "finished run")
+    a.add_argument("run_dir", type=Path, metavar="RUN_DIR",
+                   help="output folder of 'dualarm-qp run' (or a case folder of a "
+                        "reproduction)")
+    a.add_argument("--out", type=Path, default=None,
+                   help="file to write (default RUN_DIR/animation.html, then listed in the "
+                        "run's summary.json)")
+    a.set_defaults(func=_cmd_animate)
 
     rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases, draw Figs. 5-6")
     rp.add_argument("--out", default="reproduction", help="output folder (default reproduction)")
@@ -269,6 +337,28 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--no-plots", action="store_true", help="skip bench.png")
     b.add_argument("--quiet", action="store_true", help="no per-job progress lines")
     b.set_defaults(func=_cmd_bench)
+
+    w = sub.add_parser("sweep", help="run an experiment over a grid or random sample of its "
+                       "settings on Dask; write a results table and maps")
+    w.add_argument("sweep", type=Path, metavar="SWEEP",
+                   help="sweep YAML file: a base experiment and the keys to vary "
+                        "(docs/sweeps.md)")
+    w.add_argument("--out", required=True,
+                   help="sweep folder; points stored there are reused, so a sweep resumes")
+    where = w.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None,
+                       help="worker processes of the embedded Dask cluster (default: one "
+                            "per core)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="use a running Dask scheduler, e.g. tcp://host:8786")
+    w.add_argument("--batch", type=int, default=None, help=argparse.SUPPRESS)
+    w.add_argument("--quiet", action="store_true", help="no progress bar")
+    w.set_defaults(func=_cmd_sweep)
+
+    wr = sub.add_parser("sweep-report", help="draw the maps of a sweep folder into "
+                        "report.html (also done at the end of 'sweep')")
+    wr.add_argument("dir", metavar="DIR", help="the sweep's --out folder")
+    wr.set_defaults(func=_cmd_sweep_report)
 
     s = sub.add_parser("solvers", help="list the solvers and whether they are installed")
     s.set_defaults(func=_cmd_solvers)

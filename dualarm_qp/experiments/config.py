@@ -304,6 +304,13 @@ class ObjectSpec(_Model):
     ``leader_surface`` and ``leader_grasp_initial`` (both or neither) let the leader's
     grasp slide too, on its own path in object coordinates; the object is then placed
     by that path (``H1`` must be left out).
+
+    ``contact`` says how the follower holds the object: ``grasp`` (the default, Case 1)
+    or ``support`` (Case 2: it only pushes along the surface normal, on the support line
+    that gravity sets, docs/support.md). A support needs ``mass`` [kg], takes
+    ``mass_centre`` (object coordinates, length unit; default the object origin) and
+    ``gravity`` (world frame, length unit / time unit^2; default ``[0, 0, -9.81]`` m/s^2),
+    a ``plane_bar`` surface and a rigid leader grasp. These keys are refused with a grasp.
     """
 
     H1: PoseSpec | None = None
@@ -311,6 +318,33 @@ class ObjectSpec(_Model):
     grasp_initial: Num
     leader_surface: SurfaceSpec | None = None
     leader_grasp_initial: Num | None = None
+    contact: Literal["grasp", "support"] = "grasp"
+    mass: Num | None = None
+    mass_centre: Vec3 | None = None
+    gravity: Vec3 | None = None
+
+    @model_validator(mode="after")
+    def _contact(self) -> ObjectSpec:
+        if self.contact == "grasp":
+            given = [k for k in ("mass", "mass_centre", "gravity") if getattr(self, k) is not None]
+            if given:
+                raise _keyed(given[0], "is only used with 'contact: support' (a grasping "
+                             "follower needs no mass)")
+            return self
+        if self.mass is None:
+            raise _keyed("mass", "missing required key: a supporting follower ('contact: "
+                         "support') needs the object's mass [kg]")
+        if not self.mass > 0:
+            raise _keyed("mass", f"must be > 0 kg (got {self.mass:g})")
+        if self.surface.type != "plane_bar":
+            raise _keyed("surface.type", f"a support ('contact: support') needs a plane_bar "
+                         f"surface, got {self.surface.type}")
+        if self.leader_surface is not None:
+            raise _keyed("leader_surface", "a support ('contact: support') needs a rigid "
+                         "leader grasp: leave 'leader_surface' out")
+        if self.gravity is not None and not any(self.gravity):
+            raise _keyed("gravity", "must be a non-zero vector")
+        return self
 
     @model_validator(mode="after")
     def _leader_grasp(self) -> ObjectSpec:

@@ -116,7 +116,8 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     ``t, path_t, ql*, qf*, grasp`` are the realised motion; ``m, ql_dot*, qf_dot*`` the
     commanded (applied) rates of the row's step; ``closure_*_err_pre`` and
     ``correction_*`` the closure error before, and the size of, any position-level
-    correction; ``feedback_*`` the closure feedback in the step.
+    correction; ``feedback_*`` the closure feedback in the step; ``support_force`` [N]
+    the push of a supporting follower (only when it supports: Case 2).
     """
     cols: dict[str, Any] = {"t": trace.t, "path_t": trace.tau}
     for j in range(trace.q_l.shape[1]):
@@ -160,6 +161,8 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         cols["grasp_leader"] = trace.grasp_leader
         cols["m_leader"] = trace.m_leader
         cols["margin_grasp_leader"] = trace.margin_grasp_leader
+    if len(trace) and not np.isnan(trace.support_force).all():  # a supporting follower
+        cols["support_force"] = trace.support_force
     return cols
 
 

@@ -1,5 +1,9 @@
 """Reproduce the paper's Sec. 4 example: the three PUMA beam cases and Figs. 5 and 6.
 
+Beside the paper's cases (a), (b), (c), a case (d) runs case (b) with joint and
+sliding speed limits and a hard-limit solver; the figures draw it with the others.
+
+
 A reproduction owns, in its output folder, ``reproduce.json`` (written last: it lists
 what was written), the two figures and a folder per case with that case's run outputs.
 A new reproduction into the same folder first removes those (and only those).
@@ -19,14 +23,19 @@ from .._signals import SignalHold
 from .config import load_config
 from .outputs import owned_entries, remove_owned, write_json
 from .run import OUTPUT_FILES, RunOutcome, remove_run_outputs, run_and_write
-from .setup import build_experiment
+from .setup import Experiment, build_experiment
 
-#: The paper's three cases: (label, config file name).
+#: The cases run: (label, config file name). (a), (b), (c) are the paper's; (d) is
+#: case (b) with speed limits and the ``nullspace`` solver (not in the paper).
 CASES = (
     ("a", "puma_beam_fixed.yaml"),
     ("b", "puma_beam_sliding_s7_100.yaml"),
     ("c", "puma_beam_sliding_s7_1000.yaml"),
+    ("d", "puma_beam_limits.yaml"),
 )
+
+#: The case with hard limits, whose speed limits the figures draw.
+LIMITS_CASE = "d"
 
 
 #: Files a reproduction writes into its output folder, besides a folder per case.
@@ -46,8 +55,9 @@ def bundled_config(name: str) -> Path:
     return Path(str(resources.files("dualarm_qp") / "data" / name))
 
 
-_JUMP_NOTE = ("first sample of (b), (c): the paper's step has no speed limit and Table 2 "
-              "starts outside the ranges (docs/reproduction.md)")
+_JUMP_NOTE = ("(a)-(c): the paper's step, no speed limit; Table 2 starts outside the ranges, "
+              "so (b), (c) jump in the first sample.\n(d): case (b) with the speed limits "
+              "(dashed). Shaded: outside the range / over the limit, in the case's colour.")
 
 
 @dataclass
@@ -57,7 +67,7 @@ class Reproduction:
     Attributes
     ----------
     runs : dict of str to RunOutcome
-        The cases run, by label (fewer than three when interrupted).
+        The cases run, by label (fewer than :data:`CASES` when interrupted).
     checks : dict
         The paper's checks (empty when interrupted).
     interrupted : str or None
@@ -151,7 +161,7 @@ def _write_record(out: Path, runs: dict[str, RunOutcome], checks: dict[str, Any]
 
 def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
               progress: bool | None = None) -> Reproduction:
-    """Run cases (a), (b), (c) and draw Fig. 5 (follower q3) and Fig. 6 (grasp).
+    """Run cases (a) to (d) and draw Fig. 5 (follower q3) and Fig. 6 (grasp).
 
     An earlier reproduction in ``out_dir`` is replaced (:func:`remove_reproduction`);
     other files there stay.
@@ -162,8 +172,8 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
         Each case goes to ``out_dir/case_<x>/``; the figures and ``reproduce.json``
         to ``out_dir``.
     config_dir : path, optional
-        Where the three YAML files are; default: the copies shipped with the package
-        (identical to the repository's ``configs/``).
+        Where the YAML files of :data:`CASES` are; default: the copies shipped with the
+        package (identical to the repository's ``configs/``).
     progress : bool, optional
         Progress bars (default: when attached to a terminal).
 
@@ -180,13 +190,15 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
     out.mkdir(parents=True, exist_ok=True)
     remove_reproduction(out)
     runs: dict[str, RunOutcome] = {}
+    exps: dict[str, Experiment] = {}
     held: SignalHold | None = None
     label = CASES[0][0]
     try:
         for label, fname in CASES:
             path = _case_config(config_dir, fname)
-            exp = build_experiment(load_config(path), str(path))
-            runs[label], hold = run_and_write(exp, out / f"case_{label}", progress=progress)
+            exp = exps[label] = build_experiment(load_config(path), str(path))
+            runs[label], hold = run_and_write(exp, out / f"case_{label}", progress=progress,
+                                              animate=True)  # case_x/animation.html
             if runs[label].interrupted or hold.signum is not None:
                 held = hold
                 break
@@ -200,31 +212,62 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
         held.deliver()
         return Reproduction(runs, {}, label)
     with SignalHold():
-        checks = _figures_and_checks(out, runs, config_dir)
+        checks = _figures_and_checks(out, runs, exps)
         _write_record(out, runs, checks, ["fig5_joint3.png", "fig6_grasp.png"], None)
     return Reproduction(runs, checks)
 
 
-def _figures_and_checks(out: Path, runs: dict[str, RunOutcome],
-                        config_dir: str | Path | None) -> dict[str, Any]:
-    """Draw Figs. 5 and 6 from the three cases and return the paper's checks."""
-    from .plots import plot_compare
+def _draw_figures(out: Path, runs: dict[str, RunOutcome],
+                  exps: dict[str, Experiment]) -> None:
+    """Draw Fig. 5 (follower q3) and Fig. 6 (grasp) of the cases, with case (d)'s limits."""
+    from .figures import Curve, comparison_figure
+    from .figures.canvas import save_png
 
-    follower = build_experiment(load_config(_case_config(config_dir, CASES[0][1]))
-                                ).task.follower
-    traces = [(f"case ({k}) {r.summary['experiment']}", r.result.trace) for k, r in runs.items()]
-    plot_compare(out / "fig5_joint3.png", traces, "q_f", joint=2,
-                 limits=(follower.q_min[2], follower.q_max[2]), scale=180.0 / np.pi,
-                 ylabel="follower q3 [deg]",
-                 title="Fig. 5: follower joint 3 (dashed: its range)", note=_JUMP_NOTE)
-    surface = build_experiment(load_config(_case_config(config_dir, CASES[1][1]))
-                               ).task.surface
-    plot_compare(out / "fig6_grasp.png", traces, "grasp", scale=1e3,
-                 limits=(surface.sigma_min, surface.sigma_max),
-                 ylabel="grasp r2_z [mm]", title="Fig. 6: follower grasp position "
-                 "(dashed: the grasp range of Eq. 3)", note=_JUMP_NOTE)
-    checks: dict[str, Any] = {k: _joint3_excursion(r) for k, r in runs.items()}
-    for k in ("b", "c"):
+    colours = {"a": "C0", "b": "C1", "c": "C2", "d": "C4"}
+    limited = exps[LIMITS_CASE]
+    follower, surface = limited.task.follower, limited.task.surface
+
+    def label(k: str) -> str:
+        return f"({k}) {runs[k].summary['experiment']} [{runs[k].summary['solver']}]"
+
+    q3 = [Curve(label(k), r.result.trace.t, r.result.trace.q_f[:, 2], colours.get(k, "C5"))
+          for k, r in runs.items()]
+    fig = comparison_figure(q3, value_range=(follower.q_min[2], follower.q_max[2]),
+                            speed_limit=float(follower.qd_max[2]), scale=180.0 / np.pi,
+                            value_label="follower q3 [deg]",
+                            speed_label="follower q3 rate, realised [deg/s]",
+                            title="Fig. 5: follower joint 3 (dashed: its range and the "
+                            "speed limit of case (d))", note=_JUMP_NOTE)
+    save_png(fig, out / "fig5_joint3.png")
+    sliding = [k for k in runs if k != "a"]  # (a) holds the grasp
+    grasp = [Curve(label(k), runs[k].result.trace.t, runs[k].result.trace.grasp,
+                   colours.get(k, "C5")) for k in sliding]
+    speed = limited.options.grasp_speed_max if limited.options.velocity_limits else None
+    fig = comparison_figure(grasp, value_range=(surface.sigma_min, surface.sigma_max),
+                            speed_limit=speed, scale=1e3, value_label="grasp r2_z [mm]",
+                            speed_label="sliding speed, realised [mm/s]",
+                            title="Fig. 6: follower grasp position (dashed: the grasp range "
+                            "of Eq. 3 and the sliding speed limit of case (d); case (a) "
+                            "holds 450 mm)", note=_JUMP_NOTE)
+    save_png(fig, out / "fig6_grasp.png")
+
+
+def _first_step(outcome: RunOutcome) -> dict[str, float]:
+    """How far the first sample moved the follower's q3 [deg] and the grasp [mm]."""
+    tr = outcome.result.trace
+    if len(tr) < 2:
+        return {}
+    return {"q3_first_step_deg": float(np.rad2deg(abs(tr.q_f[1, 2] - tr.q_f[0, 2]))),
+            "grasp_first_step_mm": float(abs(tr.grasp[1] - tr.grasp[0]) * 1e3)}
+
+
+def _figures_and_checks(out: Path, runs: dict[str, RunOutcome],
+                        exps: dict[str, Experiment]) -> dict[str, Any]:
+    """Draw Figs. 5 and 6 from the cases and return the paper's checks."""
+    _draw_figures(out, runs, exps)
+    checks: dict[str, Any] = {k: {**_joint3_excursion(r), **_first_step(r)}
+                              for k, r in runs.items()}
+    for k in ("b", "c", "d"):
         g = runs[k].result.trace.grasp
         checks[k]["grasp_start_mm"] = float(g[0] * 1e3)
         checks[k]["grasp_end_mm"] = float(g[-1] * 1e3)

@@ -1,4 +1,4 @@
-"""Run an experiment and write its outputs (CSV, JSON, PNG).
+"""Run an experiment and write its outputs (CSV, JSON, PNG, HTML).
 
 The outputs of a run form one set: ``summary.json`` is written last and lists the
 other files, so a folder whose ``summary.json`` exists holds exactly what it lists.
@@ -17,13 +17,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
 from ..control.rollout import RolloutResult, rollout
 from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
 
 #: The files a run owns in its output folder (``summary.json`` lists the others written).
-OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "grasp.png", "closure.png")
+OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
+                "tracking.png", "closure.png", "report.html", "config.yaml", "animation.html")
 
 #: What ``summary.json``'s ``status`` says.
 STATUSES = ("completed", "failed", "interrupted")
@@ -91,6 +93,7 @@ def run_experiment(
     *,
     progress: bool | None = None,
     plots: bool = True,
+    animate: bool = False,
 ) -> RunOutcome:
     """Roll the experiment out and write its outputs.
 
@@ -99,12 +102,14 @@ def run_experiment(
     exp : Experiment
         Built by :func:`~dualarm_qp.experiments.setup.build_experiment`.
     out_dir : path, optional
-        Folder for ``summary.json``, ``trajectory.csv`` and the PNG plots; nothing is
-        written when None.
+        Folder for ``summary.json``, ``trajectory.csv``, the PNG plots and
+        ``report.html``; nothing is written when None.
     progress : bool, optional
         Show a progress bar; default: when standard error is a terminal.
     plots : bool
-        Draw the PNG plots.
+        Draw the PNG plots and write ``report.html`` (the page that gathers them).
+    animate : bool
+        Also write ``animation.html``, the run's 3D animation (:mod:`dualarm_qp.viz`).
 
     Returns
     -------
@@ -115,7 +120,8 @@ def run_experiment(
         ``interrupted``, criterion ``"interrupted"``); one that comes while the files
         are written is raised once they all are.
     """
-    outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots)
+    outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots,
+                                  animate=animate)
     hold.deliver()
     return outcome
 
@@ -126,6 +132,7 @@ def run_and_write(
     *,
     progress: bool | None = None,
     plots: bool = True,
+    animate: bool = False,
 ) -> tuple[RunOutcome, SignalHold]:
     """Do what :func:`run_experiment` does, but hand back a signal held while writing.
 
@@ -161,7 +168,7 @@ def run_and_write(
         out = None
         if out_dir is not None:
             out = Path(out_dir)
-            write_outputs(out, exp, result, summary, plots=plots)
+            write_outputs(out, exp, result, summary, plots=plots, animate=animate)
     return RunOutcome(result, summary, out), hold
 
 
@@ -175,6 +182,11 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
         "solver_options": exp.solver_options,
         "policy": exp.policy,
         "units": "SI: m, rad, s (converted from the file's units on load)",
+        # Where each arm's model came from (SerialArm.source) and its joints.
+        "arms": {role: {"source": arm.source, "joints": arm.n,
+                        "joint_names": arm.joint_names}
+                 for role, arm in (("leader", exp.task.leader),
+                                   ("follower", exp.task.follower))},
         "settings": {
             "dt_s": opts.dt,
             "duration_s": exp.duration,
@@ -214,12 +226,47 @@ def remove_run_outputs(out: Path) -> list[str]:
     return removed + remove_owned(out, OUTPUT_FILES)
 
 
+def write_resolved_config(path: Path, config_file: str) -> bool:
+    """Write the experiment file a run was built from, resolved, to ``path`` (YAML).
+
+    The keys the file set, as validated (file units kept), with a URDF ``file`` made
+    absolute, so that the copy builds the same scene from any folder.
+
+    Returns
+    -------
+    bool
+        False (nothing written) when ``config_file`` is not a readable experiment file
+        (an experiment built in code).
+    """
+    import yaml
+
+    from ..errors import DualArmError
+    from .config import load_config
+
+    source = Path(config_file)
+    if not source.is_file():
+        return False
+    try:
+        data = load_config(source).model_dump(mode="json", exclude_unset=True)
+    except DualArmError:
+        return False
+    for role in ("leader", "follower"):
+        urdf = data.get(role, {}).get("urdf")
+        if isinstance(urdf, dict) and "file" in urdf:
+            urdf["file"] = str((source.parent / urdf["file"]).resolve())
+    text = (f"# The experiment file of this run ({source}), resolved: its keys as "
+            "validated, URDF paths absolute.\n" + yaml.safe_dump(data, sort_keys=False))
+    write_text(path, text)
+    return True
+
+
 def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
-                  *, plots: bool = True) -> list[str]:
+                  *, plots: bool = True, animate: bool = False) -> list[str]:
     """Write the output set of a run into ``out``, replacing an earlier run's.
 
     The earlier run's files go first (:func:`remove_run_outputs`), then
-    ``trajectory.csv`` and the plots are written, each atomically, and ``summary.json``
+    ``trajectory.csv``, the plots and ``report.html`` are written, each atomically, and
+    ``summary.json``
     comes last, its ``outputs`` listing exactly the other files written. Call it
     inside a :class:`~dualarm_qp._signals.SignalHold` for an all-or-nothing set.
 
@@ -232,16 +279,22 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     remove_run_outputs(out)
     write_trace_csv(out / "trajectory.csv", result.trace)
     written = ["trajectory.csv"]
-    if plots and len(result.trace):
-        from .plots import plot_closure, plot_grasp, plot_joints
+    if write_resolved_config(out / "config.yaml", exp.path):
+        written.append("config.yaml")  # what rebuilds the scene (dualarm-qp animate)
+    if animate and len(result.trace):
+        from ..viz.animation import ANIMATION_FILE, write_animation
 
-        task = exp.task
-        tag = f"{exp.name} ({exp.solver_name})"
-        plot_joints(out / "joints.png", result.trace, task.leader, task.follower, title=tag)
-        plot_grasp(out / "grasp.png", result.trace, task.surface, title=tag)
-        plot_closure(out / "closure.png", result.trace, title=tag,
-                     tolerance=exp.limits.closure)
-        written += ["joints.png", "grasp.png", "closure.png"]
+        write_animation(out / ANIMATION_FILE, exp.task, out / "trajectory.csv",
+                        title=f"{exp.name} ({exp.solver_name})")
+        written.append(ANIMATION_FILE)
+    if plots and len(result.trace):
+        from .figures import write_run_figures
+        from .html_report import REPORT_FILE, write_run_report
+
+        pngs = write_run_figures(out, exp)
+        summary["outputs"] = [*written, *pngs, REPORT_FILE]  # the report shows the list
+        write_run_report(out, summary, figures=pngs)
+        written += [*pngs, REPORT_FILE]
     summary["outputs"] = list(written)
     write_json(out / "summary.json", summary)
     return [*written, "summary.json"]

@@ -31,6 +31,7 @@ from ..solvers.registry import (
     solver_info,
 )
 from ..step.build import DualArmState, StepOptions
+from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
 from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
@@ -284,6 +285,57 @@ def _surface(s: SurfaceSpec, sc: Scales, key: str) -> GraspSurface:
     return CurvedBar(radius, side=s.side or "outer", sigma_min=lo, sigma_max=hi)
 
 
+#: Gravity when the file gives none: world z up [m/s^2].
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _support(cfg: ExperimentConfig, sc: Scales, plane: GraspSurface, H1: FloatArray,
+             trajectory: Trajectory, sigma0: float, path: str, notes: dict[str, Any]
+             ) -> tuple[SupportContact, GraspSurface]:
+    """Return the Case 2 contact and its support line at t0 (the follower's first path).
+
+    Errors name the key to change: ``object.gravity`` when gravity has no component
+    along the push at the start, ``object.mass_centre`` when no point of the box holds
+    the object with a push, ``object.grasp_initial`` when the start needs a pull.
+    """
+    o = cfg.object
+    mass = _required(o.mass, "object.mass", path)
+    centre = np.zeros(3) if o.mass_centre is None else np.asarray(o.mass_centre) * sc.length
+    gravity = (np.asarray(STANDARD_GRAVITY) if o.gravity is None
+               else np.asarray(o.gravity, dtype=float) * sc.length / sc.time**2)
+    if not isinstance(plane, PlaneBar):  # the schema allows only a plane_bar
+        raise ConfigError("a support needs a plane_bar surface", path=path,
+                          key="object.surface.type")
+    with _at("object", path):
+        contact = SupportContact(mass=mass, mass_centre=centre, gravity=gravity, plane=plane,
+                                 H1=H1)
+    R0 = trajectory.pose(trajectory.t0)[:3, :3]
+    g0 = contact.gravity_in_object(R0)
+    if abs(float(g0[0])) <= GRAVITY_ALONG_PUSH_MIN * float(np.linalg.norm(g0)):
+        raise ConfigError(
+            f"at the start gravity in object coordinates is {np.round(g0, 6).tolist()} m/s^2: "
+            "it has no component along the object's x axis (the supporting face's normal), "
+            "so the follower's push carries none of the weight; turn the object or gravity",
+            path=path, key="object.gravity")
+    try:
+        line = contact.line(R0)
+    except DualArmError as err:
+        raise ConfigError(
+            "no support at the start: the follower pushes on the support line from the "
+            "leader's hand through the mass centre (both projected on the face), on the "
+            "side where the push h is > 0, and that part must lie in the box of "
+            f"object.surface (r_min, r_max); here: {err}", path=path,
+            key="object.mass_centre") from None
+    with _at("object.grasp_initial", path):
+        h0 = contact.force(line, sigma0)
+    notes["support"] = {
+        "mass_kg": mass, "mass_centre_m": centre.tolist(), "gravity_world_m_s2":
+        gravity.tolist(), "gravity_object_t0_m_s2": g0.tolist(),
+        "line_origin_m": line.origin.tolist(), "line_direction": line.tangent(0.0).tolist(),
+        "grasp_range_m": [line.sigma_min, line.sigma_max], "force_t0_N": h0}
+    return contact, line
+
+
 def _trajectory(cfg: ExperimentConfig, sc: Scales, duration: float) -> Trajectory:
     tr = cfg.trajectory
     if tr.type == "linear":
@@ -404,6 +456,9 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     with _at("object.H1", path):
         H1 = np.eye(4) if cfg.object.H1 is None else _pose(cfg.object.H1, sc)
     sigma0 = cfg.object.grasp_initial * sc.length
+    contact: SupportContact | None = None
+    if cfg.object.contact == "support":
+        contact, surface = _support(cfg, sc, surface, H1, trajectory, sigma0, path, notes)
     with _at("object.grasp_initial", path):
         surface.pose(sigma0)
     leader_surface: GraspSurface | None = None
@@ -462,7 +517,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     with _at("follower", path):
         follower = follower.with_base(base_f)
         task = DualArmTask(leader, follower, H1, surface, trajectory,
-                           leader_surface=leader_surface)
+                           leader_surface=leader_surface, contact=contact)
     q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking, sigma_l0)
     if q_f0 is None:
         q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,

@@ -36,7 +36,8 @@ def test_run_writes_outputs(tmp_path, capsys):
     out = tmp_path / "out"
     code = main(["run", str(short_config(tmp_path)), "--out", str(out), "--quiet"])
     assert code == 0
-    for name in ("summary.json", "trajectory.csv", "joints.png", "grasp.png", "closure.png"):
+    for name in ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
+                 "tracking.png", "closure.png", "report.html"):
         assert (out / name).is_file(), name
     with (out / "trajectory.csv").open() as fh:
         rows = list(csv.DictReader(fh))

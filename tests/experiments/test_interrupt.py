@@ -35,9 +35,10 @@ pytestmark = pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 CASES = ("puma_beam_fixed.yaml", "puma_beam_sliding_s7_100.yaml",
-         "puma_beam_sliding_s7_1000.yaml")
+         "puma_beam_sliding_s7_1000.yaml", "puma_beam_limits.yaml")
 TRIALS = 20  # per command, half SIGINT and half SIGTERM
-RUN_FILES = {"summary.json", "trajectory.csv", "joints.png", "grasp.png", "closure.png"}
+RUN_FILES = {"summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
+             "tracking.png", "closure.png", "report.html", "config.yaml", "animation.html"}
 REPRODUCE_FILES = {"reproduce.json", "fig5_joint3.png", "fig6_grasp.png"}
 
 
@@ -146,12 +147,12 @@ def check_reproduce_folder(out: Path) -> str:
         assert check_run_folder(out / f"case_{label}",
                                 listed_status=summary["status"]) == summary["status"]
     if rep["status"] == "completed":
-        assert list(rep["cases"]) == ["a", "b", "c"]
+        assert list(rep["cases"]) == ["a", "b", "c", "d"]
         assert set(rep["figures"]) == {"fig5_joint3.png", "fig6_grasp.png"}
         assert rep["interrupted_case"] is None
     else:
-        assert rep["figures"] == [] and rep["interrupted_case"] in ("a", "b", "c")
-        assert list(rep["cases"]) == ["a", "b", "c"][:len(rep["cases"])]
+        assert rep["figures"] == [] and rep["interrupted_case"] in ("a", "b", "c", "d")
+        assert list(rep["cases"]) == ["a", "b", "c", "d"][:len(rep["cases"])]
     return str(rep["status"])
 
 

@@ -23,7 +23,8 @@ from dualarm_qp.experiments.outputs import owned_entries
 from dualarm_qp.experiments.reproduce import CASES, is_reproduction_folder
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
-RUN_FILES = ["closure.png", "grasp.png", "joints.png", "summary.json", "trajectory.csv"]
+RUN_FILES = ["closure.png", "config.yaml", "grasp.png", "joints.png", "rates.png", "report.html",
+             "summary.json", "tracking.png", "trajectory.csv"]
 
 
 def short_config(tmp_path: Path, name: str = "puma_beam_limits.yaml", **controller) -> Path:
@@ -69,7 +70,7 @@ def test_existing_empty_folder_is_fresh(tmp_path):
     out = tmp_path / "empty"
     out.mkdir()
     assert run(short_config(tmp_path), out, "--no-plots") == 0
-    assert names(out) == ["summary.json", "trajectory.csv"]
+    assert names(out) == ["config.yaml", "summary.json", "trajectory.csv"]
 
 
 def test_used_folder_is_refused_and_left_alone(tmp_path, capsys):
@@ -103,11 +104,11 @@ def test_force_replaces_only_what_a_run_owns(tmp_path):
     (out / "sub").mkdir()
     (out / ".joints.png.abcd1234.png").write_text("left by a killed run")  # a run's temp
     assert run(config, out, "--force", "--no-plots") == 0
-    assert names(out) == ["joints.png.bak", "notes.txt", "sub", "summary.json",
-                          "trajectory.csv"]
+    assert names(out) == ["config.yaml", "joints.png.bak", "notes.txt", "sub",
+                          "summary.json", "trajectory.csv"]
     assert (out / "notes.txt").read_text() == "mine"
     # summary.json lists what this run wrote, not the PNGs of the earlier one
-    assert summary(out)["outputs"] == ["trajectory.csv"]
+    assert summary(out)["outputs"] == ["trajectory.csv", "config.yaml"]
 
 
 def test_a_folder_in_the_way_of_an_owned_file_is_bad_input(tmp_path, capsys):
@@ -143,7 +144,7 @@ def test_summary_is_written_last(tmp_path, monkeypatch):
 
     monkeypatch.setattr(run_module, "write_json", spy)
     assert run(short_config(tmp_path), tmp_path / "o") == 0
-    assert order == [["closure.png", "grasp.png", "joints.png", "trajectory.csv"]]
+    assert order == [sorted(set(RUN_FILES) - {"summary.json"})]
 
 
 def test_owned_entries_match_only_names_and_their_temporary_files(tmp_path):
@@ -164,10 +165,10 @@ def test_reproduce_twice_into_the_same_folder(tmp_path, cases, capsys):
     assert main(argv) in (0, 1)  # its own earlier output: replaced, no --force needed
     rep = json.loads((out / "reproduce.json").read_text())
     assert rep["status"] == first["status"] and rep["status"] in ("completed", "failed")
-    assert sorted(rep["outputs"]) == ["case_a/", "case_b/", "case_c/", "fig5_joint3.png",
-                                      "fig6_grasp.png"]
-    assert names(out) == ["case_a", "case_b", "case_c", "fig5_joint3.png", "fig6_grasp.png",
-                          "notes.txt", "reproduce.json"]
+    assert sorted(rep["outputs"]) == ["case_a/", "case_b/", "case_c/", "case_d/",
+                                      "fig5_joint3.png", "fig6_grasp.png"]
+    assert names(out) == ["case_a", "case_b", "case_c", "case_d", "fig5_joint3.png",
+                          "fig6_grasp.png", "notes.txt", "reproduce.json"]
     assert (out / "case_a" / "notes.txt").read_text() == "mine too"
     assert "error" not in capsys.readouterr().err
 
@@ -247,15 +248,15 @@ def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
 
 
 def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, capsys):
-    from dualarm_qp.experiments import plots
+    from dualarm_qp.experiments.figures import run_figures
 
-    real = plots.plot_grasp
+    real = run_figures.grasp_figure
 
-    def plot_grasp(*args, **kwargs):
+    def grasp_figure(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGINT)  # a (second) Ctrl-C in the middle of writing
-        real(*args, **kwargs)
+        return real(*args, **kwargs)
 
-    monkeypatch.setattr(plots, "plot_grasp", plot_grasp)
+    monkeypatch.setattr(run_figures, "grasp_figure", grasp_figure)
     out = tmp_path / "o"
     assert run(short_config(tmp_path), out) == 130
     assert names(out) == RUN_FILES  # all of it, and no temporary file
@@ -279,7 +280,7 @@ def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, monkeypatch
     monkeypatch.undo()
     assert main(argv) in (0, 1)
     rep = json.loads((out / "reproduce.json").read_text())
-    assert rep["status"] != "interrupted" and list(rep["cases"]) == ["a", "b", "c"]
+    assert rep["status"] != "interrupted" and list(rep["cases"]) == ["a", "b", "c", "d"]
 
 
 def test_signal_hold_delivers_after_the_block():

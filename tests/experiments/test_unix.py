@@ -92,15 +92,12 @@ def test_import_selects_no_backend_and_no_pyplot(tmp_path):
         import numpy, scipy.linalg, scipy.optimize, scipy.sparse  # their own filters
         filters = list(warnings.filters)
         import dualarm_qp, dualarm_qp.cli, dualarm_qp.experiments, dualarm_qp.solvers
-        import dualarm_qp.experiments.plots, dualarm_qp.bench.report
+        import dualarm_qp.experiments.figures, dualarm_qp.bench.report
         from pathlib import Path
-        import numpy as np
-        from dualarm_qp.control.trace import Trace
-        from dualarm_qp.experiments.plots import plot_closure
-        tr = Trace.allocate(3, 6, 6)
-        tr.t[:] = [0, 1, 2]
-        tr.closure_pos_err[:] = tr.closure_rot_err[:] = 1e-9
-        plot_closure(Path("closure.png"), tr)
+        from dualarm_qp.experiments.figures.canvas import new_figure, save_png
+        fig = new_figure()
+        fig.subplots().semilogy([0, 1, 2], [1e-9, 1e-8, 1e-9])
+        save_png(fig, Path("closure.png"))
         assert matplotlib.get_backend() == "svg", matplotlib.get_backend()
         assert "matplotlib.pyplot" not in sys.modules
         assert warnings.filters == filters, "warnings filters changed at import"
@@ -112,16 +109,20 @@ def test_import_selects_no_backend_and_no_pyplot(tmp_path):
 
 
 def test_the_library_and_the_help_import_no_optimiser():
-    """`import dualarm_qp` and `dualarm-qp --help` stay light: no scipy.optimize either."""
+    """`import dualarm_qp` and `dualarm-qp --help` stay light: no scipy.optimize either,
+    and no 3D viewer (meshcat, its server's zmq, viser) until a view is drawn."""
     proc = _python("""
         import sys
         import dualarm_qp
+        import dualarm_qp.viz
         from dualarm_qp.cli import main
         try:
             main(["--help"])
         except SystemExit:
             pass
-        heavy = [m for m in ("scipy.optimize", "matplotlib") if m in sys.modules]
+        heavy = [m for m in ("scipy.optimize", "matplotlib", "meshcat", "zmq", "viser",
+                             "dask", "distributed", "pyarrow")
+                 if m in sys.modules]
         assert not heavy, heavy
         print("ok")
     """)
