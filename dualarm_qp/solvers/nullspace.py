@@ -157,12 +157,17 @@ class NullspaceSolver:
         Returns ``(x, conflicts, iterations)``; ``x`` is None when infeasible (conflicts
         set) or when the iteration limit was hit (``iterations > max_iter``).
         """
-        start = max_task_scale(problem, cap=1.0)
-        if start.scale is None or start.x is None or start.scale < 1.0 - 1e-9:
-            return None, start.blocking or problem.names, 0
         lower, upper = problem.lower, problem.upper
-        x = start.x
         side = np.zeros(problem.n, dtype=np.int8)  # -1: at lower, +1: at upper, 0: free
+        found = self._start(problem, side)
+        if found is None:  # a feasible start from the LP of the largest task scale
+            start = max_task_scale(problem, cap=1.0)
+            if start.scale is None or start.x is None or start.scale < 1.0 - 1e-9:
+                return None, start.blocking or problem.names, 0
+            x = start.x
+            side[:] = 0
+        else:
+            x = found
         for it in range(1, self.max_iter + 1):
             target, mu = _equality_qp(problem, side, x)
             step = target - x
@@ -188,6 +193,31 @@ class NullspaceSolver:
                 side[block] = block_side
                 x[block] = lower[block] if block_side < 0 else upper[block]
         return None, (), self.max_iter + 1
+
+
+    def _start(self, problem: StepProblem, side: NDArray[np.int8]) -> FloatArray | None:
+        """Return a feasible start for the active set found without an LP, or None.
+
+        First the minimiser on the whole affine set (no bound held): inside the box it
+        is the answer itself. Then the working set of the previous step's answer
+        (``x_prev``, the warm start): its equality-constrained minimiser, if it lies in
+        the box. ``side`` is set to the working set of the point returned.
+        """
+        lower, upper, n = problem.lower, problem.upper, problem.n
+        tries = [np.zeros(n, dtype=np.int8)]
+        xp = problem.x_prev
+        if xp is not None:
+            held = np.where(xp <= lower, -1, np.where(xp >= upper, 1, 0)).astype(np.int8)
+            if held.any():
+                tries.append(held)
+        for trial in tries:
+            x, _ = _equality_qp(problem, trial, np.clip(np.zeros(n), lower, upper))
+            scale = 1.0 + float(np.abs(problem.b).max(initial=0.0))
+            if (np.all(x >= lower) and np.all(x <= upper) and float(
+                    np.abs(problem.A @ x - problem.b).max(initial=0.0)) <= 1e-10 * scale):
+                side[:] = trial
+                return x
+        return None
 
 
 def _equality_qp(problem: StepProblem, side: NDArray[np.int8], x: FloatArray
