@@ -226,6 +226,11 @@ class SerialArm:
         model.lowerPositionLimit = self.q_min
         model.upperPositionLimit = self.q_max
         model.velocityLimit = self.qd_max
+        # Pinocchio 4 also keeps a lower velocity limit; leaving it at its default (+max)
+        # makes the model invalid for pinocchio.appendModel. The limit is symmetric.
+        if hasattr(model, "lowerVelocityLimit"):
+            model.lowerVelocityLimit = -self.qd_max
+            model.upperVelocityLimit = self.qd_max
         self._model = model
         self._data = model.createData()
         self.base = base  # validated by the property setters

@@ -220,3 +220,14 @@ def test_accepts_lists_and_integer_arrays() -> None:
     q = [0, 1, 0, 1, 0, 1]
     np.testing.assert_allclose(arm.fk(q), arm.fk(np.array(q, dtype=float)), atol=0)
     np.testing.assert_allclose(arm.jacobian(np.array(q)), arm.jacobian(q), atol=0)
+
+
+def test_model_velocity_limits_are_symmetric_and_appendable():
+    """Pinocchio's lower velocity limit follows qd_max, so the model can be appended."""
+    arm = puma560(qd_max=np.full(6, 2.0))
+    np.testing.assert_array_equal(arm.model.upperVelocityLimit, np.full(6, 2.0))
+    np.testing.assert_array_equal(arm.model.lowerVelocityLimit, np.full(6, -2.0))
+    other = pin.Model()
+    other.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), "extra")
+    joined = pin.appendModel(arm.model, other, arm.tool_frame_id, pin.SE3.Identity())
+    assert joined.nq == 7
