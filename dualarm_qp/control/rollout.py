@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ..errors import DualArmError, InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
+from ..solvers._affine import factor
 from ..step.build import DualArmState
 from .controller import DualArmController
 from .realised import LimitReport, measure
@@ -558,10 +559,7 @@ def _reresolve(controller: DualArmController, q_l: FloatArray, q_f: FloatArray,
     T_f, J = task.follower.fk_jacobian(q_f)
     dw = pin.log3(T_target[:3, :3] @ T_f[:3, :3].T)
     twist = np.concatenate((np.zeros(3), dw))
-    try:
-        dq = np.linalg.lstsq(J, twist, rcond=1e-9)[0]
-    except np.linalg.LinAlgError:
-        return q_f
+    dq = factor(J).solve(twist)  # rank decided at RANK_RTOL, as every step's
     return q_f + dq
 
 
