@@ -231,6 +231,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     spec = load_sweep(args.sweep)
     settings = SweepSettings(workers=args.workers, scheduler=args.scheduler, batch=args.batch,
                              progress=not args.quiet)
+    fresh = not Path(args.out).exists()
     out = _output_folder(check_sweep_folder(Path(args.out)))
     try:
         with quiet_dask_logs(restore=False):  # Dask's own lines: the process ends after
@@ -239,6 +240,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     except SchedulerLost as err:
         _err(f"{err} (the table holds the points done)")
         return EXIT_FAILED
+    except DualArmError:  # bad input found before anything ran: leave no empty folder
+        if fresh and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
     done = result.finished
     print(f"sweep {spec.name}: {result.planned} points, {done} done "
           f"({result.computed} computed now), {len(result.failures)} failed -> "
@@ -308,7 +313,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "run's summary.json)")
     a.set_defaults(func=_cmd_animate)
 
-    rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases, draw Figs. 5-6")
+    rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases and the "
+                        "same task with hard limits, draw Figs. 5-6")
     rp.add_argument("--out", default="reproduction", help="output folder (default reproduction)")
     rp.add_argument("--configs", type=Path, default=None,
                     help="folder with the three YAML files (default: the bundled copies)")

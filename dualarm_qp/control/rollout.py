@@ -219,7 +219,7 @@ class RolloutResult:
             "t_end_s": float(tr.t[-1]) if n else 0.0,
             "path_time_end_s": float(tr.tau[-1]) if n else 0.0,
             "path_completed_pct": 100.0 * self.path_completed,
-            "time_lost_to_scaling_s": round(self.time_lost, 12),
+            "time_lost_to_scaling_s": round(self.time_lost, 9),  # ns: no rounding noise
             "status_counts": dict(sorted(Counter(tr.status).items())),
             "fallback_steps": int(np.nansum(tr.fallback)),
             "hard_limits": self.hard_bounds,

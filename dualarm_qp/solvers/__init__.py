@@ -4,7 +4,7 @@ Importing this package registers every solver module:
 
 ``reference``      the paper's Eq. 29 (pseudoinverse + optimal null-space term), no bounds
 ``fixed_grasp``    Zheng and Luh: the grasp does not slide, no bounds
-``nullspace``      exact QP solution by null-space parametrisation (fast for 6 x 7)
+``nullspace``      exact QP solution by null-space parametrisation (closed form for d = 1)
 ``qp:<backend>``   the QP of Eq. 37 through qpsolvers (osqp, proxsuite, daqp, ...)
 ``sns``            Saturation in the Null Space (hard bounds, not a QP; scaled by the policy)
 

@@ -1,11 +1,11 @@
 """Native osqp and proxsuite solver objects kept across steps (private).
 
-Each step of a rollout has the same shape (6 x 7) and the same sparsity, so one native
-solver object is set up once and then only updated with the new data; a new setup is
-done when the shape changes or the previous call failed. Every call keeps the profile's
-iteration (and, for osqp, time) limit. The QP is the shifted one of :mod:`.qp`:
-``min 1/2 y^T S y  s.t.  A y = b - A c,  lower - c <= y <= upper - c``, with the cost
-divided by ``max(S)`` (:func:`cost_weights`; the minimiser is the same).
+Each step of a rollout has the same shape (12 x 13 for the PUMA pair) and the same
+sparsity, so one native solver object is set up once and then only updated with the new
+data; a new setup is done when the shape changes or the previous call failed. Every
+call keeps the profile's iteration (and, for osqp, time) limit. The QP is the shifted
+one of :mod:`.qp`, ``min 1/2 y^T S y  s.t.  A y = b - A c,  lower - c <= y <= upper - c``,
+with the cost divided by ``max(S)`` (:func:`cost_weights`; the minimiser is the same).
 
 An osqp call that a SIGINT interrupted returns no ``x``, and the signal is raised again
 in Python (:func:`~dualarm_qp._signals.pass_on_sigint`): osqp's own handler swallows it

@@ -6,7 +6,8 @@ one SVD, the null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`
 * No redundant variable (a square nonsingular step such as the leader's 6 x 6, d = 0):
   ``x = x0 = A^-1 b``, OPTIMAL if it lies in the box, INFEASIBLE naming the bound it
   breaks otherwise.
-* One redundant variable (the paper's 6 x 7 step, d = 1): the cost Eq. 37 is a scalar
+* One redundant variable (the paper's step: a rigid six-joint leader and one sliding
+  grasp, d = 1): the cost Eq. 37 is a scalar
   quadratic in ``t``, the box gives an interval ``[t_lo, t_hi]``, and the minimiser is
   ``t* = -z^T S (x0 - c) / z^T S z`` clamped to it.
 * Several redundant variables (d > 1: a 6 x 8 step, or a numerically rank-deficient

@@ -90,6 +90,11 @@ def run_config(run: Path, summary: dict[str, Any]) -> Path:
     named = summary.get("config")
     if isinstance(named, str) and Path(named).is_file():
         return Path(named)
+    if not isinstance(named, str) or named.startswith("<"):
+        raise InvalidInputError(
+            f"{run}: holds no config.yaml and was not run from an experiment file (its "
+            f"summary.json names {named!r}); an animation is built from the file: run the "
+            "experiment from its YAML file, or pass the file's path to build_experiment")
     raise InvalidInputError(f"{run}: holds no config.yaml and the experiment file its "
                             f"summary.json names ({named!r}) is gone; rerun the "
                             "experiment to get config.yaml")

@@ -98,7 +98,7 @@ def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, gri
     assert code == 2, err
     assert str(path) in err and f"key '{named}" in err and says in err, err
     assert "Traceback" not in err
-    assert not (out / "points.jsonl").exists()  # nothing ran
+    assert not out.exists()  # nothing ran, and no empty folder is left
 
 
 def test_a_missing_base_file_names_it(tmp_path, capsys):
