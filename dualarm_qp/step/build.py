@@ -365,7 +365,11 @@ class StepBuilder:
         if self._contact is not None:
             kin, support_force = self._support(self._contact, kin, state)
         T_f, J_f = task.follower.fk_jacobian(state.q_f)
-        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
+        if kin.J_tool.shape == J_f.shape == (6, 6):  # both at once: one LAPACK call
+            sv = np.linalg.svd(np.stack((kin.J_tool, J_f)), compute_uv=False)
+            sigma_min = (float(sv[0, -1]), float(sv[1, -1]))
+        else:
+            sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
         t1 = time.perf_counter()
 
         dt = opts.dt
@@ -393,10 +397,9 @@ class StepBuilder:
         # paths' own ranges; Eqs. 39-40 for the centres.
         lo = np.empty(n)
         hi = np.empty(n)
-        q = np.r_[state.q_l, state.q_f]
-        with np.errstate(invalid="ignore"):
-            lo[:n_l + n_f] = (self._x_min - q) / dt
-            hi[:n_l + n_f] = (self._x_max - q) / dt
+        q = np.concatenate((state.q_l, state.q_f))  # finite: no inf - inf below
+        lo[:n_l + n_f] = (self._x_min - q) / dt
+        hi[:n_l + n_f] = (self._x_max - q) / dt
         for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:self.n_grasp],
                                           strict=True)):
             r2 = surf.point(s)

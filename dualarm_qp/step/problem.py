@@ -19,6 +19,7 @@ Zheng and Luh holds them at zero.
 
 from __future__ import annotations
 
+import math
 import operator
 from dataclasses import dataclass, field
 
@@ -90,15 +91,19 @@ class StepProblem:
             if xp.shape != (n,):
                 raise ShapeError("x_prev", (n,), xp.shape)
             object.__setattr__(self, "x_prev", xp)
+        # One sum per array: NaN and infinity propagate through it; only a sum that is
+        # not finite needs the element-wise look (an overflow of huge finite entries
+        # passes it).
         for name in ("A", "b", "weights", "center"):
-            if not np.isfinite(getattr(self, name)).all():
+            arr = getattr(self, name)
+            if not math.isfinite(float(arr.sum())) and not np.isfinite(arr).all():
                 raise NonFiniteError(name)
         # Bounds may be infinite (no limit) but never NaN.
-        if np.isnan(self.lower).any():
-            raise NonFiniteError("lower")
-        if np.isnan(self.upper).any():
-            raise NonFiniteError("upper")
-        if not (self.weights > 0.0).all():
+        for name in ("lower", "upper"):
+            arr = getattr(self, name)
+            if math.isnan(float(arr.sum())) and np.isnan(arr).any():
+                raise NonFiniteError(name)
+        if n and not float(self.weights.min()) > 0.0:
             raise InvalidInputError("weights must be strictly positive")
         if not 0 <= self.n_grasp <= n:
             raise InvalidInputError(f"n_grasp must be in [0, {n}], got {self.n_grasp}")

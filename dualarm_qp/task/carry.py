@@ -172,10 +172,16 @@ class CarryModel:
             q[n_l] = self._follower_rate * sigma_f
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        cols, rate = self._cols, self._col_rate
         J_tool = pin.getFrameJacobian(model, data, self._tool, _LWA)[:, :n_l]
-        J_object = pin.getFrameJacobian(model, data, self._object, _LWA)[:, cols] * rate
-        J_target = pin.getFrameJacobian(model, data, self._target, _LWA)[:, cols] * rate
+        J_object = pin.getFrameJacobian(model, data, self._object, _LWA)
+        J_target = pin.getFrameJacobian(model, data, self._target, _LWA)
+        if self.n_grasp == 2:  # Pinocchio's order [q_l, leader, follower] -> [q_l, f, l]
+            cols, rate = self._cols, self._col_rate
+            J_object = J_object[:, cols] * rate
+            J_target = J_target[:, cols] * rate
+        else:  # already in decision order: only the grasp column is scaled (a fresh array)
+            J_object[:, n_l] *= self._follower_rate
+            J_target[:, n_l] *= self._follower_rate
         return CarryKinematics(
             data.oMf[self._tool].homogeneous, J_tool, data.oMf[self._object].homogeneous,
             J_object, data.oMf[self._target].homogeneous, J_target)
