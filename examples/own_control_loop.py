@@ -44,15 +44,10 @@ while state.t < path_end - 1e-9:
         break
     closure_max = max(closure_max, float(np.linalg.norm(out.build.closure_error[:3])))
     travel += abs(out.m) * dt
-    # Apply the command for one sample: here, Euler integration of the rates. The
-    # path time advances by scale * dt (scale < 1 when the limits slowed the task).
-    state = dq.DualArmState(
-        t=state.t + out.scale * dt,
-        q_l=state.q_l + dt * out.ql_dot,
-        q_f=state.q_f + dt * out.qf_dot,
-        sigma=state.sigma + dt * out.m,
-        sigma_leader=state.sigma_leader + dt * out.m_leader,
-    )
+    # Apply the command for one sample. On a robot: send the rates, then measure the
+    # new state. Here: Euler integration of the rates (joints, grasps, and the path
+    # time by scale * dt, scale < 1 when the limits slowed the task).
+    state = state.advanced(out, dt)
 
 print(f"steps: {sum(statuses.values())} ({dict(statuses)})")
 print(f"path time reached: {state.t:.3f} of {path_end:.3f} s")

@@ -412,11 +412,9 @@ def rollout(
                 progress(k + 1, nominal_rows)
             if at_end or k == max_rows - 1:
                 break
-            q_l = q_l + dt * out.ql_dot
-            q_f = q_f + dt * out.qf_dot
-            sigma = sigma + dt * out.m
-            sigma_l = sigma_l + dt * out.m_leader
-            tau = tau + dt * out.scale
+            nxt = state.advanced(out, dt)
+            tau, q_l, q_f, sigma, sigma_l = (nxt.t, nxt.q_l, nxt.q_f, nxt.sigma,
+                                             nxt.sigma_leader)
             t_wall = t_wall + dt
             pre, corr = None, (0.0, 0.0)
             if reresolve_orientation or project:

@@ -35,6 +35,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,6 +74,53 @@ class DualArmState:
     q_f: FloatArray
     sigma: float
     sigma_leader: float = 0.0
+
+    def advanced(self, command: Command, dt: float) -> DualArmState:
+        """Return the state after applying ``command`` for ``dt`` seconds (explicit Euler).
+
+        Joints move by ``dt`` times their rates, each grasp by ``dt`` times its sliding
+        speed, and the path time by ``dt`` times the command's ``scale`` (the path slows
+        when the task was scaled). ``command`` is a controller step's output
+        (:class:`~dualarm_qp.control.controller.ControlOutput`) or anything with the
+        same rates.
+        """
+        return DualArmState(self.t + dt * command.scale, self.q_l + dt * command.ql_dot,
+                            self.q_f + dt * command.qf_dot, self.sigma + dt * command.m,
+                            self.sigma_leader + dt * command.m_leader)
+
+
+class Command(Protocol):
+    """The rates one controller step commands (what :meth:`DualArmState.advanced` reads).
+
+    Attributes
+    ----------
+    ql_dot, qf_dot : ndarray
+        Joint rates of the leader and the follower [rad/s].
+    m, m_leader : float
+        Sliding speeds of the follower's and the leader's grasp [m/s].
+    scale : float
+        Path-time rate of the step (1: full speed).
+    """
+
+    @property
+    def ql_dot(self) -> FloatArray:
+        """Leader joint rates [rad/s]."""
+
+    @property
+    def qf_dot(self) -> FloatArray:
+        """Follower joint rates [rad/s]."""
+
+    @property
+    def m(self) -> float:
+        """Follower grasp sliding speed [m/s]."""
+
+    @property
+    def m_leader(self) -> float:
+        """Leader grasp sliding speed [m/s]."""
+
+    @property
+    def scale(self) -> float:
+        """Path-time rate of the step."""
 
 
 @dataclass(frozen=True)

@@ -40,3 +40,17 @@ def test_bad_states_raise_clear_errors(exp, q_l, q_f, sigma, error, text):
                        sigma)
     with pytest.raises(error, match=text):
         exp.controller().step(bad)
+
+
+def test_advanced_state_is_the_euler_step_of_the_command():
+    from types import SimpleNamespace
+
+    s = DualArmState(1.0, np.zeros(6), np.ones(6), 0.2, 0.1)
+    cmd = SimpleNamespace(ql_dot=np.full(6, 2.0), qf_dot=np.full(6, -1.0), m=0.5,
+                          m_leader=-0.25, scale=0.5)
+    n = s.advanced(cmd, 0.1)
+    assert n.t == pytest.approx(1.05)
+    np.testing.assert_allclose(n.q_l, 0.2)
+    np.testing.assert_allclose(n.q_f, 0.9)
+    assert n.sigma == pytest.approx(0.25) and n.sigma_leader == pytest.approx(0.075)
+    assert s.t == 1.0 and s.q_l[0] == 0.0  # the state itself is not changed
