@@ -48,7 +48,8 @@ from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.setup import Experiment
 from dualarm_qp.se3 import pose_error
-from dualarm_qp.step.build import DualArmState, clip_rates, grasp_rate_range
+from dualarm_qp.step.bounds import clip_rates, grasp_rate_range
+from dualarm_qp.step.build import DualArmState
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = ROOT / "configs"

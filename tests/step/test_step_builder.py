@@ -9,7 +9,8 @@ import pytest
 from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError, NonFiniteError
 from dualarm_qp.se3 import pose_error
-from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions, rate_bounds
+from dualarm_qp.step.bounds import rate_bounds
+from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions
 from dualarm_qp.task.scene import DualArmTask
 from dualarm_qp.task.surfaces import CurvedBar, PlaneBar
 from dualarm_qp.task.trajectory import LinearTrajectory

@@ -8,7 +8,8 @@ import pytest
 
 from dualarm_qp import puma560
 from dualarm_qp.se3 import pose_error
-from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions, grasp_rate_range
+from dualarm_qp.step.bounds import grasp_rate_range
+from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions
 from dualarm_qp.task.scene import DualArmTask
 from dualarm_qp.task.surfaces import CurvedBar, CylinderSurface, PlaneBar
 from dualarm_qp.task.trajectory import LinearTrajectory
@@ -143,7 +144,7 @@ def test_grasp_rate_range_matches_eqs_30_31():
 
 
 def test_start_outside_box_is_recovering_and_never_moves_further_out():
-    from dualarm_qp.step.build import rate_bounds
+    from dualarm_qp.step.bounds import rate_bounds
 
     x = np.array([-1.0, 0.5, 2.0])
     lo, hi, c, rec = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, 4.0), 0.1, 0.5)
