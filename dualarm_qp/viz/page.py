@@ -50,6 +50,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; font: 13px/1.35 system-u
 .row { display: flex; gap: 10px; align-items: center; margin-top: 4px; }
 #scrub { flex: 1; }
 #readout span { font-variant-numeric: tabular-nums; }
+#notes { color: #a04000; }
 .legend i { display: inline-block; width: 10px; height: 10px; margin: 0 3px 0 8px; }
 .dg { display: none !important; }
 #dualarm-errors { display: none; }
@@ -62,7 +63,8 @@ _BODY = """
     <span class="legend"><i style="background:#3b6fb6"></i>leader<i style="background:#c9832f">
     </i>follower<i style="background:#2ca02c"></i>grasp range<i style="background:#d62728"></i>
     grasp<i style="background:#7b2cbf"></i>path D(t)<i style="background:#ffb000"></i>joint
-    near a limit<i style="background:#e00000"></i>outside</span></div>
+    near a limit<i style="background:#e00000"></i>outside</span>
+    <span id="notes"></span></div>
   <div class="row"><button id="play">Pause</button>
     <input id="scrub" type="range" min="0" max="0" step="1" value="0" aria-label="time">
     <label>speed <select id="speed"><option value="0.25">0.25x</option>

@@ -32,8 +32,31 @@
   function material(colour) {
     return new THREE.MeshPhongMaterial({color: new THREE.Color(colour), shininess: 40});
   }
+  // Triangle buffers of the URDF arms' meshes, decoded once, shared by every part.
+  const notes = (SCENE.notes || []).slice();
+  const meshes = (SCENE.meshes || []).map((m) => {
+    try {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute("position", new THREE.BufferAttribute(
+        new Float32Array(bytes(m.positions).buffer), 3));
+      const raw = bytes(m.indices).buffer;
+      g.setIndex(new THREE.BufferAttribute(
+        m.index_bytes === 4 ? new Uint32Array(raw) : new Uint16Array(raw), 1));
+      g.computeVertexNormals();
+      return g;
+    } catch (err) {
+      notes.push("mesh " + m.name + " not drawn (" + err + ")");
+      return null;
+    }
+  });
   function shape(part, mat) {
     let g;
+    if (part.shape === "mesh") {
+      if (!meshes[part.mesh]) return null;
+      const obj = fixed(new THREE.Mesh(meshes[part.mesh], mat), part.pose);
+      obj.matrix.scale(new THREE.Vector3(part.scale[0], part.scale[1], part.scale[2]));
+      return obj;
+    }
     if (part.shape === "cylinder") {
       g = new THREE.CylinderGeometry(part.radius, part.radius, part.length, 24);
     } else if (part.shape === "sphere") {
@@ -53,9 +76,18 @@
       nodes.push(node);
     }
     const body = material(arm.colour);
-    arm.parts.forEach((p) => nodes[p.node].add(shape(p, body)));
+    body.side = THREE.DoubleSide;  // some meshes' triangles do not all face outwards
+    arm.parts.forEach((p) => {
+      const obj = shape(p, body);
+      if (obj) nodes[p.node].add(obj);
+    });
     const joints = arm.joints.map((j) => {
-      const mesh = shape(Object.assign({shape: "cylinder"}, j), material("#333333"));
+      const marker = material("#333333");
+      const mesh = shape(Object.assign({shape: "cylinder"}, j), marker);
+      if (arm.markers_on_top) {  // inside a mesh: drawn over it, so always seen
+        marker.depthTest = false;
+        mesh.renderOrder = 2;
+      }
       nodes[j.node].add(mesh);
       return mesh;
     });
@@ -272,6 +304,7 @@
   }
 
   $("title").textContent = SCENE.title;
+  $("notes").textContent = notes.join("; ");
   fitCamera();
   if (!seekFromHash()) {
     if (F.t.length) show(0);

@@ -7,9 +7,14 @@ link_frames`, frame 0 the base) and the last node its tool frame; the object's n
 the object frame ``T_world_object = leader.fk(q_l) @ H1``. A part's pose in its node is
 constant, so a frame of the animation only moves nodes (see :mod:`.frames`).
 
-Arms are drawn as a cylinder per link between consecutive frame origins, with a sphere
-at each frame origin, and a short cylinder along each joint axis that changes colour
-when the joint nears or leaves its range. The object is a bar along the grasp path
+An arm built from a URDF is drawn with the visual meshes (and boxes, cylinders, spheres)
+of its links, each fixed in the node of the joint that moves it (:mod:`.meshes`); the
+meshes are stored once per scene, in ``scene["meshes"]``, however many parts draw them.
+Any other arm (a DH table), or a URDF arm some of whose meshes cannot be read, is drawn
+as a cylinder per link between consecutive frame origins (a *capsule*), with a sphere at
+each frame origin. Every arm has a short cylinder along each joint axis that changes
+colour when the joint nears or leaves its range (drawn over the meshes, so that they do
+not hide it). The object is a bar along the grasp path
 (boxes following the path, or a cylinder for a :class:`~dualarm_qp.task.surfaces.
 CylinderSurface`), with the grasp range as a green strip on the grasp surface.
 """
@@ -25,6 +30,7 @@ from numpy.typing import NDArray
 from ..kinematics.arm import SerialArm
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface
+from .meshes import MeshLibrary, arm_visuals
 
 FloatArray = NDArray[np.float64]
 
@@ -36,6 +42,8 @@ COLOURS = {"leader": "#3b6fb6", "follower": "#c9832f", "object": "#9a9a9a",
 LINK_RADIUS, FRAME_RADIUS = 0.025, 0.032
 #: Joint-axis marker: radius and length [m].
 JOINT_RADIUS, JOINT_LENGTH = 0.04, 0.09
+#: Joint-axis marker of an arm drawn with meshes, over them: a thin rod [m].
+MESH_JOINT_RADIUS, MESH_JOINT_LENGTH = 0.014, 0.22
 #: Bar cross-section: width along n* and depth behind the surface along -a* [m].
 BAR_WIDTH, BAR_DEPTH = 0.05, 0.025
 #: Samples of D(t) drawn as the path line.
@@ -75,12 +83,16 @@ def _local(T_node: FloatArray, p_world: FloatArray) -> FloatArray:
     return np.linalg.solve(T_node, np.append(p_world, 1.0))[:3]
 
 
-def arm_parts(arm: SerialArm, role: str) -> dict[str, Any]:
+def arm_parts(arm: SerialArm, role: str, library: MeshLibrary | None = None
+              ) -> dict[str, Any]:
     """Describe an arm's links and joint markers, each fixed in one node.
 
-    A link between nodes ``k`` and ``k + 1`` is fixed in whichever of the two keeps it
-    constant (the parent for a URDF chain, the child for a DH table): that is found by
-    evaluating two random configurations, so it holds for any model.
+    With a ``library``, an arm built from a URDF is drawn with its links' visuals
+    (:func:`~dualarm_qp.viz.meshes.arm_visuals`). Otherwise, and when some of those
+    cannot be read, capsules are drawn: a link between nodes ``k`` and ``k + 1`` is
+    fixed in whichever of the two keeps it constant (the parent for a URDF chain, the
+    child for a DH table), found by evaluating two random configurations, so it holds
+    for any model.
 
     Parameters
     ----------
@@ -88,17 +100,47 @@ def arm_parts(arm: SerialArm, role: str) -> dict[str, Any]:
         The arm.
     role : str
         ``"leader"`` or ``"follower"`` (its colour).
+    library : MeshLibrary, optional
+        Where the meshes of a URDF arm go (one per scene); None draws capsules only.
 
     Returns
     -------
     dict
-        ``nodes`` (count), ``parts`` (cylinders and spheres with ``node`` and a
-        column-major local ``pose``), ``joints`` (one marker per joint), ``colour``,
-        ``joint_names``.
+        ``nodes`` (count), ``parts`` (meshes, boxes, cylinders and spheres with ``node``
+        and a column-major local ``pose`` [m]; a mesh part has ``mesh``, its index in
+        the library, and ``scale``), ``joints`` (one marker per joint), ``colour``,
+        ``joint_names``, ``drawn`` (``"meshes"``, ``"capsules"`` or ``"meshes and
+        capsules"``) and ``notes`` (what could not be drawn, for the page's readout).
     """
     rng = np.random.default_rng(0)
     qa, qb = _sample_q(arm, rng), _sample_q(arm, rng)
     Ta, Tb = arm_node_poses(arm, qa), arm_node_poses(arm, qb)
+    nodes = len(Ta)
+    visuals = arm_visuals(arm, library) if library is not None else None
+    notes: list[str] = []
+    meshes = []
+    if visuals is not None:
+        meshes = [{**p, "pose": _pose_list(p["pose"])} for p in visuals.parts]
+        if visuals.missing:
+            shown = "; ".join(visuals.missing[:3])
+            more = f" and {len(visuals.missing) - 3} more" if len(visuals.missing) > 3 else ""
+            notes.append(f"{role}: {len(visuals.missing)} visual(s) not drawn ({shown}{more}); "
+                         "links drawn as capsules")
+        elif not meshes:
+            notes.append(f"{role}: its URDF links have no visuals; links drawn as capsules")
+    with_capsules = not meshes or bool(notes)
+    joints = _joint_markers(arm, qa, Ta, *((MESH_JOINT_RADIUS, MESH_JOINT_LENGTH) if meshes
+                                           else (JOINT_RADIUS, JOINT_LENGTH)))
+    drawn = "capsules" if not meshes else "meshes and capsules" if with_capsules else "meshes"
+    return {"name": role, "nodes": nodes,
+            "parts": meshes + (_capsules(Ta, Tb) if with_capsules else []),
+            "joints": joints, "colour": COLOURS[role], "drawn": drawn, "notes": notes,
+            "markers_on_top": bool(meshes),
+            "joint_names": [f"q{j + 1}" for j in range(arm.n)]}
+
+
+def _capsules(Ta: FloatArray, Tb: FloatArray) -> list[dict[str, Any]]:
+    """Frame spheres and link cylinders, from the node poses of two configurations."""
     nodes = len(Ta)
     parts: list[dict[str, Any]] = []
     for k in range(nodes):
@@ -117,6 +159,12 @@ def arm_parts(arm: SerialArm, role: str) -> dict[str, Any]:
         T = _frame_with_z(tip / 2.0, tip)
         parts.append({"node": node, "shape": "cylinder", "radius": LINK_RADIUS,
                       "length": length, "pose": _pose_list(T)})
+    return parts
+
+
+def _joint_markers(arm: SerialArm, qa: FloatArray, Ta: FloatArray, radius: float,
+                   length: float) -> list[dict[str, Any]]:
+    """One marker per joint, along its axis, fixed in a node that keeps it constant [m]."""
     joints = []
     for j in range(arm.n):
         moved = j + 1  # frame j + 1 is the first that joint j turns
@@ -128,10 +176,9 @@ def arm_parts(arm: SerialArm, role: str) -> dict[str, Any]:
         if np.linalg.norm(axis_world) < 1e-12:
             axis_world = Ta[node][:3, 2]
         axis_local = Ta[node][:3, :3].T @ axis_world
-        joints.append({"node": node, "radius": JOINT_RADIUS, "length": JOINT_LENGTH,
+        joints.append({"node": node, "radius": radius, "length": length,
                        "pose": _pose_list(_frame_with_z(np.zeros(3), axis_local))})
-    return {"name": role, "nodes": nodes, "parts": parts, "joints": joints,
-            "colour": COLOURS[role], "joint_names": [f"q{j + 1}" for j in range(arm.n)]}
+    return joints
 
 
 def _box(p0: FloatArray, p1: FloatArray, R: FloatArray, width: float, depth: float,
@@ -210,9 +257,46 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
         Grasp values shown [m] (the bar is drawn long enough to hold them).
     title : str
         Shown at the top of the page.
+
+    Returns
+    -------
+    dict
+        ``title``, ``arms`` (:func:`arm_parts`), ``meshes`` (the triangle buffers the
+        arms' mesh parts index, :meth:`~dualarm_qp.viz.meshes.MeshLibrary.payload`),
+        ``notes`` (what could not be drawn), ``object``, ``path``, ``path_colour``.
     """
-    return {"title": title,
-            "arms": [arm_parts(task.leader, "leader"), arm_parts(task.follower, "follower")],
+    library = MeshLibrary()
+    leader = arm_parts(task.leader, "leader", library)
+    follower = arm_parts(task.follower, "follower", library)
+    _drop_shared_base_parts(leader, task.leader.base, follower, task.follower.base)
+    return {"title": title, "arms": [leader, follower], "meshes": library.payload(),
+            "notes": leader["notes"] + follower["notes"],
             "object": object_parts(task.surface, grasps),
             "path": path_points(task, t_start, t_end),
             "path_colour": COLOURS["path"]}
+
+
+def _drop_shared_base_parts(leader: dict[str, Any], T_world_leader: FloatArray,
+                            follower: dict[str, Any], T_world_follower: FloatArray) -> None:
+    """Leave out the follower's base-fixed meshes that the leader draws at the same place.
+
+    Two chains of one robot (Baxter's arms) share the links before their first joints
+    (the torso): drawn once, not twice in two colours.
+    """
+    def world(part: dict[str, Any], T_world_base: FloatArray) -> FloatArray:
+        return T_world_base @ np.array(part["pose"]).reshape(4, 4).T
+
+    def base_mesh(part: dict[str, Any]) -> bool:
+        return bool(part["node"] == 0 and part["shape"] == "mesh")
+
+    drawn = [((p["mesh"], p["scale"]), world(p, T_world_leader))
+             for p in leader["parts"] if base_mesh(p)]
+
+    def shared(part: dict[str, Any]) -> bool:
+        if not base_mesh(part):
+            return False
+        T = world(part, T_world_follower)
+        return any(key == (part["mesh"], part["scale"]) and np.allclose(T, D, atol=1e-6)
+                   for key, D in drawn)
+
+    follower["parts"] = [p for p in follower["parts"] if not shared(p)]

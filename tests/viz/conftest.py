@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from dualarm_qp.experiments.config import load_config
@@ -9,6 +11,8 @@ from dualarm_qp.experiments.setup import build_experiment
 
 #: A short run of the beam with speed limits (the follower starts outside its ranges).
 DURATION_S = 1.5
+#: A short run of the UR5 pair (its page holds the arms' meshes).
+UR5_DURATION_S = 1.0
 
 
 def _experiment():
@@ -21,6 +25,27 @@ def _experiment():
 @pytest.fixture(scope="session")
 def beam():
     return _experiment()
+
+
+@pytest.fixture(scope="session")
+def ur5_pair():
+    """The UR5 pair of configs/ur5_pair_sliding_bar.yaml (example-robot-data needed)."""
+    from dualarm_qp.kinematics.robots import example_robots_dir
+
+    if example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed (pip install 'dualarm-qp[robots]')")
+    path = Path(__file__).resolve().parents[2] / "configs" / "ur5_pair_sliding_bar.yaml"
+    exp = build_experiment(load_config(path), str(path))
+    exp.duration = UR5_DURATION_S
+    return exp
+
+
+@pytest.fixture(scope="session")
+def ur5_run_dir(ur5_pair, tmp_path_factory):
+    """A finished, animated run folder of the UR5 pair (meshes drawn)."""
+    out = tmp_path_factory.mktemp("ur5run")
+    run_experiment(ur5_pair, out, progress=False, plots=False, animate=True)
+    return out
 
 
 @pytest.fixture(scope="session")

@@ -1,6 +1,7 @@
 """animation.html in a real, headless Chromium with the network blocked.
 
-Skipped only when no ``chromium`` is installed (CI installs Debian's, see .ci/run).
+Skipped only when no ``chromium`` is installed (CI installs Debian's, see .ci/run); the
+page of the UR5 pair, drawn with the arms' meshes, also when example-robot-data is not.
 """
 
 from __future__ import annotations
@@ -45,9 +46,10 @@ def _near(img: np.ndarray, rgb: tuple[int, int, int], tol: int = 60) -> np.ndarr
     return np.abs(img - np.array(rgb)).sum(axis=2) < tol
 
 
-@pytest.fixture(scope="module")
-def page(run_dir):
-    return (run_dir / "animation.html").as_uri()
+@pytest.fixture(scope="module", params=["run_dir", "ur5_run_dir"], ids=["puma", "ur5_meshes"])
+def page(request):
+    """The PUMA beam (capsules) and the UR5 pair (meshes; skipped without the robots)."""
+    return (request.getfixturevalue(request.param) / "animation.html").as_uri()
 
 
 def test_the_page_loads_offline_without_errors_or_requests(page, tmp_path):
@@ -63,7 +65,7 @@ def test_the_page_loads_offline_without_errors_or_requests(page, tmp_path):
     assert "grasp" in dom and 'id="r-status">' in dom
 
 
-def test_two_timeline_positions_differ_where_the_arms_are(page, run_dir, tmp_path):
+def test_two_timeline_positions_differ_where_the_arms_are(page, tmp_path):
     start = _screenshot(tmp_path, page + "#t=0", "start.png")
     end = _screenshot(tmp_path, page + "#t=100", "end.png")  # past the end: the last sample
     view = slice(0, HEIGHT - 120)  # the 3D pane; the panel with the readout is below
