@@ -111,7 +111,7 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from .viz.animation import animate_run
+    from .experiments.animate import animate_run
 
     path = animate_run(args.run_dir, args.out)
     print(f"animation: {path} (open it in a web browser; it needs no server or network)")

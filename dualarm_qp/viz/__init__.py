@@ -1,7 +1,8 @@
 """3D views of the dual-arm task: a run's animation as one offline HTML file, and a live view.
 
-- :func:`write_animation` / :func:`animate_run`: the animation of a recorded run
-  (``dualarm-qp run --animate``, ``dualarm-qp animate RUN_DIR``);
+- :func:`write_animation`: the animation of a recorded run (``dualarm-qp run
+  --animate``; for a finished run folder, ``dualarm-qp animate RUN_DIR`` and
+  :func:`dualarm_qp.experiments.animate.animate_run`);
 - :class:`LiveView`: a browser view on ``127.0.0.1`` that your own control loop
   updates every step.
 
@@ -14,12 +15,12 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .animation import animate_run, animation_html, write_animation
+    from .animation import animation_html, write_animation
     from .live import LiveView, open_live_view
 
-__all__ = ["LiveView", "animate_run", "animation_html", "open_live_view", "write_animation"]
+__all__ = ["LiveView", "animation_html", "open_live_view", "write_animation"]
 
-_WHERE = {"LiveView": "live", "open_live_view": "live", "animate_run": "animation",
+_WHERE = {"LiveView": "live", "open_live_view": "live",
           "animation_html": "animation", "write_animation": "animation"}
 
 

@@ -16,8 +16,8 @@ LAYERS = {
     "task": 2,
     "step": 3,
     "solvers": 4,
-    "control": 5,
-    "experiments": 6, "bench": 6, "viz": 6,
+    "control": 5, "viz": 5,  # draws tasks and recorded runs; knows no experiment files
+    "experiments": 6, "bench": 6,
     "sweep": 7,  # runs experiments (6) and reuses the bench store (6)
     "cli": 7, "__main__": 7, "__init__": 7,
 }

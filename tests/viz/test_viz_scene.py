@@ -11,7 +11,7 @@ import pytest
 
 from dualarm_qp.cli import main
 from dualarm_qp.errors import InvalidInputError
-from dualarm_qp.viz.animation import animate_run
+from dualarm_qp.experiments.animate import animate_run
 from dualarm_qp.viz.frames import (
     LIMIT_NEAR,
     LIMIT_OK,
