@@ -32,6 +32,7 @@ from ..step.problem import StepProblem
 from ._affine import (
     RANK_RTOL,
     AffineSet,
+    TaskScale,
     affine_solutions,
     factor,
     least_distance,
@@ -94,7 +95,9 @@ class NullspaceSolver:
         if aff.nullity <= 1:
             x, conflicts = self._interval(problem, aff, lower, upper)
         else:
-            x, conflicts, extras["iterations"] = self._active_set(problem)
+            x, conflicts, extras["iterations"], reach = self._active_set(problem)
+            if reach is not None:  # the task-scale LP ran: the policy may reuse it
+                extras["task_scale"] = reach
         elapsed = time.perf_counter() - start
         extras["nullity"] = aff.nullity
         if x is None:
@@ -152,20 +155,23 @@ class NullspaceSolver:
         return np.array([xi + t * zi for xi, zi in zip(xs, zs, strict=True)]), ()
 
     def _active_set(self, problem: StepProblem
-                    ) -> tuple[FloatArray | None, tuple[str, ...], int]:
+                    ) -> tuple[FloatArray | None, tuple[str, ...], int, TaskScale | None]:
         """Primal active-set method in ``x``; a working-set variable is held at its bound.
 
-        Returns ``(x, conflicts, iterations)``; ``x`` is None when infeasible (conflicts
-        set) or when the iteration limit was hit (``iterations > max_iter``).
+        Returns ``(x, conflicts, iterations, task scale)``; ``x`` is None when infeasible
+        (conflicts set) or when the iteration limit was hit (``iterations > max_iter``);
+        the task scale is the LP's (:func:`~._affine.max_task_scale` at cap 1) when the
+        start needed it, else None.
         """
         lower, upper = problem.lower, problem.upper
         side = np.zeros(problem.n, dtype=np.int8)  # -1: at lower, +1: at upper, 0: free
         found = self._start(problem, side)
+        reach: TaskScale | None = None
         if found is None:  # a feasible start from the LP of the largest task scale
-            start = max_task_scale(problem, cap=1.0)
-            if start.scale is None or start.x is None or start.scale < 1.0 - 1e-9:
-                return None, start.blocking or problem.names, 0
-            x = start.x
+            reach = max_task_scale(problem, cap=1.0)
+            if reach.scale is None or reach.x is None or reach.scale < 1.0 - 1e-9:
+                return None, reach.blocking or problem.names, 0, reach
+            x = reach.x
             side[:] = 0
         else:
             x = found
@@ -179,7 +185,7 @@ class NullspaceSolver:
                 j = int(np.argmin(wrong))
                 grad_scale = 1.0 + float(np.abs(problem.weights * (x - problem.center)).max())
                 if side[j] == 0 or wrong[j] >= -1e-11 * grad_scale:
-                    return x, (), it
+                    return x, (), it, reach
                 side[j] = 0
                 continue
             alpha, block, block_side = 1.0, -1, 0
@@ -193,30 +199,39 @@ class NullspaceSolver:
             if block >= 0:
                 side[block] = block_side
                 x[block] = lower[block] if block_side < 0 else upper[block]
-        return None, (), self.max_iter + 1
+        return None, (), self.max_iter + 1, reach
 
 
     def _start(self, problem: StepProblem, side: NDArray[np.int8]) -> FloatArray | None:
         """Return a feasible start for the active set found without an LP, or None.
 
         First the minimiser on the whole affine set (no bound held): inside the box it
-        is the answer itself. Then the working set of the previous step's answer
-        (``x_prev``, the warm start): its equality-constrained minimiser, if it lies in
-        the box. ``side`` is set to the working set of the point returned.
+        is the answer itself. Then the warm start ``x_prev`` itself, when it meets the
+        equality and the box (the policy hands the task-scale LP's point to the scaled
+        problem this way), and last the minimiser with ``x_prev``'s working set held, if
+        it lies in the box. ``side`` is set to the working set of the point returned.
         """
         lower, upper, n = problem.lower, problem.upper, problem.n
-        tries = [np.zeros(n, dtype=np.int8)]
+        scale = 1.0 + float(np.abs(problem.b).max(initial=0.0))
+
+        def feasible(x: FloatArray) -> bool:
+            return bool(np.all(x >= lower) and np.all(x <= upper) and float(
+                np.abs(problem.A @ x - problem.b).max(initial=0.0)) <= 1e-10 * scale)
+
+        x, _ = _equality_qp(problem, side, np.clip(np.zeros(n), lower, upper))
+        if feasible(x):
+            return x
         xp = problem.x_prev
-        if xp is not None:
-            held = np.where(xp <= lower, -1, np.where(xp >= upper, 1, 0)).astype(np.int8)
-            if held.any():
-                tries.append(held)
-        for trial in tries:
-            x, _ = _equality_qp(problem, trial, np.clip(np.zeros(n), lower, upper))
-            scale = 1.0 + float(np.abs(problem.b).max(initial=0.0))
-            if (np.all(x >= lower) and np.all(x <= upper) and float(
-                    np.abs(problem.A @ x - problem.b).max(initial=0.0)) <= 1e-10 * scale):
-                side[:] = trial
+        if xp is None:
+            return None
+        held = np.where(xp <= lower, -1, np.where(xp >= upper, 1, 0)).astype(np.int8)
+        if feasible(xp):
+            side[:] = held
+            return np.where(held < 0, lower, np.where(held > 0, upper, xp))
+        if held.any():
+            x, _ = _equality_qp(problem, held, np.clip(np.zeros(n), lower, upper))
+            if feasible(x):
+                side[:] = held
                 return x
         return None
 

@@ -104,7 +104,9 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
         return solution
     # Policy time is counted from the first solve, which it includes.
     start = time.perf_counter() - solution.solve_time
-    reach = max_task_scale(problem, cap=1.0)
+    # The exact solver may have computed the task scale of this very problem already.
+    known = solution.extras.get("task_scale")
+    reach = known if isinstance(known, TaskScale) else max_task_scale(problem, cap=1.0)
     if reach.scale is not None and reach.scale >= 1.0 - 1e-12:
         # The step is feasible: the failure is the solver's own.
         if fallback is None:
@@ -148,7 +150,10 @@ def _scaled(solver: StepSolver, problem: StepProblem, reach: TaskScale, tol: Tol
     if reach.scale is not None and reach.scale > problem.task_scale_max:
         reach = max_task_scale(problem, cap=problem.task_scale_max)
     s = float(reach.scale or 0.0)
-    scaled = dataclasses.replace(problem, b=s * problem.b)
+    # The LP's point is feasible for the scaled task: a warm start (an exact solver's
+    # active set starts there instead of solving the LP again).
+    scaled = dataclasses.replace(problem, b=s * problem.b,
+                                 x_prev=reach.x if reach.x is not None else problem.x_prev)
     inner = solver.solve(scaled)
     extras: dict[str, Any] = {"policy": "scale", "conflicts": reach.blocking,
                               "inner_status": inner.status}
