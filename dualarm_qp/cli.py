@@ -252,10 +252,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         _err(f"interrupted ({result.interrupted}): {done} of {result.planned} points stored; "
              "run the same command again to resume")
         return EXIT_INTERRUPTED
-    return _sweep_report(out, unrun=len(result.unrun))
+    return _sweep_report(out, unrun=len(result.unrun),
+                         why="; ".join(sorted(set(result.unrun.values()))))
 
 
-def _sweep_report(out: Path, *, unrun: int = 0) -> int:
+def _sweep_report(out: Path, *, unrun: int = 0, why: str = "") -> int:
     from .sweep.report import write_report
 
     with SignalHold():  # a signal during the report: finish it, then exit 130
@@ -263,8 +264,8 @@ def _sweep_report(out: Path, *, unrun: int = 0) -> int:
         print(f"report: {path}")
         sys.stdout.flush()
     if unrun:
-        _err(f"{unrun} points could not be run (their workers died repeatedly); they are "
-             "listed as interrupted; run the same command again to resume")
+        _err(f"{unrun} points could not be run ({why or 'their workers died repeatedly'}); "
+             "they are listed as interrupted; run the same command again to resume")
         return EXIT_FAILED
     return EXIT_OK
 

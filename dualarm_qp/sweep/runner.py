@@ -184,6 +184,7 @@ class _Driver:
         self.unrun: dict[str, str] = {}
         self.written_at = time.monotonic()
         self.bar: Any = None
+        self._last_failure = ""
 
     def todo(self) -> list[PointTask]:
         return [t for t in self.tasks if t.key not in self.records]
@@ -222,12 +223,13 @@ class _Driver:
             size = self.settings.batch or batch_size(len(todo), worker_count(client))
             batches = [todo[i:i + size] for i in range(0, len(todo), size)]
             pending = {client.submit(run_batch, b, code, pure=False): b for b in batches}
-            self._collect(client, pending)
+            self._collect(client, pending, code)
 
-    def _collect(self, client: Any, pending: dict[Any, list[PointTask]]) -> None:
+    def _collect(self, client: Any, pending: dict[Any, list[PointTask]], code: str) -> None:
         from distributed import as_completed
 
         finished = as_completed(list(pending), loop=client.loop)
+        resent: dict[tuple[str, ...], int] = {}
         lost_since: float | None = None
         while pending:
             done = finished.next_batch(block=False)
@@ -247,9 +249,28 @@ class _Driver:
             else:
                 lost_since = None
             for fut in done:
-                self._finish(fut, pending.pop(fut))
+                batch = pending.pop(fut)
+                if self._finish(fut, batch):
+                    continue
+                # A transient failure (a connection cut while the worker died, say):
+                # send the batch again, a few times at most.
+                ids = tuple(t.key for t in batch)
+                resent[ids] = resent.get(ids, 0) + 1
+                if resent[ids] > MAX_WORKER_LOSSES:
+                    for t in batch:
+                        self.unrun[t.key] = (f"its task failed {MAX_WORKER_LOSSES + 1} times "
+                                             f"({self._last_failure})")
+                    continue
+                again = client.submit(run_batch, batch, code, pure=False)
+                pending[again] = batch
+                finished.add(again)
 
-    def _finish(self, fut: Any, batch: list[PointTask]) -> None:
+    def _finish(self, fut: Any, batch: list[PointTask]) -> bool:
+        """Store a finished batch; return False when it should be sent again.
+
+        A batch lost with its worker more often than Dask allows (``KilledWorker``) is
+        left unrun; a worker running other code stops the sweep (bad set-up).
+        """
         from distributed import KilledWorker
 
         if fut.status == "finished":
@@ -261,15 +282,16 @@ class _Driver:
                                     f"stored in {self.out}; run the same command again "
                                     "(with a running scheduler) to resume") from None
             self.store_records(recs)
-            return
+            return True
         failure = fut.exception() if fut.status == "error" else None
         if isinstance(failure, DualArmError):  # a worker running other code
             raise failure
-        reason = (f"lost with its worker {MAX_WORKER_LOSSES} times"
-                  if isinstance(failure, KilledWorker) else "its task ended with "
-                  f"{type(failure).__name__ if failure else fut.status}")
-        for t in batch:
-            self.unrun[t.key] = reason
+        if isinstance(failure, KilledWorker):
+            for t in batch:
+                self.unrun[t.key] = f"lost with its worker {MAX_WORKER_LOSSES} times"
+            return True
+        self._last_failure = type(failure).__name__ if failure else fut.status
+        return False
 
     def _give_up(self, pending: dict[Any, list[PointTask]], reason: str) -> None:
         for batch in pending.values():
