@@ -89,6 +89,29 @@ def timeit(fn: Callable[[int], Any], samples: int) -> dict[str, float]:
     return stats(timings(fn, samples))
 
 
+def interleaved(fn_a: Callable[[int], Any], fn_b: Callable[[int], Any], samples: int,
+                warmup: int = 200) -> dict[str, Any]:
+    """Time ``fn_a(i)`` and ``fn_b(i)`` alternately, call by call.
+
+    This machine alternates between a fast and a slow state for seconds at a time; two
+    rows timed one after the other can see different states. Alternating the calls
+    puts both under the same conditions, so their ratio is what the code costs.
+    Returns both medians and p99 [us] and the median of the per-pair ratios a / b.
+    """
+    for i in range(min(warmup, samples)):
+        fn_a(i)
+        fn_b(i)
+    ta, tb = np.empty(samples), np.empty(samples)
+    for i in range(samples):
+        t0 = time.perf_counter()
+        fn_a(i)
+        t1 = time.perf_counter()
+        fn_b(i)
+        t2 = time.perf_counter()
+        ta[i], tb[i] = t1 - t0, t2 - t1
+    return {"a": stats(ta), "b": stats(tb), "ratio_median": float(np.median(ta / tb))}
+
+
 def ratio(a: dict[str, float] | None, b: dict[str, float] | None) -> float | None:
     """Ratio of two medians (None when either is missing)."""
     if not isinstance(a, dict) or not isinstance(b, dict):
@@ -221,10 +244,12 @@ def pink_ur5(samples: int, out: dict[str, Any]) -> None:
         task.set_target(target)
 
         def step(i: int, conf: Any = conf, task: Any = task, backend: str = backend) -> None:
-            conf.update(qs[i])
+            conf.update(qs[i % len(qs)])
             pink.solve_ik(conf, [task], 0.01, solver=backend, safety_break=False)
 
         out[key] = timeit(step, min(samples, 1000))
+        if backend == "daqp":
+            out["_daqp_step"] = step  # for the interleaved comparison (not in the JSON)
 
 
 # --------------------------------------------------------------------------------------
@@ -459,6 +484,7 @@ def pink_same_work(exp: Experiment, states: list[State], samples: int, n_compare
         diff_exact, default=None)
     out["pink same work update + solve_ik (daqp)"] = timeit(
         lambda i: same.solve(*states[i % len(states)]), samples)
+    out["_step"] = lambda i: same.solve(*states[i % len(states)])
 
 
 def _skew(u: np.ndarray) -> np.ndarray:
@@ -555,6 +581,27 @@ def main(argv: list[str] | None = None) -> int:
             ours["puma_beam_limits"]["step"])
     out["pink_same_work_puma_beam_limits"] = same
 
+    # 6. The two ratios again, timed interleaved (call by call), so that both sides see
+    # the same machine state: pink's UR5 step against our PUMA step, and pink on the
+    # same work against our step, on the same recorded states.
+    paired: dict[str, Any] = {}
+    puma_states = states_of["puma_beam_limits"]
+    ctrl = exps["puma_beam_limits"].controller()
+
+    def our_step(i: int) -> None:
+        ctrl.step(*puma_states[i % len(puma_states)][:1],
+                  scale_max=puma_states[i % len(puma_states)][1])
+
+    ur5_step = ref.pop("_daqp_step", None)
+    if ur5_step is not None:
+        # The UR5 row times its first 1000 configurations (pink finds no solution at some
+        # of the others): the same here.
+        paired["our step / pink ur5 daqp step"] = interleaved(our_step, ur5_step, min(n, 1000))
+    same_step = same.pop("_step", None)
+    if same_step is not None:
+        paired["pink same work / our step"] = interleaved(same_step, our_step, n)
+    out["interleaved"] = paired
+
     out["targets"] = {
         "our step / pink ur5 daqp step, at most": TARGET_STEP_VS_PINK_UR5,
         "rollout steps/s, at least": TARGET_ROLLOUT_STEPS_PER_S,
@@ -595,6 +642,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  ratio pink same work / our step: "
               f"{same['ratio pink same work / our step']:.2f}x (target at least "
               f"{TARGET_PINK_SAME_VS_OURS}x)")
+    if paired:
+        print("\n== 6. the ratios timed interleaved (call by call, the same machine state)")
+        for k, v in paired.items():
+            print(f"  {k:<34} {v['ratio_median']:.2f}x   (medians {v['a']['median_us']:.1f} "
+                  f"us and {v['b']['median_us']:.1f} us)")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(out, indent=2) + "\n")
