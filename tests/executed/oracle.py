@@ -1,11 +1,12 @@
-"""An independent forward-kinematics oracle for the PUMA 560 (standard DH, Table 1).
+"""The PUMA 560 of Table 1 on the tests' independent DH oracle (``tests/dh_oracle.py``).
 
-Written from the table alone, with plain numpy 4x4 products; it shares no code with
-``dualarm_qp.kinematics``. Lengths in m, angles in rad.
+Written from the table alone; it shares no code with ``dualarm_qp.kinematics``.
+Lengths in m, angles in rad.
 """
 
 from __future__ import annotations
 
+import dh_oracle
 import numpy as np
 
 #: PUMA 560, Table 1: alpha [deg], a [mm], d [mm]; no joint offsets.
@@ -14,32 +15,15 @@ A = np.array([0.0, 431.8, -20.32, 0.0, 0.0, 0.0]) / 1000.0
 D = np.array([0.0, 149.09, 0.0, 433.07, 0.0, 56.25]) / 1000.0
 
 
-def rot_z(theta: float) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], dtype=float)
-
-
-def rot_x(theta: float) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]], dtype=float)
-
-
-def trans(x: float, y: float, z: float) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, 3] = (x, y, z)
-    return out
+#: The table as oracle rows ``(a, alpha, d, offset)``.
+ROWS = np.column_stack([A, ALPHA, D, np.zeros(6)])
 
 
 def puma_fk(q, base=None, tool=None) -> np.ndarray:
     """``base @ prod_i Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) @ tool`` (4x4)."""
     q = np.asarray(q, dtype=float)
     assert q.shape == (6,), q.shape
-    T = np.eye(4) if base is None else np.array(base, dtype=float)
-    for i in range(6):
-        T = T @ rot_z(q[i]) @ trans(0.0, 0.0, D[i]) @ trans(A[i], 0.0, 0.0) @ rot_x(ALPHA[i])
-    if tool is not None:
-        T = T @ np.array(tool, dtype=float)
-    return T
+    return dh_oracle.fk(ROWS, q, "standard", base, tool)
 
 
 def inv_pose(T) -> np.ndarray:
