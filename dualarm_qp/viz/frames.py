@@ -56,6 +56,9 @@ class Timeline:
         The step status of each sample (empty strings when not recorded).
     scale : ndarray or None, shape (K,)
         Task scale of each sample (1: the path at full speed), when recorded.
+    grasp_leader : ndarray or None, shape (K,)
+        Leader grasp coordinate [m] when the leader's grasp slides (CSV column
+        ``grasp_leader``), else None.
     """
 
     t: FloatArray
@@ -65,6 +68,7 @@ class Timeline:
     grasp: FloatArray
     status: list[str]
     scale: FloatArray | None
+    grasp_leader: FloatArray | None = None
 
     def __len__(self) -> int:
         return len(self.t)
@@ -115,7 +119,9 @@ def read_timeline(path: str | Path) -> Timeline:
     return Timeline(t=column(["t"])[:, 0], path_t=column(["path_t"])[:, 0],
                     q_l=column(ql), q_f=column(qf), grasp=column(["grasp"])[:, 0],
                     status=status,
-                    scale=column(["scale"])[:, 0] if "scale" in index else None)
+                    scale=column(["scale"])[:, 0] if "scale" in index else None,
+                    grasp_leader=(column(["grasp_leader"])[:, 0] if "grasp_leader" in index
+                                  else None))
 
 
 def limit_states(arm: SerialArm, q: FloatArray) -> NDArray[np.uint8]:
@@ -143,13 +149,18 @@ def pose7(T: FloatArray) -> list[float]:
     return [*map(float, T[:3, 3]), *map(float, quat)]
 
 
-def sample_nodes(task: DualArmTask, q_l: Any, q_f: Any, grasp: float) -> dict[str, Any]:
-    """Return the node poses and limit states of one sample (see :func:`frame_payload`)."""
+def sample_nodes(task: DualArmTask, q_l: Any, q_f: Any, grasp: float,
+                 grasp_leader: float = 0.0) -> dict[str, Any]:
+    """Return the node poses and limit states of one sample (see :func:`frame_payload`).
+
+    ``grasp_leader`` [m] places the object when the leader's grasp slides
+    (``task.leader_surface``); it is ignored otherwise.
+    """
     q_l = np.asarray(q_l, dtype=float)
     q_f = np.asarray(q_f, dtype=float)
     arms = [[pose7(T) for T in arm_node_poses(arm, q)]
             for arm, q in ((task.leader, q_l), (task.follower, q_f))]
-    T_obj = task.leader.fk(q_l) @ task.H1
+    T_obj = task.object_pose(q_l, float(grasp_leader))
     return {"arms": arms,
             "limits": [limit_states(task.leader, q_l).tolist(),
                        limit_states(task.follower, q_f).tolist()],
@@ -187,8 +198,10 @@ def frame_payload(task: DualArmTask, timeline: Timeline) -> dict[str, Any]:
             f"{timeline.q_f.shape[1]} follower joints, the task's arms {n_l} and {n_f}")
     keep = thin(len(timeline))
     nodes, limits, local = [], [], []
+    lead = timeline.grasp_leader
     for k in keep:
-        s = sample_nodes(task, timeline.q_l[k], timeline.q_f[k], timeline.grasp[k])
+        s = sample_nodes(task, timeline.q_l[k], timeline.q_f[k], timeline.grasp[k],
+                         0.0 if lead is None else float(lead[k]))
         nodes.append([v for arm in s["arms"] for pose in arm for v in pose] + s["object"])
         limits.append(s["limits"][0] + s["limits"][1])
         local.append(s["grasp_local"])

@@ -148,7 +148,8 @@ class LiveView:
         q_f = self.task.follower.check_q(q_f, "q_f")
         if t is None:
             t = float(len(self._samples))
-        s = sample_nodes(self.task, q_l, q_f, float(grasp))
+        s = sample_nodes(self.task, q_l, q_f, float(grasp),
+                         float(getattr(state, "sigma_leader", 0.0)))
         nodes = [v for arm in s["arms"] for pose in arm for v in pose] + s["object"]
         event = json.dumps({"t": [float(t)], "path_t": [float(t)], "grasp": [float(grasp)],
                             "scale": [None if scale is None else float(scale)],

@@ -4,7 +4,8 @@ The scene is described once, as plain numbers (a JSON-ready dict), and the brows
 builds it with three.js. Every part hangs off a *node* whose world pose changes over
 time: node ``i`` of an arm is its frame ``i`` (:meth:`~dualarm_qp.kinematics.SerialArm.
 link_frames`, frame 0 the base) and the last node its tool frame; the object's node is
-the object frame ``T_world_object = leader.fk(q_l) @ H1``. A part's pose in its node is
+the object frame ``T_world_object = leader.fk(q_l) @ H1`` (``H1(sigma_l)`` when the
+leader's grasp slides). A part's pose in its node is
 constant, so a frame of the animation only moves nodes (see :mod:`.frames`).
 
 An arm built from a URDF is drawn with the visual meshes (and boxes, cylinders, spheres)

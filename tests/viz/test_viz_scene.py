@@ -115,3 +115,31 @@ def test_animate_command_exit_codes(run_dir, tmp_path, capsys):
     assert (tmp_path / "a.html").stat().st_size > 500_000
     assert main(["animate", str(tmp_path)]) == 2  # no summary.json: bad input
     assert "summary.json" in capsys.readouterr().err
+
+
+def test_a_sliding_leader_grasp_places_the_object_by_its_grasp(tmp_path):
+    """With both grasps sliding the object sits at T_l G_l(sigma_l)^-1, read per sample."""
+    import numpy as np
+    import pinocchio as pin
+
+    from dualarm_qp import DualArmTask, LinearTrajectory, PlaneBar, puma560
+    from dualarm_qp.viz.frames import read_timeline, sample_nodes
+
+    lead = PlaneBar(r_min=(0, 0, -0.4), r_max=(0, 0, 0))
+    task = DualArmTask(puma560(), puma560(base=np.eye(4)), np.eye(4), PlaneBar(),
+                       LinearTrajectory(np.zeros(3), np.zeros(3), tf=1.0), leader_surface=lead)
+    q = np.full(6, 0.3)
+    for sigma_l in (-0.3, -0.1):
+        obj = sample_nodes(task, q, q, 0.2, sigma_l)["object"]
+        T = task.leader.fk(q) @ np.linalg.inv(lead.pose(sigma_l))
+        np.testing.assert_allclose(obj[:3], T[:3, 3], atol=1e-12)
+        quat = pin.Quaternion(T[:3, :3]).coeffs()
+        assert min(np.abs(np.asarray(obj[3:]) - quat).max(),
+                   np.abs(np.asarray(obj[3:]) + quat).max()) < 1e-12
+    # The CSV's grasp_leader column reaches the timeline.
+    csv = tmp_path / "trajectory.csv"
+    csv.write_text("t,path_t," + ",".join(f"ql{i}" for i in range(1, 7)) + ","
+                   + ",".join(f"qf{i}" for i in range(1, 7)) + ",grasp,grasp_leader\n"
+                   + "0,0," + ",".join(["0.3"] * 12) + ",0.2,-0.25\n")
+    tl = read_timeline(csv)
+    assert tl.grasp_leader is not None and tl.grasp_leader[0] == -0.25
