@@ -95,9 +95,13 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
         speed = r["speed_ratio_max"]
         speed_text = ("n/a (no limit)" if speed is None or speed != speed
                       else f"{speed:.3g} ({r['worst_speed']})")
-        print(f"    {part:<9} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
+        print(f"    {part:<12} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
               f"speed {speed_text}")
-    print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm; "
+    lead = s.get("grasp_leader_start_m")
+    lead_text = (f" (leader's {lead * 1e3:.1f} -> {s['grasp_leader_end_m'] * 1e3:.1f} mm)"
+                 if isinstance(lead, float) and lead == lead else "")
+    print(f"  grasp: {s['grasp_start_m'] * 1e3:.1f} -> {s['grasp_end_m'] * 1e3:.1f} mm"
+          f"{lead_text}; "
           f"smallest singular value: leader {s['sigma_min']['leader']:.3g}, "
           f"follower {s['sigma_min']['follower']:.3g}")
     fallback = f", {s['fallback_steps']} by the fallback solver" if s["fallback_steps"] else ""
