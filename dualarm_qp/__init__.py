@@ -24,6 +24,7 @@ from .errors import (
     ShapeError,
     SolverError,
     SolverNotFoundError,
+    SupportLostError,
 )
 from .kinematics import (
     DHTable,
@@ -130,6 +131,7 @@ __all__ = [
     "SolverError",
     "SolverNotFoundError",
     "SolverOptionError",
+    "SupportLostError",
     "__version__",
 ]
 

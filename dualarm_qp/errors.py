@@ -51,6 +51,14 @@ class LimitsError(InvalidInputError):
     """Lower and upper limits are inconsistent (lower > upper) or malformed."""
 
 
+class SupportLostError(InvalidInputError):
+    """A supporting follower (the paper's Case 2) would have to pull to hold the object.
+
+    Raised by a step (the run then fails on criterion ``support``) and, for the start, at
+    configuration time.
+    """
+
+
 class ConfigError(DualArmError, ValueError):
     """A configuration file is malformed, has unknown keys or wrong types.
 

@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..errors import DualArmError, InvalidInputError
+from ..errors import DualArmError, InvalidInputError, SupportLostError
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
@@ -36,7 +36,8 @@ from .trace import Trace, record, record_state
 FloatArray = NDArray[np.float64]
 
 #: Criteria a run can fail on (``Failure.criterion``).
-CRITERIA = ("solver", "closure", "tracking", "singularity", "stalled", "path_incomplete",
+CRITERIA = ("solver", "support", "closure", "tracking", "singularity", "stalled",
+            "path_incomplete",
             "range", "speed", "interrupted")
 
 #: What a smallest singular value below the threshold does.
@@ -384,7 +385,8 @@ def rollout(
                 if at_end:  # the path is done; this command would not be applied
                     warnings.append(f"the command at the path's end failed: {message}")
                 else:
-                    failure = Failure("solver", k, t_wall, math.nan, math.nan, message)
+                    failure = Failure("support" if isinstance(err, SupportLostError)
+                                      else "solver", k, t_wall, math.nan, math.nan, message)
                 break
             record(tr, k, t_wall, state, out, controller)
             tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (

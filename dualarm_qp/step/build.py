@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validate import as_array
-from ..errors import InvalidInputError, NonFiniteError
+from ..errors import InvalidInputError, NonFiniteError, SupportLostError
 from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
@@ -408,7 +408,7 @@ class StepBuilder:
         current = self._surfaces[0]
         if (isinstance(current, SupportLine)
                 and float(line.tangent(0.0) @ current.tangent(0.0)) < 0.0):
-            raise InvalidInputError(
+            raise SupportLostError(
                 "support lost: the support line reversed (gravity's component along the "
                 "surface normal changed sign), so the follower would have to pull")
         if not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12):

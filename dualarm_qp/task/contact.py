@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validate import as_array, as_pose
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, SupportLostError
 from .support import SupportLine, support_line
 from .surfaces import PlaneBar
 
@@ -113,7 +113,7 @@ class SupportContact:
         """
         g_o = self.gravity_in_object(R_world_object)
         if abs(float(g_o[0])) <= GRAVITY_ALONG_PUSH_MIN * float(np.linalg.norm(g_o)):
-            raise InvalidInputError(
+            raise SupportLostError(
                 "support lost: gravity in object coordinates "
                 f"[{g_o[0]:.4g}, {g_o[1]:.4g}, {g_o[2]:.4g}] m/s^2 has no component along the "
                 "object's x axis, so a push along the surface normal carries none of the "
@@ -124,7 +124,7 @@ class SupportContact:
                                 offset=self._offset, r_min=plane.r_min, r_max=plane.r_max,
                                 mass_centre=self.mass_centre)
         except InvalidInputError as err:
-            raise InvalidInputError(
+            raise SupportLostError(
                 "support lost for gravity in object coordinates "
                 f"[{g_o[0]:.4g}, {g_o[1]:.4g}, {g_o[2]:.4g}] m/s^2: {err}") from None
 
@@ -139,7 +139,7 @@ class SupportContact:
         """
         h = line.force(sigma)
         if not (0.0 < h < math.inf):
-            raise InvalidInputError(
+            raise SupportLostError(
                 f"support lost at grasp {sigma:.6g} m: holding the object there needs a "
                 f"follower force h = {h:.4g} N along the surface normal; a support can only "
                 f"push (h > 0, finite), which needs grasp > {line.sigma_inf:.6g} m")

@@ -145,3 +145,22 @@ def test_bad_support_configs_exit_2_naming_the_key(case: str, tmp_path: Path) ->
     proc = _cli(_bad(data, tmp_path / f"{case}.yaml"), tmp_path / "out")
     assert proc.returncode == 2, (proc.returncode, proc.stderr)
     assert f"'{key}'" in proc.stderr, proc.stderr
+
+
+def test_a_step_that_would_need_a_pull_fails_on_criterion_support():
+    """A grasp far behind the leader's hand needs a pull: the step says so, the run fails
+    on its own criterion."""
+    import dataclasses
+
+    from dualarm_qp.control.rollout import CRITERIA, rollout
+    from dualarm_qp.errors import SupportLostError
+    from dualarm_qp.experiments import build_experiment, load_config
+
+    assert "support" in CRITERIA
+    exp = build_experiment(load_config(CONFIG), str(CONFIG))
+    exp.controller().step(exp.initial)  # the shipped start is supported
+    bad = dataclasses.replace(exp.initial, sigma=-10.0)
+    with pytest.raises(SupportLostError, match="support lost"):
+        exp.controller().step(bad)
+    res = rollout(exp.controller(), bad, duration=0.1)
+    assert res.failure is not None and res.failure.criterion == "support", res.message
