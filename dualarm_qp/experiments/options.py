@@ -14,7 +14,7 @@ from typing import Any
 
 from ..errors import InvalidInputError
 from ..solvers.registry import SolverOptionError, canonical_name, get_solver, solver_info
-from .config import yaml_scalar
+from .yaml_file import yaml_scalar
 
 
 class SolverFlagError(InvalidInputError):

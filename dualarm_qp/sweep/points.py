@@ -230,7 +230,7 @@ def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
         A bad key or value (naming the sweep file and the key), a base file that is
         not an experiment file, or a sweep in which no point can start.
     """
-    from ..experiments.config import read_yaml_document
+    from ..experiments.yaml_file import read_yaml_document
 
     base = read_yaml_document(spec.base)
     if not isinstance(base, dict):

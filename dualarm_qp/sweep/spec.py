@@ -282,7 +282,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     ConfigError
         Missing or unreadable file, invalid YAML, or an invalid sweep (naming the key).
     """
-    from ..experiments.config import read_yaml_document
+    from ..experiments.yaml_file import read_yaml_document
 
     return parse_sweep(read_yaml_document(path), str(path))
 
