@@ -26,6 +26,8 @@ that stops answering ends the sweep the same way, with :class:`SchedulerLost`.
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import math
 import sys
 import time
@@ -273,17 +275,18 @@ class _Driver:
         """
         from distributed import KilledWorker
 
-        if fut.status == "finished":
-            try:
-                recs = fut.result()
-            except OSError as lost:  # the result cannot be fetched: the scheduler is gone
-                raise SchedulerLost(f"the Dask scheduler stopped answering ({lost}); "
-                                    f"{len(self.records)} of {len(self.tasks)} points are "
-                                    f"stored in {self.out}; run the same command again "
-                                    "(with a running scheduler) to resume") from None
-            self.store_records(recs)
-            return True
-        failure = fut.exception() if fut.status == "error" else None
+        try:
+            if fut.status == "finished":
+                self.store_records(fut.result())
+                return True
+            failure = fut.exception() if fut.status == "error" else None
+        except (OSError, asyncio.CancelledError, concurrent.futures.CancelledError) as lost:
+            # The result cannot be fetched, or the future was cancelled under us: the
+            # scheduler is gone (Dask cancels every future when it loses it).
+            raise SchedulerLost(f"the Dask scheduler stopped answering ({type(lost).__name__}"
+                                f"); {len(self.records)} of {len(self.tasks)} points are "
+                                f"stored in {self.out}; run the same command again (with a "
+                                "running scheduler) to resume") from None
         if isinstance(failure, DualArmError):  # a worker running other code
             raise failure
         if isinstance(failure, KilledWorker):
