@@ -336,11 +336,7 @@ class StepBuilder:
         if self._contact is not None:
             kin, support_force = self._support(self._contact, kin, state)
         T_f, J_f = task.follower.fk_jacobian(state.q_f)
-        if kin.J_tool.shape == J_f.shape == (6, 6):  # both at once: one LAPACK call
-            sv = np.linalg.svd(np.stack((kin.J_tool, J_f)), compute_uv=False)
-            sigma_min = (float(sv[0, -1]), float(sv[1, -1]))
-        else:
-            sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
+        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
         t1 = time.perf_counter()
 
         dt = opts.dt
