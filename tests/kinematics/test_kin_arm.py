@@ -9,6 +9,7 @@ import dh_oracle
 import numpy as np
 import pinocchio as pin
 import pytest
+from fd import fd_jacobian
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -28,18 +29,6 @@ def trans(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
 
 def reference_fk(arm: SerialArm, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
     return dh_oracle.fk(rows, q, arm.dh.convention, arm.base, arm.tool)
-
-
-def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
-    """Central differences: position, and log(R(q+h) R(q-h)^T) / 2h for rotation."""
-    J = np.empty((6, arm.n))
-    for i in range(arm.n):
-        dq = np.zeros(arm.n)
-        dq[i] = h
-        Tp, Tm = arm.fk(q + dq), arm.fk(q - dq)
-        J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
-        J[3:, i] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
-    return J
 
 
 # Link twists: exact special values (handled by dedicated code paths) and generic ones.

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from fd import fd_jacobian
 
 from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.kinematics import (
@@ -45,18 +46,6 @@ CHAINS = [
 
 def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
     return pin.SE3(pin.exp3(rng.normal(size=3)), scale * rng.normal(size=3)).homogeneous
-
-
-def fd_jacobian(arm: SerialArm, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
-    """Central differences: position, and log(R(q+h) R(q-h)^T) / 2h for rotation."""
-    J = np.empty((6, arm.n))
-    for i in range(arm.n):
-        dq = np.zeros(arm.n)
-        dq[i] = h
-        Tp, Tm = arm.fk(q + dq), arm.fk(q - dq)
-        J[:3, i] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
-        J[3:, i] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
-    return J
 
 
 def urdf_limits(path: Path, joints: list[str]) -> tuple[np.ndarray, ...]:
