@@ -156,11 +156,15 @@ class InfeasibleStepError(SolverError):
     Attributes
     ----------
     conflicts : tuple of str
-        Human-readable names of the bounds that conflict.
+        Human-readable names of the bounds that conflict, each once.
+    reason : str
+        The message without the list of conflicts (to build on it without repeating
+        the list).
     """
 
     def __init__(self, message: str, *, conflicts: Sequence[str] = ()) -> None:
-        self.conflicts = tuple(conflicts)
+        self.conflicts = tuple(dict.fromkeys(conflicts))
+        self.reason = message
         if self.conflicts:
             message = f"{message} (conflicting bounds: {', '.join(self.conflicts)})"
         super().__init__(message)

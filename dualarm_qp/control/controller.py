@@ -260,7 +260,7 @@ class DualArmController:
         except InfeasibleStepError as err:
             sv_l, sv_f = build.sigma_min
             raise InfeasibleStepError(
-                f"{err} (smallest singular values of the arms' Jacobians: leader "
+                f"{err.reason} (smallest singular values of the arms' Jacobians: leader "
                 f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
         t5 = time.perf_counter()
         # Every solution is verified with our tolerances before it is applied; registered

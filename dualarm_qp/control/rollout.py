@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..errors import DualArmError, InvalidInputError, SupportLostError
+from ..errors import DualArmError, InfeasibleStepError, InvalidInputError, SupportLostError
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
@@ -379,7 +379,8 @@ def rollout(
                 out = controller.step(state, scale_max=scale_max)
             except DualArmError as err:
                 # The state was reached: keep it (with no command) before stopping.
-                record_state(tr, k, t_wall, state, controller)
+                record_state(tr, k, t_wall, state, controller,
+                             "infeasible" if isinstance(err, InfeasibleStepError) else "error")
                 rows = k + 1
                 message = f"step {k} at t = {t_wall:.4f} s: {err}"
                 if at_end:  # the path is done; this command would not be applied

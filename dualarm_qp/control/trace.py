@@ -139,11 +139,12 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
 
 
 def record_state(tr: Trace, k: int, t: float, state: DualArmState,
-                 controller: DualArmController) -> None:
+                 controller: DualArmController, status: str = "error") -> None:
     """Write sample ``k`` for a state whose step raised: the state, no command.
 
     The rates and the path-time rate are 0 (nothing was applied); errors and solver
-    fields stay NaN; the status is ``"error"``.
+    fields stay NaN; the status is ``status``: ``"infeasible"`` for a step that has no
+    solution (the ``"stop"`` policy), ``"error"`` for any other failure.
     """
     _record_state(tr, k, t, state, controller.task)
     tr.m[k] = 0.0
@@ -153,7 +154,7 @@ def record_state(tr: Trace, k: int, t: float, state: DualArmState,
     tr.qf_dot[k] = 0.0
     tr.scale[k] = 0.0
     tr.fallback[k] = 0.0
-    tr.status[k] = "error"
+    tr.status[k] = status
     tr.correction_l[k] = tr.correction_f[k] = 0.0
 
 

@@ -83,6 +83,12 @@ def test_stop_policy_stops_with_the_conflicting_bounds():
     assert not res.completed
     assert "conflicting bounds" in res.message
     assert np.isfinite(res.trace.q_f).all()
+    # Each conflicting bound is named once, and the step counts as infeasible.
+    assert res.message.count("conflicting bounds") == 1
+    listed = res.message.split("conflicting bounds: ")[1].split(")")[0].split(", ")
+    assert len(listed) == len(set(listed))
+    assert res.trace.status[-1] == "infeasible"
+    assert res.summary()["status_counts"].get("error", 0) == 0
 
 
 def test_a_path_that_cannot_move_stops_the_run():
