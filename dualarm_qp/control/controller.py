@@ -16,7 +16,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InfeasibleStepError, InvalidInputError, NonFiniteError, SolverNotFoundError
+from ..errors import (
+    DualArmError,
+    InfeasibleStepError,
+    InvalidInputError,
+    NonFiniteError,
+    SolverNotFoundError,
+)
 from ..solvers.base import (
     DEFAULT_TOLERANCE,
     Status,
@@ -31,6 +37,11 @@ from ..solvers.registry import solver_info
 from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
 from ..step.problem import StepProblem
 from ..task.scene import DualArmTask
+from .diagnosis import explain
+from .lookahead import Lookahead
+
+#: How many times a step over its error budget may halve its task scale.
+BUDGET_HALVINGS = 6
 
 FloatArray = NDArray[np.float64]
 
@@ -148,6 +159,13 @@ class DualArmController:
         Called with every :class:`ControlOutput` before :meth:`step` returns it (to
         record the step problems, or to refuse an answer by raising); what it raises
         leaves :meth:`step`.
+    error_budget : tuple of float, optional
+        ``(position [m], rotation [rad])``: the largest leader tracking and grasp closure
+        error one step may leave at the next sample, predicted by forward kinematics
+        (:mod:`.lookahead`). A step predicted over it is slowed through the task scale,
+        as the limits slow it (halving the scale up to :data:`BUDGET_HALVINGS` times);
+        its status is then SCALED. None (the default) predicts nothing. Only for a
+        solver that claims hard limits (the paper's methods take their steps as given).
 
     Notes
     -----
@@ -166,6 +184,7 @@ class DualArmController:
         tolerance: Tolerance = DEFAULT_TOLERANCE,
         fallback: StepSolver | None = None,
         on_step: Callable[[ControlOutput], None] | None = None,
+        error_budget: tuple[float, float] | None = None,
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
@@ -183,6 +202,14 @@ class DualArmController:
         self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds)
         self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
         self._x_prev: FloatArray | None = None
+        self._lookahead: Lookahead | None = None
+        if error_budget is not None and self._hard_bounds:
+            if not (len(error_budget) == 2 and all(
+                    math.isfinite(v) and v > 0 for v in error_budget)):
+                raise InvalidInputError(f"error_budget must be two positive numbers (m, rad), "
+                                        f"got {error_budget!r}")
+            b = self._builder
+            self._lookahead = Lookahead(task, error_budget, b.carry, b.n_l, b.n_f)
 
     @property
     def leader_gain(self) -> float:
@@ -204,6 +231,28 @@ class DualArmController:
     def names(self) -> tuple[str, ...]:
         """Names of the decision variables: ``ql1.., qf1.., m`` and ``m_l`` if it slides."""
         return self._builder.names
+
+    def explain(self, state: DualArmState) -> str:
+        """Why the task cannot be followed at ``state`` (:func:`.diagnosis.explain`).
+
+        With an error budget, the step at full path speed is solved and its predicted
+        errors at the next sample are weighed against the budget too.
+        """
+        state = self._checked(state)
+        la = self._lookahead
+        share = None
+        if la is not None:
+            problem = self._builder.build(state).problem
+            try:
+                sol = solve_step(self.solver, problem, policy="scale", tol=self.tolerance,
+                                 fallback=self.fallback)
+            except DualArmError:
+                sol = None
+            if sol is not None and sol.status.usable:
+                share = la.predict(state, _inside(sol.x, problem), sol.scale,
+                                   self.options.dt).share(la.budget)
+        return explain(self._builder, state, budget_share=share,
+                       budget=None if la is None else la.budget)
 
     def reset(self) -> None:
         """Forget the warm start (call between unrelated runs)."""
@@ -269,6 +318,9 @@ class DualArmController:
         if not _verified_with(solution, self.tolerance):
             solution = verify(problem, solution, self.tolerance,
                               claims_bounds=self._hard_bounds)
+        if (self._lookahead is not None and solution.status.usable
+                and solution.scale > 0.0 and scale_max > 0.0):
+            solution = self._within_budget(self._lookahead, state, build, solution, scale_max)
         t6 = time.perf_counter()
 
         status = solution.status
@@ -303,6 +355,49 @@ class DualArmController:
             times=StepTimes(build.kinematics_time, build.assembly_time, t5 - t4, t6 - t5),
             applied=usable_x,
         ))
+
+    def _within_budget(self, la: Lookahead, state: DualArmState, build: StepBuild,
+                       solution: StepSolution, scale_max: float) -> StepSolution:
+        """Slow the task until the errors predicted at the next sample fit the budget.
+
+        Returns ``solution`` when its prediction fits (or is negligible by the bound),
+        else the solve of the task scaled by the first halving of the scale whose
+        prediction fits, or the one with the smallest prediction (status SCALED).
+        """
+        dt = self.options.dt
+        problem = build.problem
+        build_x = _inside(solution.x, problem)
+        if la.negligible(build, build_x, dt):
+            return solution
+        pred = la.predict(state, build_x, scale_max * solution.scale, dt)
+        share = pred.share(la.budget)
+        if share <= 1.0:
+            return solution
+        best, best_share = solution, share
+        factor = solution.scale
+        for _ in range(BUDGET_HALVINGS):
+            factor *= 0.5
+            scaled = replace(problem, b=factor * problem.b)
+            try:
+                trial = solve_step(self.solver, scaled, policy=self.policy, tol=self.tolerance,
+                                   fallback=self.fallback)
+            except InfeasibleStepError:
+                break
+            if not trial.status.usable:
+                break
+            x = _inside(trial.x, scaled)
+            scale = factor * trial.scale
+            trial_share = la.predict(state, x, scale_max * scale, dt).share(la.budget)
+            if trial_share < best_share:
+                best, best_share = replace(
+                    trial, status=Status.SCALED, scale=scale,
+                    message=(f"task scaled to {scale:.6g}: at full scale the step would "
+                             f"leave {share:.3g} times the error budget "
+                             f"({la.budget[0]:g} m, {la.budget[1]:g} rad) at the next "
+                             "sample")), trial_share
+            if trial_share <= 1.0:
+                break
+        return best
 
     def _done(self, out: ControlOutput) -> ControlOutput:
         """Hand ``out`` to the ``on_step`` hook, then return it."""

@@ -14,6 +14,7 @@ amount. Every sample is kept either way.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from collections.abc import Callable
@@ -30,15 +31,19 @@ from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
 from ..step.build import DualArmState
 from .controller import DualArmController
+from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .trace import Trace, record, record_state
 
 FloatArray = NDArray[np.float64]
 
 #: Criteria a run can fail on (``Failure.criterion``).
-CRITERIA = ("solver", "support", "closure", "tracking", "singularity", "stalled",
-            "path_incomplete",
+CRITERIA = ("unreachable", "solver", "support", "closure", "tracking", "singularity",
+            "stalled", "path_incomplete",
             "range", "speed", "interrupted")
+
+#: Criteria whose failure message names its cause (:mod:`.diagnosis`).
+EXPLAINED = ("closure", "tracking", "stalled", "path_incomplete")
 
 #: What a smallest singular value below the threshold does.
 SINGULARITY_ACTIONS = ("warn", "stop", "ignore")
@@ -273,6 +278,7 @@ def rollout(
     project: bool | None = None,
     progress: Callable[[int, int], None] | None = None,
     stop_on_interrupt: bool = False,
+    preflight: bool = True,
 ) -> RolloutResult:
     """Run ``controller`` from ``initial`` along ``duration`` seconds of path.
 
@@ -314,6 +320,10 @@ def rollout(
         On KeyboardInterrupt (Ctrl-C) during the samples, stop and return the samples
         completed so far, failing on criterion ``"interrupted"``; by default the
         exception propagates (and the samples are lost).
+    preflight : bool
+        Before the first sample, check that both arms can reach the path at its
+        waypoints (:mod:`.preflight`); a waypoint out of reach fails the run on
+        criterion ``"unreachable"`` with no sample run. Default True.
 
     Returns
     -------
@@ -363,6 +373,17 @@ def rollout(
     pre: tuple[float, float] | None = None  # closure error before correction, if any
     corr = (0.0, 0.0)
     controller.reset()
+    if preflight:
+        miss = unreachable_waypoint(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
+                                    path_end, within_ranges=hard)
+        if miss is not None:
+            return RolloutResult(
+                tr.truncate(0), Failure("unreachable", 0, path_start, miss.position_error,
+                                        REACH_TOLERANCE[0], f"before the run: {miss.message}"),
+                controller.solver.name, dt, path_start, path_end,
+                _realised(controller, tr.truncate(0), dt), hard,
+                extras={"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint,
+                                        "t_s": miss.t}})
     failure: Failure | None = None
     warnings: list[str] = []
     projection_failures = 0
@@ -448,9 +469,11 @@ def rollout(
         failure = Failure(
             "path_incomplete", len(trace) - 1, float(trace.t[-1]), done, 1.0,
             f"path not completed: {100 * done:.1f}% of the path in {cap:g} s "
-            f"(the duration cap; the task was slowed by the limits)")
+            f"(the duration cap; the task was slowed)")
     if failure is None and hard:
         failure = _realised_failure(realised, trace, dt)
+    if failure is not None and failure.criterion in EXPLAINED and len(trace):
+        failure = _explained(controller, trace, failure)
     return RolloutResult(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
         warnings=warnings,
@@ -500,6 +523,19 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
         return Failure("solver", k, t, math.nan, math.nan,
                        f"{at}: solver status {status}: {message}")
     return None
+
+
+def _explained(controller: DualArmController, trace: Trace, failure: Failure) -> Failure:
+    """``failure`` with its cause appended (:func:`.diagnosis.explain` at its sample)."""
+    k = min(failure.sample, len(trace) - 1)
+    sigma_l = float(trace.grasp_leader[k])
+    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
+                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    try:
+        why = controller.explain(state)
+    except DualArmError:  # the state itself cannot be posed: say nothing more
+        return failure
+    return dataclasses.replace(failure, message=f"{failure.message}; {why}")
 
 
 def _realised(controller: DualArmController, trace: Trace, dt: float

@@ -146,10 +146,14 @@ class Experiment:
         if (fallback and self.fallback is not None and self.fallback != self.solver_name
                 and solver_info(self.solver_name).hard_bounds):
             backup = get_solver(self.fallback)
+        # A step may leave half of the run's tracking and closure tolerances at the next
+        # sample (the lookahead slows it otherwise): the other half is the feedback's.
+        budget = (0.5 * min(self.limits.tracking[0], self.limits.closure[0]),
+                  0.5 * min(self.limits.tracking[1], self.limits.closure[1]))
         return DualArmController(self.task, solver, self.options,
                                  leader_gain=self.leader_gain, policy=self.policy,
                                  tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
-                                 fallback=backup, on_step=on_step)
+                                 fallback=backup, on_step=on_step, error_budget=budget)
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:

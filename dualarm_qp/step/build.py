@@ -307,6 +307,11 @@ class StepBuilder:
                                       else [task.leader_surface])
         self._contact = task.contact
 
+    @property
+    def speed_limits(self) -> FloatArray:
+        """Speed limit of every decision variable [rad/s, m/s] (``inf``: none)."""
+        return self._v_max
+
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
               x_prev: FloatArray | None = None) -> StepBuild:
         """Build the step problem for ``state``.

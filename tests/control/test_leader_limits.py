@@ -158,5 +158,5 @@ def test_a_step_that_raises_keeps_the_state_it_failed_at():
     assert not res.completed and res.failure is not None
     tr = res.trace
     assert len(tr) == res.failure.sample + 1  # the failing state is the last row
-    assert tr.status[-1] == "error" and tr.scale[-1] == 0.0
+    assert tr.status[-1] == "infeasible" and tr.scale[-1] == 0.0
     assert np.isfinite(tr.q_l).all() and np.isfinite(tr.q_f).all()

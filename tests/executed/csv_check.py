@@ -26,8 +26,8 @@ POSITION_TOL = 1e-3    # leader tracking and grasp closure, metres
 
 LEADER = [f"ql{i}" for i in range(1, 7)]     # the PUMA 560's columns
 FOLLOWER = [f"qf{i}" for i in range(1, 7)]
-FAILURE_CRITERIA = frozenset({"solver", "closure", "tracking", "singularity", "stalled",
-                              "path_incomplete", "range", "speed"})
+FAILURE_CRITERIA = frozenset({"unreachable", "solver", "closure", "tracking", "singularity",
+                              "stalled", "path_incomplete", "range", "speed"})
 
 
 def read_trajectory(path: str | Path) -> dict[str, np.ndarray]:

@@ -37,6 +37,12 @@ def speed_up(data: dict[str, Any], factor: float) -> dict[str, Any]:
     return data
 
 
+def _with_duration(data: dict[str, Any], duration: float) -> dict[str, Any]:
+    data = copy.deepcopy(data)
+    data["controller"]["duration"] = duration
+    return data
+
+
 def with_policy(data: dict[str, Any], policy: str) -> dict[str, Any]:
     data = copy.deepcopy(data)
     data["controller"]["policy"] = policy
@@ -50,6 +56,10 @@ def _variants() -> dict[str, Any]:
         "puma_beam_sliding_s7_1000", "curved_bar_waypoints", "puma_beam_fast",
         "puma_beam_leader_near_singular", "puma_beam_wrist_singular")}
     out["puma_beam_limits_x3"] = lambda: speed_up(load("puma_beam_limits"), 3.0)
+    # The shipped file's path ends out of the leader's reach (the run is refused before
+    # it starts); its first 13 s stay in reach and pass close to a singularity.
+    out["puma_beam_leader_near_singular_13s"] = lambda: _with_duration(
+        load("puma_beam_leader_near_singular"), 13.0)
     for policy in ("scale", "relax", "stop"):
         out[f"puma_beam_tight_limits_{policy}"] = lambda p=policy: with_policy(tight, p)
     return out

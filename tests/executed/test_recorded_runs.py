@@ -67,17 +67,20 @@ def test_recorded_run_keeps_limits(variant: str, solver: str, tmp_path: Path) ->
     traj = read_trajectory(tmp_path / "trajectory.csv")
     completed = summary.get("completed")
     assert completed in (True, False), summary
+    refused = (summary.get("failure") or {}).get("criterion") == "unreachable"
     if completed:
         problems = check_completed_run(traj, exp)
+    elif refused:  # refused before its first sample: a header and no row
+        problems = [] if len(traj["t"]) == 0 else ["rows in a run refused before its start"]
     else:
         problems = check_valid(traj)
     failure = summary.get("failure") or {}
     record = {"variant": variant, "solver": solver, "policy": str(exp.policy),
               "completed": completed, "criterion": failure.get("criterion"),
               "failure": failure or None, "rows": len(traj["t"]), "problems": problems}
-    if not check_valid(traj):
+    if not refused and not check_valid(traj):
         record["worst"] = worst_shares(traj, exp)
-    if not completed and not check_valid(traj):
+    if not completed and not refused and not check_valid(traj):
         # Not asserted: does the partial record of a failed run keep the limits too?
         lim = limits_of(exp)
         record["partial_problems"] = (check_speeds(traj, lim) + check_ranges(traj, lim)

@@ -1,0 +1,129 @@
+"""Look one step ahead: the errors a command leaves after one sample.
+
+The step problem is linear in the rates (Eqs. 14 and 25): it holds the object on its
+path and the grasp closed to first order. A step that moves the joints far within one
+sample (a fast object, a coarse ``dt``) leaves a second-order error that the linear
+step cannot see: the leader leaves its path, the grasp opens. The scale policy slows
+the path only for the limits; this module lets the same task scale answer for the
+errors too. For a command ``x`` the controller asks :meth:`Lookahead.exceeds`; when
+the errors predicted at the next sample (forward kinematics at ``q + dt x``, the path
+at ``t + scale dt``) pass the budget, it slows the task further
+(:class:`~.controller.DualArmController`).
+
+A cheap bound decides first whether the prediction is needed: a chain of revolute
+joints whose joints turn by ``dq`` moves its tool off its first-order path by at most
+``(sum |dq_i|)^2 L / 2`` [m] and ``(sum |dq_i|)^2 / 2`` [rad], with ``L`` the length of
+the chain (the sum of its links). Steps under a tenth of the budget skip the forward
+kinematics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..kinematics.arm import SerialArm
+from ..se3 import pose_error
+from ..step.build import DualArmState, StepBuild
+from ..task.carry import CarryModel
+from ..task.scene import DualArmTask
+
+FloatArray = NDArray[np.float64]
+
+#: Share of the budget under which the bound skips the prediction.
+SKIP_SHARE = 0.1
+
+
+@dataclass(frozen=True)
+class Predicted:
+    """Errors expected one sample after a command.
+
+    Attributes
+    ----------
+    tracking : tuple of float
+        The object's error to ``D(t)`` (position [m], rotation [rad]).
+    closure : tuple of float
+        The grasp closure error (position [m], rotation [rad]).
+    """
+
+    tracking: tuple[float, float]
+    closure: tuple[float, float]
+
+    def share(self, budget: tuple[float, float]) -> float:
+        """Largest error relative to ``budget`` (above 1: over it)."""
+        return max(self.tracking[0] / budget[0], self.tracking[1] / budget[1],
+                   self.closure[0] / budget[0], self.closure[1] / budget[1])
+
+
+def chain_length(arm: SerialArm) -> float:
+    """Sum of the link lengths from the arm's first joint to its tool [m]."""
+    model = arm.model
+    links = sum(float(np.linalg.norm(model.jointPlacements[j].translation))
+                for j in range(2, model.njoints))
+    return links + float(np.linalg.norm(model.frames[arm.tool_frame_id].placement.translation))
+
+
+class Lookahead:
+    """Predicts the errors a command leaves after one sample.
+
+    Parameters
+    ----------
+    task : DualArmTask
+        Arms, object and path.
+    budget : tuple of float
+        Largest predicted error (position [m], rotation [rad]) of the leader's tracking
+        and of the grasp closure that a step may leave.
+    carry : CarryModel
+        The step builder's carried-object model (shared: the prediction runs after the
+        step's kinematics were read from it, and a Case 2 support line placed on it
+        holds for the prediction too).
+    n_l, n_f : int
+        Joints of the leader and the follower (the slices of the decision vector).
+    """
+
+    def __init__(self, task: DualArmTask, budget: tuple[float, float], carry: CarryModel,
+                 n_l: int, n_f: int) -> None:
+        self.task = task
+        self.budget = (float(budget[0]), float(budget[1]))
+        self.n_l, self.n_f = n_l, n_f
+        self._carry = carry
+        self._length = (chain_length(task.leader), chain_length(task.follower))
+
+    def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:
+        """Whether the bound alone keeps the command's error under a tenth of the budget."""
+        n_l, n_f = self.n_l, self.n_f
+        turn_l = dt * float(np.abs(x[:n_l]).sum())
+        turn_f = dt * float(np.abs(x[n_l:n_l + n_f]).sum())
+        lever = float(np.linalg.norm(build.carry.T_target[:3, 3] - build.carry.T_tool[:3, 3]))
+        grasps = dt * float(np.abs(x[n_l + n_f:]).sum())
+        pos = 0.5 * (turn_l ** 2 * (self._length[0] + lever) + turn_f ** 2 * self._length[1])
+        rot = 0.5 * (turn_l ** 2 + turn_f ** 2)
+        # A grasp sliding on a curved path turns with it: count its travel as a turn of
+        # the object's length (a straight path adds nothing at second order but is
+        # counted too, cheaply and safely).
+        pos += 0.5 * grasps ** 2 + turn_l * grasps
+        return pos <= SKIP_SHARE * self.budget[0] and rot <= SKIP_SHARE * self.budget[1]
+
+    def predict(self, state: DualArmState, x: FloatArray, scale: float, dt: float
+                ) -> Predicted:
+        """Errors at the next sample after applying ``x`` for ``dt`` with path rate ``scale``."""
+        n_l, n_f = self.n_l, self.n_f
+        q_l = state.q_l + dt * x[:n_l]
+        q_f = state.q_f + dt * x[n_l:n_l + n_f]
+        sigma = state.sigma + dt * float(x[n_l + n_f])
+        sigma_l = state.sigma_leader + (dt * float(x[n_l + n_f + 1])
+                                        if x.shape[0] > n_l + n_f + 1 else 0.0)
+        kin = self._carry.update(q_l, sigma, sigma_l)
+        e_l = pose_error(self.task.trajectory.pose(state.t + scale * dt), kin.T_object)
+        e_c = pose_error(kin.T_target, self.task.follower.fk(q_f))
+        return Predicted((_norm(e_l[:3]), _norm(e_l[3:])), (_norm(e_c[:3]), _norm(e_c[3:])))
+
+
+def _norm(v: FloatArray) -> float:
+    return math.hypot(*v.tolist())
+
+
+__all__ = ["Lookahead", "Predicted", "chain_length"]
