@@ -38,10 +38,15 @@ from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
 from ..step.problem import StepProblem
 from ..task.scene import DualArmTask
 from .diagnosis import explain
+from .escape import COLLAPSED_SCALE, escape_move
 from .lookahead import Lookahead
 
 #: How many times a step over its error budget may halve its task scale.
 BUDGET_HALVINGS = 6
+
+#: Position error [m] an escape move off the null space may cost per step without an
+#: error budget: a quarter of it (the default tolerance is 1 mm).
+DEFAULT_ESCAPE_BUDGET = 0.5e-3
 
 FloatArray = NDArray[np.float64]
 
@@ -166,6 +171,11 @@ class DualArmController:
         as the limits slow it (halving the scale up to :data:`BUDGET_HALVINGS` times);
         its status is then SCALED. None (the default) predicts nothing. Only for a
         solver that claims hard limits (the paper's methods take their steps as given).
+    singularity_escape : float, optional
+        Smallest singular value [mixed units, as ``sigma_min``] below which an arm at a
+        step whose task scale collapsed takes an escape move (:mod:`.escape`, status
+        ESCAPING); default 1e-3. None never escapes. Only for a solver that claims
+        hard limits.
 
     Notes
     -----
@@ -185,6 +195,7 @@ class DualArmController:
         fallback: StepSolver | None = None,
         on_step: Callable[[ControlOutput], None] | None = None,
         error_budget: tuple[float, float] | None = None,
+        singularity_escape: float | None = 1e-3,
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
@@ -210,6 +221,11 @@ class DualArmController:
                                         f"got {error_budget!r}")
             b = self._builder
             self._lookahead = Lookahead(task, error_budget, b.carry, b.n_l, b.n_f)
+        if singularity_escape is not None and not (math.isfinite(singularity_escape)
+                                                   and singularity_escape > 0):
+            raise InvalidInputError("singularity_escape must be a positive number or None, "
+                                    f"got {singularity_escape!r}")
+        self._escape = singularity_escape if self._hard_bounds else None
 
     @property
     def leader_gain(self) -> float:
@@ -321,6 +337,10 @@ class DualArmController:
         if (self._lookahead is not None and solution.status.usable
                 and solution.scale > 0.0 and scale_max > 0.0):
             solution = self._within_budget(self._lookahead, state, build, solution, scale_max)
+        if (self._escape is not None and solution.status is Status.SCALED
+                and solution.scale < COLLAPSED_SCALE
+                and min(build.sigma_min) < self._escape):
+            solution = self._escaped(state, build, solution, self._escape)
         t6 = time.perf_counter()
 
         status = solution.status
@@ -398,6 +418,32 @@ class DualArmController:
             if trial_share <= 1.0:
                 break
         return best
+
+    def _escaped(self, state: DualArmState, build: StepBuild, solution: StepSolution,
+                 threshold: float) -> StepSolution:
+        """Return the escape move from a collapsed step (:mod:`.escape`), or ``solution``."""
+        b = self._builder
+        n_l, n_f = b.n_l, b.n_f
+        task = self.task
+        arms = tuple(arm for arm, sv in zip(
+            (("leader", task.leader, slice(0, n_l), state.q_l),
+             ("follower", task.follower, slice(n_l, n_l + n_f), state.q_f)),
+            build.sigma_min, strict=True) if sv < threshold)
+        problem = build.problem
+        budget = (self._lookahead.budget[0] if self._lookahead is not None
+                  else DEFAULT_ESCAPE_BUDGET)
+        esc = escape_move(problem, _inside(solution.x, problem), arms, threshold,
+                          self.options.dt, budget)
+        if esc is None:
+            return solution
+        how = ("in the null space of the task" if esc.null_space else
+               "off the task's null space, within a quarter of the error budget")
+        return verify(problem, replace(
+            solution, x=esc.x, status=Status.ESCAPING,
+            message=(f"escaping the singularity of the {' and '.join(esc.arms)} (smallest "
+                     f"singular values {build.sigma_min[0]:.3g}, {build.sigma_min[1]:.3g}): "
+                     f"a move {how} raising it by {esc.rate:.3g} per s; "
+                     f"{solution.message}")), self.tolerance)
 
     def _done(self, out: ControlOutput) -> ControlOutput:
         """Hand ``out`` to the ``on_step`` hook, then return it."""

@@ -82,7 +82,8 @@ class LimitReport:
         The same at the first sample: a run that starts outside a range (the paper's
         Table 2 does) shows it here; the rule only forbids moving further out.
     speed_ratio : float
-        ``max |dx/dt| / v_max`` (NaN when no speed limit is finite: nothing to compare).
+        ``max |dx/dt| / v_max`` (NaN when no speed limit is finite: nothing to compare;
+        0 for a single sample: nothing moved).
     range_excess : float
         Largest distance outside a range [rad or m] (0 when always inside).
     worst_range, worst_speed : str
@@ -143,7 +144,8 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)
     jr = int(np.argmax(ratio.max(axis=0)))
     first: list[tuple[int, str, int]] = []  # (sample, rule, variable) of each breach
-    speed_ratio, js = math.nan, 0
+    speed_ratio = 0.0 if np.isfinite(v_max).any() else math.nan  # one sample: no motion
+    js = 0
     speed = np.zeros((0, x.shape[1]))
     if rows > 1 and np.isfinite(v_max).any():
         speed = np.abs(np.diff(x, axis=0)) / dt
@@ -165,7 +167,8 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         else:
             breach = Breach("range", names[j], k, float(excess[k, j]), float(best[k - 1, j]))
     return LimitReport(float(ratio[:, jr].max()), float(ratio[0].max()), speed_ratio,
-                       float(excess.max()), names[jr], names[js] if rows > 1 else "", breach)
+                       float(excess.max()), names[jr], names[js] if rows > 1 else "none moved",
+                       breach)
 
 
 __all__ = ["RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

@@ -153,7 +153,8 @@ class Experiment:
         return DualArmController(self.task, solver, self.options,
                                  leader_gain=self.leader_gain, policy=self.policy,
                                  tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
-                                 fallback=backup, on_step=on_step, error_budget=budget)
+                                 fallback=backup, on_step=on_step, error_budget=budget,
+                                 singularity_escape=self.limits.singular_value_min or 1e-3)
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:

@@ -36,6 +36,11 @@ class Status(str, enum.Enum):
         The state started outside a box; the solution never moves it further out and
         the range centres pull it back (set by the step builder, reported by the
         controller in place of OPTIMAL or FEASIBLE).
+    ESCAPING
+        The task scale collapsed at a singular configuration; the controller moves
+        inside every bound to raise the arm's smallest singular value, the path held
+        (:mod:`dualarm_qp.control.escape`). The equality holds to first order when the
+        move lies in its null space, else within a share of the error budget.
     VIOLATION
         The solver returned a point that breaks a bound (or the equality) beyond
         tolerance. The reference method does this by design: it ignores the bounds.
@@ -50,6 +55,7 @@ class Status(str, enum.Enum):
     SCALED = "scaled"
     RELAXED = "relaxed"
     RECOVERING = "recovering"
+    ESCAPING = "escaping"
     VIOLATION = "violation"
     INFEASIBLE = "infeasible"
     ERROR = "error"
@@ -59,7 +65,8 @@ class Status(str, enum.Enum):
         """Whether ``x`` may be integrated."""
         # Identity tests: ``in`` on a tuple compares str-enum members as strings, slowly.
         return (self is Status.OPTIMAL or self is Status.FEASIBLE or self is Status.SCALED
-                or self is Status.RELAXED or self is Status.RECOVERING)
+                or self is Status.RELAXED or self is Status.RECOVERING
+                or self is Status.ESCAPING)
 
 
 @dataclass(frozen=True)
@@ -258,7 +265,7 @@ def verified_solution(
     eq, viol, gaps = _residuals(problem, x, xs, scale)
     if status.usable:
         scale_eq = equality_limit(problem, tol)
-        if status is not Status.RELAXED and eq > scale_eq:
+        if status is not Status.RELAXED and status is not Status.ESCAPING and eq > scale_eq:
             status = Status.VIOLATION
             message = message or f"equality residual {eq:.3g} exceeds tolerance {scale_eq:.3g}"
         if viol > tol.bounds:
