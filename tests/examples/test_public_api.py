@@ -51,6 +51,29 @@ def test_every_exported_name_is_the_object_of_its_home_module(name):
     assert getattr(home, name) is value
 
 
+def test_dir_lists_the_public_names_and_every_one_resolves():
+    """``dir()`` is ``__all__``, before and after the lazy names load; ``import *`` works."""
+    proc = _python("""
+        import dualarm_qp
+        before = dir(dualarm_qp)
+        from dualarm_qp import *  # resolves every name of __all__, the lazy ones included
+        missing = [n for n in dualarm_qp.__all__ if n not in globals()]
+        assert not missing, missing
+        assert before == dir(dualarm_qp) == sorted(dualarm_qp.__all__), before
+        print("ok")
+    """)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "ok"
+
+
+def test_the_module_face_holds_no_helpers():
+    names = dir(dualarm_qp)
+    assert not [n for n in names if n.startswith("_") and n != "__version__"]
+    for helper in ("Any", "TYPE_CHECKING", "annotations", "import_module"):
+        assert helper not in names
+        assert not hasattr(dualarm_qp, helper), helper
+
+
 def test_every_error_class_derives_from_the_root():
     errors = [n for n in dualarm_qp.__all__ if n.endswith("Error")]
     assert all(issubclass(getattr(dualarm_qp, n), dualarm_qp.DualArmError) for n in errors)
