@@ -37,6 +37,7 @@ from .kinematics import (
     puma560_ik,
     urdf_arm,
 )
+from .poses import pose
 from .step.build import DualArmState, StepOptions
 from .step.problem import StepProblem
 from .task.scene import DualArmTask
@@ -87,6 +88,8 @@ __all__ = [
     "puma560",
     "puma560_ik",
     "urdf_arm",
+    # poses
+    "pose",
     # task
     "CurvedBar",
     "CylinderSurface",

@@ -28,7 +28,7 @@ REQUIRED = [
     "run_experiment", "puma560", "SerialArm", "urdf_arm", "example_robot_arm",
     "DualArmError", "InvalidInputError", "ShapeError", "NonFiniteError", "LimitsError",
     "ConfigError", "KinematicsError", "IKError", "SolverError", "SolverNotFoundError",
-    "InfeasibleStepError", "RobotModelError", "SolverOptionError",
+    "InfeasibleStepError", "RobotModelError", "SolverOptionError", "pose",
 ]
 
 
