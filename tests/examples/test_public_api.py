@@ -109,6 +109,22 @@ def test_the_api_page_names_every_export():
     assert not missing, f"docs/api.md does not mention {missing}"
 
 
+#: A ``Status`` turned into text by ``str()`` reads "Status.OPTIMAL": show ``.value``.
+STATUS_AS_TEXT = re.compile(r"str\(\s*[\w.]*\.status\s*\)|\{[\w.]*\.status[!:}]"
+                            r"|print\([^)\n]*\.status\)")
+
+
+def test_docs_and_examples_show_a_status_by_its_value():
+    files = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")),
+             *sorted((ROOT / "examples").glob("*.py"))]
+    slips = [f"{path.name}: {m.group(0)}" for path in files
+             for m in STATUS_AS_TEXT.finditer(path.read_text())]
+    assert not slips, slips
+    assert STATUS_AS_TEXT.search("view.update(state, status=str(out.status))")
+    assert STATUS_AS_TEXT.search('print(f"{out.status}")')
+    assert not STATUS_AS_TEXT.search("view.update(state, status=out.status.value)")
+
+
 def test_the_api_page_snippets_run(tmp_path):
     """The two snippets of "Building a task in Python", run one after the other."""
     blocks = re.findall(r"```python\n(.*?)```", API_PAGE.read_text(), re.DOTALL)
