@@ -7,10 +7,11 @@ the QP backends and SciPy, so they are imported on first use (``dualarm_qp.rollo
 ``from dualarm_qp import get_solver``): ``import dualarm_qp`` stays light.
 """
 
-from __future__ import annotations
-
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+# No ``from __future__ import annotations`` and private aliases for the helpers: the
+# module's attributes, like ``dir(dualarm_qp)``, are the public API and little else.
+from importlib import import_module as _import_module
+from typing import TYPE_CHECKING as _TYPE_CHECKING
+from typing import Any as _Any
 
 from .errors import (
     ConfigError,
@@ -36,13 +37,14 @@ from .kinematics import (
     puma560_ik,
     urdf_arm,
 )
+from .poses import pose
 from .step.build import DualArmState, StepOptions
 from .step.problem import StepProblem
 from .task.scene import DualArmTask
 from .task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
 from .task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
 
-if TYPE_CHECKING:
+if _TYPE_CHECKING:
     from .control import ControlOutput, DualArmController, RolloutResult, RunLimits, rollout
     from .experiments import Experiment, build_experiment, load_config, run_experiment
     from .solvers import (
@@ -86,6 +88,8 @@ __all__ = [
     "puma560",
     "puma560_ik",
     "urdf_arm",
+    # poses
+    "pose",
     # task
     "CurvedBar",
     "CylinderSurface",
@@ -136,16 +140,21 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _Any:
     """Import a name of :data:`_LAZY` from its subpackage on first access."""
     where = _LAZY.get(name)
     if where is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{where}", __name__), name)
+    value = getattr(_import_module(f".{where}", __name__), name)
     globals()[name] = value  # later accesses skip this function
     return value
 
 
 def __dir__() -> list[str]:
-    """Every public name, the lazy ones included (for completion and ``dir()``)."""
-    return sorted(set(globals()) | set(__all__))
+    """List the public names, the lazy ones included (for completion and ``dir()``).
+
+    Only :data:`__all__`: not the subpackages imported along the way (``errors``,
+    ``task``, ...), nor this module's own helpers. Subpackages are imported as usual
+    (``import dualarm_qp.viz``).
+    """
+    return sorted(__all__)

@@ -21,6 +21,7 @@ from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
 from ..kinematics.puma_ik import ik_branch, puma560_ik
 from ..kinematics.robots import EXAMPLE_ROBOTS, RobotModelError, example_robot_arm, urdf_arm
+from ..poses import pose
 from ..solvers.base import DEFAULT_TOLERANCE, Tolerance
 from ..solvers.policy import Policy
 from ..solvers.registry import (
@@ -158,17 +159,10 @@ class Experiment:
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
-    if spec.rotation is not None:
-        R = np.asarray(spec.rotation, dtype=float)
-        # Re-orthonormalise what the file rounded (checked to 1e-6 on load).
-        u, _, vt = np.linalg.svd(R)
-        R = u @ vt
-    elif spec.rpy is not None:
-        r, p, y = (v * sc.angle for v in spec.rpy)
-        R = pin.rpy.rpyToMatrix(r, p, y)  # Rz(y) Ry(p) Rx(r)
-    else:
-        R = np.eye(3)
-    return pin.SE3(R, np.asarray(spec.position, dtype=float) * sc.length).homogeneous
+    """Return the file's pose in SI, read by :func:`~dualarm_qp.poses.pose` as in Python."""
+    return pose(np.asarray(spec.position, dtype=float) * sc.length,
+                rpy=None if spec.rpy is None else np.asarray(spec.rpy, dtype=float) * sc.angle,
+                rotation=spec.rotation)
 
 
 T = TypeVar("T")

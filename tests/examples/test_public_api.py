@@ -28,7 +28,7 @@ REQUIRED = [
     "run_experiment", "puma560", "SerialArm", "urdf_arm", "example_robot_arm",
     "DualArmError", "InvalidInputError", "ShapeError", "NonFiniteError", "LimitsError",
     "ConfigError", "KinematicsError", "IKError", "SolverError", "SolverNotFoundError",
-    "InfeasibleStepError", "RobotModelError", "SolverOptionError",
+    "InfeasibleStepError", "RobotModelError", "SolverOptionError", "pose",
 ]
 
 
@@ -49,6 +49,29 @@ def test_every_exported_name_is_the_object_of_its_home_module(name):
     value = getattr(dualarm_qp, name)
     home = sys.modules[value.__module__]
     assert getattr(home, name) is value
+
+
+def test_dir_lists_the_public_names_and_every_one_resolves():
+    """``dir()`` is ``__all__``, before and after the lazy names load; ``import *`` works."""
+    proc = _python("""
+        import dualarm_qp
+        before = dir(dualarm_qp)
+        from dualarm_qp import *  # resolves every name of __all__, the lazy ones included
+        missing = [n for n in dualarm_qp.__all__ if n not in globals()]
+        assert not missing, missing
+        assert before == dir(dualarm_qp) == sorted(dualarm_qp.__all__), before
+        print("ok")
+    """)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "ok"
+
+
+def test_the_module_face_holds_no_helpers():
+    names = dir(dualarm_qp)
+    assert not [n for n in names if n.startswith("_") and n != "__version__"]
+    for helper in ("Any", "TYPE_CHECKING", "annotations", "import_module"):
+        assert helper not in names
+        assert not hasattr(dualarm_qp, helper), helper
 
 
 def test_every_error_class_derives_from_the_root():
@@ -84,6 +107,22 @@ def test_the_api_page_names_every_export():
     named = set(re.findall(r"`(?:dq\.)?([A-Za-z_][A-Za-z0-9_]*)", text))
     missing = sorted(set(dualarm_qp.__all__) - {"__version__"} - named)
     assert not missing, f"docs/api.md does not mention {missing}"
+
+
+#: A ``Status`` turned into text by ``str()`` reads "Status.OPTIMAL": show ``.value``.
+STATUS_AS_TEXT = re.compile(r"str\(\s*[\w.]*\.status\s*\)|\{[\w.]*\.status[!:}]"
+                            r"|print\([^)\n]*\.status\)")
+
+
+def test_docs_and_examples_show_a_status_by_its_value():
+    files = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")),
+             *sorted((ROOT / "examples").glob("*.py"))]
+    slips = [f"{path.name}: {m.group(0)}" for path in files
+             for m in STATUS_AS_TEXT.finditer(path.read_text())]
+    assert not slips, slips
+    assert STATUS_AS_TEXT.search("view.update(state, status=str(out.status))")
+    assert STATUS_AS_TEXT.search('print(f"{out.status}")')
+    assert not STATUS_AS_TEXT.search("view.update(state, status=out.status.value)")
 
 
 def test_the_api_page_snippets_run(tmp_path):

@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "dualarm_qp"
 
 #: Layer of each top-level module or subpackage, lowest first.
 LAYERS = {
-    "errors": 0, "_validate": 0, "se3": 0, "_io": 0, "_signals": 0,
+    "errors": 0, "_validate": 0, "se3": 0, "poses": 0, "_io": 0, "_signals": 0,
     "kinematics": 1,
     "task": 2,
     "step": 3,
