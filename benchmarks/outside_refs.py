@@ -49,7 +49,7 @@ from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.setup import Experiment
 from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.bounds import clip_rates, grasp_rate_range
-from dualarm_qp.step.build import DualArmState
+from dualarm_qp.step.state import DualArmState
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = ROOT / "configs"

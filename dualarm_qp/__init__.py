@@ -38,8 +38,9 @@ from .kinematics import (
     urdf_arm,
 )
 from .poses import pose
-from .step.build import DualArmState, StepOptions
+from .step.options import StepOptions
 from .step.problem import StepProblem
+from .step.state import DualArmState
 from .task.scene import DualArmTask
 from .task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
 from .task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory

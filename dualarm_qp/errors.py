@@ -150,6 +150,27 @@ class SolverNotFoundError(SolverError, KeyError):
         return str(self.args[0])
 
 
+class PairingError(SolverError, InvalidInputError):
+    """A step's parts need what the solver cannot take (rows, a full cost).
+
+    Attributes
+    ----------
+    solver : str
+        The solver's registry name.
+    limits : tuple of str
+        The limits it cannot take.
+    able : tuple of str
+        The available solvers that can.
+    """
+
+    def __init__(self, message: str, *, solver: str, limits: Sequence[str] = (),
+                 able: Sequence[str] = ()) -> None:
+        self.solver = solver
+        self.limits = tuple(limits)
+        self.able = tuple(able)
+        super().__init__(message)
+
+
 class InfeasibleStepError(SolverError):
     """A step has no solution that meets the equality and the bounds.
 

@@ -30,7 +30,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
-from ..solvers.base import Status, residuals
+from ..solvers.base import Status
+from ..solvers.certify import residuals
 from ..solvers.registry import get_solver
 from ..step.problem import StepProblem
 from .table import render_table

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -21,21 +21,18 @@ from ..errors import (
     InfeasibleStepError,
     InvalidInputError,
     NonFiniteError,
-    SolverNotFoundError,
+    ShapeError,
 )
-from ..solvers.base import (
-    DEFAULT_TOLERANCE,
-    Status,
-    StepSolution,
-    StepSolver,
-    Tolerance,
-    equality_limit,
-    verify,
-)
+from ..solvers.base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance
+from ..solvers.certify import certify, equality_limit
 from ..solvers.policy import POLICIES, Policy, solve_step
-from ..solvers.registry import solver_info
-from ..step.build import DualArmState, StepBuild, StepBuilder, StepOptions
+from ..solvers.registry import certified, check_pairing
+from ..step.build import StepBuild, StepBuilder
+from ..step.layout import Layout
+from ..step.options import StepOptions
+from ..step.parts import Limit
 from ..step.problem import StepProblem
+from ..step.state import DualArmState
 from ..task.scene import DualArmTask
 from .diagnosis import explain
 from .escape import COLLAPSED_SCALE, escape_move
@@ -176,6 +173,19 @@ class DualArmController:
         step whose task scale collapsed takes an escape move (:mod:`.escape`, status
         ESCAPING); default 1e-3. None never escapes. Only for a solver that claims
         hard limits.
+    limits : sequence of Limit
+        Limits of the user's, stacked after the standard ones
+        (:mod:`dualarm_qp.step.parts`; ``examples/custom_limit.py``). A limit that gives
+        rows needs a solver that takes rows (:class:`~dualarm_qp.errors.PairingError`
+        otherwise).
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown policy, a malformed budget, escape threshold or limit.
+    PairingError
+        A limit gives rows and the solver takes boxes only (the message names the solver,
+        the limit and the solvers that can take it).
 
     Notes
     -----
@@ -196,23 +206,25 @@ class DualArmController:
         on_step: Callable[[ControlOutput], None] | None = None,
         error_budget: tuple[float, float] | None = None,
         singularity_escape: float | None = 1e-3,
+        limits: Sequence[Limit] = (),
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
         self.task = task
-        self.solver = solver
+        # Every answer is certified once, with the controller's tolerances.
+        self.solver = certified(solver, tolerance)
         self.options = options
         self.policy = policy
         self.tolerance = tolerance
-        self.fallback = fallback
+        self.fallback = None if fallback is None else certified(fallback, tolerance)
         self.on_step = on_step
-        try:
-            self._hard_bounds = solver_info(solver.name).hard_bounds
-        except SolverNotFoundError:  # a solver not from the registry: it claims the bounds
-            self._hard_bounds = True
-        self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds)
+        self._hard_bounds = self.solver.info.hard_bounds
+        self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds,
+                                    limits=limits)
+        check_pairing(self.solver.info, self._builder.row_limits)
         self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
         self._x_prev: FloatArray | None = None
+        self._x_applied = np.zeros(self._builder.n)
         self._lookahead: Lookahead | None = None
         if error_budget is not None and self._hard_bounds:
             if not (len(error_budget) == 2 and all(
@@ -248,6 +260,21 @@ class DualArmController:
         """Names of the decision variables: ``ql1.., qf1.., m`` and ``m_l`` if it slides."""
         return self._builder.names
 
+    @property
+    def layout(self) -> Layout:
+        """The slices of the decision vector."""
+        return self._builder.layout
+
+    @property
+    def builder(self) -> StepBuilder:
+        """The step builder: its tasks, cost and limits (``.limits``), and ``build``."""
+        return self._builder
+
+    @property
+    def applied(self) -> FloatArray:
+        """The last command applied [rad/s, m/s] (what acceleration limits start from)."""
+        return self._x_applied.copy()
+
     def explain(self, state: DualArmState) -> str:
         """Why the task cannot be followed at ``state`` (:func:`.diagnosis.explain`).
 
@@ -270,9 +297,26 @@ class DualArmController:
         return explain(self._builder, state, budget_share=share,
                        budget=None if la is None else la.budget)
 
-    def reset(self) -> None:
-        """Forget the warm start (call between unrelated runs)."""
+    def reset(self, rates: FloatArray | None = None) -> None:
+        """Forget the warm start and set the last applied command (call between runs).
+
+        Parameters
+        ----------
+        rates : ndarray, shape (n,), optional
+            The rates the pair already moves at [rad/s, m/s], in the decision order
+            (:attr:`layout`); default zero (the run starts at rest).
+        """
         self._x_prev = None
+        n = self._builder.n
+        if rates is None:
+            self._x_applied = np.zeros(n)
+        else:
+            x = np.asarray(rates, dtype=np.float64)
+            if x.shape != (n,):
+                raise ShapeError("rates", (n,), x.shape)
+            if not np.isfinite(x).all():
+                raise NonFiniteError("rates")
+            self._x_applied = x.copy()
 
     def _checked(self, state: DualArmState) -> DualArmState:
         """``state`` with float arrays of the right lengths, or a clear error."""
@@ -316,7 +360,8 @@ class DualArmController:
         if not 0.0 <= scale_max <= 1.0:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         state = self._checked(state)
-        build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev)
+        build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev,
+                                    x_applied=self._x_applied)
         problem = build.problem
         t4 = time.perf_counter()
         try:
@@ -328,12 +373,6 @@ class DualArmController:
                 f"{err.reason} (smallest singular values of the arms' Jacobians: leader "
                 f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
         t5 = time.perf_counter()
-        # Every solution is verified with our tolerances before it is applied; registered
-        # solvers already did that (they verify before returning), so it is done here
-        # only for a solution verified otherwise or not at all.
-        if not _verified_with(solution, self.tolerance):
-            solution = verify(problem, solution, self.tolerance,
-                              claims_bounds=self._hard_bounds)
         if (self._lookahead is not None and solution.status.usable
                 and solution.scale > 0.0 and scale_max > 0.0):
             solution = self._within_budget(self._lookahead, state, build, solution, scale_max)
@@ -347,6 +386,7 @@ class DualArmController:
         if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovering.any():
             status = Status.RECOVERING
             solution = replace(solution, status=status)
+        # Every answer was certified once, in the solve: nothing here checks it again.
         if not self._hard_bounds and status is Status.VIOLATION:
             # The paper's methods ignore the bounds by design: integrate a bound
             # violation and report it, but never a step whose equality is broken.
@@ -360,14 +400,15 @@ class DualArmController:
         else:
             x = solution.x
         self._x_prev = x if usable_x else None
+        if usable_x:
+            self._x_applied = x
         scale = scale_max * min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
-        b = self._builder
-        n_l, n_f = b.n_l, b.n_f
+        ql_dot, qf_dot, m, m_leader = self._builder.layout.split(x)
         return self._done(ControlOutput(
-            ql_dot=x[:n_l].copy(),
-            qf_dot=x[n_l:n_l + n_f].copy(),
-            m=float(x[n_l + n_f]),
-            m_leader=float(x[n_l + n_f + 1]) if b.n_grasp == 2 else 0.0,
+            ql_dot=ql_dot,
+            qf_dot=qf_dot,
+            m=m,
+            m_leader=m_leader,
             scale=scale,
             status=status,
             solution=solution,
@@ -397,7 +438,7 @@ class DualArmController:
         factor = solution.scale
         for _ in range(BUDGET_HALVINGS):
             factor *= 0.5
-            scaled = replace(problem, b=factor * problem.b)
+            scaled = problem.scaled(factor)
             try:
                 trial = solve_step(self.solver, scaled, policy=self.policy, tol=self.tolerance,
                                    fallback=self.fallback)
@@ -422,12 +463,11 @@ class DualArmController:
     def _escaped(self, state: DualArmState, build: StepBuild, solution: StepSolution,
                  threshold: float) -> StepSolution:
         """Return the escape move from a collapsed step (:mod:`.escape`), or ``solution``."""
-        b = self._builder
-        n_l, n_f = b.n_l, b.n_f
+        lay = self._builder.layout
         task = self.task
         arms = tuple(arm for arm, sv in zip(
-            (("leader", task.leader, slice(0, n_l), state.q_l),
-             ("follower", task.follower, slice(n_l, n_l + n_f), state.q_f)),
+            (("leader", task.leader, lay.leader, state.q_l),
+             ("follower", task.follower, lay.follower, state.q_f)),
             build.sigma_min, strict=True) if sv < threshold)
         problem = build.problem
         budget = (self._lookahead.budget[0] if self._lookahead is not None
@@ -438,7 +478,7 @@ class DualArmController:
             return solution
         how = ("in the null space of the task" if esc.null_space else
                "off the task's null space, within a quarter of the error budget")
-        return verify(problem, replace(
+        return certify(problem.scaled(solution.scale), replace(
             solution, x=esc.x, status=Status.ESCAPING,
             message=(f"escaping the singularity of the {' and '.join(esc.arms)} (smallest "
                      f"singular values {build.sigma_min[0]:.3g}, {build.sigma_min[1]:.3g}): "
@@ -461,8 +501,3 @@ def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:
     """
     return np.minimum(np.maximum(x, problem.lower), problem.upper)
 
-
-def _verified_with(solution: StepSolution, tol: Tolerance) -> bool:
-    """Whether :func:`verify` checked ``solution`` against tolerances equal to ``tol``."""
-    checked = solution.verified_with
-    return checked is tol or (checked is not None and checked == tol)

@@ -24,8 +24,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..solvers._affine import affine_solutions, max_task_scale
-from ..step.build import DualArmState, StepBuilder
+from ..solvers._affine import affine_solutions
+from ..solvers._scale import max_task_scale
+from ..step.build import StepBuilder
+from ..step.state import DualArmState
 
 FloatArray = NDArray[np.float64]
 

@@ -17,10 +17,11 @@ instead of standing still (status ESCAPING, path time held):
    the grasp closure hold to first order; when that projection has less than
    :data:`NULL_SHARE` of the gradient (no self-motion of the pair raises ``sigma``),
    the gradient itself, with its first-order error on the equality capped at
-   :data:`ERROR_SHARE` of the error budget per step (the feedback removes it);
-3. added to the step's own answer at task scale 0 (which meets every bound and every
-   row), as far as every bound allows and no further than needed to lift ``sigma`` to
-   twice the threshold within one sample.
+   :data:`ERROR_SHARE` of the error budget per step (the feedback removes it); a box or
+   row already active that the direction would push past is held (projected out);
+3. added to the step's own answer at its collapsed scale (which meets every box and
+   row), as far as every box and row allows and no further than needed to lift
+   ``sigma`` to twice the threshold within one sample.
 
 At an exact singularity ``sigma = |f(q)|`` is not differentiable; its singular vectors
 give the gradient of ``f`` up to a sign, and both signs raise ``sigma``: the move takes
@@ -152,70 +153,64 @@ def escape_move(problem: StepProblem, base: FloatArray,
         rate = float(sign * g @ d)  # d sigma / d alpha
         if not rate > 0.0:
             continue
-        _, hi_a = _interval(base, d, problem.lower, problem.upper)
-        alpha = min(deficit / (dt * rate), hi_a)
+        alpha = min(deficit / (dt * rate), _reach(problem, base, d))
         if not on_null:  # the equality moves by dt |A d| alpha: keep it in its share
             drift = dt * float(np.abs(problem.A @ d).max(initial=0.0))
             if drift > 0.0:
                 alpha = min(alpha, ERROR_SHARE * budget / drift)
         if alpha > 0.0:
-            x = np.clip(base + alpha * d, problem.lower, problem.upper)
+            x = np.clip(base + alpha * d, problem.lower, problem.upper)  # rounding only
             return Escape(x, tuple(a[0] for a in arms), on_null, alpha * rate)
     return None
 
 
 def _direction(problem: StepProblem, base: FloatArray, g: FloatArray
                ) -> tuple[FloatArray, bool]:
-    """Project the gradient ``g`` on what the bounds and the equality leave free.
+    """Project the gradient ``g`` on what the limits and the equality leave free.
 
-    A variable at a bound that ``g`` would push past it is held (its component 0) and the
-    projection on the null space of the free columns is taken again, until no held
-    variable is pushed out (at most ``n`` rounds). When that null-space projection
-    keeps less than :data:`NULL_SHARE` of ``g``, the free part of ``g`` itself is used.
+    Every box and general row active at ``base`` (within rounding) that ``g`` would push
+    past is held: the projection is taken again on the null space of the held rows (and
+    of the equality), until no held row is pushed out (at most one round per row). When
+    that null-space projection keeps less than :data:`NULL_SHARE` of ``g``, the
+    projection on the held rows alone (off the equality's null space) is used.
 
     Returns
     -------
     d : ndarray
-        The direction (0 on the held variables).
+        The direction.
     on_null : bool
         Whether ``d`` lies in the null space of the equality.
     """
-    n = problem.n
-    span = np.maximum(1.0, np.abs(base))
-    at_lo = base <= problem.lower + 1e-12 * span
-    at_up = base >= problem.upper - 1e-12 * span
+    ineq = problem.inequalities()
+    C, e = ineq.C, ineq.e
+    active = C @ base >= e - 1e-12 * np.maximum(1.0, np.abs(e))
     g_size = float(np.linalg.norm(g))
+    d = g
     for on_null in (True, False):
-        free = np.ones(n, dtype=bool)
-        for _ in range(n):
-            d = np.zeros(n)
-            if on_null:
-                N = factor(problem.A[:, free]).N
-                d[free] = N @ (N.T @ g[free])
-            else:
-                d[free] = g[free]
-            pushed = (at_lo & (d < 0.0)) | (at_up & (d > 0.0))
+        held = np.zeros(C.shape[0], dtype=bool)
+        for _ in range(C.shape[0] + 1):
+            rows = [problem.A] if on_null else []
+            rows.append(C[held])
+            N = factor(np.vstack(rows)).N
+            d = N @ (N.T @ g)
+            pushed = active & ~held & (C @ d > 1e-12 * float(np.linalg.norm(d)))
             if not pushed.any():
                 break
-            free &= ~pushed
-        if float(np.linalg.norm(d)) >= NULL_SHARE * g_size or not on_null:
+            held |= pushed
+        if not on_null or float(np.linalg.norm(d)) >= NULL_SHARE * g_size:
             return d, on_null
     return d, False
 
 
-def _interval(base: FloatArray, d: FloatArray, lower: FloatArray, upper: FloatArray
-              ) -> tuple[float, float]:
-    """``[a_lo, a_hi]``: the steps ``alpha`` with ``base + alpha d`` in the box."""
-    a_lo, a_hi = -np.inf, np.inf
-    moving = np.abs(d) > 1e-12 * float(np.abs(d).max())
-    with np.errstate(divide="ignore", invalid="ignore"):
-        to_lo = (lower - base)[moving] / d[moving]
-        to_hi = (upper - base)[moving] / d[moving]
-    ends = np.sort(np.stack([to_lo, to_hi]), axis=0)
-    if ends.size:
-        a_lo = float(ends[0].max())
-        a_hi = float(ends[1].min())
-    return min(a_lo, 0.0), max(a_hi, 0.0)
+def _reach(problem: StepProblem, base: FloatArray, d: FloatArray) -> float:
+    """Return the largest ``alpha >= 0`` with ``base + alpha d`` inside every box and row."""
+    ineq = problem.inequalities()
+    rate = ineq.C @ d
+    slack = ineq.e - ineq.C @ base
+    moving = rate > 1e-15 * max(1.0, float(np.abs(d).max(initial=0.0)))
+    if not moving.any():
+        return np.inf
+    return max(float((np.maximum(slack[moving], 0.0) / rate[moving]).min()), 0.0)
 
 
 __all__ = ["COLLAPSED_SCALE", "Escape", "escape_move", "sigma_gradient"]

@@ -27,7 +27,8 @@ from numpy.typing import NDArray
 
 from ..kinematics.arm import SerialArm
 from ..se3 import pose_error
-from ..step.build import DualArmState, StepBuild
+from ..step.build import StepBuild
+from ..step.state import DualArmState
 from ..task.carry import CarryModel
 from ..task.scene import DualArmTask
 

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
-from ..step.build import DualArmState
+from ..step.state import DualArmState
 from ..task.scene import DualArmTask
 from ..task.trajectory import WaypointTrajectory
 

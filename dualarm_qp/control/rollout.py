@@ -29,7 +29,7 @@ from ..errors import DualArmError, InfeasibleStepError, InvalidInputError, Suppo
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
-from ..step.build import DualArmState
+from ..step.state import DualArmState
 from .controller import DualArmController
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure

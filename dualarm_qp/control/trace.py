@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..step.build import DualArmState
+from ..step.state import DualArmState
 from ..task.scene import DualArmTask
 from ..task.surfaces import GraspSurface
 from .controller import ControlOutput, DualArmController

@@ -31,7 +31,8 @@ from ..solvers.registry import (
     get_solver,
     solver_info,
 )
-from ..step.build import DualArmState, StepOptions
+from ..step.options import StepOptions
+from ..step.state import DualArmState
 from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar

@@ -142,6 +142,9 @@ class SerialArm:
     qd_max : array_like, shape (n,)
         Joint speed limits [rad/s], symmetric: ``|qd_i| <= qd_max_i``. Default: the
         model's ``velocityLimit`` (a zero there means no limit), inf for a DH table.
+    qdd_max : array_like, shape (n,)
+        Joint acceleration limits [rad/s^2], symmetric. Default inf (none: a URDF
+        states no acceleration limits).
     base : array_like, shape (4, 4)
         ``T_world_base``, the pose of the arm's base frame (frame 0) in the world.
     tool : array_like, shape (4, 4)
@@ -173,6 +176,7 @@ class SerialArm:
         q_min: Any = None,
         q_max: Any = None,
         qd_max: Any = None,
+        qdd_max: Any = None,
         base: Any = None,
         tool: Any = None,
         name: str = "arm",
@@ -200,7 +204,8 @@ class SerialArm:
         if lo is None or hi is None or vel is None:  # a DH table: no limits of its own
             lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
         self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
-                         vel if qd_max is None else qd_max, n)
+                         vel if qd_max is None else qd_max,
+                         np.full(n, np.inf) if qdd_max is None else qdd_max, n)
         frame = template.frames[flange]
         self._flange = pin.SE3(frame.placement)
         self._tool_id = template.addFrame(pin.Frame(_TOOL, frame.parentJoint, flange,
@@ -212,13 +217,16 @@ class SerialArm:
         self._root_frames = [i for i, f in enumerate(template.frames) if f.parentJoint == 0]
         self._place(base, tool)
 
-    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, n: int) -> None:
+    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int) -> None:
         self.q_min = _limit(q_min, "q_min", n)
         self.q_max = _limit(q_max, "q_max", n)
         check_limits(self.q_min, self.q_max, f"{self.name} joint limits")
         self.qd_max = _limit(qd_max, "qd_max", n)
         if (self.qd_max <= 0).any():
             raise LimitsError(f"{self.name}: qd_max must be positive, got {self.qd_max}")
+        self.qdd_max = _limit(qdd_max, "qdd_max", n)
+        if (self.qdd_max <= 0).any():
+            raise LimitsError(f"{self.name}: qdd_max must be positive, got {self.qdd_max}")
 
     def _place(self, base: Any, tool: Any) -> None:
         """Copy the template model, allocate its data, set the limits, base and tool."""
@@ -301,7 +309,7 @@ class SerialArm:
         return new
 
     def with_limits(self, q_min: Any = None, q_max: Any = None,
-                    qd_max: Any = None) -> SerialArm:
+                    qd_max: Any = None, qdd_max: Any = None) -> SerialArm:
         """Return a copy of this arm with other limits (None keeps a limit as it is).
 
         Raises
@@ -313,7 +321,8 @@ class SerialArm:
         new.__dict__.update(self.__dict__)
         new._set_limits(self.q_min if q_min is None else q_min,
                         self.q_max if q_max is None else q_max,
-                        self.qd_max if qd_max is None else qd_max, self.n)
+                        self.qd_max if qd_max is None else qd_max,
+                        self.qdd_max if qdd_max is None else qdd_max, self.n)
         new._place(self._base, self._tool)
         return new
 

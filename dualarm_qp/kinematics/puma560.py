@@ -19,6 +19,11 @@ Joint speed limits are not given by the paper. :data:`PUMA560_QD_MAX` is our
 documented choice (see ``docs/kinematics.md``): 2 rad/s (115 deg/s) for the three
 arm joints and 4 rad/s (229 deg/s) for the wrist, which keeps the flange speed of the
 fully stretched arm below about 2 m/s. Override them with ``qd_max=`` for a real arm.
+
+Joint acceleration limits are not given either. :data:`PUMA560_QDD_MAX` is our
+documented choice too: each joint may reach its speed limit from rest in 0.2 s, i.e.
+10 rad/s^2 for the arm joints and 20 rad/s^2 for the wrist. They are used only when a
+run asks for acceleration limits; override them with ``qdd_max=``.
 """
 
 from __future__ import annotations
@@ -40,10 +45,12 @@ PUMA560_Q_MIN = np.deg2rad([-160.0, -225.0, -45.0, -110.0, -100.0, -266.0])
 PUMA560_Q_MAX = np.deg2rad([160.0, 45.0, 225.0, 170.0, 100.0, 266.0])
 #: Joint speed limits [rad/s] (our choice, see the module docstring).
 PUMA560_QD_MAX = np.array([2.0, 2.0, 2.0, 4.0, 4.0, 4.0])
+#: Joint acceleration limits [rad/s^2]: the speed limits reached from rest in 0.2 s.
+PUMA560_QDD_MAX = PUMA560_QD_MAX / 0.2
 
 
 def puma560(base: Any = None, *, tool: Any = None, qd_max: Any = None,
-            name: str = "puma560") -> SerialArm:
+            qdd_max: Any = None, name: str = "puma560") -> SerialArm:
     """Build the paper's Table 1 PUMA 560 in SI units (m, rad).
 
     Parameters
@@ -54,6 +61,8 @@ def puma560(base: Any = None, *, tool: Any = None, qd_max: Any = None,
         ``T_flange_tool`` [m]; identity by default (the paper's frame 6).
     qd_max : array_like, shape (6,), optional
         Joint speed limits [rad/s]; default :data:`PUMA560_QD_MAX`.
+    qdd_max : array_like, shape (6,), optional
+        Joint acceleration limits [rad/s^2]; default :data:`PUMA560_QDD_MAX`.
     name : str
         Label used in messages.
 
@@ -68,6 +77,7 @@ def puma560(base: Any = None, *, tool: Any = None, qd_max: Any = None,
         q_min=PUMA560_Q_MIN,
         q_max=PUMA560_Q_MAX,
         qd_max=PUMA560_QD_MAX if qd_max is None else qd_max,
+        qdd_max=PUMA560_QDD_MAX if qdd_max is None else qdd_max,
         base=base,
         tool=tool,
         name=name,

@@ -1,14 +1,13 @@
-"""Geometry of the step's equality ``A x = b`` and of its feasible set (private).
+"""Geometry of the step's equality ``A x = b`` (private).
 
-Two tools shared by the exact solver, the KKT certificate and the infeasible-step
-policies:
+The tools every solver, the certificate and the policies share:
 
+* :func:`factor`, the one truncated SVD that takes every rank decision;
 * :func:`affine_solutions` writes every solution of ``A x = b`` as ``x0 + N t``;
-* :func:`max_task_scale` finds the largest ``s`` for which ``A x = s b`` meets the box,
-  in closed form when the null space has at most one dimension (the paper's step,
-  and the leader's square 6 x 6 step) and with a linear program otherwise.
+* :func:`least_distance_eq`, the one equality-constrained least-distance kernel:
+  the minimiser of Eq. 37 over an affine set, with its multipliers.
 
-Every decision about a dimension in :mod:`.nullspace`, :mod:`._kkt` and here (the rank
+Every decision about a dimension in the solvers, the certificate and here (the rank
 of ``A`` or of a column subset of it, hence the null-space dimension; whether a
 variable moves along a null direction) is taken from a singular value decomposition
 with the one relative tolerance :data:`RANK_RTOL`. None rests on an LU pivot, on the
@@ -24,10 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lapack
-from scipy.optimize import linprog
 
 from ..step.problem import StepProblem
-from ._util import bound_label
 
 FloatArray = NDArray[np.float64]
 
@@ -128,14 +125,15 @@ def moves(z: FloatArray) -> NDArray[np.bool_]:
     return np.abs(z) > RANK_RTOL * float(np.abs(z).max(initial=0.0))
 
 
-def least_distance(N: FloatArray, x0: FloatArray, w: FloatArray, c: FloatArray
+def least_distance(N: FloatArray, x0: FloatArray, root: FloatArray, c: FloatArray
                    ) -> FloatArray:
-    """Minimiser of ``sum w_i (x_i - c_i)^2`` over ``x = x0 + N t``.
+    """Minimiser of ``|R (x - c)|^2`` over ``x = x0 + N t``.
 
-    ``N`` has orthonormal columns and ``w > 0``, so ``W^1/2 N`` has full column rank
-    (its singular values lie in ``[min sqrt(w), max sqrt(w)]``): no rank decision, one
-    Householder QR solve of ``min |W^1/2 (x0 + N t - c)|`` (not the normal equations,
-    whose condition is the square of that, up to 1e9 with a sliding weight of 1e9).
+    ``N`` has orthonormal columns and ``R`` is invertible, so ``R N`` has full column
+    rank (for a diagonal cost its singular values lie in ``[min sqrt(w), max sqrt(w)]``):
+    no rank decision, one Householder QR solve of ``min |R (x0 + N t - c)|`` (not the
+    normal equations, whose condition is the square of that, up to 1e9 with a sliding
+    weight of 1e9).
 
     Parameters
     ----------
@@ -143,17 +141,65 @@ def least_distance(N: FloatArray, x0: FloatArray, w: FloatArray, c: FloatArray
         Orthonormal null-space basis (``d = 0`` returns ``x0``).
     x0 : ndarray, shape (n,)
         A point of the affine set (units of ``x``).
-    w : ndarray, shape (n,)
-        Positive weights.
+    root : ndarray, shape (n,) or (n, n)
+        ``R``: the square roots of a diagonal cost's weights, or a full cost's upper
+        Cholesky factor (:meth:`StepProblem.cost_root`).
     c : ndarray, shape (n,)
         Centre (units of ``x``).
     """
     if not N.shape[1]:
         return x0
-    root = np.sqrt(w)
-    Q, R = np.linalg.qr(root[:, None] * N)
-    t = np.linalg.solve(R, Q.T @ (root * (c - x0)))
+    RN = root[:, None] * N if root.ndim == 1 else root @ N
+    r = root * (c - x0) if root.ndim == 1 else root @ (c - x0)
+    Q, R = np.linalg.qr(RN)
+    t = np.linalg.solve(R, Q.T @ r)
     return np.asarray(x0 + N @ t, dtype=np.float64)
+
+
+def cost_root(problem: StepProblem) -> FloatArray:
+    """``R`` of :func:`least_distance` for ``problem``: ``sqrt(w)`` or the Cholesky factor."""
+    w = problem.weights
+    return np.sqrt(w) if w.ndim == 1 else problem.cost_root()
+
+
+def least_distance_eq(problem: StepProblem, E: FloatArray, r: FloatArray
+                      ) -> tuple[FloatArray, FloatArray]:
+    """Minimise Eq. 37 of ``problem`` subject to ``E x = r`` only; with the multipliers.
+
+    The one equality-constrained least-distance kernel of the package: the exact
+    solver's subproblems, the KKT refinement of the QP backends, SNS's working sets and
+    the certificate all reduce to it. ``E`` holds whatever is held as an equality (the
+    step's ``A``, unit rows of variables held at a bound, active general rows); its
+    rank is decided by :func:`factor` at :data:`RANK_RTOL`, so dependent rows are fine.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        Supplies the cost ``W`` and the centre ``c``.
+    E : ndarray, shape (k, n)
+        Equality rows.
+    r : ndarray, shape (k,)
+        Their right-hand side (assumed consistent; least squares otherwise).
+
+    Returns
+    -------
+    x : ndarray, shape (n,)
+        The minimiser.
+    multipliers : ndarray, shape (k,)
+        The minimum-norm ``lam`` with ``W (x - c) = E^T lam``.
+    """
+    f = factor(E)
+    x = least_distance(f.N, f.solve(r), cost_root(problem), problem.center)
+    return x, f.solve_transposed(problem.gradient(x))
+
+
+def problem_factor(problem: StepProblem) -> Factor:
+    """:func:`factor` of ``problem.A``, computed once per problem and shared."""
+    f = problem._cache.get("factor")
+    if f is None:
+        f = factor(problem.A)
+        problem._cache["factor"] = f
+    return f
 
 
 @dataclass(frozen=True, slots=True)
@@ -221,172 +267,3 @@ def _consistent(A: FloatArray, b: FloatArray, f: Factor, x0: FloatArray) -> bool
     scale = max(1.0, float(np.abs(b).max()),
                 float(f.sigma[0]) * float(np.abs(x0).max()) if f.rank else 0.0)
     return float(np.abs(A @ x0 - b).max()) <= CONSISTENCY_TOL * scale
-
-
-@dataclass(frozen=True, slots=True)
-class TaskScale:
-    """Largest feasible scale of the task.
-
-    Attributes
-    ----------
-    scale : float or None
-        Largest ``s`` in ``[0, cap]`` with ``{A x = s b, lower <= x <= upper}`` non-empty;
-        None when even ``s = 0`` is infeasible.
-    x : ndarray or None
-        A point of that set at ``s = scale``.
-    blocking : tuple of str
-        Bounds that stop ``s`` from growing further (empty when ``scale == cap``).
-    """
-
-    scale: float | None
-    x: FloatArray | None
-    blocking: tuple[str, ...]
-
-
-def max_task_scale(problem: StepProblem, cap: float = 1.0) -> TaskScale:
-    """Largest ``s`` in ``[0, cap]`` such that ``A x = s b`` has a solution in the box.
-
-    Exact closed form when the numerical null space (:data:`RANK_RTOL`) has at most one
-    dimension (see :func:`_scale_1d`): a 6 x 7 step, or a square 6 x 6 step, where
-    ``x = s x0`` and ``s`` is limited by the first bound ``s x0`` meets. A HiGHS linear
-    program in ``(x, s)`` on the numerical range of ``A`` otherwise (:func:`_scale_lp`).
-
-    Parameters
-    ----------
-    problem : StepProblem
-        The step; ``b`` in [m/s; rad/s], bounds in [rad/s, m/s].
-    cap : float
-        Largest scale of interest (dimensionless).
-
-    Returns
-    -------
-    TaskScale
-        The scale, a point at that scale and the bounds that block it.
-    """
-    if (problem.lower > problem.upper).any():
-        return TaskScale(None, None, problem.empty_bounds())
-    aff = affine_solutions(problem.A, problem.b)
-    if aff is not None and aff.nullity <= 1:
-        return _scale_1d(problem, aff, cap)
-    return _scale_lp(problem, cap)
-
-
-def _scale_1d(problem: StepProblem, aff: AffineSet, cap: float) -> TaskScale:
-    """Closed-form task scale for ``x = s x0 + t z`` (at most one null direction).
-
-    Each bound ``l_i <= s x0_i + t z_i <= u_i`` with ``z_i != 0`` bounds ``t`` between
-    lines in ``s``: ``t >= L_j(s)`` and ``t <= U_k(s)``. The feasible ``s`` are the
-    intersection of the half-lines ``L_j(s) <= U_k(s)`` over all pairs (j, k), with
-    ``l_i <= s x0_i <= u_i`` for the bounds with ``z_i = 0``, and with ``[0, cap]``.
-    Every such condition reads ``coef * s <= rhs``.
-    """
-    x0 = aff.x0
-    z = aff.N[:, 0] if aff.nullity else np.zeros_like(x0)
-    lower, upper = problem.lower, problem.upper
-    move = moves(z)  # all False for a square nonsingular A (no null direction)
-    fixed = np.flatnonzero(~move)
-    idx = np.flatnonzero(move)
-    zi, xi = z[idx], x0[idx]
-    pos = zi > 0
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # t >= alpha + beta s (from the "lower" bound in t), t <= gamma + beta s.
-        alpha = np.where(pos, lower[idx], upper[idx]) / zi
-        gamma = np.where(pos, upper[idx], lower[idx]) / zi
-        beta = -xi / zi
-        coef = np.concatenate([x0[fixed], -x0[fixed],
-                               (beta[:, None] - beta[None, :]).ravel()])
-        rhs = np.concatenate([upper[fixed], -lower[fixed],
-                              (gamma[None, :] - alpha[:, None]).ravel()])
-    k = idx.size
-    labels = ([(bound_label(problem, int(i), True),) for i in fixed]
-              + [(bound_label(problem, int(i), False),) for i in fixed])
-
-    def why(c: int) -> tuple[str, ...]:
-        if c < len(labels):
-            return labels[c]
-        j, kk = divmod(c - len(labels), k)
-        return (bound_label(problem, int(idx[j]), not pos[j]),
-                bound_label(problem, int(idx[kk]), bool(pos[kk])))
-
-    finite = np.isfinite(rhs)  # rhs = +inf: an infinite bound, never binds
-    tiny = 1e-14 * np.maximum(1.0, np.abs(np.where(finite, rhs, 0.0)))
-    flat = finite & (np.abs(coef) <= tiny)
-    broken = np.flatnonzero(flat & (rhs < -1e-12))
-    if broken.size:  # 0 <= rhs fails for every s
-        return TaskScale(None, None, why(int(broken[0])))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        limit = np.where(finite & ~flat, rhs / np.where(flat, 1.0, coef), np.nan)
-    no_bound: tuple[str, ...] = ()
-    ups = np.flatnonzero(coef > 0)
-    ups = ups[np.isfinite(limit[ups])]
-    downs = np.flatnonzero(coef < 0)
-    downs = downs[np.isfinite(limit[downs])]
-    s_hi, hi_why = float(cap), no_bound
-    if ups.size and float(limit[ups].min()) < s_hi:
-        c = int(ups[np.argmin(limit[ups])])
-        s_hi, hi_why = float(limit[c]), why(c)
-    s_lo, lo_why = 0.0, no_bound
-    if downs.size and float(limit[downs].max()) > s_lo:
-        c = int(downs[np.argmax(limit[downs])])
-        s_lo, lo_why = float(limit[c]), why(c)
-    if s_lo > s_hi + 1e-12 * max(1.0, abs(s_hi)) or s_hi < -1e-12:
-        return TaskScale(None, None, lo_why + hi_why)
-    s = max(s_hi, 0.0)
-    t = 0.0
-    if k:
-        t = _midpoint(float(np.max(alpha + beta * s)), float(np.min(gamma + beta * s)))
-    x = np.clip(s * x0 + t * z, lower, upper)
-    return TaskScale(s, x, hi_why if s < cap else ())
-
-
-def _midpoint(lo: float, hi: float) -> float:
-    """Return a point of ``[lo, hi]`` (ends may be infinite), the midpoint if reversed."""
-    if np.isfinite(lo) and np.isfinite(hi):
-        return 0.5 * (lo + hi)
-    if np.isfinite(lo):
-        return lo
-    if np.isfinite(hi):
-        return hi
-    return 0.0
-
-
-def _scale_lp(problem: StepProblem, cap: float) -> TaskScale:
-    """Task scale by linear programming: maximise s s.t. A x - s b = 0, box, 0 <= s <= cap.
-
-    The equality is written on the numerical range of ``A`` (:func:`factor`):
-    ``diag(sigma) V^T x - s U^T b = 0``, full row rank, so that HiGHS takes no rank
-    decision of its own. The part of ``b`` outside that range, when it exceeds
-    ``CONSISTENCY_TOL`` (``A x = b`` inconsistent), adds the row ``|b_perp| s = 0``.
-    """
-    n = problem.n
-    f = factor(problem.A)
-    b_r = f.U.T @ problem.b
-    rows = [np.hstack([f.V.T * f.sigma[:, None], -b_r[:, None]])]
-    if problem.m and not _consistent(problem.A, problem.b, f, f.solve(problem.b)):
-        b_perp = float(np.linalg.norm(problem.b - f.U @ b_r))
-        rows.append(np.hstack([np.zeros(n), [b_perp]])[None, :])
-    A_eq = np.vstack(rows)
-    cost = np.zeros(n + 1)
-    cost[n] = -1.0
-    bounds = [(_finite_or_none(lo), _finite_or_none(up))
-              for lo, up in zip(problem.lower, problem.upper, strict=True)] + [(0.0, float(cap))]
-    res = linprog(cost, A_eq=A_eq if A_eq.shape[0] else None,
-                  b_eq=np.zeros(A_eq.shape[0]) if A_eq.shape[0] else None,
-                  bounds=bounds, method="highs",
-                  options={"primal_feasibility_tolerance": 1e-10,
-                           "dual_feasibility_tolerance": 1e-10, "time_limit": 1.0})
-    if res.status != 0 or res.x is None:
-        return TaskScale(None, None, ())
-    x = np.clip(res.x[:n], problem.lower, problem.upper)
-    s = float(res.x[n])
-    blocking: list[str] = []
-    if s < cap:
-        lo_dual = np.asarray(res.lower.marginals)[:n]
-        up_dual = np.asarray(res.upper.marginals)[:n]
-        blocking += [bound_label(problem, int(i), False) for i in np.flatnonzero(lo_dual > 1e-12)]
-        blocking += [bound_label(problem, int(i), True) for i in np.flatnonzero(up_dual < -1e-12)]
-    return TaskScale(s, x, tuple(blocking))
-
-
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if np.isfinite(value) else None

@@ -74,6 +74,21 @@ def cost_weights(weights: FloatArray) -> FloatArray:
     return weights / top if top > 0.0 else weights.copy()
 
 
+def cost_matrix(weights: FloatArray) -> FloatArray:
+    """Return the cost matrix the backends see: ``W / max |W|`` (diagonal or full, as given)."""
+    if weights.ndim == 1:
+        return np.diag(cost_weights(weights))
+    top = float(np.abs(weights).max(initial=0.0))
+    return weights / top if top > 0.0 else weights.copy()
+
+
+def shifted_rows(problem: StepProblem) -> tuple[FloatArray, FloatArray]:
+    """Return the general rows in ``y = x - c``: ``(G, h - G c)``, rows with a finite ``h`` only."""
+    keep = np.isfinite(problem.h)
+    G = problem.G[keep]
+    return G, problem.h[keep] - G @ problem.center
+
+
 def _box(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Shifted data ``(b - A c, lower - c, upper - c)``."""
     c = problem.center
@@ -81,7 +96,9 @@ def _box(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 
 class OSQPNative:
-    """One ``osqp.OSQP`` object; the equality rows come first, then the identity (box).
+    """One ``osqp.OSQP`` object: the equality rows, the identity (box), the rows ``G``.
+
+    The general rows have an upper bound only.
 
     The constraint matrix is stored with a fixed, dense pattern (zeros kept as explicit
     entries), so a new ``A`` is always an update of the values, never a new setup.
@@ -101,7 +118,7 @@ class OSQPNative:
         self.options = dict(options)
         self._solver: Any = None
         self._ext: Any = None
-        self._shape: tuple[int, int] | None = None
+        self._shape: tuple[int, int, int] | None = None
         self._weights: FloatArray | None = None
         self._zero_y: FloatArray | None = None
         self._infty = float(osqp.constant("OSQP_INFTY"))
@@ -113,17 +130,25 @@ class OSQPNative:
     def _fill(self, problem: StepProblem) -> None:
         """Write the shifted step data into the buffers (sized for the problem's shape)."""
         m, n = problem.A.shape
-        if self._ax.shape != (n, m + 1):
-            self._ax = np.ones((n, m + 1))  # column j of [A; I]: A[:, j], then the 1
-            self._l, self._u = np.empty(m + n), np.empty(m + n)
+        p = problem.p
+        if self._ax.shape != (n, m + 1 + p):
+            # column j of [A; I; G]: A[:, j], then the 1, then G[:, j]
+            self._ax = np.ones((n, m + 1 + p))
+            self._l, self._u = np.empty(m + n + p), np.empty(m + n + p)
         c = problem.center
         self._ax[:, :m] = problem.A.T
+        if p:
+            self._ax[:, m + 1:] = problem.G.T
         beq = problem.b - problem.A @ c
         lo, up = self._l, self._u
         lo[:m] = beq
         up[:m] = beq
-        np.subtract(problem.lower, c, out=lo[m:])
-        np.subtract(problem.upper, c, out=up[m:])
+        np.subtract(problem.lower, c, out=lo[m:m + n])
+        np.subtract(problem.upper, c, out=up[m:m + n])
+        if p:
+            lo[m + n:] = -np.inf
+            with np.errstate(invalid="ignore"):
+                up[m + n:] = problem.h - problem.G @ c
         np.maximum(lo, -self._infty, out=lo)
         np.minimum(up, self._infty, out=up)
 
@@ -131,22 +156,23 @@ class OSQPNative:
         import scipy.sparse as sp
 
         m, n = problem.A.shape
+        p = problem.p
         self._fill(problem)
         ax = self._ax.ravel()
-        if self._solver is None or self._shape != (m, n):
-            # Pattern: every entry of A and the diagonal of I; in csc order column j
-            # holds A[:, j] then I[j, j], which is the order of ``ax``.
-            mat = sp.csc_matrix(np.vstack([np.ones((m, n)), np.eye(n)]))
+        if self._solver is None or self._shape != (m, n, p):
+            # Pattern: every entry of A, the diagonal of I and every entry of G; in csc
+            # order column j holds A[:, j], I[j, j], G[:, j]: the order of ``ax``.
+            mat = sp.csc_matrix(np.vstack([np.ones((m, n)), np.eye(n), np.ones((p, n))]))
             mat.sort_indices()
             mat.data = ax.copy()
             solver = self._osqp.OSQP()
             solver.setup(P=sp.diags(cost_weights(problem.weights), format="csc"),
                          q=np.zeros(n), A=mat,
                          l=self._l.copy(), u=self._u.copy(), verbose=False, **self.options)
-            self._solver, self._shape = solver, (m, n)
+            self._solver, self._shape = solver, (m, n, p)
             self._ext = _osqp_extension(solver)
             self._weights = problem.weights.copy()
-            self._zero_y = np.zeros(m + n)
+            self._zero_y = np.zeros(m + n + p)
         else:
             px = None
             if self._weights is None or not np.array_equal(self._weights, problem.weights):
@@ -196,7 +222,7 @@ def _osqp_extension(solver: Any) -> Any:
 
 
 class ProxQPNative:
-    """One ``proxsuite.proxqp.dense.QP`` with native box constraints.
+    """One ``proxsuite.proxqp.dense.QP`` with native box constraints and general rows.
 
     proxqp has no time limit. Its ``max_iter`` bounds the outer (augmented Lagrangian)
     iterations only; each may run up to ``max_iter_in`` inner Newton iterations (1500 by
@@ -213,35 +239,45 @@ class ProxQPNative:
         self._proxqp = proxqp
         self.options = dict(options)
         self._qp: Any = None
-        self._shape: tuple[int, int] | None = None
+        self._shape: tuple[int, int, int] | None = None
         self._weights: FloatArray | None = None
+
+    def _rows(self, problem: StepProblem) -> tuple[Any, Any, Any]:
+        """``(C, l, u)`` of the general rows in ``y`` (None without rows)."""
+        if not problem.p:
+            return None, None, None
+        with np.errstate(invalid="ignore"):
+            u = np.minimum(problem.h - problem.G @ problem.center, _PROXQP_INFTY)
+        return problem.G, np.full(problem.p, -_PROXQP_INFTY), u
 
     def _setup(self, problem: StepProblem, beq: FloatArray, lo: FloatArray,
                up: FloatArray) -> None:
         m, n = problem.A.shape
-        qp = self._proxqp.dense.QP(n, m, 0, True)
+        qp = self._proxqp.dense.QP(n, m, problem.p, True)
         for key, value in self.options.items():
             if key not in self.INIT_ONLY:
                 setattr(qp.settings, key, value)
         qp.settings.verbose = False
-        qp.init(np.diag(cost_weights(problem.weights)), np.zeros(n), problem.A, beq,
-                None, None, None,
+        C, cl, cu = self._rows(problem)
+        qp.init(cost_matrix(problem.weights), np.zeros(n), problem.A, beq,
+                C, cl, cu,
                 lo, up, compute_preconditioner=bool(
                     self.options.get("compute_preconditioner", True)))
-        self._qp, self._shape = qp, (m, n)
+        self._qp, self._shape = qp, (m, n, problem.p)
         self._weights = problem.weights.copy()
 
     def solve(self, problem: StepProblem) -> BackendAnswer:
         beq, lo, up = _box(problem)
         m, n = problem.A.shape
-        if self._qp is None or self._shape != (m, n):
+        if self._qp is None or self._shape != (m, n, problem.p):
             self._setup(problem, beq, lo, up)
         else:
             H = None
             if self._weights is None or not np.array_equal(self._weights, problem.weights):
-                H = np.diag(cost_weights(problem.weights))
+                H = cost_matrix(problem.weights)
                 self._weights = problem.weights.copy()
-            self._qp.update(H, None, problem.A, beq, None, None, None, lo, up,
+            C, cl, cu = self._rows(problem)
+            self._qp.update(H, None, problem.A, beq, C, cl, cu, lo, up,
                             update_preconditioner=bool(
                                 self.options.get("compute_preconditioner", True)))
         guess = self._proxqp.InitialGuess
@@ -261,6 +297,9 @@ class ProxQPNative:
         return BackendAnswer(x, bool(solved), bool(infeasible), str(info.status),
                              int(info.iter))
 
+
+#: What stands for "no bound" in proxqp's row bounds.
+_PROXQP_INFTY = 1e20
 
 #: qpsolvers backend name -> native class, for the installed backends that have one.
 NATIVE: dict[str, type[OSQPNative] | type[ProxQPNative]] = {

@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import enum
-import math
-import operator
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -76,9 +74,12 @@ class Tolerance:
     Parameters
     ----------
     equality : float
-        Largest allowed ``|A x - scale * b|`` component [m/s or rad/s].
+        Largest allowed ``|A x - b|`` component, relative to ``max(1, max |b|)`` of the
+        right-hand side the answer was asked for (the scaled one for a scaled task)
+        [m/s or rad/s].
     bounds : float
-        Largest allowed bound violation [rad/s or m/s].
+        Largest allowed violation of a box or of a (unit-norm) row [rad/s or m/s]; the
+        one feasibility tolerance of every answer.
     """
 
     equality: float = 1e-7
@@ -102,11 +103,15 @@ class StepSolution:
     objective : float
         Eq. 37 at ``x``.
     eq_residual : float
-        ``max |A x - scale * b|``.
+        ``max |A x - b|`` for the right-hand side the answer was asked for.
     bound_violation : float
         ``max(lower - x, x - upper, 0)``.
     active_lower, active_upper : ndarray of bool, shape (n,)
         Bounds active at ``x`` (within tolerance).
+    row_violation : float
+        Largest violation of a general row, ``max((G x - h)_i / |G_i|, 0)``.
+    active_rows : tuple of str
+        General rows active at ``x`` (within tolerance).
     scale : float
         Task scale applied (1.0 unless status is SCALED).
     solve_time : float
@@ -120,9 +125,8 @@ class StepSolution:
     extras : dict
         Backend-specific details (iterations, backend status, ...).
     verified_with : Tolerance or None
-        The tolerances :func:`verify` checked this solution against; None when it was
-        never verified. Only :func:`verify` sets it: a caller holding a solution
-        verified with its own tolerances need not verify it again.
+        The tolerances :func:`~.certify.certify` checked this solution against; None
+        for a solver's raw claim, before certification.
     """
 
     x: FloatArray
@@ -139,6 +143,8 @@ class StepSolution:
     message: str = ""
     extras: dict[str, Any] = field(default_factory=dict)
     verified_with: Tolerance | None = None
+    row_violation: float = 0.0
+    active_rows: tuple[str, ...] = ()
 
     @property
     def success(self) -> bool:
@@ -152,156 +158,17 @@ class StepSolver(Protocol):
 
     A solver is built once (with its options) and called once per step. It may keep
     state between calls (a factorisation, a warm start), but must give a correct
-    answer for any problem handed to it.
+    answer for any problem handed to it. It returns its *claim* (a status and ``x``);
+    :func:`~dualarm_qp.solvers.get_solver` hands out every registered solver wrapped so
+    that each answer is certified once (:func:`~.certify.certify`) before anyone reads
+    it.
     """
 
     name: str
 
     def solve(self, problem: StepProblem) -> StepSolution:
-        """Solve one step problem and return a solution passed through :func:`verify`."""
+        """Solve one step problem; return the claimed status and ``x``."""
         ...
-
-
-def residuals(problem: StepProblem, x: FloatArray, scale: float = 1.0) -> tuple[float, float]:
-    """Return ``(equality residual, bound violation)`` of ``x`` for ``problem``."""
-    eq, viol, _ = _residuals(problem, x, x.tolist(), scale)
-    return eq, viol
-
-
-def _residuals(problem: StepProblem, x: FloatArray, xs: list[float], scale: float
-               ) -> tuple[float, float, list[list[float]]]:
-    """:func:`residuals`, and the signed bound gaps ``[lower - x, x - upper]``.
-
-    ``xs`` is ``x.tolist()``. Python floats with C-level ``map``: at this size each
-    numpy call costs more than the arithmetic.
-    """
-    eq = 0.0
-    if problem.m:
-        b = problem.b.tolist()
-        if scale != 1.0:
-            b = [scale * bi for bi in b]
-        eq = max(map(abs, map(operator.sub, (problem.A @ x).tolist(), b)))
-    gaps = [list(map(operator.sub, problem.lower.tolist(), xs)),
-            list(map(operator.sub, xs, problem.upper.tolist()))]
-    viol = max([0.0, *gaps[0], *gaps[1]])
-    return eq, viol, gaps
-
-
-def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
-    """Largest ``|A x - scale * b|`` component that counts as meeting the equality.
-
-    ``tol.equality`` relative to ``max(1, max |b|)`` [m/s or rad/s].
-    """
-    return tol.equality * max(1.0, max(map(abs, problem.b.tolist()), default=0.0))
-
-
-def verify(
-    problem: StepProblem,
-    solution: StepSolution,
-    tol: Tolerance = DEFAULT_TOLERANCE,
-    *,
-    claims_bounds: bool = True,
-) -> StepSolution:
-    """Recompute the residuals of ``solution`` and downgrade a false claim.
-
-    Parameters
-    ----------
-    problem : StepProblem
-        The problem that was solved.
-    solution : StepSolution
-        What the solver returned.
-    tol : Tolerance
-        Tolerances for the equality and the bounds.
-    claims_bounds : bool
-        False for methods that ignore the bounds (the paper's reference step): their
-        bound violations are still measured and reported as VIOLATION.
-
-    Returns
-    -------
-    StepSolution
-        A copy with residuals, objective and active sets filled in, and
-        ``verified_with = tol``. A usable status whose residuals exceed ``tol`` becomes
-        VIOLATION; a non-finite ``x`` becomes ERROR with ``x`` set to zero.
-    """
-    return verified_solution(
-        problem, solution.x, solution.status, tol=tol, claims_bounds=claims_bounds,
-        scale=solution.scale, solve_time=solution.solve_time, solver=solution.solver,
-        message=solution.message, extras=solution.extras,
-    )
-
-
-def verified_solution(
-    problem: StepProblem,
-    x: FloatArray,
-    status: Status,
-    *,
-    solver: str,
-    tol: Tolerance = DEFAULT_TOLERANCE,
-    claims_bounds: bool = True,
-    scale: float = 1.0,
-    solve_time: float = 0.0,
-    message: str = "",
-    extras: dict[str, Any] | None = None,
-) -> StepSolution:
-    """Verify a solver's answer ``x`` with the ``status`` it claims; what solvers return.
-
-    Equal to ``verify(problem, StepSolution(x=x, status=status, ...), tol)`` (the
-    keywords are the :class:`StepSolution` fields of the same names), without building
-    the unverified solution first.
-    """
-    n = problem.n
-    extras = {} if extras is None else extras
-    xs: list[float] = x.tolist() if isinstance(x, np.ndarray) and x.shape == (n,) else []
-    # A finite sum is the cheap common case (NaN and inf propagate through it).
-    if len(xs) != n or (not math.isfinite(sum(xs)) and not np.isfinite(x).all()):
-        return _solution(
-            x=np.zeros(n), status=Status.ERROR if status.usable else status,
-            objective=math.nan, eq_residual=math.nan, bound_violation=math.nan,
-            active_lower=np.zeros(n, dtype=bool), active_upper=np.zeros(n, dtype=bool),
-            scale=scale, solve_time=solve_time, build_time=problem.build_time,
-            solver=solver, message=message or "solver returned a non-finite or misshaped x",
-            extras=extras, verified_with=tol,
-        )
-    eq, viol, gaps = _residuals(problem, x, xs, scale)
-    if status.usable:
-        scale_eq = equality_limit(problem, tol)
-        if status is not Status.RELAXED and status is not Status.ESCAPING and eq > scale_eq:
-            status = Status.VIOLATION
-            message = message or f"equality residual {eq:.3g} exceeds tolerance {scale_eq:.3g}"
-        if viol > tol.bounds:
-            status = Status.VIOLATION
-            worst = int(np.argmax(np.maximum(problem.lower - x, x - problem.upper)))
-            message = message or (
-                f"{problem.names[worst]} = {x[worst]:.6g} outside "
-                f"[{problem.lower[worst]:.6g}, {problem.upper[worst]:.6g}]"
-                + ("" if claims_bounds else " (this method ignores the bounds)")
-            )
-    # A bound is active when x is within act_tol of it (or beyond): its gap >= -act_tol.
-    active = np.array(gaps) >= -max(tol.bounds, 1e-9)
-    return _solution(
-        x=x, status=status, objective=problem.objective(x), eq_residual=eq,
-        bound_violation=viol, active_lower=active[0], active_upper=active[1], scale=scale,
-        solve_time=solve_time, build_time=problem.build_time, solver=solver,
-        message=message, extras=extras, verified_with=tol,
-    )
-
-
-_SOLUTION_FIELDS = frozenset(f.name for f in fields(StepSolution))
-
-
-def _solution(**values: Any) -> StepSolution:
-    """``StepSolution(**values)`` for values of every field, built at once.
-
-    The frozen dataclass's ``__init__`` sets its 14 fields one ``object.__setattr__``
-    call at a time, which costs more than a fast solve's arithmetic. The class has no
-    ``__post_init__`` and no slots, so filling ``__dict__`` gives the same object.
-    """
-    if values.keys() != _SOLUTION_FIELDS:
-        raise TypeError(f"StepSolution fields missing or unknown: "
-                        f"{sorted(_SOLUTION_FIELDS.symmetric_difference(values))}")
-    solution = object.__new__(StepSolution)
-    solution.__dict__.update(values)
-    return solution
 
 
 def failed(problem: StepProblem, status: Status, solver: str, message: str,

@@ -1,27 +1,29 @@
 """Exact solver of the step QP by parametrising the null space of ``A``.
 
 Every solution of ``A x = b`` is ``x = x0 + N t`` (:func:`~._affine.affine_solutions`:
-one SVD, the null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`).
+one SVD, the null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`). Every
+limit of the step, box or general row, is a row ``C_i x <= e_i`` of
+:meth:`~dualarm_qp.step.StepProblem.inequalities` (unit norm), hence a row
+``(C_i N) t <= e_i - C_i x0`` on ``t``:
 
-* No redundant variable (a square nonsingular step such as the leader's 6 x 6, d = 0):
-  ``x = x0 = A^-1 b``, OPTIMAL if it lies in the box, INFEASIBLE naming the bound it
-  breaks otherwise.
-* One redundant variable (the paper's step: a rigid six-joint leader and one sliding
-  grasp, d = 1): the cost Eq. 37 is a scalar
-  quadratic in ``t``, the box gives an interval ``[t_lo, t_hi]``, and the minimiser is
-  ``t* = -z^T S (x0 - c) / z^T S z`` clamped to it.
-* Several redundant variables (d > 1: a 6 x 8 step, or a numerically rank-deficient
-  6 x 7 step at a singular pose): an exact primal active-set method on the box,
-  started from a feasible point of the LP in :mod:`._affine`; each iteration solves
-  the equality-constrained subproblem on the null space of the free columns.
+* ``d = 0`` (a square nonsingular step such as the leader's 6 x 6): ``x = x0``,
+  OPTIMAL if it meets every row, INFEASIBLE naming the rows it breaks otherwise.
+* ``d = 1`` (the paper's step: a rigid six-joint leader and one sliding grasp): every
+  row is an interval on the scalar ``t``; their intersection is exact and the
+  minimiser ``t* = -z^T W (x0 - c) / z^T W z`` is clamped to it.
+* ``d >= 2`` (a 6 x 8 step, both grasps sliding, a rank-deficient step at a singular
+  pose): the dual active-set method of Goldfarb and Idnani (:mod:`._dense_qp`) on the
+  ``d`` null-space coordinates. It needs no feasible start, cannot cycle on degenerate
+  vertices (stated tie rules) and proves infeasibility by a row it cannot add.
 
-Infeasible steps (empty box, empty interval, inconsistent equality) are reported as
-INFEASIBLE with the conflicting bounds in ``message`` and ``extras["conflicts"]``.
+A row whose normal does not move along the null space (``|C_i N| <= RANK_RTOL``) is a
+condition on ``x0`` alone: met within ``feasibility_tol`` or the step is infeasible.
+
+The answer is a claim (OPTIMAL or INFEASIBLE); :func:`~.certify.certify` checks it.
 """
 
 from __future__ import annotations
 
-import operator
 import time
 from typing import Any
 
@@ -29,238 +31,132 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import (
-    RANK_RTOL,
-    AffineSet,
-    TaskScale,
-    affine_solutions,
-    factor,
-    least_distance,
-    max_task_scale,
-)
-from ._util import bound_label, empty_box_failure
-from .base import (
-    DEFAULT_TOLERANCE,
-    Status,
-    StepSolution,
-    Tolerance,
-    failed,
-    verified_solution,
-)
+from ._affine import RANK_RTOL, affine_solutions, cost_root
+from ._dense_qp import solve_dense_qp
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
 
 
 class NullspaceSolver:
-    """Exact minimiser of Eq. 37 subject to ``A x = b`` and the box.
+    """Exact minimiser of Eq. 37 subject to ``A x = b``, the boxes and the rows.
 
     Parameters
     ----------
     feasibility_tol : float
-        Bound violation [rad/s or m/s] below which a barely empty interval is still
-        accepted (its midpoint is returned); beyond it the step is infeasible.
-    max_iter : int
-        Iteration limit of the active-set method (null space dimension > 1).
+        Violation [rad/s or m/s] below which a row counts as met (a barely empty
+        interval is still accepted: its midpoint is returned).
+    max_iter : int, optional
+        Limit on the active-set additions and drops (``d >= 2``; default ``10 (k + d) +
+        10`` for ``k`` rows).
     tol : Tolerance
-        Tolerances used by :func:`~.base.verify`.
+        Tolerances of the certificate.
     """
 
     name = "nullspace"
 
-    def __init__(self, *, feasibility_tol: float = 1e-10, max_iter: int = 200,
+    def __init__(self, *, feasibility_tol: float = 1e-10, max_iter: int | None = None,
                  tol: Tolerance = DEFAULT_TOLERANCE) -> None:
         check_number(self.name, "feasibility_tol", feasibility_tol, minimum=0.0, strict=True)
-        check_number(self.name, "max_iter", max_iter, integer=True, minimum=1)
+        if max_iter is not None:
+            check_number(self.name, "max_iter", max_iter, integer=True, minimum=1)
         check_tolerance(self.name, tol)
         self.feasibility_tol = float(feasibility_tol)
-        self.max_iter = int(max_iter)
+        self.max_iter = max_iter
         self.tol = tol
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve one step exactly; see the module docstring."""
         start = time.perf_counter()
-        lower, upper = problem.lower.tolist(), problem.upper.tolist()
-        empty = (empty_box_failure(problem, self.name)
-                 if any(map(operator.gt, lower, upper)) else None)
-        if empty is not None:
-            return empty
-        extras: dict[str, Any] = {}
+        if problem.has_empty_box():
+            names = problem.empty_bounds()
+            return failed(problem, Status.INFEASIBLE, self.name,
+                          f"empty box (lower > upper) for {', '.join(names)}",
+                          time.perf_counter() - start, conflicts=names)
         aff = affine_solutions(problem.A, problem.b)
         if aff is None:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",
                           time.perf_counter() - start, conflicts=())
-        x: FloatArray | None
-        if aff.nullity <= 1:
-            x, conflicts = self._interval(problem, aff, lower, upper)
-        else:
-            x, conflicts, extras["iterations"], reach = self._active_set(problem)
-            if reach is not None:  # the task-scale LP ran: the policy may reuse it
-                extras["task_scale"] = reach
-        elapsed = time.perf_counter() - start
-        extras["nullity"] = aff.nullity
-        if x is None:
-            if "iterations" in extras and extras["iterations"] > self.max_iter:
-                return failed(problem, Status.ERROR, self.name,
-                              f"active set did not converge in {self.max_iter} iterations",
-                              elapsed, **extras)
-            return failed(problem, Status.INFEASIBLE, self.name,
-                          "no x meets A x = b within the bounds; conflicting bounds: "
-                          + ", ".join(conflicts), elapsed, conflicts=conflicts, **extras)
-        return verified_solution(problem, x, Status.OPTIMAL, solver=self.name, tol=self.tol,
-                                 solve_time=elapsed, extras=extras)
-
-    def _interval(self, problem: StepProblem, aff: AffineSet, los: list[float],
-                  ups: list[float]) -> tuple[FloatArray | None, tuple[str, ...]]:
-        """Minimise over ``x = x0 + t z``: clamp the scalar minimiser to the bound interval.
-
-        ``los`` and ``ups`` are the bounds as lists [rad/s, m/s]. With no null direction
-        (square nonsingular ``A``) ``x = x0``, checked against the box. A component
-        ``|z_i| <= RANK_RTOL * max |z|`` does not move ``x_i`` (see
-        :func:`~._affine.moves`). Returns ``(x or None, conflicts)``. Plain Python
-        floats: at n = 7 each numpy call costs more than the arithmetic.
-        """
-        xs = aff.x0.tolist()
-        zs = aff.N[:, 0].tolist() if aff.nullity else [0.0] * len(xs)
-        z_max = max(max(zs), -min(zs))
-        z_tiny = RANK_RTOL * z_max
+        ineq = problem.inequalities()
+        x0, N = aff.x0, aff.N
+        M = ineq.C @ N
+        f = ineq.e - ineq.C @ x0
         tol = self.feasibility_tol
-        curvature = slope = 0.0  # z^T S z and z^T S (x0 - c)
-        t_lo, t_hi = -np.inf, np.inf
-        why_lo = why_hi = (0, False)  # (variable, is its upper bound) that set t_lo / t_hi
-        for i, (xi, zi, lo, up, wi, ci) in enumerate(zip(
-                xs, zs, los, ups, problem.weights.tolist(), problem.center.tolist(),
-                strict=True)):
-            if zi > z_tiny:
-                a, b = (lo - xi) / zi, (up - xi) / zi
-            elif zi < -z_tiny:
-                a, b = (up - xi) / zi, (lo - xi) / zi
-            else:  # the null direction does not move x_i (or there is none)
-                if xi < lo - tol or xi > up + tol:
-                    return None, (bound_label(problem, i, xi > up),)
-                continue
-            curvature += wi * zi * zi
-            slope += wi * zi * (xi - ci)
-            if a > t_lo:
-                t_lo, why_lo = a, (i, zi < 0.0)
-            if b < t_hi:
-                t_hi, why_hi = b, (i, zi > 0.0)
-        t = -slope / curvature if curvature > 0.0 else 0.0
-        if t_lo > t_hi:
-            if (t_lo - t_hi) * z_max > 2.0 * tol:  # not just rounding: infeasible
-                return None, (bound_label(problem, *why_lo), bound_label(problem, *why_hi))
-            t = 0.5 * (t_lo + t_hi)
-        t = min(max(t, t_lo), t_hi)
-        return np.array([xi + t * zi for xi, zi in zip(xs, zs, strict=True)]), ()
-
-    def _active_set(self, problem: StepProblem
-                    ) -> tuple[FloatArray | None, tuple[str, ...], int, TaskScale | None]:
-        """Primal active-set method in ``x``; a working-set variable is held at its bound.
-
-        Returns ``(x, conflicts, iterations, task scale)``; ``x`` is None when infeasible
-        (conflicts set) or when the iteration limit was hit (``iterations > max_iter``);
-        the task scale is the LP's (:func:`~._affine.max_task_scale` at cap 1) when the
-        start needed it, else None.
-        """
-        lower, upper = problem.lower, problem.upper
-        side = np.zeros(problem.n, dtype=np.int8)  # -1: at lower, +1: at upper, 0: free
-        found = self._start(problem, side)
-        reach: TaskScale | None = None
-        if found is None:  # a feasible start from the LP of the largest task scale
-            reach = max_task_scale(problem, cap=1.0)
-            if reach.scale is None or reach.x is None or reach.scale < 1.0 - 1e-9:
-                return None, reach.blocking or problem.names, 0, reach
-            x = reach.x
-            side[:] = 0
+        moving = np.abs(M).max(axis=1, initial=0.0) > RANK_RTOL
+        fixed_broken = np.flatnonzero(~moving & (f < -tol))
+        extras: dict[str, Any] = {"nullity": aff.nullity}
+        if fixed_broken.size:
+            return self._infeasible(problem, [int(i) for i in fixed_broken], start, extras)
+        d = aff.nullity
+        if d == 0:
+            return StepSolution(x=x0, status=Status.OPTIMAL, solver=self.name,
+                                solve_time=time.perf_counter() - start, extras=extras)
+        R = cost_root(problem)
+        RN = R[:, None] * N if R.ndim == 1 else R @ N
+        r = R * (problem.center - x0) if R.ndim == 1 else R @ (problem.center - x0)
+        Q, Rt = np.linalg.qr(RN)
+        t_free = np.linalg.solve(Rt, Q.T @ r)
+        rows = np.flatnonzero(moving)
+        if d == 1:
+            t, conflict = _interval(M[rows, 0], f[rows], float(t_free[0]), tol)
+            if conflict is not None:
+                return self._infeasible(problem, [int(rows[i]) for i in conflict],
+                                        start, extras)
+            x = x0 + N[:, 0] * t
         else:
-            x = found
-        for it in range(1, self.max_iter + 1):
-            target, mu = _equality_qp(problem, side, x)
-            step = target - x
-            if float(np.abs(step).max()) <= 1e-12 * (1.0 + float(np.abs(x).max())):
-                x = target
-                # Lower bound needs mu >= 0, upper bound mu <= 0.
-                wrong = -side * mu
-                j = int(np.argmin(wrong))
-                grad_scale = 1.0 + float(np.abs(problem.weights * (x - problem.center)).max())
-                if side[j] == 0 or wrong[j] >= -1e-11 * grad_scale:
-                    return x, (), it, reach
-                side[j] = 0
-                continue
-            alpha, block, block_side = 1.0, -1, 0
-            for i in np.flatnonzero((side == 0) & (step != 0.0)):
-                p = step[i]
-                bound, s = (lower[i], -1) if p < 0 else (upper[i], 1)
-                ratio = max((bound - x[i]) / p, 0.0)
-                if ratio < alpha:
-                    alpha, block, block_side = ratio, int(i), s
-            x = x + alpha * step
-            if block >= 0:
-                side[block] = block_side
-                x[block] = lower[block] if block_side < 0 else upper[block]
-        return None, (), self.max_iter + 1, reach
+            out = solve_dense_qp(Rt, t_free, M[rows], f[rows], feas_tol=tol,
+                                 max_iter=self.max_iter)
+            extras["iterations"] = out.iterations
+            if out.status == "max_iter":
+                return failed(problem, Status.ERROR, self.name,
+                              f"active set did not converge in {out.iterations - 1} "
+                              "additions and drops", time.perf_counter() - start, **extras)
+            if out.status == "infeasible":
+                involved = [int(rows[i]) for i in (*out.active.tolist(), out.blocking)]
+                return self._infeasible(problem, involved, start, extras)
+            x = x0 + N @ out.t
+        return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+                            solve_time=time.perf_counter() - start, extras=extras)
+
+    def _infeasible(self, problem: StepProblem, rows: list[int], start: float,
+                    extras: dict[str, Any]) -> StepSolution:
+        labels = problem.inequalities().labels
+        conflicts = tuple(dict.fromkeys(labels[i] for i in rows))
+        return failed(problem, Status.INFEASIBLE, self.name,
+                      "no x meets A x = b within the limits; conflicting: "
+                      + ", ".join(conflicts), time.perf_counter() - start,
+                      conflicts=conflicts, **extras)
 
 
-    def _start(self, problem: StepProblem, side: NDArray[np.int8]) -> FloatArray | None:
-        """Return a feasible start for the active set found without an LP, or None.
+def _interval(c: FloatArray, f: FloatArray, t_free: float, tol: float
+              ) -> tuple[float, tuple[int, int] | None]:
+    """Clamp ``t_free`` to ``{t : c_i t <= f_i}``; ``(t, None)`` or ``(0, conflicting rows)``.
 
-        First the minimiser on the whole affine set (no bound held): inside the box it
-        is the answer itself. Then the warm start ``x_prev`` itself, when it meets the
-        equality and the box (the policy hands the task-scale LP's point to the scaled
-        problem this way), and last the minimiser with ``x_prev``'s working set held, if
-        it lies in the box. ``side`` is set to the working set of the point returned.
-        """
-        lower, upper, n = problem.lower, problem.upper, problem.n
-        scale = 1.0 + float(np.abs(problem.b).max(initial=0.0))
-
-        def feasible(x: FloatArray) -> bool:
-            return bool(np.all(x >= lower) and np.all(x <= upper) and float(
-                np.abs(problem.A @ x - problem.b).max(initial=0.0)) <= 1e-10 * scale)
-
-        x, _ = _equality_qp(problem, side, np.clip(np.zeros(n), lower, upper))
-        if feasible(x):
-            return x
-        xp = problem.x_prev
-        if xp is None:
-            return None
-        held = np.where(xp <= lower, -1, np.where(xp >= upper, 1, 0)).astype(np.int8)
-        if feasible(xp):
-            side[:] = held
-            return np.where(held < 0, lower, np.where(held > 0, upper, xp))
-        if held.any():
-            x, _ = _equality_qp(problem, held, np.clip(np.zeros(n), lower, upper))
-            if feasible(x):
-                side[:] = held
-                return x
-        return None
-
-
-def _equality_qp(problem: StepProblem, side: NDArray[np.int8], x: FloatArray
-                 ) -> tuple[FloatArray, FloatArray]:
-    """Minimise Eq. 37 with ``A x = b`` and the working-set variables at their bounds.
-
-    The free part is written ``x_F = x0 + N t`` on the numerical null space of the free
-    columns ``A_F`` (:func:`~._affine.factor`, rank at :data:`~._affine.RANK_RTOL`);
-    ``t`` minimises ``|S_F^1/2 (x0 + N t - c_F)|`` (:func:`~._affine.least_distance`,
-    no rank decision). ``x`` is the current iterate: it
-    meets the equality, so the right-hand side lies in the range of ``A_F``.
-
-    Returns the minimiser and the bound multipliers ``mu`` (zero off the working set),
-    from ``S (x - c) = A^T lambda + mu`` with the minimum-norm ``lambda``.
+    Every ``c_i`` is nonzero (rows that do not move were checked before). An interval
+    empty by at most ``tol`` (in units of ``x``: the rows are unit norm and the null
+    direction has unit length) is rounding: its midpoint is returned.
     """
-    w, c, A = problem.weights, problem.center, problem.A
-    free = side == 0
-    target = np.where(side < 0, problem.lower, np.where(side > 0, problem.upper, x))
-    rhs = problem.b - A[:, ~free] @ target[~free]
-    f = factor(A[:, free])
-    target[free] = least_distance(f.N, f.solve(rhs), w[free], c[free])
-    grad = w * (target - c)
-    lam = f.solve_transposed(grad[free])
-    mu = np.where(free, 0.0, grad - A.T @ lam)
-    return target, mu
+    ratio = f / c
+    up = c > 0.0
+    hi_rows = np.flatnonzero(up)
+    lo_rows = np.flatnonzero(~up)
+    t_hi, t_lo = np.inf, -np.inf
+    i_hi = i_lo = -1
+    if hi_rows.size:
+        j = int(np.argmin(ratio[hi_rows]))
+        i_hi, t_hi = int(hi_rows[j]), float(ratio[hi_rows[j]])
+    if lo_rows.size:
+        j = int(np.argmax(ratio[lo_rows]))
+        i_lo, t_lo = int(lo_rows[j]), float(ratio[lo_rows[j]])
+    if t_lo > t_hi:
+        if t_lo - t_hi > 2.0 * tol:
+            return 0.0, (i_lo, i_hi)
+        return 0.5 * (t_lo + t_hi), None
+    return min(max(t_free, t_lo), t_hi), None
 
 
 register("nullspace", NullspaceSolver,
-         description="exact: null-space parametrisation, scalar clamp (d=1) or active set",
-         hard_bounds=True)
+         description="exact: null-space parametrisation, interval (d=1) or dual active set",
+         hard_bounds=True, takes_rows=True, dense_cost=True)

@@ -1,34 +1,38 @@
 """What to do when a step is infeasible: scale the task, relax it, or stop.
 
-:func:`solve_step` wraps any registered solver. A usable answer is returned as is. When
-the solver gives none (INFEASIBLE, ERROR, or a VIOLATION it did not mean) the step is
-checked for feasibility (:func:`~._affine.max_task_scale`). A feasible step is the
-solver's fault, not the step's: it is solved again by the ``fallback`` solver when one
-is given (see below), else the solver's own failure is returned. An infeasible step
-gets:
+:func:`solve_step` wraps any solver. Every answer in it comes from a certified solve
+(:class:`~.registry.CertifiedSolver`: each claim is checked once, by
+:func:`~.certify.certify`, against the problem it was asked), so nothing here checks an
+answer again. A usable answer is returned as is. When the solver gives none
+(INFEASIBLE, ERROR, or a VIOLATION it did not mean) the step's largest feasible task
+scale is computed exactly (:func:`~._scale.max_task_scale`: every box and row). A step
+feasible at full scale is the solver's fault, not the step's: it is solved again by the
+``fallback`` solver when one is given, else the solver's own failure is returned. An
+infeasible step gets:
 
 ``"scale"``
-    the largest ``s`` in ``[0, task_scale_max]`` with ``{A x = s b, box}`` non-empty
-    (closed form for a one-dimensional null space, an LP otherwise), then the solver on
-    the task ``s b``; status SCALED with ``solution.scale = s``. If the solver fails on
+    the largest ``s`` in ``[0, 1]`` with ``{A x = s b, boxes, rows}``
+    non-empty, then the solver on the task ``s b`` (its answer certified against that
+    scaled problem); status SCALED with ``solution.scale = s``. If the solver fails on
     that (degenerate) problem, the ``fallback`` solves it when given; failing that, the
-    feasible point found with ``s`` is returned. If not
-    even ``s = 0`` is feasible, falls back to ``"relax"``. The whole right-hand side is
+    feasible point found with ``s`` is returned, certified as it is. If not even
+    ``s = 0`` is feasible, falls back to ``"relax"``. The whole right-hand side is
     scaled, so a closure-correction term in ``b`` is slowed with the task (at ``s = 0``
-    the step holds still and corrects nothing; nothing moves, so no new drift
-    arises either).
+    the step holds still and corrects nothing; nothing moves, so no new drift arises
+    either).
 ``"relax"``
-    ``min ||A x - b||^2 + eps ||x - c||_S^2 / max(S)`` over the box (bounded least
-    squares, BVLS): the bounds hold, the task is met in least squares; status RELAXED.
+    ``min ||A x - b||^2 + eps ||x - c||_W^2 / max(W)`` subject to every box and row (a
+    strictly convex QP, solved by the dual active-set method of :mod:`._dense_qp`): the
+    limits hold, the task is met in least squares; status RELAXED.
 ``"stop"``
-    raise :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting bounds.
+    raise :class:`~dualarm_qp.errors.InfeasibleStepError` naming the conflicting limits.
 
 An empty box (``lower > upper``) cannot be relaxed: ``"scale"`` and ``"relax"`` return
 INFEASIBLE with the empty boxes in ``extras["conflicts"]``; ``"stop"`` raises.
 
 Fallback. With ``fallback`` given (e.g. the exact ``nullspace`` solver), a feasible
 step that the solver failed is solved by the fallback, and the answer is the
-fallback's (its status, ``x`` and extras, verified with ``tol``), with
+fallback's (its status, ``x`` and extras), with
 
 * ``solution.solver``: still the primary solver's name;
 * ``extras["fallback"] = {"from": <primary name>, "to": <fallback name>,
@@ -36,8 +40,7 @@ fallback's (its status, ``x`` and extras, verified with ``tol``), with
 * ``solution.message``: ``"<primary> <status> (<its message>); solved by <fallback>"``;
 * ``solution.solve_time``: both solves and the feasibility check.
 
-No new status is used: the fallback is recorded only in ``extras["fallback"]``. The
-default is no fallback, so that a benchmark measures each solver's own success.
+The default is no fallback, so that a benchmark measures each solver's own success.
 """
 
 from __future__ import annotations
@@ -47,19 +50,20 @@ import time
 from typing import Any, Literal
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
 from ..errors import InfeasibleStepError, InvalidInputError
 from ..step.problem import StepProblem
-from ._affine import TaskScale, max_task_scale
-from ._util import bound_label
-from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, failed, verify
+from ._dense_qp import solve_dense_qp
+from ._scale import TaskScale, max_task_scale
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, failed
+from .certify import certify
+from .registry import certified
 
 Policy = Literal["scale", "relax", "stop"]
 POLICIES: tuple[str, ...] = ("scale", "relax", "stop")
 
 #: Weight of the centring term in the relaxed problem (relative to the task residual,
-#: with S normalised by its largest entry).
+#: with W normalised by its largest entry).
 RELAX_EPS = 1e-8
 
 
@@ -71,13 +75,14 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     Parameters
     ----------
     solver : StepSolver
-        Any registered solver.
+        Any solver (one not from the registry is certified with ``tol``).
     problem : StepProblem
         The step.
     policy : {"scale", "relax", "stop"}
         What to do with an infeasible step (see the module docstring).
     tol : Tolerance
-        Tolerances used to verify the policy's answer.
+        Tolerances of the certificate for a solver not from the registry and for the
+        policy's own answers.
     relax_eps : float
         Weight of the centring term in ``"relax"`` (dimensionless).
     fallback : StepSolver or None
@@ -87,43 +92,45 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     Returns
     -------
     StepSolution
-        Never contains NaN. ``extras["policy"]`` records the policy applied, if any;
+        Certified, never NaN. ``extras["policy"]`` records the policy applied, if any;
         ``extras["fallback"]`` records a fallback (see the module docstring).
 
     Raises
     ------
     InfeasibleStepError
-        Policy ``"stop"`` on an infeasible step; ``conflicts`` names the bounds.
+        Policy ``"stop"`` on an infeasible step; ``conflicts`` names the limits.
     InvalidInputError
         Unknown policy.
     """
     if policy not in POLICIES:
         raise InvalidInputError(f"unknown policy '{policy}' (valid: {', '.join(POLICIES)})")
+    solver = certified(solver, tol)
     solution = solver.solve(problem)
     if solution.status.usable:
         return solution
     # Policy time is counted from the first solve, which it includes.
     start = time.perf_counter() - solution.solve_time
-    # The exact solver may have computed the task scale of this very problem already.
     known = solution.extras.get("task_scale")
     reach = known if isinstance(known, TaskScale) else max_task_scale(problem, cap=1.0)
-    if reach.scale is not None and reach.scale >= 1.0 - 1e-12:
+    if reach.full:
         # The step is feasible: the failure is the solver's own.
         if fallback is None:
             return solution
-        return _fell_back(solution, fallback, problem, solver.name, tol, start)
+        return _fell_back(solution, certified(fallback, tol), problem, solver.name, start)
     if policy == "stop":
-        conflicts = reach.blocking or _relaxed_conflicts(problem, relax_eps)
+        conflicts = reach.blocking or problem.empty_bounds() or _relaxed_conflicts(
+            problem, relax_eps)
         raise InfeasibleStepError(
             f"step infeasible for solver '{solver.name}' "
             f"(largest feasible task scale: {_fmt(reach.scale)})", conflicts=conflicts)
     if policy == "scale" and reach.scale is not None:
-        return _scaled(solver, problem, reach, tol, start, fallback)
+        return _scaled(solver, problem, reach, tol, start,
+                       None if fallback is None else certified(fallback, tol))
     return _relaxed(solver.name, problem, reach.blocking, relax_eps, tol, start)
 
 
 def _fell_back(failure: StepSolution, fallback: StepSolver, problem: StepProblem,
-               name: str, tol: Tolerance, start: float) -> StepSolution:
+               name: str, start: float) -> StepSolution:
     """Solve a feasible step that the solver ``name`` failed with ``fallback``."""
     answer = fallback.solve(problem)
     record = _fallback_record(failure, name, fallback.name)
@@ -133,9 +140,9 @@ def _fell_back(failure: StepSolution, fallback: StepSolver, problem: StepProblem
                    f"{fallback.name} failed too: {answer.message}")
     elif answer.message:
         message += f": {answer.message}"
-    return verify(problem, dataclasses.replace(
-        answer, solver=name, message=message, solve_time=time.perf_counter() - start,
-        extras={**answer.extras, "fallback": record}), tol)
+    return dataclasses.replace(answer, solver=name, message=message,
+                               solve_time=time.perf_counter() - start,
+                               extras={**answer.extras, "fallback": record})
 
 
 def _fallback_record(failure: StepSolution, name: str, fallback: str) -> dict[str, str]:
@@ -146,94 +153,97 @@ def _fallback_record(failure: StepSolution, name: str, fallback: str) -> dict[st
 
 def _scaled(solver: StepSolver, problem: StepProblem, reach: TaskScale, tol: Tolerance,
             start: float, fallback: StepSolver | None = None) -> StepSolution:
-    """Solve the task scaled by the largest feasible ``s`` (capped by task_scale_max)."""
-    if reach.scale is not None and reach.scale > problem.task_scale_max:
-        reach = max_task_scale(problem, cap=problem.task_scale_max)
+    """Solve the task scaled by the largest feasible ``s``."""
     s = float(reach.scale or 0.0)
     # The LP's point is feasible for the scaled task: a warm start (an exact solver's
-    # active set starts there instead of solving the LP again).
-    scaled = dataclasses.replace(problem, b=s * problem.b,
-                                 x_prev=reach.x if reach.x is not None else problem.x_prev)
+    # active set may start there).
+    scaled = problem.scaled(s, x_prev=reach.x)
     inner = solver.solve(scaled)
     extras: dict[str, Any] = {"policy": "scale", "conflicts": reach.blocking,
-                              "inner_status": inner.status}
+                              "inner_status": inner.status,
+                              "rank_limited": reach.rank_limited}
     if not inner.status.usable and fallback is not None:
         second = fallback.solve(scaled)
         if second.status.usable:
             extras["fallback"] = _fallback_record(inner, solver.name, fallback.name)
             inner = second
-    x = inner.x
-    if inner.status.usable:
-        s *= inner.scale  # 1 for every registered solver (they solve the task given)
-    elif reach.x is not None:
-        x = reach.x  # the feasible set at the largest s is (nearly) a single point
+    if not inner.status.usable and reach.x is not None:
+        # The feasible set at the largest s is (nearly) a single point: the LP's.
+        inner = certify(scaled, StepSolution(x=reach.x, status=Status.FEASIBLE,
+                                             solver=solver.name), tol)
         extras["point"] = "feasibility"
-    message = (f"task scaled to {s:.6g} of b; blocking bounds: "
-               f"{', '.join(reach.blocking) or 'none'}")
+    message = (f"task scaled to {s:.6g} of b; blocking limits: "
+               f"{', '.join(reach.blocking) or 'none'}"
+               + ("; the step lost rank (an arm at a singularity)" if reach.rank_limited
+                  else ""))
     if "fallback" in extras:
         message += f"; solved by {extras['fallback']['to']} after {solver.name} failed"
+    status = Status.SCALED if inner.status.usable else inner.status
     # ``start`` is the start of the first solve: the wall time since covers every solve.
-    return verify(problem, StepSolution(
-        x=x, status=Status.SCALED, scale=s, solver=solver.name, message=message,
-        solve_time=time.perf_counter() - start, extras=extras), tol)
+    return dataclasses.replace(inner, status=status, scale=s * inner.scale,
+                               solver=solver.name, message=message if status.usable
+                               else inner.message, solve_time=time.perf_counter() - start,
+                               extras={**inner.extras, **extras})
 
 
 def _relaxed(name: str, problem: StepProblem, blocking: tuple[str, ...], relax_eps: float,
              tol: Tolerance, start: float) -> StepSolution:
-    """Bounded least squares: the box holds, ``A x = b`` holds as well as it can."""
-    if (problem.lower > problem.upper).any():
+    """Least squares within every limit: the limits hold, ``A x = b`` as well as it can."""
+    if problem.has_empty_box():
         names = problem.empty_bounds()
         return failed(problem, Status.INFEASIBLE, name,
                       f"empty box (lower > upper) for {', '.join(names)}: cannot relax",
                       time.perf_counter() - start, policy="relax", conflicts=names)
-    x = _bounded_least_squares(problem, relax_eps)
+    x = relaxed_point(problem, relax_eps)
     if x is None:
-        return failed(problem, Status.ERROR, name, "bounded least squares failed",
+        return failed(problem, Status.ERROR, name,
+                      "the limits admit no common point: cannot relax",
                       time.perf_counter() - start, policy="relax", conflicts=blocking)
-    residual = float(np.abs(problem.A @ x - problem.b).max())
-    return verify(problem, StepSolution(
-        x=x, status=Status.RELAXED, solver=name,
-        message=f"task relaxed: |A x - b| = {residual:.3g}",
-        solve_time=time.perf_counter() - start,
-        extras={"policy": "relax", "conflicts": blocking or _active(problem, x)}), tol)
+    residual = float(np.abs(problem.A @ x - problem.b).max(initial=0.0))
+    claim = StepSolution(x=x, status=Status.RELAXED, solver=name,
+                         message=f"task relaxed: |A x - b| = {residual:.3g}",
+                         extras={"policy": "relax",
+                                 "conflicts": blocking or _active(problem, x)})
+    out = certify(problem, claim, tol)
+    return dataclasses.replace(out, solve_time=time.perf_counter() - start)
 
 
-def _bounded_least_squares(problem: StepProblem, relax_eps: float) -> np.ndarray | None:
-    """``argmin ||A x - b||^2 + eps ||x - c||_S^2 / max(S)`` over the (non-empty) box."""
-    lower, upper = problem.lower, problem.upper
-    pinned = upper - lower <= 0.0  # BVLS needs lower < upper: substitute pinned ones
-    free = ~pinned
-    x = np.where(pinned, lower, 0.0)
-    if free.any():
-        reg = np.sqrt(relax_eps * problem.weights[free] / problem.weights.max())
-        M = np.vstack([problem.A[:, free], np.diag(reg)])
-        rhs = np.concatenate([problem.b - problem.A[:, pinned] @ x[pinned],
-                              reg * problem.center[free]])
-        try:
-            res = lsq_linear(M, rhs, bounds=(lower[free], upper[free]), method="bvls",
-                             tol=1e-12, max_iter=100 * problem.n)
-        except (ValueError, np.linalg.LinAlgError):
-            return None
-        x[free] = np.clip(res.x, lower[free], upper[free])
-    return x if np.isfinite(x).all() else None
+def relaxed_point(problem: StepProblem, relax_eps: float = RELAX_EPS) -> np.ndarray | None:
+    """``argmin ||A x - b||^2 + eps ||x - c||_W^2 / max(W)`` over every box and row.
+
+    None when the limits have no common point.
+    """
+    # The objective is |M x - r|^2 with M = [A; sqrt(eps / max W) R_W]: its QR gives the
+    # triangular factor of the Hessian without squaring the condition number.
+    root = problem.cost_root()
+    top = float(np.abs(problem.weight_matrix()).max(initial=1.0)) or 1.0
+    k = np.sqrt(relax_eps / top)
+    M = np.vstack([problem.A, k * root])
+    r = np.concatenate([problem.b, k * (root @ problem.center)])
+    Q, R = np.linalg.qr(M)
+    if not np.all(np.abs(np.diag(R)) > 0.0):
+        return None
+    t_free = np.linalg.solve(R, Q.T @ r)
+    ineq = problem.inequalities()
+    out = solve_dense_qp(R, t_free, ineq.C, ineq.e)
+    if out.status != "optimal" or not np.isfinite(out.t).all():
+        return None
+    return np.clip(out.t, problem.lower, problem.upper)
 
 
 def _active(problem: StepProblem, x: np.ndarray) -> tuple[str, ...]:
-    """Bounds active at ``x`` (within 1e-9), as labels."""
-    lo = np.flatnonzero(x <= problem.lower + 1e-9)
-    up = np.flatnonzero(x >= problem.upper - 1e-9)
-    return (tuple(bound_label(problem, int(i), False) for i in lo)
-            + tuple(bound_label(problem, int(i), True) for i in up))
+    """Limits active at ``x`` (within 1e-9), as labels."""
+    ineq = problem.inequalities()
+    on = ineq.C @ x - ineq.e >= -1e-9
+    return tuple(ineq.labels[i] for i in np.flatnonzero(on))
 
 
 def _relaxed_conflicts(problem: StepProblem, relax_eps: float) -> tuple[str, ...]:
-    """Name the bounds in conflict when no LP certificate names them.
+    """Name the limits in conflict when no LP certificate names them.
 
-    These are the empty boxes if any, else the bounds active at the relaxed solution.
+    These are the limits active at the relaxed solution.
     """
-    if (problem.lower > problem.upper).any():
-        return problem.empty_bounds()
-    x = _bounded_least_squares(problem, relax_eps)
+    x = relaxed_point(problem, relax_eps)
     return _active(problem, x) if x is not None else problem.names
 
 

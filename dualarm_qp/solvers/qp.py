@@ -4,18 +4,20 @@ The QP is written in the shifted variable ``y = x - c`` (Eq. 37 becomes ``y^T S 
 with no linear term), which measurably helps the interior-point backends (piqp,
 clarabel) and does not hurt the others:
 
-    minimise    1/2 y^T S y
-    subject to  A y = b - A c,     lower - c <= y <= upper - c.
+    minimise    1/2 y^T W y
+    subject to  A y = b - A c,   G y <= h - G c,   lower - c <= y <= upper - c.
 
-Each backend runs with a tolerance profile and an iteration or time limit; options
-given to the factory override the profile. Every answer is checked by
-:func:`~.base.verify`; a backend exception never escapes (it becomes ERROR).
+General rows go to the backend natively. Each backend runs with a tolerance profile and
+an iteration or time limit; options given to the factory override the profile. A
+backend exception never escapes (it becomes ERROR).
 
-Honesty: the status never rests on a backend's status text alone. An answer is OPTIMAL
-only when it passes :func:`~.base.verify` (and, for iterative backends, preferably after
-a KKT certificate, :func:`._kkt.refine`); a failed step is INFEASIBLE exactly when the
-exact feasibility check :func:`._affine.max_task_scale` says so (the backend's own
-verdict is kept in ``extras["backend_infeasible"]``), ERROR otherwise.
+Honesty: the status never rests on a backend's status text alone. The backend's point
+is refined on the limits it points to (:func:`._kkt.refine`: an exact, KKT-certified
+optimum or nothing) and claimed OPTIMAL only then; a "solved" point without that
+certificate is claimed FEASIBLE; every claim is then checked by
+:func:`~.certify.certify`. A failed step is INFEASIBLE exactly when the exact
+feasibility check :func:`._scale.max_task_scale` says so (the backend's own verdict is
+kept in ``extras["backend_infeasible"]``), ERROR otherwise.
 
 On the recorded step suite the sliding weight ``s7`` is 1e6..1e9 (the notes measured
 1e2..1e6): the multipliers reach 1e5 and more, absolute dual tolerances such as
@@ -50,17 +52,10 @@ import scipy.sparse as sp
 from ..errors import InvalidInputError
 from ..step.problem import StepProblem
 from . import _native
-from ._affine import max_task_scale
 from ._kkt import refine
+from ._scale import max_task_scale
 from ._util import empty_box_failure
-from .base import (
-    DEFAULT_TOLERANCE,
-    Status,
-    StepSolution,
-    Tolerance,
-    failed,
-    verified_solution,
-)
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import SolverOptionError, check_tolerance, register
 
 
@@ -156,7 +151,7 @@ class QPSolver:
     backend : str
         Key of :data:`BACKENDS` (``"osqp"``, ``"proxsuite"``, ``"daqp"``, ...).
     tol : Tolerance
-        Tolerances used by :func:`~.base.verify`.
+        Tolerances used by :func:`~.certify.certify`.
     **options
         Backend options; they override the backend's profile (e.g. ``eps_abs=1e-6``).
 
@@ -170,7 +165,7 @@ class QPSolver:
     Every backend's answer (solved or not) is refined on the bounds it points to
     (:func:`._kkt.refine`: a KKT-certified optimum or nothing) and is OPTIMAL only when
     certified; without a certificate a "solved" answer that passes
-    :func:`~.base.verify` is FEASIBLE (the active-set backends are no exception: highs
+    :func:`~.certify.certify` is FEASIBLE (the active-set backends are no exception: highs
     called 622 of 5,536 recorded steps solved up to 2.5e-6 off the optimum). Otherwise
     the step is INFEASIBLE when the exact feasibility check
     (:func:`._affine.max_task_scale`) says so, whatever the backend said, and ERROR when
@@ -235,13 +230,13 @@ class QPSolver:
         return None
 
     def solve(self, problem: StepProblem) -> StepSolution:
-        """Build the shifted QP, call the backend, and verify its answer."""
+        """Build the shifted QP, call the backend, and claim its (refined) answer."""
         start = time.perf_counter()
         empty = empty_box_failure(problem, self.name)
         if empty is not None:
             return empty
         try:
-            if self._native is not None:
+            if self._native is not None and problem.diagonal_cost:
                 out = self._native.solve(problem)
             else:
                 out = self._qpsolvers(problem)
@@ -256,37 +251,38 @@ class QPSolver:
             # The KKT certificate: a backend's "solved" at its own tolerance may be
             # feasible yet off the optimum; the certified point is the optimum.
             refined = refine(problem, x)
-            if refined is not None:
-                sol = self._verified(problem, refined, start, {**extras, "refined": True})
-                if sol.status is Status.OPTIMAL:
-                    return sol
+            if refined is not None:  # feasible and KKT-certified: the optimum
+                return self._claim(Status.OPTIMAL, refined, start,
+                                   {**extras, "refined": True})
             if out.solved:
-                # Feasible, but no certificate: the point may be off the optimum (seen
+                # Solved, but no certificate: the point may be off the optimum (seen
                 # up to 0.6 rad/s for quadprog at rank-deficient steps), so it is
-                # reported FEASIBLE, never OPTIMAL.
-                sol = self._verified(problem, x, start, {**extras, "certified": False},
-                                     status=Status.FEASIBLE)
-                if sol.status is Status.FEASIBLE:
-                    return sol
+                # claimed FEASIBLE, never OPTIMAL (the certificate checks the claim).
+                return self._claim(Status.FEASIBLE, x, start, {**extras, "certified": False})
         return self._failure(problem, f"{self.backend.solver}: {out.status or 'no status'}",
                              start, extras, out.infeasible)
 
-    def _verified(self, problem: StepProblem, x: np.ndarray, start: float,
-                  extras: dict[str, Any], status: Status = Status.OPTIMAL) -> StepSolution:
-        # verified_solution is verify() without first building the unverified solution.
-        return verified_solution(problem, x, status, solver=self.name, tol=self.tol,
-                                 solve_time=time.perf_counter() - start, extras=extras)
+    def _claim(self, status: Status, x: np.ndarray, start: float, extras: dict[str, Any]
+               ) -> StepSolution:
+        return StepSolution(x=x, status=status, solver=self.name,
+                            solve_time=time.perf_counter() - start, extras=extras)
 
     def _qpsolvers(self, problem: StepProblem) -> _native.BackendAnswer:
         """One call through ``qpsolvers.solve_problem`` (the backends without a native path)."""
         c = problem.center
-        w = problem.weights
-        P: np.ndarray | sp.csc_matrix = np.diag(
-            _native.cost_weights(w) if self.backend.normalise_cost else w)
+        P: np.ndarray | sp.csc_matrix = (_native.cost_matrix(problem.weights)
+                                         if self.backend.normalise_cost
+                                         else problem.weight_matrix())
         A: np.ndarray | sp.csc_matrix = problem.A
+        G: np.ndarray | sp.csc_matrix | None = None
+        h = None
+        if problem.p:
+            G, h = _native.shifted_rows(problem)
         if self.backend.sparse:
             P, A = sp.csc_matrix(P), sp.csc_matrix(A)
-        qp = qpsolvers.Problem(P, np.zeros(problem.n), A=A, b=problem.b - problem.A @ c,
+            G = None if G is None else sp.csc_matrix(G)
+        qp = qpsolvers.Problem(P, np.zeros(problem.n), G=G, h=h, A=A,
+                               b=problem.b - problem.A @ c,
                                lb=problem.lower - c, ub=problem.upper - c)
         initvals = None
         if self.backend.warm_start and problem.x_prev is not None:
@@ -311,7 +307,7 @@ class QPSolver:
         """INFEASIBLE if the exact check finds no feasible point, ERROR otherwise."""
         extras = {**extras, "backend_infeasible": backend_infeasible}
         check = max_task_scale(problem, cap=1.0)
-        if check.scale is None or check.scale < 1.0 - FEASIBLE_SCALE_TOL:
+        if not check.full:
             extras["conflicts"] = check.blocking
             reach = "none" if check.scale is None else f"{check.scale:.6g}"
             return failed(problem, Status.INFEASIBLE, self.name,
@@ -592,8 +588,6 @@ def _check_highs_values(name: str, options: dict[str, Any]) -> None:
                                     "its range or of the wrong type)")
 
 
-#: Task scale below ``1 - FEASIBLE_SCALE_TOL`` means the full task is out of reach.
-FEASIBLE_SCALE_TOL = 1e-9
 
 #: Status words by which a qpsolvers backend says the constraints are inconsistent.
 _INFEASIBLE_WORDS: dict[str, tuple[str, ...]] = {

@@ -11,10 +11,13 @@ import inspect
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..errors import InvalidInputError, SolverNotFoundError
-from .base import StepSolver
+from ..errors import InvalidInputError, PairingError, SolverNotFoundError
+from .base import StepSolution, StepSolver, Tolerance
+
+if TYPE_CHECKING:
+    from ..step.problem import StepProblem
 
 
 @dataclass(frozen=True)
@@ -33,6 +36,11 @@ class SolverInfo:
         The pip extra of dualarm-qp that installs what the solver needs.
     hard_bounds : bool
         Whether the solver guarantees the bounds (False for the paper's reference step).
+    takes_rows : bool
+        Whether the solver keeps general rows ``G x <= h`` (collision, wall, torque
+        limits); a solver that takes boxes only refuses a problem with rows.
+    dense_cost : bool
+        Whether the solver takes a full (non-diagonal) weighting matrix ``W``.
     """
 
     name: str
@@ -41,6 +49,52 @@ class SolverInfo:
     extra: str | None
     hard_bounds: bool
     factory: Callable[..., StepSolver]
+    takes_rows: bool = True
+    dense_cost: bool = True
+
+    def refusal(self, row_limits: Iterable[str] = (), dense_cost: bool = False) -> str | None:
+        """Why this solver cannot take a step with these parts, or None if it can.
+
+        Parameters
+        ----------
+        row_limits : iterable of str
+            Names of the limits of the step that give general rows.
+        dense_cost : bool
+            Whether the step's cost is a full matrix.
+        """
+        rows = tuple(row_limits)
+        if rows and not self.takes_rows:
+            able = [i.name for i in _REGISTRY.values() if i.takes_rows and i.available]
+            return (f"solver '{self.name}' takes boxes only, and the limit "
+                    f"{', '.join(repr(r) for r in rows)} gives rows; solvers that take "
+                    f"rows: {', '.join(able)}")
+        if dense_cost and not self.dense_cost:
+            able = [i.name for i in _REGISTRY.values() if i.dense_cost and i.available]
+            return (f"solver '{self.name}' takes a diagonal cost only; solvers that take "
+                    f"a full weighting matrix: {', '.join(able)}")
+        return None
+
+
+def check_pairing(info: SolverInfo, row_limits: Iterable[str] = (),
+                  dense_cost: bool = False) -> None:
+    """Check that a solver can take a step's parts (the one pairing check).
+
+    Called where a controller is built (before anything runs) and, for a problem handed
+    to a solver directly, by :class:`CertifiedSolver` (which then answers ERROR).
+
+    Raises
+    ------
+    PairingError
+        ``info``'s solver takes boxes only and some limit gives rows, or it takes a
+        diagonal cost only and the cost is full. The message names the solver, the
+        limits and the solvers that can take them.
+    """
+    rows = tuple(dict.fromkeys(row_limits))
+    why = info.refusal(rows, dense_cost)
+    if why is not None:
+        able = [i.name for i in _REGISTRY.values() if i.available
+                and (i.takes_rows or not rows) and (i.dense_cost or not dense_cost)]
+        raise PairingError(why, solver=info.name, limits=rows, able=able)
 
 
 class SolverOptionError(InvalidInputError):
@@ -129,6 +183,8 @@ def register(
     available: bool = True,
     extra: str | None = None,
     hard_bounds: bool = True,
+    takes_rows: bool = True,
+    dense_cost: bool = True,
     aliases: tuple[str, ...] = (),
 ) -> None:
     """Add a solver to the registry (one line per solver module).
@@ -136,7 +192,8 @@ def register(
     ``aliases`` are other names :func:`get_solver` accepts for it (e.g. ``"qp:proxqp"``
     for ``"qp:proxsuite"``); they are not listed separately.
     """
-    _REGISTRY[name] = SolverInfo(name, description, available, extra, hard_bounds, factory)
+    _REGISTRY[name] = SolverInfo(name, description, available, extra, hard_bounds, factory,
+                                 takes_rows, dense_cost)
     for alias in aliases:
         _ALIASES[alias] = name
 
@@ -189,8 +246,77 @@ def option_names(name: str) -> list[str] | None:
                            inspect.Parameter.POSITIONAL_OR_KEYWORD)]
 
 
-def get_solver(name: str, **options: Any) -> StepSolver:
+class CertifiedSolver:
+    """A solver whose every answer is certified once (:func:`~.certify.certify`).
+
+    What :func:`get_solver` hands out. ``solve`` returns the certified answer; a
+    problem with rows handed to a solver that takes boxes only (or a full cost to one
+    that takes a diagonal cost only) is refused (ERROR, with the reason: the pairing
+    check of :meth:`SolverInfo.refusal`). Every other attribute is the wrapped
+    solver's.
+
+    Parameters
+    ----------
+    solver : StepSolver
+        The solver built by the registry's factory (or a user's own).
+    info : SolverInfo
+        Its registry entry (what it takes, whether it keeps the bounds).
+    tol : Tolerance, optional
+        The certificate's tolerances; default the solver's own ``tol`` (or
+        :data:`~.base.DEFAULT_TOLERANCE`).
+    """
+
+    def __init__(self, solver: StepSolver, info: SolverInfo,
+                 tol: Tolerance | None = None) -> None:
+        from .base import DEFAULT_TOLERANCE
+
+        self.inner = solver
+        self.info = info
+        self.name = solver.name
+        self.tol = tol if tol is not None else getattr(solver, "tol", DEFAULT_TOLERANCE)
+
+    def solve(self, problem: StepProblem) -> StepSolution:
+        """Solve ``problem`` and certify the answer against it."""
+        from .base import Status, failed
+        from .certify import certify
+
+        why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
+                                not problem.diagonal_cost)
+        if why is not None:
+            return failed(problem, Status.ERROR, self.name, why)
+        return certify(problem, self.inner.solve(problem), self.tol,
+                       claims_bounds=self.info.hard_bounds)
+
+    def __getattr__(self, key: str) -> Any:
+        return getattr(self.inner, key)
+
+    def __repr__(self) -> str:
+        return f"CertifiedSolver({self.inner!r})"
+
+
+def certified(solver: StepSolver, tol: Tolerance | None = None) -> CertifiedSolver:
+    """``solver`` as a :class:`CertifiedSolver` (certifying with ``tol`` when given).
+
+    A registered solver keeps its registry entry; a user's own solver (not in the
+    registry) is taken to keep hard limits and to take rows and a full cost. The
+    wrapped solver object itself is shared, not copied (its warm starts are kept).
+    """
+    if isinstance(solver, CertifiedSolver):
+        if tol is None or tol == solver.tol:
+            return solver
+        return CertifiedSolver(solver.inner, solver.info, tol)
+    info = _REGISTRY.get(solver.name) or _REGISTRY.get(_ALIASES.get(solver.name, ""))
+    if info is None:
+        info = SolverInfo(solver.name, "a user's solver", True, None, True,
+                          lambda **_: solver)
+    return CertifiedSolver(solver, info, tol)
+
+
+def get_solver(name: str, **options: Any) -> CertifiedSolver:
     """Build the solver registered as ``name`` with keyword ``options``.
+
+    The solver is wrapped in :class:`CertifiedSolver`: every answer it gives is
+    certified once against the problem it was asked.
 
     Raises
     ------
@@ -210,6 +336,6 @@ def get_solver(name: str, **options: Any) -> StepSolver:
                 raise SolverOptionError(info.name, key, "unknown option",
                                         valid=valid or ["(none)"])
     try:
-        return info.factory(**options)
+        return CertifiedSolver(info.factory(**options), info)
     except TypeError as err:
         raise InvalidInputError(f"bad options for solver '{name}': {err}") from err

@@ -72,29 +72,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import factor, max_task_scale
+from ._affine import factor
+from ._scale import FEASIBLE_SCALE_TOL, max_task_scale
 from ._util import bound_label, empty_box_failure
-from .base import (
-    DEFAULT_TOLERANCE,
-    Status,
-    StepSolution,
-    Tolerance,
-    failed,
-    verified_solution,
-)
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-#: A largest feasible task scale at least ``1 - FULL_TASK_TOL`` counts as the full task
-#: (the residual it leaves, ``FULL_TASK_TOL * |b|``, is far below the verification
-#: tolerance). This absorbs the rounding of ``s*`` when the policy calls SNS on ``s* b``.
-FULL_TASK_TOL = 1e-9
-
-
-#: Relative tolerance of the KKT test that decides between OPTIMAL and FEASIBLE.
-KKT_TOL = 1e-9
 
 
 class SNSSolver:
@@ -106,7 +91,7 @@ class SNSSolver:
         Bound violation [rad/s or m/s] tolerated before a variable is saturated; boxes
         narrower than this are pinched (held at ``lower``).
     tol : Tolerance
-        Tolerances used by :func:`~.base.verify`.
+        Tolerances of the certificate (:func:`~.certify.certify`).
     """
 
     name = "sns"
@@ -124,13 +109,13 @@ class SNSSolver:
         Parameters
         ----------
         problem : StepProblem
-            The step; ``task_scale_max`` is ignored (scaling is the policy's job).
+            The step (boxes only; scaling is the policy's job).
 
         Returns
         -------
         StepSolution
-            OPTIMAL when the answer is the minimiser of Eq. 37, FEASIBLE when it only
-            meets ``A x = b`` and the bounds, INFEASIBLE (``x = 0``) when the full task
+            The claim OPTIMAL (the certificate makes it FEASIBLE when the saturated
+            set is not the optimal one), INFEASIBLE (``x = 0``) when the full task
             is infeasible; then ``extras["max_scale"]`` is the largest feasible task
             scale (None if not even ``s = 0`` is) and ``extras["conflicts"]`` the
             bounds blocking it. ``scale`` is always 1. ``extras["saturated"]`` names
@@ -150,7 +135,7 @@ class SNSSolver:
         if end is None:
             reach = max_task_scale(problem, cap=1.0)
             extras["max_scale"] = reach.scale
-            if reach.scale is None or reach.x is None or reach.scale < 1.0 - FULL_TASK_TOL:
+            if reach.scale is None or reach.x is None or reach.scale < 1.0 - FEASIBLE_SCALE_TOL:
                 scale = ("none (not even s = 0)" if reach.scale is None
                          else f"{reach.scale:.6g}")
                 return failed(problem, Status.INFEASIBLE, self.name,
@@ -165,13 +150,11 @@ class SNSSolver:
         held_upper = [bool(x[i] >= problem.upper[i]) for i in held]
         extras["saturated"] = tuple(bound_label(problem, int(i), up)
                                     for i, up in zip(held, held_upper, strict=True))
-        optimal = _multipliers_agree(problem, x, held, held_upper, lam)
-        message = "" if optimal else (
-            "SNS point, not the minimiser of Eq. 37; held: " + ", ".join(extras["saturated"]))
-        return verified_solution(
-            problem, x, Status.OPTIMAL if optimal else Status.FEASIBLE, solver=self.name,
-            tol=self.tol, solve_time=time.perf_counter() - start, message=message,
-            extras=extras)
+        # The claim: the minimiser of Eq. 37 with the saturated set held. Whether it is
+        # the minimiser of the step is the certificate's decision (FEASIBLE otherwise).
+        del lam
+        return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+                            solve_time=time.perf_counter() - start, extras=extras)
 
 
 #: What a phase ends with: ``x`` (``A x = b``, in the box), the free variables, and the
@@ -332,26 +315,7 @@ def _null_space_step(problem: StepProblem, free: BoolArray, v: FloatArray
     return d, lam
 
 
-def _multipliers_agree(problem: StepProblem, x: FloatArray, held: NDArray[np.intp],
-                       held_upper: list[bool], lam: FloatArray) -> bool:
-    """Whether the held bounds have multipliers of the right sign (KKT of Eq. 37).
-
-    At the end of either phase ``S (x - c) = A^T lam`` holds on the free variables, so
-    ``x`` minimises Eq. 37 (uniquely: ``S`` is positive definite) exactly when the bound
-    multipliers ``mu = S (x - c) - A^T lam`` of the held variables have the right sign:
-    ``mu >= 0`` at a lower bound, ``mu <= 0`` at an upper bound (within ``KKT_TOL``
-    relative to ``max |S (x - c)|``). Pinched boxes are equalities: any sign.
-    """
-    if held.size == 0:
-        return True
-    g = problem.weights * (x - problem.center)
-    mu = g[held] - problem.A[:, held].T @ lam if problem.m else g[held]
-    slack = KKT_TOL * (1.0 + float(np.abs(g).max()))
-    sign = np.where(held_upper, -1.0, 1.0)
-    return bool((sign * mu >= -slack).all())
-
-
 register("sns", SNSSolver,
          description="Saturation in the Null Space (Flacco et al. 2012/2015), full task; "
-                     "task scaling by the policy",
-         hard_bounds=True)
+                     "task scaling by the policy; boxes only",
+         hard_bounds=True, takes_rows=False, dense_cost=False)

@@ -1,199 +1,52 @@
-"""Build the one step problem of both arms and every sliding grasp (Eqs. 14, 25-40).
+"""Build the one step problem of both arms and every sliding grasp by stacking its parts.
 
-The decision vector holds the leader's joint rates, the follower's joint rates and
-the sliding speed of every sliding grasp, in this order:
+Each step the builder computes the kinematics once (both arms and the carried object,
+:class:`~dualarm_qp.task.carry.CarryModel`, where every sliding grasp is a joint), puts
+them in the step's context (:class:`~dualarm_qp.step.context.StepContext`) and stacks
+the step's parts (:mod:`dualarm_qp.step.parts`):
 
-    x = [ql_dot (n_l), qf_dot (n_f), m (follower grasp), m_l (leader grasp, if it slides)]
+* the equality tasks, in this order: the object follows ``D(t)``, the grasp stays
+  closed (:mod:`.tasks`, Eqs. 14 and 25-27);
+* the cost: the paper's centring (:mod:`.cost`, Eqs. 37-40);
+* the limits: joint and grasp ranges (Eqs. 30-36, with recovery), joint and grasp
+  speeds, accelerations when asked for (:mod:`.limits`), then any limit of the user's.
+  Their boxes are intersected (the largest lower, the smallest upper bound; each bound
+  remembers the limit that set it, for messages) and their rows stacked.
 
-with two blocks of six equality rows (world frame, ``[v; w]``), both read from the
-carried-object model (:class:`~dualarm_qp.task.carry.CarryModel`, where every sliding
-grasp is a joint):
-
-    J_o [ql_dot; m_l] = s V_o(t) + K_l e_l                       (Eq. 14 differentiated)
-    J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c                    (Eqs. 25-27)
-
-``J_o`` is the Jacobian of the object frame (the leader's task: the object follows
-``D(t)``, with path twist ``V_o`` and the feedback of its pose error ``e_l``); ``J_t`` is
-the Jacobian of the follower's target frame ``T_l H1 H2(sigma)`` and ``J_f`` the
-follower's tool Jacobian; ``e_c`` is the grasp closure error. With a rigid leader grasp
-and a six-joint leader the first block fixes ``ql_dot`` and the second is the paper's
-6x7 follower problem ``[J_f, -R_o s*] [qf_dot; m] = J_l' ql_dot + K e`` (Eqs. 25-27):
-the columns of ``J_t`` over ``ql`` are ``[[Jp_l - [d]x Ja_l], [Ja_l]]`` (Eq. 27) and its
-sliding column is ``[R_o s*; R_o kappa]`` (Eq. 26). The paper freezes the orientation
-(kappa = 0 in Eq. 26) and re-resolves it after the step (Sec. 3.3);
-``exact_orientation=True`` keeps the curvature term of the follower's grasp instead.
-
-Every variable has a box from its range and its speed limit (Eqs. 30-36) and a centre
-(Eqs. 38-40), weighted per variable (Eq. 37). ``s`` is the task scale of the
-infeasible-step policy (:func:`~dualarm_qp.solvers.solve_step`), which multiplies the
-whole right-hand side.
+The decision vector's slices are the :class:`~dualarm_qp.step.layout.Layout`'s. ``s``
+is the task scale of the infeasible-step policy (:func:`~dualarm_qp.solvers.solve_step`),
+which multiplies the whole right-hand side.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validate import as_array
 from ..errors import InvalidInputError, NonFiniteError, SupportLostError
 from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
 from ..task.scene import DualArmTask
 from ..task.support import SupportLine
-from .bounds import clip_rates, grasp_rate_range
+from ..task.surfaces import GraspSurface
+from .bounds import grasp_rate_range
+from .context import StepContext
+from .cost import CentringCost
+from .layout import Layout
+from .limits import LimitSetup, standard_limits
+from .options import StepOptions
+from .parts import Limit, Task
 from .problem import StepProblem
+from .state import DualArmState
+from .tasks import GraspClosureTask, ObjectPathTask
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class DualArmState:
-    """Measured state of the pair at one instant.
-
-    Attributes
-    ----------
-    t : float
-        Path time [s] at which the desired object pose D(t) is read.
-    q_l, q_f : ndarray, shape (n_l,), (n_f,)
-        Leader and follower joints [rad].
-    sigma : float
-        Follower grasp coordinate along its sliding path [m].
-    sigma_leader : float
-        Leader grasp coordinate along its sliding path [m]; ignored (0) when the leader
-        grasps rigidly.
-    """
-
-    t: float
-    q_l: FloatArray
-    q_f: FloatArray
-    sigma: float
-    sigma_leader: float = 0.0
-
-    def advanced(self, command: Command, dt: float) -> DualArmState:
-        """Return the state after applying ``command`` for ``dt`` seconds (explicit Euler).
-
-        Joints move by ``dt`` times their rates, each grasp by ``dt`` times its sliding
-        speed, and the path time by ``dt`` times the command's ``scale`` (the path slows
-        when the task was scaled). ``command`` is a controller step's output
-        (:class:`~dualarm_qp.control.controller.ControlOutput`) or anything with the
-        same rates.
-        """
-        return DualArmState(self.t + dt * command.scale, self.q_l + dt * command.ql_dot,
-                            self.q_f + dt * command.qf_dot, self.sigma + dt * command.m,
-                            self.sigma_leader + dt * command.m_leader)
-
-
-class Command(Protocol):
-    """The rates one controller step commands (what :meth:`DualArmState.advanced` reads).
-
-    Attributes
-    ----------
-    ql_dot, qf_dot : ndarray
-        Joint rates of the leader and the follower [rad/s].
-    m, m_leader : float
-        Sliding speeds of the follower's and the leader's grasp [m/s].
-    scale : float
-        Path-time rate of the step (1: full speed).
-    """
-
-    @property
-    def ql_dot(self) -> FloatArray:
-        """Leader joint rates [rad/s]."""
-
-    @property
-    def qf_dot(self) -> FloatArray:
-        """Follower joint rates [rad/s]."""
-
-    @property
-    def m(self) -> float:
-        """Follower grasp sliding speed [m/s]."""
-
-    @property
-    def m_leader(self) -> float:
-        """Leader grasp sliding speed [m/s]."""
-
-    @property
-    def scale(self) -> float:
-        """Path-time rate of the step."""
-
-
-@dataclass(frozen=True)
-class StepOptions:
-    """Settings of the step problem.
-
-    Parameters
-    ----------
-    dt : float
-        Sampling interval ``Delta T`` [s] (Eqs. 30-36).
-    joint_weights : ndarray, shape (n_f,) or (1,)
-        Diagonal of S for the follower joints (Eq. 37) [1/(rad/s)^2].
-    grasp_weight : float
-        ``s7``, the weight of every sliding speed in SI units [1/(m/s)^2].
-    velocity_limits : bool
-        Intersect the position boxes with the joint speed limits and the grasp speed
-        limit (the paper's closing remark). Default True.
-    grasp_speed_max : float
-        Limit on every ``|m|`` [m/s]; ``inf`` for none.
-    correction_gain : float, optional
-        Gain ``K`` [1/s] of the closure-error feedback, ``b = ... + K e``; 0 disables it.
-        Default ``1/dt``, which removes the whole error in one step (to first order).
-    centre_horizon : float, optional
-        Time [s] in which the range centres of Eqs. 39-40 ask each variable to reach the
-        middle of its range: the centre rate is ``(middle - x) / centre_horizon``.
-        Default ``dt``, the paper's choice. A longer horizon makes the centring gentler.
-    recovery_fraction : float
-        A variable that starts outside its range may never move further out; its
-        centre (Eq. 39/40) pulls it back. With ``recovery_fraction > 0`` it must also
-        move back at least at this fraction of its speed limit. Default 0: a forced
-        return rate can make a step infeasible.
-    exact_orientation : bool
-        Keep the curvature term of the follower's grasp frame (see module docstring).
-    leader_joint_weights : ndarray, shape (n_l,) or (1,), optional
-        Diagonal of S for the leader joints [1/(rad/s)^2]; default 1. It matters only
-        when the leader has more joints than the six rows of its task.
-    """
-
-    dt: float
-    joint_weights: FloatArray
-    grasp_weight: float
-    velocity_limits: bool = True
-    grasp_speed_max: float = float("inf")
-    correction_gain: float | None = None
-    recovery_fraction: float = 0.0
-    exact_orientation: bool = False
-    centre_horizon: float | None = None
-    leader_joint_weights: FloatArray | None = None
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.dt) and self.dt > 0):
-            raise InvalidInputError(f"dt must be a positive number of seconds, got {self.dt}")
-        w = as_array(np.atleast_1d(self.joint_weights), "joint_weights", (-1,))
-        lw = as_array(np.atleast_1d(1.0 if self.leader_joint_weights is None
-                                    else self.leader_joint_weights),
-                      "leader_joint_weights", (-1,))
-        if ((w <= 0).any() or (lw <= 0).any()
-                or not (np.isfinite(self.grasp_weight) and self.grasp_weight > 0)):
-            raise InvalidInputError("weights must be finite and strictly positive")
-        object.__setattr__(self, "joint_weights", w)
-        object.__setattr__(self, "leader_joint_weights", lw)
-        if not self.grasp_speed_max > 0:
-            raise InvalidInputError("grasp_speed_max must be positive")
-        if self.correction_gain is None:
-            object.__setattr__(self, "correction_gain", 1.0 / self.dt)
-        elif not (np.isfinite(self.correction_gain) and self.correction_gain >= 0):
-            raise InvalidInputError("correction_gain must be a finite number >= 0 [1/s]")
-        if self.centre_horizon is None:
-            object.__setattr__(self, "centre_horizon", self.dt)
-        elif not (np.isfinite(self.centre_horizon) and self.centre_horizon > 0):
-            raise InvalidInputError("centre_horizon must be a positive number of seconds")
-        if not 0 <= self.recovery_fraction <= 1:
-            raise InvalidInputError("recovery_fraction must be in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -220,6 +73,8 @@ class StepBuild:
         Seconds spent in the kinematics and in assembling the problem.
     support_force : float
         Follower push ``h`` [N] of a Case 2 support at this state (NaN for a grasp).
+    context : StepContext or None
+        What the parts read.
     """
 
     problem: StepProblem
@@ -233,6 +88,7 @@ class StepBuild:
     kinematics_time: float
     assembly_time: float
     support_force: float = math.nan
+    context: StepContext | None = None
 
 
 def smallest_singular_value(J: FloatArray) -> float:
@@ -246,9 +102,9 @@ def smallest_singular_value(J: FloatArray) -> float:
 class StepBuilder:
     """Builds the step problems of one task under fixed options.
 
-    What does not change from step to step (variable names, weights, limits, the
+    What does not change from step to step (the layout, the weights, the limits, the
     carried-object model) is prepared once here; :meth:`build` does the per-step work:
-    both arms' kinematics (once), the problem, the errors the trace records.
+    both arms' kinematics (once), the context, the stacking of the parts.
 
     Parameters
     ----------
@@ -259,61 +115,155 @@ class StepBuilder:
     leader_gain : float, optional
         Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``; default ``1/dt``.
     leader_bounds : bool
-        Impose the leader's joint ranges and speed limits (hard-limit solvers); False
-        leaves its box open (the paper's methods, which ignore limits by design).
+        Impose the leader's joint ranges and speed and acceleration limits (hard-limit
+        solvers); False leaves its box open (the paper's methods, which ignore limits by
+        design).
+    limits : sequence of Limit
+        Limits of the user's, stacked after the standard ones (e.g. a wall the
+        follower's tool may not cross, ``examples/custom_limit.py``).
 
     Raises
     ------
     InvalidInputError
-        A weight vector of the wrong length.
+        A weight vector of the wrong length, or a limit that is not a
+        :class:`~dualarm_qp.step.parts.Limit`.
     """
 
     def __init__(self, task: DualArmTask, options: StepOptions, *,
-                 leader_gain: float | None = None, leader_bounds: bool = True) -> None:
-        leader, follower, surface = task.leader, task.follower, task.surface
+                 leader_gain: float | None = None, leader_bounds: bool = True,
+                 limits: Sequence[Limit] = ()) -> None:
+        leader, follower = task.leader, task.follower
         n_l, n_f = leader.n, follower.n
         for w, n, who in ((options.joint_weights, n_f, "joint_weights (follower)"),
                           (options.leader_joint_weights, n_l, "leader_joint_weights")):
             if w is not None and w.shape[0] not in (1, n):
                 raise InvalidInputError(f"{who} has {w.shape[0]} entries, the arm has {n}")
+        for limit in limits:
+            if not (isinstance(getattr(limit, "name", None), str)
+                    and callable(getattr(limit, "constraint", None))
+                    and isinstance(getattr(limit, "gives_rows", None), bool)):
+                raise InvalidInputError(
+                    f"{limit!r} is not a limit: a limit has a str 'name', a bool "
+                    "'gives_rows' and a method 'constraint(ctx)' (dualarm_qp.step.parts)")
         self.task = task
         self.options = options
-        self.carry = CarryModel(leader, surface, task.H1, task.leader_surface)
-        k = self.carry.n_grasp
-        self.n_l, self.n_f, self.n_grasp = n_l, n_f, k
-        self.n = n_l + n_f + k
-        self.names: tuple[str, ...] = (*(f"ql{i + 1}" for i in range(n_l)),
-                                       *(f"qf{i + 1}" for i in range(n_f)),
-                                       "m", *(("m_l",) if k == 2 else ()))
-        weights = np.empty(self.n)
-        weights[:n_l] = options.leader_joint_weights if options.leader_joint_weights is not None \
-            else 1.0
-        weights[n_l:n_l + n_f] = options.joint_weights
-        weights[n_l + n_f:] = options.grasp_weight
-        weights.flags.writeable = False  # shared by every problem this builder makes
-        self.weights = weights
-        inf = math.inf
-        limits = options.velocity_limits
-        m_max = options.grasp_speed_max if limits else inf
-        self._x_min = np.r_[leader.q_min if leader_bounds else np.full(n_l, -inf),
-                            follower.q_min]
-        self._x_max = np.r_[leader.q_max if leader_bounds else np.full(n_l, inf),
-                            follower.q_max]
-        self._v_max = np.r_[leader.qd_max if leader_bounds and limits else np.full(n_l, inf),
-                            follower.qd_max if limits else np.full(n_f, inf),
-                            np.full(k, m_max)]
-        self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
-        self._surfaces = [surface] + ([] if task.leader_surface is None
-                                      else [task.leader_surface])
+        self.carry = CarryModel(leader, task.surface, task.H1, task.leader_surface)
+        self.layout = Layout(n_l, n_f, self.carry.n_grasp)
+        self.path_task = ObjectPathTask(1.0 / options.dt if leader_gain is None
+                                        else leader_gain)
+        self.closure_task = GraspClosureTask(float(options.correction_gain or 0.0),
+                                             exact_orientation=options.exact_orientation)
+        self.tasks: tuple[Task, ...] = (self.path_task, self.closure_task)
+        self.cost = CentringCost(self.layout, options, leader_ranges=leader_bounds)
+        setup = LimitSetup(task, options, self.layout, leader_bounds)
+        self.limits: tuple[Limit, ...] = (*standard_limits(setup), *limits)
+        lay = self.layout
+        ranged = np.ones(lay.n, dtype=bool)
+        ranged[lay.leader] = leader_bounds
+        self._ranged = ranged
+        self._q_min = np.r_[leader.q_min, follower.q_min]
+        self._q_max = np.r_[leader.q_max, follower.q_max]
+        v = np.full(lay.n, np.inf)
+        if options.velocity_limits:
+            v[lay.follower] = follower.qd_max
+            v[lay.grasps] = options.grasp_speed_max
+            if leader_bounds:
+                v[lay.leader] = leader.qd_max
+        self._v_max = v
+        self._surfaces: list[GraspSurface] = [task.surface] + (
+            [] if task.leader_surface is None else [task.leader_surface])
         self._contact = task.contact
+        self._zeros = np.zeros(lay.n)
+        self._no_rows = np.zeros((0, lay.n))
+        self._no_rhs = np.zeros(0)
+        self._labels = tuple(limit.name for limit in self.limits)
+
+    # -- what the controller and the reports read -----------------------------------------
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the decision variables (the layout's)."""
+        return self.layout.names
+
+    @property
+    def n_l(self) -> int:
+        """Leader joints."""
+        return self.layout.n_l
+
+    @property
+    def n_f(self) -> int:
+        """Follower joints."""
+        return self.layout.n_f
+
+    @property
+    def n_grasp(self) -> int:
+        """Sliding grasps."""
+        return self.layout.n_grasp
+
+    @property
+    def n(self) -> int:
+        """Length of the decision vector."""
+        return self.layout.n
 
     @property
     def speed_limits(self) -> FloatArray:
-        """Speed limit of every decision variable [rad/s, m/s] (``inf``: none)."""
+        """Speed limit of every decision variable [rad/s, m/s] (``inf``: none imposed)."""
         return self._v_max
 
+    @property
+    def leader_gain(self) -> float:
+        """Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``."""
+        return self.path_task.gain
+
+    @leader_gain.setter
+    def leader_gain(self, value: float) -> None:
+        self.path_task.gain = float(value)
+
+    @property
+    def row_limits(self) -> tuple[str, ...]:
+        """Names of the limits that give general rows (what the pairing check reads)."""
+        return tuple(limit.name for limit in self.limits if limit.gives_rows)
+
+    # -- the step -----------------------------------------------------------------------
+    def context(self, state: DualArmState, *, scale_max: float = 1.0,
+                x_applied: FloatArray | None = None) -> tuple[StepContext, float]:
+        """Return the step's context at ``state`` (the kinematics, once) and a support's push.
+
+        Returns
+        -------
+        context : StepContext
+        support_force : float
+            Follower push ``h`` [N] of a Case 2 support (NaN for a grasp).
+        """
+        sigma, sigma_l = state.sigma, state.sigma_leader
+        kin = self.carry.update(state.q_l, sigma, sigma_l)
+        support_force = math.nan
+        if self._contact is not None:
+            kin, support_force = self._support(self._contact, kin, state)
+        T_f, J_f = self.task.follower.fk_jacobian(state.q_f)
+        e_l = pose_error(self.task.trajectory.pose(state.t), kin.T_object)
+        e_c = pose_error(kin.T_target, T_f)
+        lay, dt = self.layout, self.options.dt
+        positions = lay.join(state.q_l, state.q_f, sigma, sigma_l)
+        lo = np.empty(lay.n)
+        hi = np.empty(lay.n)
+        q = positions[lay.joints]  # finite: no inf - inf below
+        lo[lay.joints] = (self._q_min - q) / dt
+        hi[lay.joints] = (self._q_max - q) / dt
+        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:lay.n_grasp],
+                                          strict=True)):
+            rho_min, rho_max = grasp_rate_range(surf.point(s), surf.tangent(s), surf.r_min,
+                                                surf.r_max, dt)
+            j = lay.grasps.start + i
+            lo[j] = max(rho_min, (surf.sigma_min - s) / dt)
+            hi[j] = min(rho_max, (surf.sigma_max - s) / dt)
+        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T_f, J_f,
+                          tuple(self._surfaces), positions, lo, hi,
+                          self._zeros if x_applied is None else x_applied, e_l, e_c)
+        return ctx, support_force
+
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
-              x_prev: FloatArray | None = None) -> StepBuild:
+              x_prev: FloatArray | None = None,
+              x_applied: FloatArray | None = None) -> StepBuild:
         """Build the step problem for ``state``.
 
         Parameters
@@ -323,7 +273,10 @@ class StepBuilder:
         scale_max : float
             Share in [0, 1] of the path's feed-forward twist (1: full speed).
         x_prev : ndarray, optional
-            Previous step's solution (warm start).
+            Previous step's solution (warm start only).
+        x_applied : ndarray, optional
+            The last command applied [rad/s, m/s] (acceleration limits); default zero
+            (at rest).
 
         Raises
         ------
@@ -333,61 +286,54 @@ class StepBuilder:
             A supporting follower (Case 2) would have to pull at this state.
         """
         t0 = time.perf_counter()
-        task, opts = self.task, self.options
-        n_l, n_f, n = self.n_l, self.n_f, self.n
-        sigma, sigma_l = state.sigma, state.sigma_leader
-        kin = self.carry.update(state.q_l, sigma, sigma_l)
-        support_force = math.nan
-        if self._contact is not None:
-            kin, support_force = self._support(self._contact, kin, state)
-        T_f, J_f = task.follower.fk_jacobian(state.q_f)
-        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(J_f))
+        ctx, support_force = self.context(state, scale_max=scale_max, x_applied=x_applied)
+        kin = ctx.carry
+        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(ctx.J_f))
         t1 = time.perf_counter()
 
-        dt = opts.dt
-        traj = task.trajectory
-        e_l = pose_error(traj.pose(state.t), kin.T_object)
-        e_c = pose_error(kin.T_target, T_f)
-        A = np.zeros((12, n))
-        b = np.empty(12)
-        grasps = slice(n_l + n_f, n)
-        # Leader task: the object frame follows D(t).
-        A[:6, :n_l] = kin.J_object[:, :n_l]
-        A[:6, grasps] = kin.J_object[:, n_l:]
-        b[:6] = scale_max * traj.twist(state.t) + self.leader_gain * e_l
-        # Closure: the follower's tool moves with its target.
-        A[6:, :n_l] = -kin.J_target[:, :n_l]
-        A[6:, n_l:n_l + n_f] = J_f
-        A[6:, grasps] = -kin.J_target[:, n_l:]
-        if not opts.exact_orientation:
-            A[9:, n_l + n_f] = 0.0  # the paper's frozen orientation of the follower's grasp
-        b[6:] = float(opts.correction_gain or 0.0) * e_c
+        eqs = [task.equality(ctx) for task in self.tasks]
+        A = np.vstack([e.A for e in eqs])
+        b = np.concatenate([e.b for e in eqs])
         if not (np.isfinite(A).all() and np.isfinite(b).all()):
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
-
-        # Eqs. 34-36 for the joints; Eqs. 30-33 for the grasps, also kept inside their
-        # paths' own ranges; Eqs. 39-40 for the centres.
-        lo = np.empty(n)
-        hi = np.empty(n)
-        q = np.concatenate((state.q_l, state.q_f))  # finite: no inf - inf below
-        lo[:n_l + n_f] = (self._x_min - q) / dt
-        hi[:n_l + n_f] = (self._x_max - q) / dt
-        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:self.n_grasp],
-                                          strict=True)):
-            r2 = surf.point(s)
-            rho_min, rho_max = grasp_rate_range(r2, surf.tangent(s), surf.r_min, surf.r_max, dt)
-            lo[n_l + n_f + i] = max(rho_min, (surf.sigma_min - s) / dt)
-            hi[n_l + n_f + i] = min(rho_max, (surf.sigma_max - s) / dt)
-        lower, upper, center, recovering = clip_rates(lo, hi, self._v_max,
-                                                      opts.recovery_fraction)
-        horizon = opts.centre_horizon or dt
-        if horizon != dt:  # the centre rates were computed for dt
-            center = center * (dt / horizon)
-        problem = StepProblem(A, b, self.weights, center, lower, upper,
-                              n_grasp=self.n_grasp, names=self.names, x_prev=x_prev)
+        cost = self.cost.quadratic(ctx)
+        lay = self.layout
+        lower = np.full(lay.n, -np.inf)
+        upper = np.full(lay.n, np.inf)
+        lo_by = np.full(lay.n, -1)
+        up_by = np.full(lay.n, -1)
+        G_parts: list[FloatArray] = []
+        h_parts: list[FloatArray] = []
+        row_names: list[str] = []
+        for k, limit in enumerate(self.limits):
+            c = limit.constraint(ctx)
+            if c.lower is not None:
+                tighter = c.lower > lower
+                lo_by[tighter] = k
+                lower = np.where(tighter, c.lower, lower)
+            if c.upper is not None:
+                tighter = c.upper < upper
+                up_by[tighter] = k
+                upper = np.where(tighter, c.upper, upper)
+            if c.G is not None and c.h is not None and len(c.h):
+                G_parts.append(np.atleast_2d(c.G))
+                h_parts.append(np.atleast_1d(c.h))
+                row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
+                                                   for i in range(len(c.h))]
+        labels = self._labels
+        problem = StepProblem(
+            A, b, cost.weights, cost.center, lower, upper,
+            G=np.vstack(G_parts) if G_parts else self._no_rows,
+            h=np.concatenate(h_parts) if h_parts else self._no_rhs,
+            n_grasp=lay.n_grasp, names=lay.names, row_names=tuple(row_names),
+            eq_names=tuple(name for e in eqs for name in e.names), x_prev=x_prev,
+            lower_by=tuple(labels[i] if i >= 0 else "" for i in lo_by.tolist()),
+            upper_by=tuple(labels[i] if i >= 0 else "" for i in up_by.tolist()))
+        recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
-        return StepBuild(problem, recovering, e_c, e_l, kin, T_f, J_f, sigma_min,
-                         t1 - t0, t2 - t1, support_force)
+        object.__setattr__(problem, "build_time", t2 - t0)
+        return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, kin,
+                         ctx.T_f, ctx.J_f, sigma_min, t1 - t0, t2 - t1, support_force, ctx)
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> tuple[CarryKinematics, float]:
@@ -417,3 +363,6 @@ class StepBuilder:
             kin = self.carry.update(state.q_l, state.sigma, state.sigma_leader)
         self._surfaces[0] = line
         return kin, contact.force(line, state.sigma)
+
+
+__all__ = ["StepBuild", "StepBuilder", "smallest_singular_value"]

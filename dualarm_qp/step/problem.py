@@ -1,65 +1,107 @@
-"""The step problem: the data one controller step hands to a solver.
+"""The step problem: the value one controller step hands to a solver.
 
-A step problem is a value, built once per control step by pure functions
-(:mod:`dualarm_qp.step.build`) and handed unchanged to any solver in the registry.
-It knows nothing of robots: only the linear algebra of Eqs. 25 and 33-40 of the paper.
+A step problem is built once per control step by the builder
+(:mod:`dualarm_qp.step.build`), which stacks the step's parts (tasks, a cost, limits),
+and is handed unchanged to any solver in the registry. It knows nothing of robots:
+only the linear algebra of one step.
 
 Find ``x`` (both arms' joint rates [rad/s] followed by the grasp sliding speeds [m/s],
-see :mod:`dualarm_qp.step.build`) that minimises the weighted distance to the centre of
-the admissible ranges,
+see :class:`~dualarm_qp.step.layout.Layout`) that
 
-    minimise    (x - center)^T diag(weights) (x - center)          (Eq. 37)
-    subject to  A x = b                                             (Eq. 25)
-                lower <= x <= upper                                 (Eqs. 33-34)
+    minimises   (x - center)^T W (x - center)                        (Eq. 37)
+    subject to  A x = s b                                             (Eqs. 14, 25)
+                lower <= x <= upper                                   (boxes: Eqs. 33-36)
+                G x <= h                                              (rows)
 
-with the object's path and the grasp closure as the equality rows.
-The last ``n_grasp`` variables are grasp sliding speeds; the fixed-grasp method of
-Zheng and Luh holds them at zero.
+``W`` is ``diag(weights)``, or ``weights`` itself when it is a full symmetric positive
+definite matrix. ``s`` is the task scale of the infeasible-step policy: it multiplies
+the whole right-hand side, feedback included (at ``s = 0`` the step holds still and
+corrects nothing); ``s = 1`` is the full task, ``A x = b``.
+
+The problem converts to and from :class:`qpsolvers.Problem` (:meth:`StepProblem.to_qpsolvers`,
+:meth:`StepProblem.from_qpsolvers`), the exchange value of the QP backends.
 """
 
 from __future__ import annotations
 
 import math
 import operator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
+if TYPE_CHECKING:
+    import qpsolvers
+
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True)
+class Inequalities:
+    """Every finite inequality of a problem as rows ``C x <= e`` (unit-norm rows).
+
+    Attributes
+    ----------
+    C : ndarray, shape (k, n)
+        Upper boxes (``+e_i``), lower boxes (``-e_i``), then the general rows, each
+        divided by its Euclidean norm (rows of zeros are kept as they are).
+    e : ndarray, shape (k,)
+        Right-hand sides in the same units (of ``x``).
+    labels : tuple of str
+        One name per row (``"qf4 upper (joint speed)"``, ``"wall"``).
+    kind : ndarray of int, shape (k,)
+        ``+1`` upper box, ``-1`` lower box, ``0`` general row.
+    index : ndarray of int, shape (k,)
+        The variable (boxes) or the row of ``G`` (general rows).
+    """
+
+    C: FloatArray
+    e: FloatArray
+    labels: tuple[str, ...]
+    kind: NDArray[np.int8]
+    index: NDArray[np.intp]
+
+
+@dataclass(frozen=True)
 class StepProblem:
-    """Equality-constrained, box-bounded weighted least-distance problem of one step.
+    """One step: an equality, boxes, general rows and a weighted least-distance cost.
 
     Parameters
     ----------
     A : ndarray, shape (m, n)
-        Equality matrix (Eqs. 14 and 25-27: m = 12 for a controller step).
+        Equality matrix (12 rows for a controller step: the object's path, the closure).
     b : ndarray, shape (m,)
-        Right-hand side [m/s; rad/s], feedback terms included.
-    weights : ndarray, shape (n,)
-        Diagonal of the positive definite weighting matrix ``S`` (Eq. 37).
+        Right-hand side of the full task (``s = 1``) [m/s; rad/s].
+    weights : ndarray, shape (n,) or (n, n)
+        The weighting matrix ``W`` of Eq. 37: its diagonal, or the whole symmetric
+        positive definite matrix.
     center : ndarray, shape (n,)
-        Centre of the admissible ranges ``dqhat_c`` (Eqs. 38-40) [rad/s, m/s].
+        Centre of the cost ``dqhat_c`` (Eqs. 38-40) [rad/s, m/s].
     lower, upper : ndarray, shape (n,)
-        Hard bounds on ``x`` (Eqs. 33-34, intersected with velocity limits).
-        ``lower[i] > upper[i]`` is allowed and means that bound ``i`` is empty:
-        solvers report the step as infeasible.
+        Boxes on ``x`` (may be infinite). ``lower[i] > upper[i]`` means an empty box:
+        solvers report the step infeasible.
+    G : ndarray, shape (p, n), optional
+        General inequality rows ``G x <= h`` (default: none).
+    h : ndarray, shape (p,), optional
+        Their right-hand side.
     n_grasp : int
         Number of trailing variables that are grasp sliding speeds (default 1).
     x_prev : ndarray, shape (n,), optional
-        Solution of the previous step, for warm starts.
+        A warm start (the previous step's answer), never a constraint.
     names : tuple of str, optional
-        Variable names used in reports (default ``x1..xn``).
-    task_scale_max : float
-        Largest allowed scale of ``b`` (1.0: the full task). Solvers that scale the
-        task search ``s`` in ``[0, task_scale_max]``.
+        Variable names (default ``x1..xn``).
+    row_names : tuple of str, optional
+        Names of the rows of ``G`` (default ``row1..rowp``).
+    eq_names : tuple of str, optional
+        Names of the equality rows (default ``eq1..eqm``).
+    lower_by, upper_by : tuple of str, optional
+        The limit that set each variable's lower and upper bound (for messages).
     build_time : float
-        Seconds spent building this problem (filled by the builder).
+        Seconds the builder spent assembling this problem.
     """
 
     A: FloatArray
@@ -68,50 +110,87 @@ class StepProblem:
     center: FloatArray
     lower: FloatArray
     upper: FloatArray
+    # Typed as arrays: None (the default) becomes an empty array in __post_init__.
+    G: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    h: FloatArray = field(default_factory=lambda: np.zeros(0))
     n_grasp: int = 1
     x_prev: FloatArray | None = None
-    names: tuple[str, ...] = field(default=())
-    task_scale_max: float = 1.0
+    names: tuple[str, ...] = ()
+    row_names: tuple[str, ...] = ()
+    eq_names: tuple[str, ...] = ()
+    lower_by: tuple[str, ...] = ()
+    upper_by: tuple[str, ...] = ()
     build_time: float = 0.0
+    _cache: dict[str, Any] = field(default_factory=dict, init=False, compare=False,
+                                   repr=False)
 
     def __post_init__(self) -> None:
         A = np.asarray(self.A, dtype=np.float64)
         if A.ndim != 2:
             raise ShapeError("A", (-1, -1), A.shape)
         m, n = A.shape
-        object.__setattr__(self, "A", A)
-        for name, shape in (("b", (m,)), ("weights", (n,)), ("center", (n,)),
-                            ("lower", (n,)), ("upper", (n,))):
+        set_ = object.__setattr__
+        set_(self, "A", A)
+        for name, shape in (("b", (m,)), ("center", (n,)), ("lower", (n,)),
+                            ("upper", (n,))):
             arr = np.asarray(getattr(self, name), dtype=np.float64)
             if arr.shape != shape:
                 raise ShapeError(name, shape, arr.shape)
-            object.__setattr__(self, name, arr)
+            set_(self, name, arr)
+        w = np.asarray(self.weights, dtype=np.float64)
+        if w.shape not in ((n,), (n, n)):
+            raise ShapeError("weights", (n,), w.shape)
+        set_(self, "weights", w)
+        G = np.asarray(self.G, dtype=np.float64)
+        if G.size == 0:
+            G = np.zeros((0, n))
+        if G.ndim != 2 or G.shape[1] != n:
+            raise ShapeError("G", (-1, n), G.shape)
+        h = np.asarray(self.h, dtype=np.float64)
+        if h.shape != (G.shape[0],):
+            raise ShapeError("h", (G.shape[0],), h.shape)
+        set_(self, "G", G)
+        set_(self, "h", h)
         if self.x_prev is not None:
             xp = np.asarray(self.x_prev, dtype=np.float64)
             if xp.shape != (n,):
                 raise ShapeError("x_prev", (n,), xp.shape)
-            object.__setattr__(self, "x_prev", xp)
+            set_(self, "x_prev", xp)
         # One sum per array: NaN and infinity propagate through it; only a sum that is
         # not finite needs the element-wise look (an overflow of huge finite entries
         # passes it).
-        for name in ("A", "b", "weights", "center"):
+        for name in ("A", "b", "weights", "center", "G"):
             arr = getattr(self, name)
             if not math.isfinite(float(arr.sum())) and not np.isfinite(arr).all():
                 raise NonFiniteError(name)
-        # Bounds may be infinite (no limit) but never NaN.
-        for name in ("lower", "upper"):
+        # Bounds and row right-hand sides may be infinite (no limit) but never NaN.
+        for name in ("lower", "upper", "h"):
             arr = getattr(self, name)
             if math.isnan(float(arr.sum())) and np.isnan(arr).any():
                 raise NonFiniteError(name)
-        if n and not float(self.weights.min()) > 0.0:
-            raise InvalidInputError("weights must be strictly positive")
+        if n:
+            if w.ndim == 1:
+                if not float(w.min()) > 0.0:
+                    raise InvalidInputError("weights must be strictly positive")
+            elif not np.allclose(w, w.T, rtol=1e-12, atol=0.0):
+                raise InvalidInputError("a full weighting matrix must be symmetric")
         if not 0 <= self.n_grasp <= n:
             raise InvalidInputError(f"n_grasp must be in [0, {n}], got {self.n_grasp}")
-        if not self.names:
-            object.__setattr__(self, "names", tuple(f"x{i + 1}" for i in range(n)))
-        elif len(self.names) != n:
-            raise ShapeError("names", (n,), (len(self.names),))
+        for name, count, prefix in (("names", n, "x"), ("row_names", G.shape[0], "row"),
+                                    ("eq_names", m, "eq")):
+            given = getattr(self, name)
+            if not given:
+                set_(self, name, tuple(f"{prefix}{i + 1}" for i in range(count)))
+            elif len(given) != count:
+                raise ShapeError(name, (count,), (len(given),))
+        for name in ("lower_by", "upper_by"):
+            given = getattr(self, name)
+            if not given:
+                set_(self, name, ("",) * n)
+            elif len(given) != n:
+                raise ShapeError(name, (n,), (len(given),))
 
+    # -- sizes ---------------------------------------------------------------------------
     @property
     def n(self) -> int:
         """Number of variables."""
@@ -119,16 +198,172 @@ class StepProblem:
 
     @property
     def m(self) -> int:
-        """Number of equality constraints."""
+        """Number of equality rows."""
         return int(self.A.shape[0])
 
-    def objective(self, x: FloatArray) -> float:
-        """Value of Eq. 37, ``(x - c)^T S (x - c)``, at ``x``."""
-        # Python floats: for a handful of variables cheaper than three numpy calls.
-        d = list(map(operator.sub, np.asarray(x, dtype=np.float64).tolist(),
-                     self.center.tolist()))
-        return float(sum(map(operator.mul, self.weights.tolist(), map(operator.mul, d, d))))
+    @property
+    def p(self) -> int:
+        """Number of general inequality rows."""
+        return int(self.G.shape[0])
 
+    @property
+    def diagonal_cost(self) -> bool:
+        """Whether ``W`` is diagonal (given by its diagonal)."""
+        return self.weights.ndim == 1
+
+    # -- the right-hand side and the cost -------------------------------------------------
+    def scaled(self, scale: float, *, x_prev: FloatArray | None = None) -> StepProblem:
+        """Return the problem whose full task is this one's at task scale ``scale``.
+
+        Its right-hand side is ``scale b``; ``x_prev`` replaces the warm start when given.
+        """
+        return replace(self, b=scale * self.b,
+                       x_prev=self.x_prev if x_prev is None else x_prev)
+
+    def weight_matrix(self) -> FloatArray:
+        """``W`` as an ``n x n`` matrix."""
+        return np.diag(self.weights) if self.weights.ndim == 1 else self.weights
+
+    def cost_root(self) -> FloatArray:
+        """``R`` with ``R^T R = W`` (so that Eq. 37 is ``|R (x - c)|^2``), ``n x n``.
+
+        ``diag(sqrt(w))`` for a diagonal cost, the upper Cholesky factor otherwise.
+
+        Raises
+        ------
+        InvalidInputError
+            A full weighting matrix that is not positive definite.
+        """
+        root = self._cache.get("root")
+        if root is None:
+            if self.weights.ndim == 1:
+                root = np.diag(np.sqrt(self.weights))
+            else:
+                try:
+                    root = np.linalg.cholesky(self.weights).T
+                except np.linalg.LinAlgError as err:
+                    raise InvalidInputError(
+                        "the weighting matrix is not positive definite") from err
+            self._cache["root"] = root
+        return np.asarray(root)
+
+    def gradient(self, x: FloatArray) -> FloatArray:
+        """``W (x - c)``, half the gradient of Eq. 37 at ``x``."""
+        d = np.asarray(x, dtype=np.float64) - self.center
+        return self.weights * d if self.weights.ndim == 1 else self.weights @ d
+
+    def objective(self, x: FloatArray) -> float:
+        """Value of Eq. 37, ``(x - c)^T W (x - c)``, at ``x``."""
+        if self.weights.ndim == 2:
+            d = np.asarray(x, dtype=np.float64) - self.center
+            return float(d @ self.weights @ d)
+        # Python floats: for a handful of variables cheaper than three numpy calls.
+        diff = list(map(operator.sub, np.asarray(x, dtype=np.float64).tolist(),
+                        self.center.tolist()))
+        return float(sum(map(operator.mul, self.weights.tolist(),
+                             map(operator.mul, diff, diff))))
+
+    # -- the inequalities ----------------------------------------------------------------
     def empty_bounds(self) -> tuple[str, ...]:
         """Names of the variables whose box is empty (``lower > upper``)."""
         return tuple(self.names[i] for i in np.flatnonzero(self.lower > self.upper))
+
+    def has_empty_box(self) -> bool:
+        """Whether some variable's box is empty (``lower > upper``)."""
+        return bool((self.lower > self.upper).any())
+
+    def bound_label(self, index: int, upper: bool) -> str:
+        """Name of one bound with the limit that set it, e.g. ``"qf3 upper (joint speed)"``."""
+        side = "upper" if upper else "lower"
+        source = (self.upper_by if upper else self.lower_by)[index]
+        return f"{self.names[index]} {side}" + (f" ({source})" if source else "")
+
+    def inequalities(self) -> Inequalities:
+        """Every finite inequality as unit-norm rows ``C x <= e`` (computed once)."""
+        cached = self._cache.get("ineq")
+        if cached is not None:
+            return cached
+        n = self.n
+        up = np.flatnonzero(np.isfinite(self.upper))
+        lo = np.flatnonzero(np.isfinite(self.lower))
+        G, h = self.G, self.h
+        rows = np.flatnonzero(np.isfinite(h))
+        norms = np.linalg.norm(G[rows], axis=1) if rows.size else np.zeros(0)
+        safe = np.where(norms > 0.0, norms, 1.0)
+        eye = np.eye(n)
+        C = np.vstack([eye[up], -eye[lo], G[rows] / safe[:, None]])
+        e = np.concatenate([self.upper[up], -self.lower[lo], h[rows] / safe])
+        labels = (tuple(self.bound_label(int(i), True) for i in up)
+                  + tuple(self.bound_label(int(i), False) for i in lo)
+                  + tuple(self.row_names[int(i)] for i in rows))
+        kind = np.concatenate([np.ones(up.size), -np.ones(lo.size),
+                               np.zeros(rows.size)]).astype(np.int8)
+        index = np.concatenate([up, lo, rows]).astype(np.intp)
+        out = Inequalities(C, e, labels, kind, index)
+        self._cache["ineq"] = out
+        return out
+
+    def row_violation(self, x: FloatArray) -> float:
+        """Largest violation of a general row, ``max((G x - h) / |G_i|, 0)`` [units of x]."""
+        if not self.p:
+            return 0.0
+        G, h = self.G, self.h
+        norms = np.linalg.norm(G, axis=1)
+        gap = (G @ x - h) / np.where(norms > 0.0, norms, 1.0)
+        return float(max(0.0, float(np.nanmax(gap))))
+
+    # -- qpsolvers -----------------------------------------------------------------------
+    def to_qpsolvers(self, scale: float = 1.0) -> qpsolvers.Problem:
+        """Return the step at task scale ``scale`` as ``qpsolvers.Problem`` (in ``x``).
+
+        ``minimise 1/2 x^T P x + q^T x`` with ``P = 2 W`` and ``q = -2 W c`` (Eq. 37 up
+        to its constant), ``G x <= h``, ``A x = scale b``, ``lb <= x <= ub``.
+        """
+        import qpsolvers
+
+        P = 2.0 * self.weight_matrix()
+        q = -P @ self.center
+        G, h = self.G, self.h
+        return qpsolvers.Problem(P, q, G=G if self.p else None, h=h if self.p else None,
+                                 A=self.A if self.m else None,
+                                 b=scale * self.b if self.m else None,
+                                 lb=self.lower, ub=self.upper)
+
+    @classmethod
+    def from_qpsolvers(cls, qp: qpsolvers.Problem, **fields: Any) -> StepProblem:
+        """Build a step problem from ``qpsolvers.Problem`` (dense data; ``P`` positive definite).
+
+        ``fields`` are further :class:`StepProblem` fields (``names``, ``n_grasp``, ...).
+
+        Raises
+        ------
+        InvalidInputError
+            ``P`` is not positive definite.
+        """
+        P = np.asarray(qp.P.toarray() if hasattr(qp.P, "toarray") else qp.P, dtype=float)
+        n = P.shape[0]
+        W = 0.25 * (P + P.T)  # P = 2 W
+        try:
+            np.linalg.cholesky(W)
+        except np.linalg.LinAlgError as err:
+            raise InvalidInputError("qpsolvers problem: P is not positive definite") from err
+        center = np.linalg.solve(W, -0.5 * np.asarray(qp.q, dtype=float))
+        diagonal = np.count_nonzero(W - np.diag(np.diag(W))) == 0
+        def dense(M: Any) -> FloatArray | None:
+            return None if M is None else np.asarray(
+                M.toarray() if hasattr(M, "toarray") else M, dtype=float)
+
+        A = dense(qp.A)
+        G = dense(qp.G)
+        inf = np.full(n, np.inf)
+        return cls(A=np.zeros((0, n)) if A is None else A,
+                   b=np.zeros(0) if qp.b is None else np.asarray(qp.b, dtype=float),
+                   weights=np.diag(W).copy() if diagonal else W, center=center,
+                   lower=-inf if qp.lb is None else np.asarray(qp.lb, dtype=float),
+                   upper=inf if qp.ub is None else np.asarray(qp.ub, dtype=float),
+                   G=np.zeros((0, n)) if G is None else G,
+                   h=np.zeros(0) if qp.h is None else np.asarray(qp.h, dtype=float),
+                   **fields)
+
+
+__all__ = ["Inequalities", "StepProblem"]

@@ -9,7 +9,7 @@ import pytest
 
 from dualarm_qp.errors import DualArmError, NonFiniteError, ShapeError
 from dualarm_qp.experiments import build_experiment, load_config
-from dualarm_qp.step.build import DualArmState
+from dualarm_qp.step.state import DualArmState
 
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_sliding_s7_100.yaml"
 

@@ -11,8 +11,9 @@ from dualarm_qp.control import controller as controller_module
 from dualarm_qp.control.controller import DualArmController
 from dualarm_qp.solvers import get_solver
 from dualarm_qp.solvers.base import Status, StepSolution, Tolerance, verify
-from dualarm_qp.step.build import DualArmState, StepOptions
+from dualarm_qp.step.options import StepOptions
 from dualarm_qp.step.problem import StepProblem
+from dualarm_qp.step.state import DualArmState
 from dualarm_qp.task.scene import DualArmTask
 from dualarm_qp.task.surfaces import PlaneBar
 from dualarm_qp.task.trajectory import LinearTrajectory

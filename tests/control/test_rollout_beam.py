@@ -12,8 +12,8 @@ from dualarm_qp.control.rollout import rollout
 from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.solvers import available_solvers, get_solver
-from dualarm_qp.step.build import DualArmState
 from dualarm_qp.step.problem import StepProblem
+from dualarm_qp.step.state import DualArmState
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

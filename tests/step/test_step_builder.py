@@ -10,7 +10,9 @@ from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError, NonFiniteError
 from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.bounds import rate_bounds
-from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions
+from dualarm_qp.step.build import StepBuilder
+from dualarm_qp.step.options import StepOptions
+from dualarm_qp.step.state import DualArmState
 from dualarm_qp.task.scene import DualArmTask
 from dualarm_qp.task.surfaces import CurvedBar, PlaneBar
 from dualarm_qp.task.trajectory import LinearTrajectory

@@ -22,7 +22,9 @@ from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError, LimitsError
 from dualarm_qp.experiments.config import load_config
 from dualarm_qp.experiments.setup import Experiment, build_experiment
-from dualarm_qp.step.build import DualArmState, StepBuilder, StepOptions
+from dualarm_qp.step.build import StepBuilder
+from dualarm_qp.step.options import StepOptions
+from dualarm_qp.step.state import DualArmState
 from dualarm_qp.task import (
     CurvedBar,
     CylinderSurface,

@@ -9,7 +9,7 @@ import urllib.request
 import pytest
 
 from dualarm_qp.errors import InvalidInputError
-from dualarm_qp.step.build import DualArmState
+from dualarm_qp.step.state import DualArmState
 from dualarm_qp.viz import LiveView
 
 

@@ -1,0 +1,205 @@
+"""The largest feasible task scale of a step: an exact small linear program (private).
+
+For a right-hand side that moves along a line, ``A x = base + s direction``, find the
+largest ``s`` in ``[0, cap]`` for which some ``x`` meets every box and row of the
+step. The policy asks it with ``base = 0`` and ``direction = b`` (the task scale,
+:func:`max_task_scale`).
+
+Every solution of the equality is ``x = x_b + s x_d + N t`` (one truncated SVD of
+``A``, :func:`~._affine.factor`), so the problem is an LP in ``(t, s)``, a handful of
+variables, with one row per finite bound and general row:
+
+    maximise s   subject to   M t + a s <= g,   s_lo <= s <= s_hi.
+
+It is solved through its dual, ``min g^T y + s_hi y_hi - s_lo y_lo`` subject to
+``M^T y = 0``, ``a^T y + y_hi - y_lo = 1``, ``y >= 0``: a standard-form LP with only
+``d + 1`` equality rows, which always has the feasible basis ``y_hi = 1`` (with ``d``
+artificial columns held at zero). A revised primal simplex on it with Bland's rule
+(the smallest index enters; among ties of the ratio test the smallest index leaves)
+cannot cycle, so it is finite and exact up to the rounding of its
+``(d + 1) x (d + 1)`` basis solves. Its simplex multipliers are ``(t, s)`` itself; a
+dual ray (no blocking row) proves that no ``(t, s)`` exists. No scipy LP, no time
+limit.
+
+When ``A`` is rank-deficient (at :data:`~._affine.RANK_RTOL`) and ``direction`` has a
+part outside its range, only the one ``s`` that cancels that part can be feasible
+(usually ``s = 0``): the scale is then limited by **rank**, not by a bound
+(:attr:`TaskScale.rank_limited`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..step.problem import StepProblem
+from ._affine import CONSISTENCY_TOL, factor
+
+FloatArray = NDArray[np.float64]
+
+#: A largest feasible task scale at least ``1 - FEASIBLE_SCALE_TOL`` is the full task:
+#: the one constant by which every caller decides "the full task is feasible". The
+#: residual it leaves, ``FEASIBLE_SCALE_TOL |b_ff|``, is far below the 1e-7 of the
+#: verification tolerance.
+FEASIBLE_SCALE_TOL = 1e-9
+
+#: Reduced costs (primal slacks) above ``-PRICE_TOL (1 + |g_j|)`` count as met.
+PRICE_TOL = 1e-12
+
+#: Pivot elements below this share of the column's largest entry are never pivoted on.
+PIVOT_TOL = 1e-11
+
+
+@dataclass(frozen=True)
+class TaskScale:
+    """Largest feasible scale of a task.
+
+    Attributes
+    ----------
+    scale : float or None
+        The largest ``s`` in ``[0, cap]`` with a feasible ``x``; None when no ``s``
+        in ``[0, cap]`` has one.
+    x : ndarray or None
+        A feasible point at ``s = scale`` (clipped to the box).
+    blocking : tuple of str
+        The bounds and rows that stop ``s`` from growing (at ``scale < cap``), or, when
+        ``scale`` is None, rows that admit no common point.
+    rank_limited : bool
+        ``direction`` has a part outside the numerical range of ``A``: the scale is held
+        by the rank of the step, not by a bound.
+    """
+
+    scale: float | None
+    x: FloatArray | None
+    blocking: tuple[str, ...]
+    rank_limited: bool = False
+
+    @property
+    def full(self) -> bool:
+        """Whether the full task (``s = 1``) is feasible (to :data:`FEASIBLE_SCALE_TOL`)."""
+        return self.scale is not None and self.scale >= 1.0 - FEASIBLE_SCALE_TOL
+
+
+def max_task_scale(problem: StepProblem, cap: float = 1.0) -> TaskScale:
+    """Largest ``s`` in ``[0, cap]`` with ``A x = s b`` inside every limit."""
+    return max_scale(problem, np.zeros(problem.m), problem.b, cap)
+
+
+def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
+              cap: float = 1.0) -> TaskScale:
+    """Largest ``s`` in ``[0, cap]`` such that ``A x = base + s direction`` meets the limits.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        Supplies ``A``, the boxes and the rows (its own ``b`` is not read).
+    base, direction : ndarray, shape (m,)
+        The right-hand side at ``s = 0`` and its rate of change [m/s; rad/s].
+    cap : float
+        Largest scale of interest.
+
+    Returns
+    -------
+    TaskScale
+    """
+    if problem.has_empty_box():
+        return TaskScale(None, None, problem.empty_bounds())
+    A = problem.A
+    f = factor(A)
+    x_b, x_d = f.solve(base), f.solve(direction)
+    s_lo, s_hi = 0.0, float(cap)
+    rank_limited = False
+    if f.rank < problem.m:
+        r_b, r_d = base - A @ x_b, direction - A @ x_d
+        tol_b = CONSISTENCY_TOL * max(1.0, float(np.abs(base).max(initial=0.0)),
+                                      _size(f, x_b))
+        tol_d = CONSISTENCY_TOL * max(1.0, float(np.abs(direction).max(initial=0.0)),
+                                      _size(f, x_d))
+        if float(np.abs(r_d).max(initial=0.0)) > tol_d:
+            rank_limited = True
+            s_fix = -float(r_b @ r_d) / float(r_d @ r_d)
+            if (float(np.abs(r_b + s_fix * r_d).max()) > tol_b + s_fix * tol_d
+                    or not -FEASIBLE_SCALE_TOL <= s_fix <= cap + FEASIBLE_SCALE_TOL):
+                return TaskScale(None, None, (), rank_limited=True)
+            s_lo = s_hi = min(max(s_fix, 0.0), cap)
+        elif float(np.abs(r_b).max(initial=0.0)) > tol_b:
+            return TaskScale(None, None, ())  # the feedback alone is out of reach
+    ineq = problem.inequalities()
+    C, e = ineq.C, ineq.e
+    N = f.N
+    M = C @ N
+    a = C @ x_d
+    g = e - C @ x_b
+    found = _lp(M, a, g, s_lo, s_hi)
+    if found is None:
+        return TaskScale(None, None, (), rank_limited=rank_limited)
+    ok, t, s, rows = found
+    labels = tuple(dict.fromkeys(ineq.labels[i] for i in rows))
+    if not ok:
+        return TaskScale(None, None, labels, rank_limited=rank_limited)
+    s = min(max(s, s_lo), s_hi)
+    x = np.clip(x_b + s * x_d + N @ t, problem.lower, problem.upper)
+    blocking = labels if s < cap - FEASIBLE_SCALE_TOL else ()
+    return TaskScale(s, x, blocking, rank_limited=rank_limited)
+
+
+def _size(f: object, x: FloatArray) -> float:
+    sigma = getattr(f, "sigma")  # noqa: B009  (a Factor)
+    return float(sigma[0]) * float(np.abs(x).max(initial=0.0)) if sigma.size else 0.0
+
+
+def _lp(M: FloatArray, a: FloatArray, g: FloatArray, s_lo: float, s_hi: float
+        ) -> tuple[bool, FloatArray, float, list[int]] | None:
+    """Maximise ``s`` s.t. ``M t + a s <= g``, ``s_lo <= s <= s_hi`` (see the module docs).
+
+    Returns ``(feasible, t, s, rows)``: at the optimum, the rows of the final basis
+    (the active rows that hold ``s``); when infeasible, the rows of the dual ray. None
+    when the iteration limit is reached (never seen; reported, not guessed).
+    """
+    k, d = M.shape
+    # Columns: 0..k-1 the rows, k the cap (s <= s_hi), k+1 the floor (-s <= -s_lo),
+    # then d artificial columns (held at zero).
+    E = np.zeros((d + 1, k + 2 + d))
+    E[:d, :k] = M.T
+    E[d, :k] = a
+    E[d, k], E[d, k + 1] = 1.0, -1.0
+    E[:d, k + 2:] = np.eye(d)
+    cost = np.concatenate([g, [s_hi, -s_lo], np.zeros(d)])
+    real = k + 2
+    basis = [*range(k + 2, k + 2 + d), k]  # artificials, then the cap
+    y = np.zeros(d + 1)
+    y[d] = 1.0
+    slack_tol = PRICE_TOL * (1.0 + np.abs(cost[:real]))
+    for _ in range(50 * (k + d + 2)):
+        B = E[:, basis]
+        pi = np.linalg.solve(B.T, cost[basis])  # simplex multipliers = (t, s)
+        reduced = cost[:real] - E[:, :real].T @ pi
+        reduced[[j for j in basis if j < real]] = 0.0
+        entering = np.flatnonzero(reduced < -slack_tol)
+        if entering.size == 0:
+            rows = [j for j in basis if j < k]
+            return True, pi[:d], float(pi[d]), rows
+        q = int(entering[0])  # Bland: the smallest index enters
+        w = np.linalg.solve(B, E[:, q])
+        tiny = PIVOT_TOL * max(1.0, float(np.abs(w).max()))
+        leave, best = -1, np.inf
+        for pos, j in enumerate(basis):
+            if j >= real:  # an artificial, held at zero: any nonzero pivot blocks
+                ratio = 0.0 if abs(w[pos]) > tiny else np.inf
+            else:
+                ratio = max(y[pos], 0.0) / w[pos] if w[pos] > tiny else np.inf
+            # Bland: the smallest ratio leaves, the smallest index among ties.
+            if ratio < best or (ratio == best < np.inf and j < basis[leave]):
+                leave, best = pos, ratio
+        if leave < 0:  # a dual ray: no (t, s) meets every row
+            rows = [q] + [j for pos, j in enumerate(basis) if j < k and w[pos] < -tiny]
+            return False, np.zeros(d), 0.0, [j for j in rows if j < k]
+        y = y - best * w
+        y[leave] = best
+        basis[leave] = q
+    return None
+
+
+__all__ = ["FEASIBLE_SCALE_TOL", "TaskScale", "max_scale", "max_task_scale"]

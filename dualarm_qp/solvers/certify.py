@@ -1,0 +1,184 @@
+"""The one certification of a step's answer: feasibility, then optimality (KKT).
+
+Every solver returns a *claim*: a status and an ``x``. :func:`certify` is the only
+place that decides what the claim is worth, for every solver, with one feasibility
+tolerance and one optimality check:
+
+1. a non-finite or misshaped ``x`` is ERROR;
+2. the equality ``A x = b`` must hold to ``tol.equality * max(1, max |b|)`` of the
+   right-hand side the answer was asked for (the scaled one for a scaled task: the
+   policy hands the solver the scaled problem), except for a RELAXED answer, which
+   meets it in least squares by definition, and an ESCAPING move, which may leave it
+   within a share of the error budget (:mod:`dualarm_qp.control.escape`);
+3. every box and every (unit-norm) general row must hold to ``tol.bounds``;
+   a usable claim that breaks 2 or 3 is VIOLATION (the reference step, which ignores
+   the limits by design, is the common case);
+4. an OPTIMAL claim must pass the KKT conditions (:func:`kkt_holds`); one that does
+   not is FEASIBLE, never OPTIMAL. For the reference step (``claims_bounds=False``)
+   OPTIMAL means "the minimiser of Eq. 37 over ``A x = b``" and stationarity is
+   checked on the equality alone.
+
+The KKT check does not trust the solver's multipliers or its working set: the active
+set is read from ``x`` (every bound and row within :data:`ACTIVE_TOL` of binding, both
+sides of a zero-width box), and the multipliers are found by non-negative least
+squares of the projected stationarity condition
+
+    Z^T (W (x - c) + C_a^T mu) = 0,   mu >= 0
+
+on the null space ``Z`` of ``A`` (rank at :data:`~._affine.RANK_RTOL`). Non-negative
+least squares finds a valid multiplier vector whenever one exists, also on degenerate
+vertices where the minimum-norm multipliers have the wrong sign.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import nnls
+
+from ..step.problem import StepProblem
+from ._affine import problem_factor
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
+
+FloatArray = NDArray[np.float64]
+
+#: Distance (units of ``x``, rows unit-norm) within which a bound or row is active.
+ACTIVE_TOL = 1e-9
+
+#: Relative size of the projected gradient accepted as stationary.
+DUAL_TOL = 1e-9
+
+#: Rounding allowance of the stationarity check: a thousand ulps of the gradient's
+#: largest term ``w_i (x_i - c_i)`` (with a sliding weight of 1e9 one ulp of the
+#: sliding speed is already 1e-7 of gradient).
+ROUNDING = 1e3 * float(np.finfo(np.float64).eps)
+
+
+def residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float]:
+    """``(max |A x - b|, largest violation of a box or a unit-norm row)`` of ``x``."""
+    eq = float(np.abs(problem.A @ x - problem.b).max(initial=0.0))
+    box = float(max(0.0, float(np.max(problem.lower - x, initial=0.0)),
+                    float(np.max(x - problem.upper, initial=0.0))))
+    return eq, max(box, problem.row_violation(x))
+
+
+def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
+    """Largest ``|A x - b|`` component that meets the equality [m/s or rad/s]."""
+    return tol.equality * max(1.0, float(np.abs(problem.b).max(initial=0.0)))
+
+
+def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_TOLERANCE,
+            *, claims_bounds: bool = True) -> StepSolution:
+    """Check a solver's claim against ``problem`` and return what it is worth.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        The problem the answer was asked for.
+    claim : StepSolution
+        The solver's status and ``x``.
+    tol : Tolerance
+        The feasibility tolerances.
+    claims_bounds : bool
+        False for the paper's reference step, which ignores the limits: its breaches
+        are VIOLATION and its optimality is over the equality alone.
+
+    Returns
+    -------
+    StepSolution
+        A copy with the residuals, the objective, the active bounds and rows and
+        ``verified_with = tol``, and the status the certificate supports.
+    """
+    start = time.perf_counter()
+    n = problem.n
+    x = claim.x
+    status, message = claim.status, claim.message
+    if not (isinstance(x, np.ndarray) and x.shape == (n,)) or (
+            not math.isfinite(float(np.sum(x))) and not np.isfinite(x).all()):
+        zeros = np.zeros(n, dtype=bool)
+        return replace(claim, x=np.zeros(n), status=Status.ERROR if status.usable else status,
+                       objective=math.nan, eq_residual=math.nan, bound_violation=math.nan,
+                       active_lower=zeros, active_upper=zeros, verified_with=tol,
+                       build_time=problem.build_time,
+                       message=message or "solver returned a non-finite or misshaped x")
+    eq = float(np.abs(problem.A @ x - problem.b).max(initial=0.0))
+    gap_lo = problem.lower - x
+    gap_up = x - problem.upper
+    box = float(max(0.0, float(gap_lo.max(initial=0.0)), float(gap_up.max(initial=0.0))))
+    rows = problem.row_violation(x)
+    if status.usable:
+        limit = equality_limit(problem, tol)
+        if status is not Status.RELAXED and status is not Status.ESCAPING and eq > limit:
+            status = Status.VIOLATION
+            message = message or f"equality residual {eq:.3g} exceeds tolerance {limit:.3g}"
+        elif max(box, rows) > tol.bounds:
+            status = Status.VIOLATION
+            message = message or _worst_breach(problem, x, box >= rows, claims_bounds)
+        elif status is Status.OPTIMAL and not kkt_holds(problem, x, bounds=claims_bounds):
+            status = Status.FEASIBLE
+            message = "the optimality certificate (KKT) does not confirm the claimed optimum"
+    active_lo = gap_lo >= -ACTIVE_TOL
+    active_up = gap_up >= -ACTIVE_TOL
+    active_rows: tuple[str, ...] = ()
+    if problem.p:
+        ineq = problem.inequalities()
+        general = ineq.kind == 0
+        on = general & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
+        active_rows = tuple(ineq.labels[i] for i in np.flatnonzero(on))
+    return replace(claim, status=status, message=message, objective=problem.objective(x),
+                   eq_residual=eq, bound_violation=box, row_violation=rows,
+                   active_lower=active_lo, active_upper=active_up, active_rows=active_rows,
+                   build_time=problem.build_time, verified_with=tol,
+                   solve_time=claim.solve_time + (time.perf_counter() - start))
+
+
+def _worst_breach(problem: StepProblem, x: FloatArray, box: bool, claims_bounds: bool
+                  ) -> str:
+    """One line naming the worst broken box or row."""
+    tail = "" if claims_bounds else " (this method ignores the bounds)"
+    if box:
+        i = int(np.argmax(np.maximum(problem.lower - x, x - problem.upper)))
+        return (f"{problem.names[i]} = {x[i]:.6g} outside "
+                f"[{problem.lower[i]:.6g}, {problem.upper[i]:.6g}]{tail}")
+    norms = np.linalg.norm(problem.G, axis=1)
+    gap = (problem.G @ x - problem.h) / np.where(norms > 0.0, norms, 1.0)
+    j = int(np.nanargmax(gap))
+    return f"row {problem.row_names[j]} broken by {gap[j]:.3g}{tail}"
+
+
+def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bool:
+    """Whether ``x`` (feasible) satisfies the KKT conditions of the step QP.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        The step.
+    x : ndarray, shape (n,)
+        A point that meets the equality and (with ``bounds``) every limit.
+    bounds : bool
+        Include the boxes and rows (False: the minimiser over ``A x = b`` alone).
+    """
+    Z = problem_factor(problem).N
+    grad = problem.gradient(x)
+    g = Z.T @ grad
+    w = problem.weights if problem.diagonal_cost else np.abs(problem.weights).sum(axis=1)
+    dtol = (DUAL_TOL * max(1.0, float(np.abs(grad).max(initial=0.0)))
+            + ROUNDING * float((w * (np.abs(x) + np.abs(problem.center))).max(initial=0.0)))
+    if not Z.shape[1] or float(np.abs(g).max()) <= dtol:
+        return True
+    if not bounds:
+        return False
+    ineq = problem.inequalities()
+    active = ineq.C @ x - ineq.e >= -ACTIVE_TOL
+    if not active.any():
+        return False
+    M = Z.T @ ineq.C[active].T  # d x k: the projected normals of the active limits
+    mu, _ = nnls(M, -g, maxiter=50 * (M.shape[1] + 1))
+    return float(np.abs(g + M @ mu).max()) <= dtol
+
+
+__all__ = ["ACTIVE_TOL", "certify", "equality_limit", "kkt_holds", "residuals"]

@@ -1,0 +1,86 @@
+"""What every part of one step reads: the state, its kinematics (computed once) and dt.
+
+The builder (:class:`~dualarm_qp.step.build.StepBuilder`) computes the kinematics of
+both arms and of the carried object once per step and hands this context to every task,
+cost term and limit; none of them computes kinematics of its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..task.carry import CarryKinematics
+from ..task.scene import DualArmTask
+from ..task.surfaces import GraspSurface
+from .layout import Layout
+from .state import DualArmState
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class StepContext:
+    """The step's state and kinematics.
+
+    Attributes
+    ----------
+    state : DualArmState
+        The measured state (joints [rad], grasp coordinates [m], path time [s]).
+    task : DualArmTask
+        Arms, object and path.
+    layout : Layout
+        The slices of the decision vector.
+    dt : float
+        Sampling interval [s].
+    scale_max : float
+        Share of the path's feed-forward asked for (1: full speed).
+    carry : CarryKinematics
+        Poses and Jacobians of the leader's tool, the object frame and the follower's
+        target (world frame, ``[v; w]``, columns in decision order over the leader's
+        joints and the grasps).
+    T_f, J_f : ndarray
+        Follower tool pose (4, 4) [m] and Jacobian (6, n_f).
+    surfaces : tuple of GraspSurface
+        The grasps' paths at this step, the follower's first (a Case 2 support line
+        follows gravity from step to step).
+    positions : ndarray, shape (n,)
+        What the decision variables are rates of: joints [rad], grasp coordinates [m].
+    rate_lo, rate_hi : ndarray, shape (n,)
+        The rates that would take each variable to the ends of its range in one
+        sample (Eqs. 30-36) [rad/s, m/s] (``-inf`` / ``inf`` for an unbounded range;
+        ``rate_lo > 0`` or ``rate_hi < 0``: the variable is outside its range).
+    x_applied : ndarray, shape (n,)
+        The last command applied [rad/s, m/s] (zero from rest): what acceleration limits
+        measure the step from. Not the solver's warm start.
+    leader_error : ndarray, shape (6,)
+        ``[dp; dw]`` from the object frame to ``D(t)`` [m, rad].
+    closure_error : ndarray, shape (6,)
+        ``[dp; dw]`` from the follower's tool to its target [m, rad].
+    """
+
+    state: DualArmState
+    task: DualArmTask
+    layout: Layout
+    dt: float
+    scale_max: float
+    carry: CarryKinematics
+    T_f: FloatArray
+    J_f: FloatArray
+    surfaces: tuple[GraspSurface, ...]
+    positions: FloatArray
+    rate_lo: FloatArray
+    rate_hi: FloatArray
+    x_applied: FloatArray
+    leader_error: FloatArray
+    closure_error: FloatArray
+
+    @property
+    def outside(self) -> NDArray[np.bool_]:
+        """Variables outside their range (they recover: never further out)."""
+        return (self.rate_lo > 0.0) | (self.rate_hi < 0.0)
+
+
+__all__ = ["StepContext"]

@@ -1,0 +1,67 @@
+"""The paper's cost: every variable pulled towards the middle of its range (Eqs. 37-40).
+
+    minimise (x - dqhat_c)^T S (x - dqhat_c)                       (Eq. 37)
+
+with ``S`` diagonal (the joint weights and the sliding weight ``s7``) and ``dqhat_c`` the
+rate that would bring each variable to the middle of its range in ``centre_horizon``
+seconds (Eqs. 38-40; the paper's horizon is one sample). A variable without a finite
+range (and the leader's joints, for the paper's methods, whose leader box is open) has
+centre 0: the term then asks for the smallest rate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .context import StepContext
+from .layout import Layout
+from .options import StepOptions
+from .parts import Quadratic
+
+FloatArray = NDArray[np.float64]
+
+
+class CentringCost:
+    """Eq. 37 with the range centres of Eqs. 38-40.
+
+    Parameters
+    ----------
+    layout : Layout
+        The slices of the decision vector.
+    options : StepOptions
+        Weights (``leader_joint_weights``, ``joint_weights``, ``grasp_weight``) and the
+        centre horizon.
+    leader_ranges : bool
+        Centre the leader's joints too (False: centre 0, for the paper's methods whose
+        leader box is open).
+    """
+
+    name = "centring"
+
+    def __init__(self, layout: Layout, options: StepOptions, *, leader_ranges: bool = True
+                 ) -> None:
+        w = np.empty(layout.n)
+        w[layout.leader] = (1.0 if options.leader_joint_weights is None
+                            else options.leader_joint_weights)
+        w[layout.follower] = options.joint_weights
+        w[layout.grasps] = options.grasp_weight
+        w.flags.writeable = False  # shared by every problem
+        self.weights = w
+        self._centred = np.ones(layout.n, dtype=bool)
+        if not leader_ranges:
+            self._centred[layout.leader] = False
+        self._shrink = options.dt / (options.centre_horizon or options.dt)
+
+    def quadratic(self, ctx: StepContext) -> Quadratic:
+        """Weights ``S`` and centres ``dqhat_c`` [rad/s, m/s] at this step."""
+        lo, hi = ctx.rate_lo, ctx.rate_hi
+        bounded = self._centred & np.isfinite(lo) & np.isfinite(hi)
+        center = np.where(bounded, 0.5 * (np.where(bounded, lo, 0.0)
+                                          + np.where(bounded, hi, 0.0)), 0.0)
+        if self._shrink != 1.0:  # the centre rates were computed for dt
+            center = center * self._shrink
+        return Quadratic(self.weights, center)
+
+
+__all__ = ["CentringCost"]
