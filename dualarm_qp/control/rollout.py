@@ -388,6 +388,8 @@ def rollout(
                                       else "solver", k, t_wall, math.nan, math.nan, message)
                 break
             record(tr, k, t_wall, state, out, controller)
+            if at_end and k:  # not applied: keep the task scale the path ended at
+                tr.scale[k] = tr.scale[k - 1]
             tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (
                 pre if pre is not None else (tr.closure_pos_err[k], tr.closure_rot_err[k]))
             tr.correction_l[k], tr.correction_f[k] = corr

@@ -1,4 +1,5 @@
-"""What a rollout reports while it runs: the share of the path done, the time lost."""
+"""What a rollout reports while it runs (the share of the path, the time lost) and the
+task scale it records, on the sample where the path ends and on the last one too."""
 
 from __future__ import annotations
 
@@ -59,3 +60,28 @@ def test_progress_of_a_run_that_lost_no_time(tmp_path: Path) -> None:
     res = run(beam(tmp_path, slow=False), lambda done, lost: calls.append((done, lost)))
     assert res.completed, res.message
     assert calls[-1] == (1.0, 0.0) and all(lost == 0.0 for _, lost in calls)
+
+
+def test_the_task_scale_is_recorded_without_the_path_end_artefacts(tmp_path: Path) -> None:
+    """The last row's command (no motion: the path is done) is never applied, and the
+    sample before it is shortened to land on the path's end: neither is a slowing."""
+    exp = beam(tmp_path, slow=True)
+    tr = run(exp).trace
+    dt, end = exp.options.dt, tr.tau[0] + exp.duration
+    assert end - tr.tau[-2] < 0.5 * dt  # the path ended early in the last applied sample
+    # The task scale is the share of the rate asked for: full speed, or what is left.
+    advanced = np.diff(tr.tau)
+    asked = np.minimum(dt, end - tr.tau[:-1])
+    np.testing.assert_allclose(advanced, tr.scale[:-1] * asked, rtol=1e-9, atol=1e-15)
+    status = np.array(tr.status)
+    assert np.array_equal(tr.scale < 1.0, status == "scaled")  # slowed when it says so
+    assert tr.scale[-2] == 1.0 and status[-2] != "scaled"  # the shortened sample
+    assert tr.scale[-1] == tr.scale[-2]  # the last row: the scale the path ended at
+    assert np.any(tr.scale < 0.95)
+
+
+def test_a_run_that_lost_no_time_records_scale_1_to_its_end(tmp_path: Path) -> None:
+    res = run(beam(tmp_path, slow=False))
+    assert res.time_lost == 0.0
+    assert res.trace.status[-1] != "scaled"
+    assert np.all(res.trace.scale == 1.0)  # the last row too (was 0 where the path ends)

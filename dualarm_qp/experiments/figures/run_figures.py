@@ -226,8 +226,7 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     ax2.set_ylabel("smallest singular\nvalue of J")
     ax2.legend(fontsize=7, ncol=2)
 
-    # The last row's command is computed but never applied (its scale is 0 where the
-    # path ends): left out.
+    # The last row's command is computed but never applied (the path is done): left out.
     scale = data.col("scale")[:-1]
     ax3.plot(t[:-1], scale, color="C0", label="task scale")
     if data.has("leader_scale"):
