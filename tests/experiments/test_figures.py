@@ -8,6 +8,7 @@ beyond their limit.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -21,6 +22,7 @@ from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.figures import (
     RUN_FIGURES,
     Curve,
+    DisplayUnits,
     PlotLimits,
     RunData,
     comparison_figure,
@@ -30,6 +32,7 @@ from dualarm_qp.experiments.figures import (
     tracking_figure,
 )
 from dualarm_qp.experiments.figures.canvas import outside_spans
+from dualarm_qp.experiments.figures.compare import range_label
 from dualarm_qp.experiments.figures.rundata import ArmLimits
 from dualarm_qp.experiments.html_report import write_run_report
 from dualarm_qp.experiments.run import run_experiment
@@ -312,11 +315,100 @@ def test_a_range_limit_far_from_the_data_is_named_not_drawn():
     fig = comparison_figure([Curve("(a)", t, np.radians([-31, -40, -50, -40, -31]), "C0")],
                             value_range=(np.radians(-45), np.radians(225)),
                             speed_limit=None, scale=DEG, value_label="q3 [deg]",
-                            speed_label="[deg/s]", title="Fig. 5")
+                            speed_label="[deg/s]", title="Fig. 5", unit="deg")
     assert line_levels(fig, "limit:range") == pytest.approx([-45, -45])
-    labels = [ln.get_label() for ln in fig.axes[0].get_lines()]
-    assert any("off the axis" in lab and "225" in lab for lab in labels)
+    assert legend_texts(fig) == ["(a)", "range limit \N{MINUS SIGN}45 deg (the upper limit, "
+                                 "225 deg, is far above the axis)"]
     assert spans(fig.axes[0], "outside:range:(a)") == pytest.approx(flat([(0.15, 0.25)]))
+
+
+def test_range_legends_say_which_limits_are_drawn_and_where_the_others_are():
+    assert range_label([0.0, 400.0], [], "mm") == "range limits 0 and 400 mm"
+    assert range_label([400.0], [("lower", 0.0, "below")], "mm") == (
+        "range limit 400 mm (the lower limit, 0 mm, is far below the axis)")
+    assert range_label([], [("lower", -45.0, "below"), ("upper", 225.0, "above")],
+                       "deg") == ("range limits off the axis: the lower limit, \N{MINUS SIGN}45 "
+                                  "deg, is far below the axis; the upper limit, 225 deg, is "
+                                  "far above the axis")
+
+
+# --- readable ticks in the file's units ---------------------------------------------
+
+def legend_texts(fig) -> list[str]:
+    return [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+
+
+def shown_tick_labels(fig, ax) -> list[tuple[float, str]]:
+    """(value, label) of the y ticks inside the axis's view, as drawn."""
+    fig.canvas.draw()
+    lo, hi = ax.get_ylim()
+    return [(float(v), lab.get_text()) for v, lab in zip(ax.get_yticks(),
+                                                         ax.get_yticklabels(), strict=True)
+            if lo <= v <= hi]
+
+
+def assert_readable(label: str, value: float) -> None:
+    """A label a person reads: a plain number (no exponent) of at most two significant
+    digits (not ``57.3`` or ``114.6``), the tick's value."""
+    text = label.replace("\N{MINUS SIGN}", "-").replace(",", "")
+    assert re.fullmatch(r"-?\d+(\.\d+)?", text), label
+    assert float(text) == pytest.approx(value), (label, value)
+    digits = text.lstrip("-").replace(".", "").strip("0")
+    assert len(digits) <= 2, label
+
+
+def test_speed_ticks_are_round_numbers_in_the_display_unit():
+    """Fig. 5's rate axis: 1,000 deg/s jumps against a 114.6 deg/s (2 rad/s) limit."""
+    t = np.arange(40) * 0.031
+    q3 = np.radians(np.concatenate(([-31.0], np.linspace(-0.5, 6.0, 39))))  # a 30 deg jump
+    fig = comparison_figure([Curve("(b)", t, q3, "C1")], value_range=(np.radians(-45),
+                            np.radians(225)), speed_limit=2.0, scale=DEG, unit="deg",
+                            value_label="q3 [deg]", speed_label="q3 rate [deg/s]",
+                            title="Fig. 5")
+    speed = fig.axes[2]
+    assert speed.get_yscale() == "symlog"
+    ticks = shown_tick_labels(fig, speed)
+    for value, label in ticks:
+        assert_readable(label, value)
+    values = [v for v, _ in ticks]
+    assert {-1000.0, -100.0, -50.0, 0.0, 50.0, 100.0, 1000.0} <= set(values)
+    assert not any(np.isclose(abs(v), 2 * DEG) for v in values)  # the limit is the line
+    assert "speed limit \N{PLUS-MINUS SIGN}114.6 deg/s" in legend_texts(fig)
+
+
+def test_run_figures_show_the_files_units():
+    data = synthetic()
+    for units, per_rad, per_m in ((DisplayUnits("deg", "mm"), DEG, 1e3),
+                                  (DisplayUnits("rad", "m"), 1.0, 1.0)):
+        limits = dataclasses.replace(synthetic_limits(), units=units)
+        joints = joints_figure(data, limits)
+        assert joints.axes[0].get_ylabel() == f"[{units.angle}]"
+        assert line_levels(joints, "limit:qf3") == pytest.approx([-per_rad, per_rad])
+        rates = rates_figure(data, limits)
+        assert rates.axes[0].get_ylabel() == f"[{units.angle}/s]"
+        ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3")
+        assert line_levels(rates, "limit:qf_dot3") == pytest.approx([-3 * per_rad,
+                                                                     3 * per_rad])
+        for value, label in shown_tick_labels(rates, ax):  # 20 rad/s against 3 rad/s
+            assert_readable(label, value)
+        grasp = grasp_figure(data, limits)
+        assert grasp.axes[0].get_ylabel() == f"grasp [{units.length}]"
+        assert grasp.axes[1].get_ylabel() == f"sliding speed [{units.length}/s]"
+        assert line_levels(grasp, "limit:grasp") == pytest.approx([0.0, 0.4 * per_m])
+        for value, label in shown_tick_labels(grasp, grasp.axes[1]):
+            assert_readable(label, value)
+
+
+def test_the_display_units_are_the_experiment_files(tmp_path):
+    d = yaml.safe_load((CONFIGS / "puma_beam_limits.yaml").read_text())
+    assert DisplayUnits.of_file(CONFIGS / "puma_beam_limits.yaml") == DisplayUnits("deg", "mm")
+    d["units"] = {"length": "m", "angle": "rad", "time": "s"}  # a schema check only
+    path = tmp_path / "si.yaml"
+    path.write_text(yaml.safe_dump(d))
+    assert DisplayUnits.of_file(path) == DisplayUnits("rad", "m")
+    assert DisplayUnits.of_file("<built in code>") == DisplayUnits("deg", "mm")
+    with pytest.raises(InvalidInputError, match="display units"):
+        DisplayUnits("grad", "mm")
 
 
 # --- the bench figure -------------------------------------------------------------------
