@@ -25,6 +25,7 @@ from dualarm_qp.experiments.figures import (
     DisplayUnits,
     PlotLimits,
     RunData,
+    closure_figure,
     comparison_figure,
     grasp_figure,
     joints_figure,
@@ -259,6 +260,30 @@ def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():
     ax = grasp_figure(calm, limits).axes[1]
     assert ax.get_yscale() == "linear"
     assert ax.get_ylim() == pytest.approx((-115.0, 115.0))
+
+
+def test_error_axes_stop_where_the_tolerances_stop_mattering():
+    """Six decades below the smallest tolerance (1 mm: 1e-9), not at 1e-16; what is
+    smaller (the exact start, rounding) lies on the bottom edge and the legend says so."""
+    data, limits = synthetic(), synthetic_limits()
+    data.columns["leader_pos_err"] = np.concatenate(([0.0, 2e-16], np.full(8, 3e-6)))
+    data.columns["closure_rot_err"] = np.full(10, 1e-12)
+    tracking = tracking_figure(data, limits)
+    closure = closure_figure(data, limits)
+    for ax in (tracking.axes[0], closure.axes[0]):
+        assert ax.get_yscale() == "log"
+        assert ax.get_ylim() == pytest.approx((1e-9, 1e-1))  # tolerances 1e-3 m, 1e-2 rad
+        assert min(np.min(ln.get_ydata()) for ln in ax.get_lines() if len(ln.get_ydata())
+                   ) >= 1e-9
+        assert "below 1e-09: on the bottom edge" in ax.get_legend_handles_labels()[1]
+    position = next(ln for ln in tracking.axes[0].get_lines()
+                    if ln.get_label() == "position [m]")
+    assert list(position.get_ydata()[:3]) == pytest.approx([1e-9, 1e-9, 3e-6])
+    # singular values: two decades below the threshold (1e-3)
+    assert tracking.axes[1].get_ylim() == pytest.approx((1e-5, 1.0))
+    calm = synthetic()  # every error 1e-9: nothing below the axis, no note
+    labels = closure_figure(calm, limits).axes[0].get_legend_handles_labels()[1]
+    assert not any("bottom edge" in lab for lab in labels)
 
 
 def test_joint_counts_come_from_the_header_and_a_sliding_leader_grasp_is_drawn():

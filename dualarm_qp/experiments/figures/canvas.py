@@ -194,6 +194,49 @@ def speed_axis(ax: Any, limit: float | None, peak: float) -> None:
     ax.set_ylim(-top, top)
 
 
+def log_axis(ax: Any, levels: Sequence[float], values: Sequence[Any], *,
+             decades: float) -> float:
+    """Limit a log y axis to the scale that matters, and return its bottom.
+
+    The axis runs from ``decades`` below the smallest of the ``levels`` that matter
+    (tolerances, thresholds; without one, the largest value) to above the largest level
+    or value. Draw the values through ``np.maximum(values, bottom)``: smaller ones
+    (exact zeros, rounding at 1e-16) lie on the bottom edge instead of stretching the
+    axis down to them, and :func:`note_bottom` says so in the legend.
+
+    Parameters
+    ----------
+    ax : Axes
+        A log-scaled y axis.
+    levels : sequence of float
+        The lines the data are read against (non-positive ones are ignored).
+    values : sequence of array_like
+        The data drawn (NaN ignored).
+    decades : float
+        How far below the smallest level the axis goes (powers of ten).
+    """
+    data = [np.asarray(v, dtype=float).ravel() for v in values]
+    finite = np.concatenate([d[np.isfinite(d)] for d in data]) if data else np.zeros(0)
+    marks = [float(v) for v in levels if v is not None and np.isfinite(v) and v > 0]
+    positive = finite[finite > 0]
+    reference = min(marks) if marks else float(positive.max()) if positive.size else 1.0
+    bottom = float(10.0 ** (np.floor(np.log10(reference)) - decades))
+    high = max([*marks, float(positive.max()) if positive.size else reference])
+    ax.set_ylim(bottom, float(10.0 ** np.ceil(np.log10(2.0 * high))))
+    return bottom
+
+
+def note_bottom(ax: Any, bottom: float, values: Sequence[Any]) -> None:
+    """Add a legend entry saying that values below ``bottom`` lie on the bottom edge.
+
+    Only when some of the ``values`` (array_like, NaN ignored) are below it.
+    """
+    low = [np.nanmin(a) for a in (np.asarray(v, dtype=float) for v in values)
+           if a.size and np.isfinite(a).any()]
+    if low and min(low) < bottom:
+        ax.plot([], [], color="none", label=f"below {bottom:.0e}: on the bottom edge")
+
+
 def finite_max_abs(*arrays: Any) -> float:
     """Largest finite absolute value in the arrays (0 if none)."""
     best = 0.0

@@ -31,7 +31,9 @@ from matplotlib.figure import Figure
 from .canvas import (
     finite_max_abs,
     limit_lines,
+    log_axis,
     new_figure,
+    note_bottom,
     outside_mask,
     outside_spans,
     save_png,
@@ -48,6 +50,10 @@ if TYPE_CHECKING:
 RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.png")
 
 _ARMS = (("l", "leader"), ("f", "follower"))
+
+#: How far the error axes go below the smallest tolerance [powers of ten]: an error a
+#: million times smaller than its tolerance is drawn on the bottom edge.
+LOG_DECADES = 6
 
 
 def _speed_note(limits: PlotLimits) -> str:
@@ -211,22 +217,26 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     fig = new_figure(figsize=(8, 7.5))
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
     t = data.t
-    floor = 1e-16
-    ax1.semilogy(t, np.maximum(data.col("leader_pos_err"), floor), color="C0",
-                 label="position [m]")
-    ax1.semilogy(t, np.maximum(data.col("leader_rot_err"), floor), color="C1",
-                 label="rotation [rad]")
+    errors = (data.col("leader_pos_err"), data.col("leader_rot_err"))
+    ax1.set_yscale("log")
+    floor = log_axis(ax1, limits.tracking, errors, decades=LOG_DECADES)
+    ax1.plot(t, np.maximum(errors[0], floor), color="C0", label="position [m]")
+    ax1.plot(t, np.maximum(errors[1], floor), color="C1", label="rotation [rad]")
     limit_lines(ax1, (limits.tracking[0],), "tracking_pos", colour="C0",
                 label=f"tolerance {limits.tracking[0]:g} m")
     limit_lines(ax1, (limits.tracking[1],), "tracking_rot", colour="C1",
                 label=f"tolerance {limits.tracking[1]:g} rad")
+    note_bottom(ax1, floor, errors)
     ax1.set_ylabel("leader error to D(t)")
     ax1.legend(fontsize=7, ncol=2)
 
+    s_min = limits.singular_value_min
+    ax2.set_yscale("log")
+    floor = log_axis(ax2, (s_min,), (data.col("sigma_min_l"), data.col("sigma_min_f")),
+                     decades=2)
     for name, colour, label in (("sigma_min_l", "C2", "leader"),
                                 ("sigma_min_f", "C0", "follower")):
-        ax2.semilogy(t, np.maximum(data.col(name), floor), color=colour, label=label)
-    s_min = limits.singular_value_min
+        ax2.plot(t, np.maximum(data.col(name), floor), color=colour, label=label)
     if s_min > 0:
         limit_lines(ax2, (s_min,), "singular_value_min",
                     label=f"singularity threshold {s_min:g}")
@@ -234,6 +244,7 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
             data.col("sigma_min_f"), s_min)
         shade_spans(ax2, outside_spans(t, near), "singular_value_min",
                     label="an arm below the threshold")
+    note_bottom(ax2, floor, (data.col("sigma_min_l"), data.col("sigma_min_f")))
     ax2.set_ylabel("smallest singular\nvalue of J")
     ax2.legend(fontsize=7, ncol=2)
 
@@ -264,19 +275,23 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     fig = new_figure(figsize=(8, 3.8))
     ax = fig.subplots()
     t = data.t
-    floor = 1e-16
     marker = "o" if len(data) < 20 else None
-    ax.semilogy(t, np.maximum(data.col("closure_pos_err"), floor), marker=marker,
-                color="C0", label="position [m]")
-    ax.semilogy(t, np.maximum(data.col("closure_rot_err"), floor), marker=marker,
-                color="C1", label="rotation [rad]")
-    if np.nanmax(data.col("correction_f"), initial=0.0) > 0.0:
-        ax.semilogy(t, np.maximum(data.col("closure_pos_err_pre"), floor), color="C0",
-                    ls=":", lw=0.9, label="position before the position-level correction")
+    corrected = np.nanmax(data.col("correction_f"), initial=0.0) > 0.0
+    errors = [data.col("closure_pos_err"), data.col("closure_rot_err")]
+    drawn = [*errors, data.col("closure_pos_err_pre") if corrected else np.zeros(0)]
+    ax.set_yscale("log")
+    floor = log_axis(ax, limits.closure, drawn, decades=LOG_DECADES)
+    ax.plot(t, np.maximum(errors[0], floor), marker=marker, color="C0", label="position [m]")
+    ax.plot(t, np.maximum(errors[1], floor), marker=marker, color="C1",
+            label="rotation [rad]")
+    if corrected:
+        ax.plot(t, np.maximum(data.col("closure_pos_err_pre"), floor), color="C0",
+                ls=":", lw=0.9, label="position before the position-level correction")
     limit_lines(ax, (limits.closure[0],), "closure_pos", colour="C0",
                 label=f"tolerance {limits.closure[0]:g} m (the run fails above)")
     limit_lines(ax, (limits.closure[1],), "closure_rot", colour="C1",
                 label=f"tolerance {limits.closure[1]:g} rad")
+    note_bottom(ax, floor, drawn)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("closure error")
     ax.legend(fontsize=7)
