@@ -35,7 +35,11 @@ from dualarm_qp.experiments.figures import (
 from dualarm_qp.experiments.figures.canvas import outside_spans
 from dualarm_qp.experiments.figures.compare import range_label
 from dualarm_qp.experiments.figures.rundata import ArmLimits
-from dualarm_qp.experiments.html_report import write_run_report
+from dualarm_qp.experiments.html_report import (
+    CRITERION_TEXT,
+    render_run_report,
+    write_run_report,
+)
 from dualarm_qp.experiments.run import run_experiment
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -146,6 +150,42 @@ def test_the_report_is_self_contained(limits_run):
     assert "animation.html" not in page  # none in the folder
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] in page and summary["status"] in page
+
+
+def test_the_report_leads_with_the_verdict_and_folds_the_raw_values(limits_run):
+    _, out, _ = limits_run
+    page = (out / "report.html").read_text()
+    verdict = page.index('id="verdict"')
+    details = page.index('<details id="all-values">')
+    assert verdict < page.index("<table") < page.index("<figure") < details
+    assert "<strong>Completed</strong>: the whole path D(t)" in page[verdict:]
+    glance = page[verdict:page.index("<figure")]
+    assert "100% of D(t)" in glance and "time lost to slowing</th><td>none" in glance
+    # the worst share of each limit, with its joint; the follower starts outside (Table 2)
+    limits = glance[glance.index('<table class="limits">'):]
+    row = limits[limits.index("follower arm"):]
+    row = row[:row.index("</tr>")]
+    assert '<td class="over">103%</td><td>qf1; started outside, at 103%</td>' in row
+    assert "leader arm" in limits and "follower grasp" in limits
+    # every raw key is still there, folded below
+    assert "margin_qf_min_after_start_rad" in page[details:]
+    assert "margin_qf_min_after_start_rad" not in page[:details]
+
+
+def test_a_failed_run_says_first_why(limits_run, tmp_path):
+    _, out, _ = limits_run
+    summary = json.loads((out / "summary.json").read_text())
+    message = "path not completed: 64.9% of the path in 0.93 s (the duration cap)"
+    summary.update(status="failed", completed=False, message=message,
+                   path_completed_pct=64.9, time_lost_to_scaling_s=0.527,
+                   failure={"criterion": "path_incomplete", "sample": 30, "t_s": 0.93,
+                            "amount": 0.649, "limit": 1.0, "message": message})
+    page = render_run_report(tmp_path, summary, [])
+    verdict = page[page.index('id="verdict"'):]
+    verdict = verdict[:verdict.index("</p>")]
+    assert "<strong>FAILED</strong> on <code>path_incomplete</code>" in verdict
+    assert CRITERION_TEXT["path_incomplete"] in verdict and message in verdict
+    assert "64.9% of D(t)" in page and "0.527 s (the limits slowed the path" in page
 
 
 def test_the_report_shows_an_animation_beside_it(limits_run, tmp_path):
