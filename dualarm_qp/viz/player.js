@@ -99,8 +99,12 @@
   SCENE.object.parts.forEach((p) => objectNode.add(shape(p, bar)));
   const strip = material(SCENE.object.range_colour);
   SCENE.object.range.forEach((p) => objectNode.add(shape(p, strip)));
-  const graspPoint = new THREE.Mesh(new THREE.SphereGeometry(0.018, 20, 14),
-                                    material(SCENE.object.grasp_colour));
+  // The grasp: a ball scaled to the object, drawn over the gripper that holds it.
+  const graspMaterial = material(SCENE.object.grasp_colour);
+  graspMaterial.depthTest = false;
+  const graspPoint = new THREE.Mesh(
+    new THREE.SphereGeometry(SCENE.object.grasp_radius || 0.018, 24, 16), graspMaterial);
+  graspPoint.renderOrder = 3;
   objectNode.add(graspPoint);
   const pathGeometry = new THREE.BufferGeometry().setFromPoints(
     SCENE.path.map((p) => new THREE.Vector3(p[0], p[1], p[2])));

@@ -47,6 +47,9 @@ JOINT_RADIUS, JOINT_LENGTH = 0.04, 0.09
 MESH_JOINT_RADIUS, MESH_JOINT_LENGTH = 0.014, 0.22
 #: Bar cross-section: width along n* and depth behind the surface along -a* [m].
 BAR_WIDTH, BAR_DEPTH = 0.05, 0.025
+#: The grasp marker (a ball): its radius against the bar's width or the cylinder's
+#: diameter, and against the length of the object drawn.
+GRASP_PER_WIDTH, GRASP_PER_LENGTH = 0.6, 0.03
 #: Samples of D(t) drawn as the path line.
 PATH_SAMPLES = 200
 
@@ -214,7 +217,10 @@ def object_parts(surface: GraspSurface, grasps: FloatArray | None = None) -> dic
     Returns
     -------
     dict
-        ``parts`` (the bar), ``range`` (the grasp range strip) and ``colour``.
+        ``parts`` (the bar), ``range`` (the grasp range strip), ``colour`` and
+        ``grasp_radius`` [m]: the grasp marker's, scaled to the object (wider than its
+        cross-section, and a few percent of its length), so that it shows beside the
+        gripper that holds it.
     """
     s_origin = surface.sigma_of(np.zeros(3))
     values = [surface.sigma_min, surface.sigma_max, s_origin]
@@ -228,12 +234,16 @@ def object_parts(surface: GraspSurface, grasps: FloatArray | None = None) -> dic
         T = _frame_with_z(np.array([0.0, 0.0, 0.5 * (lo + hi)]), np.array([0.0, 0.0, 1.0]))
         bar = [{"shape": "cylinder", "radius": surface.radius, "length": hi - lo,
                 "pose": _pose_list(T)}]
+        width = 2.0 * float(surface.radius)
     else:
         bar = _strip(surface, lo, hi, width=BAR_WIDTH, depth=BAR_DEPTH, lift=-BAR_DEPTH / 2)
+        width = BAR_WIDTH
+    grasp_radius = max(GRASP_PER_WIDTH * width, GRASP_PER_LENGTH * (hi - lo))
     marks = _strip(surface, surface.sigma_min, surface.sigma_max, width=0.3 * BAR_WIDTH,
                    depth=0.004, lift=0.002)
     return {"parts": bar, "range": marks, "colour": COLOURS["object"],
-            "range_colour": COLOURS["range"], "grasp_colour": COLOURS["grasp"]}
+            "range_colour": COLOURS["range"], "grasp_colour": COLOURS["grasp"],
+            "grasp_radius": round(grasp_radius, 6)}
 
 
 def path_points(task: DualArmTask, t_start: float, t_end: float) -> list[list[float]]:
