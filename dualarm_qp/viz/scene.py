@@ -15,7 +15,8 @@ Any other arm (a DH table), or a URDF arm some of whose meshes cannot be read, i
 as a cylinder per link between consecutive frame origins (a *capsule*), with a sphere at
 each frame origin. Every arm has a short cylinder along each joint axis that changes
 colour when the joint nears or leaves its range (drawn over the meshes, so that they do
-not hide it). The object is a bar along the grasp path
+not hide it; on such an arm the page shows only those of joints near or outside their
+range until asked for all). The object is a bar along the grasp path
 (boxes following the path, or a cylinder for a :class:`~dualarm_qp.task.surfaces.
 CylinderSurface`), with the grasp range as a green strip on the grasp surface.
 """
@@ -274,7 +275,11 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
     dict
         ``title``, ``arms`` (:func:`arm_parts`), ``meshes`` (the triangle buffers the
         arms' mesh parts index, :meth:`~dualarm_qp.viz.meshes.MeshLibrary.payload`),
-        ``notes`` (what could not be drawn), ``object``, ``path``, ``path_colour``.
+        ``notes`` (what could not be drawn), ``object``, ``path``, ``path_colour``, and
+        ``all_joint_axes``: whether the page starts showing the marker of every joint
+        (capsule arms: they are the joints of the stick figure) or only of those near
+        or outside their range (an arm drawn with meshes: the meshes show the joints,
+        and a rod out of each would hide them); the page has a toggle.
     """
     library = MeshLibrary()
     leader = arm_parts(task.leader, "leader", library)
@@ -282,6 +287,7 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
     _drop_shared_base_parts(leader, task.leader.base, follower, task.follower.base)
     return {"title": title, "arms": [leader, follower], "meshes": library.payload(),
             "notes": leader["notes"] + follower["notes"],
+            "all_joint_axes": not (leader["markers_on_top"] or follower["markers_on_top"]),
             "object": object_parts(task.surface, grasps),
             "path": path_points(task, t_start, t_end),
             "path_colour": COLOURS["path"]}
