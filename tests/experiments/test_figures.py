@@ -315,7 +315,7 @@ def test_error_axes_stop_where_the_tolerances_stop_mattering():
         assert ax.get_ylim() == pytest.approx((1e-9, 1e-1))  # tolerances 1e-3 m, 1e-2 rad
         assert min(np.min(ln.get_ydata()) for ln in ax.get_lines() if len(ln.get_ydata())
                    ) >= 1e-9
-        assert "below 1e-09: on the bottom edge" in ax.get_legend_handles_labels()[1]
+        assert "below 1e-9: on the bottom edge" in ax.get_legend_handles_labels()[1]
     position = next(ln for ln in tracking.axes[0].get_lines()
                     if ln.get_label() == "position [m]")
     assert list(position.get_ydata()[:3]) == pytest.approx([1e-9, 1e-9, 3e-6])

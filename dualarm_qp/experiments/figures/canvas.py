@@ -234,7 +234,8 @@ def note_bottom(ax: Any, bottom: float, values: Sequence[Any]) -> None:
     low = [np.nanmin(a) for a in (np.asarray(v, dtype=float) for v in values)
            if a.size and np.isfinite(a).any()]
     if low and min(low) < bottom:
-        ax.plot([], [], color="none", label=f"below {bottom:.0e}: on the bottom edge")
+        power = f"1e{round(np.log10(bottom))}" if bottom > 0 else f"{bottom:g}"
+        ax.plot([], [], color="none", label=f"below {power}: on the bottom edge")
 
 
 def finite_max_abs(*arrays: Any) -> float:
