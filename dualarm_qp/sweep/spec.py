@@ -44,6 +44,12 @@ DISTRIBUTIONS = ("uniform", "normal", "choice")
 #: Most points one sweep may have.
 MAX_POINTS = 100_000
 
+#: Most rollouts of one point (``repeat``).
+MAX_REPEAT = 1_000
+
+#: Most rollouts of one sweep: points times ``repeat``.
+MAX_ROLLOUTS = 1_000_000
+
 
 @dataclass(frozen=True)
 class RandomKey:
@@ -90,7 +96,8 @@ class SweepSpec:
     random : tuple of RandomKey
         The random keys, in file order.
     repeat : int
-        Rollouts per point; their step timings are pooled.
+        Rollouts per point (at most :data:`MAX_REPEAT`, and at most
+        :data:`MAX_ROLLOUTS` for the whole sweep); their step timings are pooled.
     """
 
     path: str
@@ -144,9 +151,11 @@ def check_key_path(key: Any, spec_path: str, section: str) -> str:
     return key
 
 
-def _positive_int(value: Any, spec_path: str, key: str) -> int:
+def _positive_int(value: Any, spec_path: str, key: str, cap: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise _error(spec_path, f"must be a whole number >= 1, got {value!r}", key=key)
+    if value > cap:
+        raise _error(spec_path, f"is {value:,}; at most {cap:,}", key=key)
     return value
 
 
@@ -202,7 +211,7 @@ def _random(raw: Any, spec_path: str) -> tuple[int, int, tuple[RandomKey, ...]]:
     if "seed" not in section:
         raise _error(spec_path, "missing 'seed': a sweep must draw the same points when "
                      "it is run again (to resume)", key="random.seed")
-    n = _positive_int(section["n"], spec_path, "random.n")
+    n = _positive_int(section["n"], spec_path, "random.n", MAX_POINTS)
     seed = section["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise _error(spec_path, f"must be a whole number >= 0, got {seed!r}",
@@ -261,11 +270,15 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
     grid = _grid(data["grid"], spec_path) if "grid" in data else {}
     n, seed, rand = _random(data["random"], spec_path) if "random" in data else (0, 0, ())
     _check_overlaps(spec_path, fixed, [*grid, *(r.key for r in rand)])
-    repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat")
+    repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat", MAX_REPEAT)
     total = math.prod(len(v) for v in grid.values()) * max(n, 1)
     if total > MAX_POINTS:
         raise _error(spec_path, f"expands to {total:,} points; a sweep has at most "
                      f"{MAX_POINTS:,}", key="grid" if grid else "random.n")
+    if total * repeat > MAX_ROLLOUTS:
+        raise _error(spec_path, f"{total:,} points x {repeat:,} rollouts is "
+                     f"{total * repeat:,} rollouts; a sweep runs at most {MAX_ROLLOUTS:,}",
+                     key="repeat")
     base = Path(data["base"])
     if not base.is_absolute():
         base = Path(spec_path).parent / base

@@ -101,6 +101,19 @@ def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, gri
     assert not out.exists()  # nothing ran, and no empty folder is left
 
 
+def test_repeat_and_the_rollouts_of_a_sweep_are_capped_naming_the_cap():
+    doc = {"base": "b.yaml", "grid": {"a": [1, 2]}}
+    with pytest.raises(ConfigError, match="is 1,000,000,000; at most 1,000") as err:
+        parse_sweep({**doc, "repeat": 1_000_000_000}, "s.yaml")
+    assert (err.value.path, err.value.key) == ("s.yaml", "repeat")
+    random = {"n": 2000, "seed": 1, "c": {"uniform": [0, 1]}}  # 4,000 points
+    with pytest.raises(ConfigError, match=r"4,000 points x 300 rollouts .* at most "
+                       r"1,000,000") as err:
+        parse_sweep({**doc, "random": random, "repeat": 300}, "s.yaml")
+    assert err.value.key == "repeat"
+    assert parse_sweep({**doc, "random": random, "repeat": 250}, "s.yaml").repeat == 250
+
+
 def test_a_missing_base_file_names_it(tmp_path, capsys):
     path = write_sweep(tmp_path, extra={"base": "missing.yaml"})
     code, err = _exit_and_error(capsys, path, tmp_path / "out")
