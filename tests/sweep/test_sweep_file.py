@@ -114,10 +114,11 @@ def test_repeat_and_the_rollouts_of_a_sweep_are_capped_naming_the_cap():
     assert parse_sweep({**doc, "random": random, "repeat": 250}, "s.yaml").repeat == 250
 
 
-def test_a_missing_base_file_names_it(tmp_path, capsys):
+def test_a_missing_base_file_names_the_sweep_file_the_key_and_the_path(tmp_path, capsys):
     path = write_sweep(tmp_path, extra={"base": "missing.yaml"})
     code, err = _exit_and_error(capsys, path, tmp_path / "out")
-    assert code == 2 and "missing.yaml" in err and "file not found" in err
+    assert code == 2, err
+    assert f"{path}: key 'base': file not found: {tmp_path / 'missing.yaml'}" in err, err
 
 
 def test_a_folder_holding_other_files_is_refused(tmp_path, capsys):
