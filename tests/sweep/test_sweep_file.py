@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 import yaml
-from sweep_tools import BASE, write_sweep
+from sweep_tools import BASE, NEAR, write_sweep
 
 from dualarm_qp.cli import main
 from dualarm_qp.errors import ConfigError
@@ -119,6 +119,25 @@ def test_a_missing_base_file_names_the_sweep_file_the_key_and_the_path(tmp_path,
     code, err = _exit_and_error(capsys, path, tmp_path / "out")
     assert code == 2, err
     assert f"{path}: key 'base': file not found: {tmp_path / 'missing.yaml'}" in err, err
+
+
+@pytest.mark.parametrize(("content", "says"), [(None, "URDF file not found"),
+                                                ("not a URDF", "cannot read URDF")])
+def test_a_bad_file_in_the_grid_names_the_sweep_file_the_key_and_the_file(tmp_path, capfd,
+                                                                         content, says):
+    urdf = tmp_path / "arm.urdf"
+    if content is not None:
+        urdf.write_text(content)
+    follower = {"urdf": {"file": "placeholder.urdf", "root": "base_link", "tip": "tool0"},
+                "base": {"position": [300, 1380, 0]}, "initial": {"near": NEAR}}
+    path = write_sweep(tmp_path, grid={"follower.urdf.file": [str(urdf)]},
+                       extra={"set": {"controller.duration": 0.5, "follower": follower}})
+    code = main(["sweep", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capfd.readouterr().err  # file descriptor 2: what C++ code prints too
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err  # our message only, no parser lines before it
+    assert err.startswith(f"dualarm-qp: error: {path}: key 'follower.urdf.file': ")
+    assert f"{says}" in err and str(urdf) in err
 
 
 def test_a_folder_holding_other_files_is_refused(tmp_path, capsys):
