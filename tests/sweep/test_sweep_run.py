@@ -9,6 +9,7 @@ import signal
 import subprocess
 
 import pyarrow.parquet as pq
+import pytest
 from sweep_tools import restore_sigint, stop, sweep_cmd, wait_for_lines, write_sweep
 
 from dualarm_qp.cli import main
@@ -34,6 +35,7 @@ def _store_keys(out):
     return [json.loads(line)["key"] for line in (out / "points.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.slow
 def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster, capsys):
     sweep = write_sweep(tmp_path)
     local, remote = tmp_path / "local", tmp_path / "remote"
@@ -73,6 +75,7 @@ def cluster_workers(cluster):
         return list(client.scheduler_info()["workers"])
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -95,6 +98,7 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     assert len(keys) == len(set(keys)) == 12  # every point stored once
 
 
+@pytest.mark.slow
 def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     grid = {"follower.base.position.0": [100, 200, 300, 400, 500],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -131,6 +135,7 @@ def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     assert all(r["status"] != "interrupted" for r in _rows(out))
 
 
+@pytest.mark.slow
 def test_the_scheduler_gone_mid_sweep_is_a_clear_error(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}
