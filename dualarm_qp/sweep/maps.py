@@ -3,8 +3,9 @@
 Each function takes the table's rows (dicts by column) and the swept keys and returns a
 :class:`matplotlib.figure.Figure` on its own Agg canvas (no pyplot, no global state).
 A swept key whose values are all numbers is a numeric axis; any other key is an axis of
-categories in sorted order. Points that share the two mapped values (other keys swept
-too) are summed up per cell: the mean completion, the worst ratio, the smallest margin.
+categories in the order they first come in the table (a grid key's: the sweep file's).
+Points that share the two mapped values (other keys swept too) are summed up per cell:
+the mean completion, the worst ratio, the smallest margin.
 """
 
 from __future__ import annotations
@@ -52,7 +53,7 @@ class _Axis:
         self.key = key
         self.numeric = _is_numeric(values)
         self.levels: list[Any] = (sorted(set(values)) if self.numeric
-                                  else sorted(set(values), key=str))
+                                  else list(dict.fromkeys(values)))
 
     def pos(self, value: Any) -> float:
         return float(value) if self.numeric else float(self.levels.index(value))
@@ -205,7 +206,7 @@ def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
     fig = _figure(figsize=(7.5, 4.8), layout="constrained")
     ax = fig.subplots()
     ran = [r for r in rows if r["status"] != "interrupted"]
-    solvers = sorted({str(r.get("solver") or r.get(SOLVER_KEY)) for r in ran})
+    solvers = list(dict.fromkeys(str(r.get("solver") or r.get(SOLVER_KEY)) for r in ran))
     key = next((k for k in swept if k != SOLVER_KEY), None)
     if key is None:
         share = [np.mean([r["status"] == "completed" for r in ran

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
 
 import pytest
 
+from dualarm_qp.sweep.maps import completion_figure
 from dualarm_qp.sweep.points import PointTask
 from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
 from dualarm_qp.sweep.table import build_rows, read_table, write_table
@@ -65,3 +67,15 @@ def test_importing_the_sweep_package_imports_no_dask_pyarrow_or_matplotlib():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=120, check=False)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_categories_keep_the_sweep_files_order_not_the_texts():
+    values = [{"follower.base.position": p, "b": y}
+              for p in ([5, 0, 0], [10, 0, 0], [3, 0, 0]) for y in (1, 2)]
+    rows, swept = _rows(values, ["completed"] * 6)
+    rows = [{**r, "follower.base.position": json.dumps(r["follower.base.position"])}
+            for r in rows]  # as the table holds them: JSON text
+    ax = completion_figure(rows, swept).axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == [  # as text: 10, 3, 5
+        "[5, 0, 0]", "[10, 0, 0]", "[3, 0, 0]"]
+
