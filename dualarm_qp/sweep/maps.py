@@ -5,7 +5,8 @@ Each function takes the table's rows (dicts by column) and the swept keys and re
 A swept key whose values are all numbers is a numeric axis; any other key is an axis of
 categories in the order they first come in the table (a grid key's: the sweep file's).
 Points that share the two mapped values (other keys swept too) are summed up per cell:
-the mean completion, the worst ratio, the smallest margin.
+the mean completion, the worst ratio, the smallest margin. Markers (a start that cannot
+be reached) are explained in one legend below the axes, off the cells.
 """
 
 from __future__ import annotations
@@ -24,6 +25,9 @@ from .points import START_UNREACHABLE
 
 #: Most distinct values of a numeric key drawn one by one; more are binned.
 MAX_LEVELS = 12
+
+#: Legend of the points whose start cannot be reached (crossed out on the maps).
+UNREACHABLE_LABEL = "start unreachable"
 
 #: The swept key of the solver's name.
 SOLVER_KEY = "solver.name"
@@ -107,8 +111,18 @@ def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
     crossed = sorted(dead - alive, key=str)
     if crossed:
         ax.plot([xa.pos(x) for x, _ in crossed], [ya.pos(y) for _, y in crossed], "x",
-                color="black", ms=5, label="start unreachable")
-        ax.legend(loc="upper right", fontsize=7)
+                color="black", ms=5, label=UNREACHABLE_LABEL)
+
+
+def _legend_below(fig: Figure) -> None:
+    """One legend of the figure's markers, below its axes (never over a map's cells)."""
+    handles: dict[str, Any] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center",
+                   ncols=len(handles), fontsize=8, frameon=False)
 
 
 def _draw_curve(ax: Any, rows: Rows, key: str, metric: Callable[[dict[str, Any]], float],
@@ -147,6 +161,7 @@ def completion_figure(rows: Rows, swept: Sequence[str]) -> Figure:
         _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)")
         ax.set_ylim(-5, 105)
     ax.set_title("Completion")
+    _legend_below(fig)
     return fig
 
 
@@ -180,6 +195,7 @@ def limits_figure(rows: Rows, swept: Sequence[str]) -> Figure:
         ax_m.axhline(0.0, color="red", lw=0.8)
     ax_r.set_title("Worst realised range or speed ratio (above 1: outside a limit)")
     ax_m.set_title("Smallest joint margin (below 0: outside a range)")
+    _legend_below(fig)
     return fig
 
 

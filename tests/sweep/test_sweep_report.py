@@ -9,8 +9,8 @@ import sys
 
 import pytest
 
-from dualarm_qp.sweep.maps import completion_figure
-from dualarm_qp.sweep.points import PointTask
+from dualarm_qp.sweep.maps import completion_figure, limits_figure
+from dualarm_qp.sweep.points import START_UNREACHABLE, PointTask
 from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
 from dualarm_qp.sweep.table import build_rows, read_table, write_table
 from dualarm_qp.sweep.worker import empty_record
@@ -79,3 +79,16 @@ def test_categories_keep_the_sweep_files_order_not_the_texts():
     assert [t.get_text() for t in ax.get_xticklabels()] == [  # as text: 10, 3, 5
         "[5, 0, 0]", "[10, 0, 0]", "[3, 0, 0]"]
 
+
+def test_the_start_unreachable_legend_covers_no_map():
+    values = [{"x": x, "y": y} for x in (0, 1, 2, 3) for y in (0, 1, 2, 3)]
+    rows, swept = _rows(values, ["completed"] * 16)
+    for r in rows[-4:]:  # the top-right corner, where the legend used to sit
+        r.update(status="failed", criterion=START_UNREACHABLE, path_completed_pct=0.0)
+    for fig in (completion_figure(rows, swept), limits_figure(rows, swept)):
+        fig.canvas.draw()
+        (legend,) = fig.legends
+        assert [t.get_text() for t in legend.get_texts()] == ["start unreachable"]
+        box = legend.get_window_extent()
+        assert not any(box.overlaps(ax.get_window_extent()) for ax in fig.axes)
+        assert not any(ax.get_legend() for ax in fig.axes)
