@@ -1,7 +1,8 @@
 """Figures of a sweep's table: maps over two swept keys, curves over one.
 
-Each function takes the table's rows (dicts by column) and the swept keys and returns a
-:class:`matplotlib.figure.Figure` on its own Agg canvas (no pyplot, no global state).
+Each function takes the table's rows (dicts by column), the swept keys and their axis
+labels (:mod:`.labels`) and returns a :class:`matplotlib.figure.Figure` on its own Agg
+canvas (no pyplot, no global state).
 A swept key whose values are all numbers is a numeric axis; any other key is an axis of
 categories in the order they first come in the table (a grid key's: the sweep file's).
 Points that share the two mapped values (other keys swept too) are summed up per cell:
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,9 @@ SOLVER_KEY = "solver.name"
 
 Rows = Sequence[dict[str, Any]]
 
+#: Axis label of each swept key (a key left out is labelled by itself).
+Labels = Mapping[str, str]
+
 
 def _figure(**kwargs: Any) -> Figure:
     fig = Figure(**kwargs)
@@ -53,8 +57,9 @@ def _is_numeric(values: Sequence[Any]) -> bool:
 class _Axis:
     """Positions of a swept key's values on a plot axis."""
 
-    def __init__(self, key: str, values: Sequence[Any]) -> None:
+    def __init__(self, key: str, values: Sequence[Any], label: str | None = None) -> None:
         self.key = key
+        self.text = label or key
         self.numeric = _is_numeric(values)
         self.levels: list[Any] = (sorted(set(values)) if self.numeric
                                   else list(dict.fromkeys(values)))
@@ -71,7 +76,7 @@ class _Axis:
         return np.concatenate([[p[0] - (mid[0] - p[0])], mid, [p[-1] + (p[-1] - mid[-1])]])
 
     def label(self, ax: Any, which: str) -> None:
-        getattr(ax, f"set_{which}label")(self.key)
+        getattr(ax, f"set_{which}label")(self.text)
         if not self.numeric:
             getattr(ax, f"set_{which}ticks")(range(len(self.levels)),
                                              [str(v) for v in self.levels])
@@ -89,10 +94,11 @@ def _cells(rows: Rows, kx: str, ky: str, metric: Callable[[dict[str, Any]], floa
 
 
 def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
-              values: dict[tuple[Any, Any], float], label: str, **style: Any) -> None:
+              values: dict[tuple[Any, Any], float], label: str, labels: Labels,
+              **style: Any) -> None:
     """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots."""
-    xa = _Axis(kx, [r[kx] for r in rows])
-    ya = _Axis(ky, [r[ky] for r in rows])
+    xa = _Axis(kx, [r[kx] for r in rows], labels.get(kx))
+    ya = _Axis(ky, [r[ky] for r in rows], labels.get(ky))
     full = len({(r[kx], r[ky]) for r in rows}) == len(xa.levels) * len(ya.levels)
     if full and len(xa.levels) * len(ya.levels) > 1:
         grid = np.full((len(ya.levels), len(xa.levels)), np.nan)
@@ -126,9 +132,9 @@ def _legend_below(fig: Figure) -> None:
 
 
 def _draw_curve(ax: Any, rows: Rows, key: str, metric: Callable[[dict[str, Any]], float],
-                agg: Callable[[list[float]], float], label: str,
+                agg: Callable[[list[float]], float], label: str, labels: Labels,
                 axis: _Axis | None = None) -> None:
-    axis = axis or _Axis(key, [r[key] for r in rows])
+    axis = axis or _Axis(key, [r[key] for r in rows], labels.get(key))
     groups: dict[Any, list[float]] = defaultdict(list)
     for r in rows:
         v = metric(r)
@@ -149,16 +155,19 @@ def _completion(r: dict[str, Any]) -> float:
     return float(r["path_completed_pct"]) if r["status"] != "interrupted" else math.nan
 
 
-def completion_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+def completion_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None
+                      ) -> Figure:
     """Path completed [%] over the first two swept keys (or along the only one)."""
+    labels = labels or {}
     fig = _figure(figsize=(7.5, 5.5), layout="constrained")
     ax = fig.subplots()
     if len(swept) >= 2:
         _draw_map(fig, ax, rows, swept[0], swept[1],
                   _cells(rows, swept[0], swept[1], _completion, _mean),
-                  "path completed [%] (mean)", cmap="RdYlGn", vmin=0.0, vmax=100.0)
+                  "path completed [%] (mean)", labels, cmap="RdYlGn", vmin=0.0, vmax=100.0)
     else:
-        _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)")
+        _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)",
+                    labels)
         ax.set_ylim(-5, 105)
     ax.set_title("Completion")
     _legend_below(fig)
@@ -175,8 +184,9 @@ def _margin_deg(r: dict[str, Any]) -> float:
     return math.degrees(v) if _finite(v) else math.nan
 
 
-def limits_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+def limits_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None) -> Figure:
     """Worst realised limit ratio and smallest joint margin [deg] over the first two keys."""
+    labels = labels or {}
     fig = _figure(figsize=(13, 5.2), layout="constrained")
     ax_r, ax_m = fig.subplots(1, 2)
     if len(swept) >= 2:
@@ -184,14 +194,16 @@ def limits_figure(rows: Rows, swept: Sequence[str]) -> Figure:
         ratios = _cells(rows, kx, ky, _ratio, max)
         top = max([*ratios.values(), 1.01])
         _draw_map(fig, ax_r, rows, kx, ky, ratios, "worst realised limit ratio (max)",
-                  cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
+                  labels, cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
         margins = _cells(rows, kx, ky, _margin_deg, min)
         _draw_map(fig, ax_m, rows, kx, ky, margins, "smallest joint margin [deg] (min)",
-                  cmap="viridis")
+                  labels, cmap="viridis")
     else:
-        _draw_curve(ax_r, rows, swept[0], _ratio, max, "worst realised limit ratio (max)")
+        _draw_curve(ax_r, rows, swept[0], _ratio, max, "worst realised limit ratio (max)",
+                    labels)
         ax_r.axhline(1.0, color="red", lw=0.8)
-        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, "smallest joint margin [deg]")
+        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, "smallest joint margin [deg]",
+                    labels)
         ax_m.axhline(0.0, color="red", lw=0.8)
     ax_r.set_title("Worst realised range or speed ratio (above 1: outside a limit)")
     ax_m.set_title("Smallest joint margin (below 0: outside a range)")
@@ -213,12 +225,13 @@ def _binned(axis_values: Sequence[Any]) -> Callable[[Any], Any]:
     return level
 
 
-def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+def solver_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None) -> Figure:
     """Share of points completed against one swept key, one line per solver.
 
     The key is the first swept key that is not the solver's name; with the solver the
     only one, a bar per solver.
     """
+    labels = labels or {}
     fig = _figure(figsize=(7.5, 4.8), layout="constrained")
     ax = fig.subplots()
     ran = [r for r in rows if r["status"] != "interrupted"]
@@ -231,16 +244,17 @@ def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
         ax.set_xlabel("solver")
     else:
         level = _binned([r[key] for r in ran])
-        axis = _Axis(key, [level(r[key]) for r in ran])
+        axis = _Axis(key, [level(r[key]) for r in ran], labels.get(key))
         for s in solvers:
             mine = [{**r, key: level(r[key]), "ok": float(r["status"] == "completed")}
                     for r in ran if str(r.get("solver") or r.get(SOLVER_KEY)) == s]
             if mine:
                 _draw_curve(ax, mine, key, lambda r: r["ok"], _mean, "share completed",
-                            axis)
+                            labels, axis)
                 ax.lines[-1].set_label(s)
         ax.legend(title="solver", fontsize=8)
     ax.set_ylim(-0.05, 1.05)
     ax.set_ylabel("share of points completed")
-    ax.set_title(f"Success by solver{'' if key is None else ' against ' + key}")
+    ax.set_title("Success by solver" if key is None
+                 else f"Success by solver against {labels.get(key) or key}")
     return fig

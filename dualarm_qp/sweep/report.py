@@ -26,7 +26,7 @@ import html
 import io
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -53,10 +53,14 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def draw_figures(rows: Sequence[dict[str, Any]], swept: Sequence[str]) -> dict[str, bytes]:
-    """Draw the report's figures as PNG bytes, by file name (see :data:`FIGURES`)."""
-    figures = (completion_figure(rows, swept), limits_figure(rows, swept),
-               solver_figure(rows, swept))
+def draw_figures(rows: Sequence[dict[str, Any]], swept: Sequence[str],
+                 labels: Mapping[str, str] | None = None) -> dict[str, bytes]:
+    """Draw the report's figures as PNG bytes, by file name (see :data:`FIGURES`).
+
+    ``labels`` are the axis labels of the swept keys (default: the keys).
+    """
+    figures = (completion_figure(rows, swept, labels), limits_figure(rows, swept, labels),
+               solver_figure(rows, swept, labels))
     return {name: _png(fig) for (name, _), fig in zip(FIGURES, figures, strict=True)}
 
 
@@ -111,6 +115,7 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
                   pngs: dict[str, bytes]) -> str:
     """Return the HTML text of the report (see the module docstring), ``pngs`` inlined."""
     swept = _swept(rows, meta)
+    labels = meta.get("labels") or {}
     counts = {s: sum(r["status"] == s for r in rows)
               for s in ("completed", "failed", "interrupted")}
     parts = [
@@ -121,7 +126,9 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
         f"<p>{html.escape(str(meta.get('description', '')))}</p>",
         "<p>Base experiment: <code>"
         f"{html.escape(Path(str(meta.get('base', ''))).name)}</code>; swept keys: "
-        + ", ".join(f"<code>{html.escape(k)}</code>" for k in swept)
+        + ", ".join(f"<code>{html.escape(k)}</code>"
+                    + (f" ({html.escape(labels[k])})" if labels.get(k) else "")
+                    for k in swept)
         + f"; fixed: <code>{html.escape(json.dumps(meta.get('set', {})))}</code>.</p>",
         f"<p>{len(rows)} points: {counts['completed']} completed, {counts['failed']} "
         f"failed, {counts['interrupted']} not finished.</p>",
@@ -163,7 +170,7 @@ def write_report(out: Path, meta: dict[str, Any] | None = None) -> Path:
                                     "'dualarm-qp sweep SWEEP.yaml --out DIR' first")
         meta = json.loads(meta_path.read_text(encoding="utf-8"))
     rows = read_table(out)
-    pngs = draw_figures(rows, _swept(rows, meta))
+    pngs = draw_figures(rows, _swept(rows, meta), meta.get("labels"))
     for name, data in pngs.items():
         _write_bytes(out / name, data)
     path = out / REPORT_FILE

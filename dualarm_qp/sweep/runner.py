@@ -33,6 +33,7 @@ from .._signals import InterruptHandlers, signal_name
 from ..errors import InvalidInputError
 from .claims import STORE_FILE
 from .driver import Driver, SchedulerLost
+from .labels import file_units, sweep_labels
 from .points import PointTask, prepare_points
 from .spec import SweepSpec
 
@@ -123,8 +124,10 @@ def check_sweep_folder(out: Path) -> Path:
 
 
 def _meta(spec: SweepSpec, tasks: Sequence[PointTask], code: str) -> dict[str, Any]:
+    units = file_units(tasks[0].document)
     return {"name": spec.name, "sweep_file": spec.path, "base": str(spec.base),
             "description": spec.description, "swept_keys": spec.swept_keys,
+            "units": units, "labels": sweep_labels(spec.swept_keys, units, spec.labels),
             "set": spec.fixed, "grid": spec.grid, "random_n": spec.random_n,
             "random_seed": spec.random_seed, "repeat": spec.repeat, "points": len(tasks),
             "code": code}

@@ -15,6 +15,8 @@ paths into the file (``follower.base.position.0``: list items by index)::
       seed: 1
       controller.grasp_speed_max: {uniform: [50, 150]}
     repeat: 1                          # rollouts per point (step timings pooled)
+    labels:                            # axis labels of the maps (default: from the key)
+      follower.base.position.0: "follower base x [mm]"
 
 Values are in the base file's units. This module reads and checks the sweep file itself
 and expands it into points; whether each point makes a valid experiment is checked by
@@ -35,7 +37,7 @@ import numpy as np
 from ..errors import ConfigError
 
 #: Keys of a sweep file.
-SWEEP_KEYS = ("name", "description", "base", "set", "grid", "random", "repeat")
+SWEEP_KEYS = ("name", "description", "base", "set", "grid", "random", "repeat", "labels")
 
 #: How a random key is drawn: ``uniform: [lo, hi]``, ``normal: [mean, sd]``,
 #: ``choice: [a, b, ...]``.
@@ -98,6 +100,9 @@ class SweepSpec:
     repeat : int
         Rollouts per point (at most :data:`MAX_REPEAT`, and at most
         :data:`MAX_ROLLOUTS` for the whole sweep); their step timings are pooled.
+    labels : dict
+        Swept key -> the label of its map axis, as the file gives them (the others are
+        made from the key, see :mod:`.labels`).
     """
 
     path: str
@@ -110,6 +115,7 @@ class SweepSpec:
     random_seed: int = 0
     random: tuple[RandomKey, ...] = ()
     repeat: int = 1
+    labels: dict[str, str] = field(default_factory=dict)
 
     @property
     def swept_keys(self) -> list[str]:
@@ -224,6 +230,20 @@ def _random(raw: Any, spec_path: str) -> tuple[int, int, tuple[RandomKey, ...]]:
     return n, seed, keys
 
 
+def _labels(raw: Any, spec_path: str, swept: list[str]) -> dict[str, str]:
+    """Check the ``labels`` section: text for swept keys only."""
+    if not isinstance(raw, dict):
+        raise _error(spec_path, f"must be a mapping of swept keys to axis labels, got "
+                     f"{type(raw).__name__}", key="labels")
+    for key, text in raw.items():
+        if key not in swept:
+            raise _error(spec_path, "is not a swept key", key=f"labels.{key}", valid=swept)
+        if not isinstance(text, str) or not text.strip():
+            raise _error(spec_path, f"must be non-empty text, got {text!r}",
+                         key=f"labels.{key}")
+    return dict(raw)
+
+
 def _check_overlaps(spec_path: str, fixed: dict[str, Any], swept: list[str]) -> None:
     """Refuse a key swept twice, or swept together with a part of it, or also fixed."""
     for i, a in enumerate(swept):
@@ -269,7 +289,9 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
              for k, v in _mapping(data.get("set", {}) or {}, spec_path, "set").items()}
     grid = _grid(data["grid"], spec_path) if "grid" in data else {}
     n, seed, rand = _random(data["random"], spec_path) if "random" in data else (0, 0, ())
-    _check_overlaps(spec_path, fixed, [*grid, *(r.key for r in rand)])
+    swept = [*grid, *(r.key for r in rand)]
+    _check_overlaps(spec_path, fixed, swept)
+    labels = _labels(data["labels"], spec_path, swept) if "labels" in data else {}
     repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat", MAX_REPEAT)
     total = math.prod(len(v) for v in grid.values()) * max(n, 1)
     if total > MAX_POINTS:
@@ -284,7 +306,7 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
         base = Path(spec_path).parent / base
     return SweepSpec(path=spec_path, name=name, base=base, description=description,
                      fixed=fixed, grid=grid, random_n=n, random_seed=seed, random=rand,
-                     repeat=repeat)
+                     repeat=repeat, labels=labels)
 
 
 def load_sweep(path: str | Path) -> SweepSpec:

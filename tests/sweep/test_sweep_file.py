@@ -89,6 +89,11 @@ def _exit_and_error(capsys, path, out):
     ({"random": {"n": 3, "seed": 1, "controller.dt": {"beta": [0, 1]}}}, None,
      "controller.dt", "valid: uniform, normal, choice"),
     ({"repeat": 0}, None, "repeat", ">= 1"),
+    ({"labels": {"follower.base.position.2": "z"}}, None, "labels.follower.base.position.2",
+     "is not a swept key (valid: follower.base.position.0, follower.base.position.1)"),
+    ({"labels": {"follower.base.position.0": 5}}, None, "labels.follower.base.position.0",
+     "must be non-empty text"),
+    ({"labels": ["x"]}, None, "labels", "must be a mapping"),
 ])
 def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, grid, named,
                                                      says):

@@ -9,7 +9,8 @@ import sys
 
 import pytest
 
-from dualarm_qp.sweep.maps import completion_figure, limits_figure
+from dualarm_qp.sweep.labels import axis_label, file_units, sweep_labels
+from dualarm_qp.sweep.maps import completion_figure, limits_figure, solver_figure
 from dualarm_qp.sweep.points import START_UNREACHABLE, PointTask
 from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
 from dualarm_qp.sweep.table import build_rows, read_table, write_table
@@ -92,3 +93,28 @@ def test_the_start_unreachable_legend_covers_no_map():
         box = legend.get_window_extent()
         assert not any(box.overlaps(ax.get_window_extent()) for ax in fig.axes)
         assert not any(ax.get_legend() for ax in fig.axes)
+
+
+def test_axis_labels_name_the_key_and_its_unit_in_the_files_units():
+    mm = file_units({"units": {"length": "mm", "angle": "deg"}})
+    assert axis_label("follower.base.position.0", mm) == "follower base x [mm]"
+    assert axis_label("follower.base.position.1", file_units({})) == "follower base y [m]"
+    assert axis_label("trajectory.velocity.0", mm) == "object velocity x [mm/s]"
+    assert axis_label("leader.qd_max.2", mm) == "leader q3 speed limit [deg/s]"
+    assert axis_label("controller.duration", mm) == "duration [s]"
+    assert axis_label("solver.name", mm) == "solver"
+    assert axis_label("controller.weights.leader_joints", mm) == \
+        "controller weights leader joints"  # no rule: the path, no unit
+    labels = sweep_labels(["a.b", "controller.dt"], mm, {"a.b": "my a"})
+    assert labels == {"a.b": "my a", "controller.dt": "sampling interval [s]"}
+
+
+def test_maps_show_the_labels():
+    rows, swept = _rows([{"a.0": x, "v": y} for x in (1, 2, 3) for y in (1, 2)],
+                        ["completed"] * 6)
+    labels = {"a.0": "follower base x [mm]", "v": "object velocity x [mm/s]"}
+    ax = completion_figure(rows, swept, labels).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == tuple(labels.values())
+    fig = solver_figure(rows, swept, labels)
+    assert fig.axes[0].get_xlabel() == labels["a.0"]
+    assert fig.axes[0].get_title() == "Success by solver against follower base x [mm]"

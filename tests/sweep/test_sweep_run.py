@@ -59,6 +59,9 @@ def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster
     assert header.split(",")[:3] == ["point", "follower.base.position.0",
                                      "follower.base.position.1"]
     assert len(lines) == 6
+    meta = json.loads((remote / "sweep.json").read_text())
+    assert meta["labels"] == {"follower.base.position.0": "follower base x [mm]",
+                              "follower.base.position.1": "follower base y [mm]"}
     html = (remote / "report.html").read_text()
     assert "data:image/png;base64," in html and "<script" not in html
     # Rerun: every point is stored, nothing is computed again.
