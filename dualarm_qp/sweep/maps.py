@@ -30,6 +30,9 @@ MAX_LEVELS = 12
 #: Legend of the points whose start cannot be reached (crossed out on the maps).
 UNREACHABLE_LABEL = "start unreachable"
 
+#: Legend of the points that ran but never got inside every range (circled).
+NEVER_INSIDE_LABEL = "never inside every range"
+
 #: The swept key of the solver's name.
 SOLVER_KEY = "solver.name"
 
@@ -94,9 +97,13 @@ def _cells(rows: Rows, kx: str, ky: str, metric: Callable[[dict[str, Any]], floa
 
 
 def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
-              values: dict[tuple[Any, Any], float], label: str, labels: Labels,
-              **style: Any) -> None:
-    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots."""
+              values: dict[tuple[Any, Any], float], label: str, labels: Labels, *,
+              never_inside: bool = False, **style: Any) -> None:
+    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots.
+
+    Points whose start cannot be reached are crossed out; with ``never_inside``, points
+    that ran but never got inside every range are circled.
+    """
     xa = _Axis(kx, [r[kx] for r in rows], labels.get(kx))
     ya = _Axis(ky, [r[ky] for r in rows], labels.get(ky))
     full = len({(r[kx], r[ky]) for r in rows}) == len(xa.levels) * len(ya.levels)
@@ -118,6 +125,14 @@ def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
     if crossed:
         ax.plot([xa.pos(x) for x, _ in crossed], [ya.pos(y) for _, y in crossed], "x",
                 color="black", ms=5, label=UNREACHABLE_LABEL)
+    if never_inside:
+        ran = [r for r in rows if r["status"] != "interrupted"
+               and r.get("criterion") != START_UNREACHABLE]
+        inside = {(r[kx], r[ky]) for r in ran if _finite(r.get("recovered_at_s"))}
+        never = sorted({(r[kx], r[ky]) for r in ran} - inside, key=str)
+        if never:
+            ax.plot([xa.pos(x) for x, _ in never], [ya.pos(y) for _, y in never], "o",
+                    mfc="none", color="black", ms=5, label=NEVER_INSIDE_LABEL)
 
 
 def _legend_below(fig: Figure) -> None:
@@ -174,39 +189,51 @@ def completion_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = 
     return fig
 
 
-def _ratio(r: dict[str, Any]) -> float:
-    v: Any = r.get("worst_limit_ratio")
-    return float(v) if _finite(v) else math.nan
+def _field(name: str, scale: float = 1.0) -> Callable[[dict[str, Any]], float]:
+    """Return the metric reading a number of the record (NaN when missing), scaled."""
+    def metric(r: dict[str, Any]) -> float:
+        v: Any = r.get(name)
+        return float(v) * scale if _finite(v) else math.nan
+    return metric
 
 
-def _margin_deg(r: dict[str, Any]) -> float:
-    v: Any = r.get("joint_margin_min_rad")
-    return math.degrees(v) if _finite(v) else math.nan
+_ratio = _field("worst_limit_ratio_after_recovery")
+_margin_deg = _field("joint_margin_min_after_recovery_rad", 180.0 / math.pi)
+_recovered_s = _field("recovered_at_s")
 
 
 def limits_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None) -> Figure:
-    """Worst realised limit ratio and smallest joint margin [deg] over the first two keys."""
+    """Draw the realised limits after the start-up recovery over the first two keys.
+
+    Three maps (curves along a single key): the worst realised range or speed ratio, the
+    smallest joint margin [deg] and the time until every variable is inside its range
+    [s] (see :mod:`.recovery`). Points that never get inside are marked with a circle.
+    """
     labels = labels or {}
-    fig = _figure(figsize=(13, 5.2), layout="constrained")
-    ax_r, ax_m = fig.subplots(1, 2)
+    fig = _figure(figsize=(18, 5.4), layout="constrained")
+    ax_r, ax_m, ax_t = fig.subplots(1, 3)
+    r_text = "worst realised ratio after the recovery (max)"
+    m_text = "smallest joint margin after the recovery [deg] (min)"
+    t_text = "time to get inside every range [s] (max)"
     if len(swept) >= 2:
         kx, ky = swept[0], swept[1]
         ratios = _cells(rows, kx, ky, _ratio, max)
         top = max([*ratios.values(), 1.01])
-        _draw_map(fig, ax_r, rows, kx, ky, ratios, "worst realised limit ratio (max)",
-                  labels, cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
-        margins = _cells(rows, kx, ky, _margin_deg, min)
-        _draw_map(fig, ax_m, rows, kx, ky, margins, "smallest joint margin [deg] (min)",
-                  labels, cmap="viridis")
+        _draw_map(fig, ax_r, rows, kx, ky, ratios, r_text, labels, never_inside=True,
+                  cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
+        _draw_map(fig, ax_m, rows, kx, ky, _cells(rows, kx, ky, _margin_deg, min), m_text,
+                  labels, never_inside=True, cmap="viridis")
+        _draw_map(fig, ax_t, rows, kx, ky, _cells(rows, kx, ky, _recovered_s, max), t_text,
+                  labels, never_inside=True, cmap="YlOrRd", vmin=0.0)
     else:
-        _draw_curve(ax_r, rows, swept[0], _ratio, max, "worst realised limit ratio (max)",
-                    labels)
+        _draw_curve(ax_r, rows, swept[0], _ratio, max, r_text, labels)
         ax_r.axhline(1.0, color="red", lw=0.8)
-        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, "smallest joint margin [deg]",
-                    labels)
+        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, m_text, labels)
         ax_m.axhline(0.0, color="red", lw=0.8)
-    ax_r.set_title("Worst realised range or speed ratio (above 1: outside a limit)")
-    ax_m.set_title("Smallest joint margin (below 0: outside a range)")
+        _draw_curve(ax_t, rows, swept[0], _recovered_s, max, t_text, labels)
+    ax_r.set_title("Worst range or speed ratio after the recovery\n(above 1: outside a limit)")
+    ax_m.set_title("Smallest joint margin after the recovery")
+    ax_t.set_title("Start-up recovery: time until every variable\nis inside its range")
     _legend_below(fig)
     return fig
 

@@ -31,7 +31,7 @@ from ..errors import ConfigError, DualArmError
 from .spec import Point, SweepSpec, expand
 
 #: Version of the stored record's fields; part of every point's key.
-RECORD_FORMAT = 1
+RECORD_FORMAT = 2
 
 #: Criterion of a point whose start pose cannot be reached.
 START_UNREACHABLE = "start_unreachable"

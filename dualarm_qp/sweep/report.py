@@ -6,9 +6,10 @@ script) with
 1. a **completion map**: the share of the path completed [%] over the first two swept
    keys (the mean over any other swept keys; points that cannot even start are
    crossed out);
-2. a **limit map**: the worst realised limit ratio (range or speed, leader, follower or
-   grasp; above 1 is outside a limit) and the smallest joint margin [deg] over the same
-   two keys (the worst over any other keys);
+2. **limit maps** of the motion after the start-up recovery (:mod:`.recovery`): the
+   worst realised limit ratio (range or speed, leader, follower or grasp; above 1 is
+   outside a limit), the smallest joint margin [deg] and the time until every variable
+   is inside its range [s], over the same two keys (the worst over any other keys);
 3. **success by solver**: the share of points that completed against one swept key
    (the first one that is not the solver), one line per solver;
 4. the **ten worst points**: failed ones first (least path completed), then the highest
@@ -43,7 +44,7 @@ WORST_ROWS = 10
 
 #: The figures: file name (also written beside the report) and title.
 FIGURES = (("map_completion.png", "Completion"),
-           ("map_limits.png", "Realised limits and margins"),
+           ("map_limits.png", "Realised limits and margins after the start-up recovery"),
            ("success_by_solver.png", "Success by solver"))
 
 
@@ -138,8 +139,8 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
         parts.append(f"<h2>{html.escape(title)}</h2>")
         parts.append(f"<img alt='{html.escape(title)}' src='data:image/png;base64,{data}'>")
     columns = [POINT_COLUMN, *swept, "status", "criterion", "solver", "path_completed_pct",
-               "worst_limit_ratio", "joint_margin_min_rad", "closure_pos_err_max_m",
-               "message"]
+               "worst_limit_ratio", "recovered_at_s", "worst_limit_ratio_after_recovery",
+               "joint_margin_min_rad", "closure_pos_err_max_m", "message"]
     parts.append(f"<h2>The {min(WORST_ROWS, len(rows))} worst points</h2>")
     parts.append(_table(worst_points(rows), columns))
     parts.append("</body></html>")

@@ -50,6 +50,10 @@ def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster
     statuses = {(r["follower.base.position.0"], r["follower.base.position.1"]): r["status"]
                 for r in a}
     assert statuses[(300, 1380)] == "completed"
+    paper = next(r for r in a if (r["follower.base.position.0"],
+                                  r["follower.base.position.1"]) == (300, 1380))
+    assert 0 < paper["recovered_at_s"] < 1  # the grasp starts 50 mm outside its range
+    assert paper["worst_limit_ratio_after_recovery"] <= 1 + 1e-6 < paper["worst_limit_ratio"]
     assert statuses[(0, 1000)] == "failed"
     assert {r["criterion"] for r in a if r["status"] == "failed"} >= {"start_unreachable"}
     ran_on = {r["worker"] for r in b if r["criterion"] != "start_unreachable"}
