@@ -65,8 +65,16 @@ def draw_figures(rows: Sequence[dict[str, Any]], swept: Sequence[str],
     return {name: _png(fig) for (name, _), fig in zip(FIGURES, figures, strict=True)}
 
 
-def _swept(rows: Sequence[dict[str, Any]], meta: dict[str, Any]) -> list[str]:
-    swept = [k for k in meta.get("swept_keys", []) if rows and k in rows[0]]
+def _swept(rows: Sequence[dict[str, Any]], meta: dict[str, Any], *,
+           axes: bool = False) -> list[str]:
+    """Return the swept keys that are table columns.
+
+    With ``axes``, only those varied freely (not the paired ones): the maps' axes.
+    """
+    keys = meta.get("swept_keys", [])
+    if axes:
+        keys = meta.get("map_keys", keys)
+    swept = [k for k in keys if rows and k in rows[0]]
     if not swept:
         raise InvalidInputError("the sweep's table has no row or no swept key column")
     return swept
@@ -171,7 +179,7 @@ def write_report(out: Path, meta: dict[str, Any] | None = None) -> Path:
                                     "'dualarm-qp sweep SWEEP.yaml --out DIR' first")
         meta = json.loads(meta_path.read_text(encoding="utf-8"))
     rows = read_table(out)
-    pngs = draw_figures(rows, _swept(rows, meta), meta.get("labels"))
+    pngs = draw_figures(rows, _swept(rows, meta, axes=True), meta.get("labels"))
     for name, data in pngs.items():
         _write_bytes(out / name, data)
     path = out / REPORT_FILE

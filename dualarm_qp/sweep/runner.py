@@ -127,6 +127,7 @@ def _meta(spec: SweepSpec, tasks: Sequence[PointTask], code: str) -> dict[str, A
     units = file_units(tasks[0].document)
     return {"name": spec.name, "sweep_file": spec.path, "base": str(spec.base),
             "description": spec.description, "swept_keys": spec.swept_keys,
+            "map_keys": spec.axes, "paired": spec.paired,
             "units": units, "labels": sweep_labels(spec.swept_keys, units, spec.labels),
             "set": spec.fixed, "grid": spec.grid, "random_n": spec.random_n,
             "random_seed": spec.random_seed, "repeat": spec.repeat, "points": len(tasks),

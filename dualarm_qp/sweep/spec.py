@@ -10,6 +10,9 @@ paths into the file (``follower.base.position.0``: list items by index)::
     grid:                              # every combination of these values
       follower.base.position.0: [200, 300, 400]
       solver.name: [nullspace, "qp:daqp"]
+    paired:                            # keys that change with a grid key: a value for
+      follower.base.position.0:        # each of its values, in order
+        controller.duration: [4, 5, 6]
     random:                            # n samples (times each grid point)
       n: 20
       seed: 1
@@ -37,7 +40,8 @@ import numpy as np
 from ..errors import ConfigError
 
 #: Keys of a sweep file.
-SWEEP_KEYS = ("name", "description", "base", "set", "grid", "random", "repeat", "labels")
+SWEEP_KEYS = ("name", "description", "base", "set", "grid", "paired", "random", "repeat",
+              "labels")
 
 #: How a random key is drawn: ``uniform: [lo, hi]``, ``normal: [mean, sd]``,
 #: ``choice: [a, b, ...]``.
@@ -90,6 +94,9 @@ class SweepSpec:
         Replacements applied at every point (the file's ``set``), before the swept ones.
     grid : dict
         Values of each grid key, in file order.
+    paired : dict
+        Grid key -> {key: values}: keys that take the i-th of their values wherever the
+        grid key takes its i-th (a distance kept fixed while the speed varies, say).
     random_n : int
         Random samples (0: no ``random`` section).
     random_seed : int
@@ -111,6 +118,7 @@ class SweepSpec:
     description: str = ""
     fixed: dict[str, Any] = field(default_factory=dict)
     grid: dict[str, list[Any]] = field(default_factory=dict)
+    paired: dict[str, dict[str, list[Any]]] = field(default_factory=dict)
     random_n: int = 0
     random_seed: int = 0
     random: tuple[RandomKey, ...] = ()
@@ -118,9 +126,14 @@ class SweepSpec:
     labels: dict[str, str] = field(default_factory=dict)
 
     @property
-    def swept_keys(self) -> list[str]:
-        """The grid keys, then the random keys (the table's value columns)."""
+    def axes(self) -> list[str]:
+        """The grid keys, then the random keys: the keys varied independently (map axes)."""
         return [*self.grid, *(r.key for r in self.random)]
+
+    @property
+    def swept_keys(self) -> list[str]:
+        """The axes, then the paired keys (the table's value columns)."""
+        return [*self.axes, *(k for keys in self.paired.values() for k in keys)]
 
 
 @dataclass(frozen=True)
@@ -184,6 +197,25 @@ def _grid(raw: Any, spec_path: str) -> dict[str, list[Any]]:
         if len(set(seen)) != len(seen):
             raise _error(spec_path, f"grid value {twice!r} is given twice", key=key)
         out[key] = list(values)
+    return out
+
+
+def _paired(raw: Any, spec_path: str, grid: dict[str, list[Any]]
+            ) -> dict[str, dict[str, list[Any]]]:
+    """Check the ``paired`` section: for grid keys, a list of values as long as theirs."""
+    out: dict[str, dict[str, list[Any]]] = {}
+    for gkey, keys in _mapping(raw, spec_path, "paired").items():
+        if gkey not in grid:
+            raise _error(spec_path, "pairs keys with a grid key, and this is not one",
+                         key=f"paired.{gkey}", valid=list(grid))
+        out[gkey] = {}
+        for key, values in _mapping(keys, spec_path, f"paired.{gkey}").items():
+            check_key_path(key, spec_path, f"paired.{gkey}")
+            n = len(grid[gkey])
+            if not isinstance(values, list) or len(values) != n:
+                raise _error(spec_path, f"needs a list of {n} values, one for each value "
+                             f"of '{gkey}', got {values!r}", key=f"paired.{gkey}.{key}")
+            out[gkey][key] = list(values)
     return out
 
 
@@ -251,7 +283,7 @@ def _check_overlaps(spec_path: str, fixed: dict[str, Any], swept: list[str]) -> 
             raise _error(spec_path, "is both set and swept; give it in one place", key=a)
         for b in swept[i + 1:]:
             if a == b:
-                raise _error(spec_path, "is swept twice (in grid and in random)", key=a)
+                raise _error(spec_path, "is swept twice (in grid, paired or random)", key=a)
             if b.startswith(a + ".") or a.startswith(b + "."):
                 raise _error(spec_path, f"is swept together with '{b}', a part of it or "
                              "the whole that holds it; sweep one of them", key=a)
@@ -289,7 +321,8 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
              for k, v in _mapping(data.get("set", {}) or {}, spec_path, "set").items()}
     grid = _grid(data["grid"], spec_path) if "grid" in data else {}
     n, seed, rand = _random(data["random"], spec_path) if "random" in data else (0, 0, ())
-    swept = [*grid, *(r.key for r in rand)]
+    paired = _paired(data["paired"], spec_path, grid) if "paired" in data else {}
+    swept = [*grid, *(r.key for r in rand), *(k for keys in paired.values() for k in keys)]
     _check_overlaps(spec_path, fixed, swept)
     labels = _labels(data["labels"], spec_path, swept) if "labels" in data else {}
     repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat", MAX_REPEAT)
@@ -305,8 +338,8 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
     if not base.is_absolute():
         base = Path(spec_path).parent / base
     return SweepSpec(path=spec_path, name=name, base=base, description=description,
-                     fixed=fixed, grid=grid, random_n=n, random_seed=seed, random=rand,
-                     repeat=repeat, labels=labels)
+                     fixed=fixed, grid=grid, paired=paired, random_n=n, random_seed=seed,
+                     random=rand, repeat=repeat, labels=labels)
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -333,16 +366,20 @@ def _draw(rng: np.random.Generator, r: RandomKey) -> Any:
 def expand(spec: SweepSpec) -> list[Point]:
     """Return the sweep's points.
 
-    The grid's combinations (last key fastest), each with every random sample (drawn
-    once, in order, from ``random.seed``).
+    The grid's combinations (last key fastest; a paired key takes the value at the
+    position of its grid key's), each with every random sample (drawn once, in order,
+    from ``random.seed``).
     """
     rng = np.random.default_rng(spec.random_seed)
     samples: list[dict[str, Any]] = [
         {r.key: _draw(rng, r) for r in spec.random} for _ in range(spec.random_n)] or [{}]
-    combos = itertools.product(*spec.grid.values())
+    keys = list(spec.grid)
     points: list[Point] = []
-    for combo in combos:
-        grid_values = dict(zip(spec.grid, combo, strict=True))
+    for at in itertools.product(*(range(len(v)) for v in spec.grid.values())):
+        grid_values = {k: spec.grid[k][i] for k, i in zip(keys, at, strict=True)}
+        for gkey, paired in spec.paired.items():
+            i = at[keys.index(gkey)]
+            grid_values.update({k: values[i] for k, values in paired.items()})
         for sample in samples:
             points.append(Point(len(points), {**grid_values, **sample}))
     return points

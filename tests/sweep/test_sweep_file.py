@@ -27,6 +27,18 @@ def test_grid_expands_last_key_fastest_with_every_random_sample():
     assert [p.values for p in again] == [p.values for p in pts]  # seeded: resumable
 
 
+def test_a_paired_key_takes_the_value_at_its_grid_keys_position():
+    spec = parse_sweep({"base": "b.yaml", "grid": {"v": [10, 20, 40], "s": ["a", "b"]},
+                        "paired": {"v": {"duration": [4, 2, 1], "note": ["x", "y", "z"]}}},
+                       "s.yaml")
+    pts = expand(spec)
+    assert len(pts) == 6  # pairing adds no combination
+    assert [(p.values["v"], p.values["duration"], p.values["note"]) for p in pts[::2]] == [
+        (10, 4, "x"), (20, 2, "y"), (40, 1, "z")]
+    assert all(p.values["v"] * p.values["duration"] == 40 for p in pts)
+    assert spec.axes == ["v", "s"] and spec.swept_keys == ["v", "s", "duration", "note"]
+
+
 def test_random_distributions_are_drawn_as_given():
     spec = parse_sweep({"base": "b.yaml", "random": {
         "n": 200, "seed": 1, "a": {"normal": [10, 0.5]}, "b": {"choice": ["x", "y"]}}},
@@ -89,6 +101,12 @@ def _exit_and_error(capsys, path, out):
     ({"random": {"n": 3, "seed": 1, "controller.dt": {"beta": [0, 1]}}}, None,
      "controller.dt", "valid: uniform, normal, choice"),
     ({"repeat": 0}, None, "repeat", ">= 1"),
+    ({"paired": {"controller.dt": {"controller.duration": [1, 2]}}}, None,
+     "paired.controller.dt", "valid: follower.base.position.0, follower.base.position.1"),
+    ({"paired": {"follower.base.position.1": {"controller.duration": [1, 2, 3]}}}, None,
+     "paired.follower.base.position.1.controller.duration", "needs a list of 2 values"),
+    ({"paired": {"follower.base.position.1": {"controller.duration": [1, 2]}},
+      "set": {"controller.duration": 1}}, None, "controller.duration", "both set and swept"),
     ({"labels": {"follower.base.position.2": "z"}}, None, "labels.follower.base.position.2",
      "is not a swept key (valid: follower.base.position.0, follower.base.position.1)"),
     ({"labels": {"follower.base.position.0": 5}}, None, "labels.follower.base.position.0",

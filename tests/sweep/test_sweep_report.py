@@ -12,7 +12,7 @@ import pytest
 from dualarm_qp.sweep.labels import axis_label, file_units, sweep_labels
 from dualarm_qp.sweep.maps import completion_figure, limits_figure, solver_figure
 from dualarm_qp.sweep.points import START_UNREACHABLE, PointTask
-from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
+from dualarm_qp.sweep.report import _swept, draw_figures, render_report, worst_points
 from dualarm_qp.sweep.table import build_rows, read_table, write_table
 from dualarm_qp.sweep.worker import empty_record
 
@@ -133,3 +133,11 @@ def test_the_limit_maps_circle_points_that_never_got_inside_their_ranges():
     assert len(circled) == 3  # on each of the three maps, at the one point
     assert {(tuple(ln.get_xdata()), tuple(ln.get_ydata())) for ln in circled} == {((1.0,),
                                                                                     (1.0,))}
+
+
+def test_maps_are_drawn_over_the_free_keys_not_the_paired_ones():
+    rows, swept = _rows([{"v": v, "solver.name": s, "duration": 40 / v}
+                         for v in (10, 20) for s in ("a", "b")], ["completed"] * 4)
+    meta = {"swept_keys": swept, "map_keys": ["v", "solver.name"]}
+    assert _swept(rows, meta, axes=True) == ["v", "solver.name"]
+    assert _swept(rows, meta) == ["v", "solver.name", "duration"]  # the table's columns
