@@ -152,7 +152,8 @@ def run_sweep(
     settings : SweepSettings, optional
         Cluster, batch size, progress bar.
     log : callable, optional
-        Receives one line when the points are checked.
+        Receives one line when the points are checked, and one when the sweep waits for
+        another sweep on the same folder to finish the points it has claimed.
 
     Returns
     -------
