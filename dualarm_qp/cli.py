@@ -176,7 +176,7 @@ def _cmd_solvers(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench.report import format_table, write_report
+    from .bench.report import format_table, jobs_line, table_legend, write_report
     from .bench.runner import BenchInterrupted, BenchSettings, run_bench
     from .experiments.reproduce import BENCH_CONFIGS, bundled_config
     from .solvers import available_solvers
@@ -209,9 +209,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     with SignalHold():  # a signal during the report: finish it, then exit 130
         rows = write_report(out, result.records, meta, plots=not args.no_plots)
         print(format_table(rows))
+        print(table_legend())
         print(f"outputs: {out}/bench.json, bench.csv"
               + ("" if args.no_plots else ", bench.png")
-              + f" ({result.computed} of {len(rows)} jobs computed, the rest resumed)")
+              + f" ({jobs_line(result.computed, len(rows), result.planned)})")
         sys.stdout.flush()
     if result.interrupted is not None:
         _err(f"interrupted ({result.interrupted}): {len(result.records)} of "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -123,6 +124,54 @@ TABLE: tuple[tuple[str, str, str], ...] = (
     ("margin rad", "margin_qf_min_rad", "sci"),
     ("obj gap rel", "objective_gap_rel_max", "sci"),
 )
+
+
+#: What each column of the printed table means (header, meaning).
+TABLE_LEGEND: tuple[tuple[str, str], ...] = (
+    ("success", "usable steps / planned steps"),
+    ("step med us, step p99 us", "whole controller step, median and 99th percentile [us]"),
+    ("kin med, asm med, solve med, verify med",
+     "its parts, medians [us]: both arms' kinematics, problem assembly, solve (with the "
+     "infeasible-step policy), verification"),
+    ("solve/bare", "qp:* solvers only: our whole solve over the backend's own solve time "
+                   "on the same steps (the cost around the backend; 1 = none)"),
+    ("bound viol", "worst bound violation of a step [rad/s, m/s] (0: the limits held)"),
+    ("eq resid", "worst residual of the step's equality (the task)"),
+    ("closure m", "worst grasp closure error [m]"),
+    ("margin rad", "smallest distance of a follower joint to the end of its range [rad]; "
+                   "negative: outside (the paper's start, Table 2, is)"),
+    ("obj gap rel", "worst objective gap to the best solver on the same steps, relative"),
+)
+
+
+def table_legend() -> str:
+    """Return the legend of :func:`format_table`'s columns, an entry a column (text)."""
+    lines = ["columns:"]
+    for header, text in TABLE_LEGEND:
+        lines += textwrap.wrap(f"{header}: {text}", 96, initial_indent="  ",
+                               subsequent_indent="      ")
+    return "\n".join(lines)
+
+
+def jobs_line(computed: int, done: int, planned: int) -> str:
+    """Say how many jobs this bench computed, reused from the store, and did not run.
+
+    Parameters
+    ----------
+    computed : int
+        Jobs computed by this call.
+    done : int
+        Jobs with a result (computed, or read back from the store: an earlier bench in
+        the same folder, or one running beside it).
+    planned : int
+        Jobs asked for.
+    """
+    parts = [f"{computed} of {planned} job{'s' if planned != 1 else ''} computed now"]
+    if done > computed:
+        parts.append(f"{done - computed} reused from the store (resumed)")
+    if planned > done:
+        parts.append(f"{planned - done} not run")
+    return ", ".join(parts)
 
 
 def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> str:

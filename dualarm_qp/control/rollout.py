@@ -188,9 +188,7 @@ class RolloutResult:
         tr = self.trace
         if not len(tr):
             return 0.0
-        elapsed = float(tr.t[-1] - tr.t[0])
-        advanced = float(tr.tau[-1] - tr.tau[0])
-        return max(elapsed - self.dt * math.ceil(advanced / self.dt - 1e-9), 0.0)
+        return _time_lost(float(tr.t[-1] - tr.t[0]), float(tr.tau[-1] - tr.tau[0]), self.dt)
 
     @property
     def path_completed(self) -> float:
@@ -225,7 +223,7 @@ class RolloutResult:
             "t_end_s": float(tr.t[-1]) if n else 0.0,
             "path_time_end_s": float(tr.tau[-1]) if n else 0.0,
             "path_completed_pct": 100.0 * self.path_completed,
-            "time_lost_to_scaling_s": round(self.time_lost, 9),  # ns: no rounding noise
+            "time_lost_to_scaling_s": self.time_lost,
             "status_counts": dict(sorted(Counter(tr.status).items())),
             "fallback_steps": int(np.nansum(tr.fallback)),
             "hard_limits": self.hard_bounds,
@@ -276,7 +274,7 @@ def rollout(
     limits: RunLimits | None = None,
     reresolve_orientation: bool | None = None,
     project: bool | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[float, float], None] | None = None,
     stop_on_interrupt: bool = False,
     preflight: bool = True,
 ) -> RolloutResult:
@@ -314,8 +312,10 @@ def rollout(
     project : bool, optional
         Apply the drift projection; default: for the paper's methods.
     progress : callable, optional
-        Called as ``progress(done, total)`` after every sample; it may raise
-        KeyboardInterrupt to stop the run.
+        Called as ``progress(path_done, time_lost)`` after every sample: the share of
+        the path executed, in [0, 1] (1 at the last sample of a completed run, however
+        long the slowed task took), and the time lost to slowing so far [s] (as
+        :attr:`RolloutResult.time_lost`). It may raise KeyboardInterrupt to stop the run.
     stop_on_interrupt : bool
         On KeyboardInterrupt (Ctrl-C) during the samples, stop and return the samples
         completed so far, failing on criterion ``"interrupted"``; by default the
@@ -362,7 +362,6 @@ def rollout(
     path_start = float(initial.t)
     path_end = path_start + duration
     max_rows = math.floor(cap / dt + 1e-9) + 1
-    nominal_rows = math.floor(duration / dt + 1e-9) + 1
     tr = Trace.allocate(max_rows, leader.n, follower.n)
     q_l = leader.check_q(initial.q_l, "initial q_l").copy()
     q_f = follower.check_q(initial.q_f, "initial q_f").copy()
@@ -411,6 +410,8 @@ def rollout(
                                       else "solver", k, t_wall, math.nan, math.nan, message)
                 break
             record(tr, k, t_wall, state, out, controller)
+            if at_end and k:  # not applied: keep the task scale the path ended at
+                tr.scale[k] = tr.scale[k - 1]
             tr.closure_pos_err_pre[k], tr.closure_rot_err_pre[k] = (
                 pre if pre is not None else (tr.closure_pos_err[k], tr.closure_rot_err[k]))
             tr.correction_l[k], tr.correction_f[k] = corr
@@ -433,7 +434,8 @@ def rollout(
             if failure is not None:
                 break
             if progress is not None:
-                progress(k + 1, nominal_rows)
+                progress(min((tau - path_start) / duration, 1.0),
+                         _time_lost(t_wall - path_start, tau - path_start, dt))
             if at_end or k == max_rows - 1:
                 break
             nxt = state.advanced(out, dt)
@@ -483,6 +485,16 @@ def rollout(
                 "tracking_tolerance_m_rad": list(limits.tracking),
                 "singular_value_min": limits.singular_value_min,
                 "duration_cap_s": cap})
+
+
+def _time_lost(elapsed: float, advanced: float, dt: float) -> float:
+    """Time lost to slowing [s] when the path time advanced by ``advanced`` [s] in ``elapsed``.
+
+    The elapsed time minus the whole samples of ``dt`` [s] the advance takes at full
+    speed: the shortened last sample where the path ends is no loss. Rounded to the
+    nanosecond, so that a run that lost no time says 0, not rounding noise.
+    """
+    return max(round(elapsed - dt * math.ceil(advanced / dt - 1e-9), 9), 0.0)
 
 
 def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,

@@ -39,6 +39,14 @@ class Trace:
     follower's right-hand side [m/s, rad/s]: the velocity-level correction, which the
     step's limits bound. ``support_force`` is the push ``h`` [N] of a supporting
     follower (Case 2) at the row's state (NaN for a grasp, and for a step that raised).
+
+    ``scale`` is the task scale of the row's step: the share of the path rate asked for
+    that the limits allowed (1: not slowed; 0 for a command not applied). The rollout
+    asks for full speed, except on the sample where the path ends, which it shortens to
+    land on the end (no time is lost there): the path time advances by ``scale *
+    min(dt, path end - tau)``. At the path's end the controller is asked for no motion
+    and its command is not applied: the last row repeats the task scale of the row
+    before, the one at which the path ended.
     """
 
     t: FloatArray
@@ -124,7 +132,8 @@ def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
         gain *= out.solution.scale
     tr.feedback_pos[k] = gain * tr.closure_pos_err[k]
     tr.feedback_rot[k] = gain * tr.closure_rot_err[k]
-    tr.scale[k] = out.scale
+    # The task scale, without the shortening of the sample where the path ends.
+    tr.scale[k] = min(max(out.solution.scale, 0.0), 1.0) if out.applied else 0.0
     tr.status[k] = out.status.value
     tr.fallback[k] = float(out.fallback)
     sol = out.solution

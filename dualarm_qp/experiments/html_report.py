@@ -1,4 +1,4 @@
-"""``report.html``: one self-contained page per run (summary, figures, animation).
+"""``report.html``: one self-contained page per run (verdict, figures, animation, values).
 
 The page needs no network and no other file: the figures are inlined as base64 PNG
 data, the style sheet is inline, and there is no script. When the run folder holds an
@@ -35,6 +35,12 @@ th { background: #f2f2f2; } td.num { text-align: right; font-family: monospace; 
 figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 0.85em; color: #555; }
 iframe { width: 100%; height: 640px; border: 1px solid #ccc; }
+.verdict { font-size: 1.05em; padding: 0.5em 0.8em; border-left: 5px solid; }
+.verdict.completed { border-color: #1a7f37; background: #eef8f0; color: #222; }
+.verdict.failed, .verdict.interrupted { border-color: #b42318; background: #fdf0ef;
+                                        color: #222; }
+td.over { color: #b42318; font-weight: bold; } .note { font-size: 0.85em; color: #555; }
+details { margin-top: 2em; } summary { cursor: pointer; font-weight: bold; }
 """
 
 
@@ -82,15 +88,158 @@ def summary_tables(summary: dict[str, Any]) -> str:
     return "\n".join(parts)
 
 
+#: What each failure criterion means, for the verdict (the message gives the numbers).
+CRITERION_TEXT = {
+    "solver": "a step could not be solved",
+    "support": "the supporting follower lost its support",
+    "closure": "the grasp closure error passed its tolerance",
+    "tracking": "the leader left the path D(t) by more than its tolerance",
+    "singularity": "an arm came too near a singularity",
+    "stalled": "the path stalled: the limits stopped the object",
+    "path_incomplete": "the path was not finished within the duration cap",
+    "range": "the realised motion left a range",
+    "speed": "the realised motion broke a speed limit",
+    "interrupted": "the run was interrupted",
+}
+
+#: What each figure of a run shows (its caption in the report).
+FIGURE_CAPTIONS = {
+    "joints.png": "Joints against their ranges (dashed); shaded where outside.",
+    "rates.png": "Joint rates, commanded and realised, against the speed limits (dashed).",
+    "grasp.png": "Grasp position along the object against its range; sliding speed "
+                 "against its limit.",
+    "tracking.png": "Leader's error to D(t) against its tolerance, the arms' smallest "
+                    "singular values, and the task scale (below 1: the limits slowed "
+                    "the path).",
+    "closure.png": "Grasp closure error (Eq. 15) against its tolerance.",
+}
+
+#: The limit groups of ``realised_limits``, in the order shown, with their names.
+_PARTS = {"leader": "leader arm", "follower": "follower arm", "grasp": "follower grasp",
+          "grasp_leader": "leader grasp"}
+
+
 def _figure(path: Path) -> str:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     name = html.escape(path.name)
+    caption = html.escape(FIGURE_CAPTIONS.get(path.name, ""))
     return (f'<figure id="{name}"><img alt="{name}" src="data:image/png;base64,{data}">'
-            f"<figcaption>{name}</figcaption></figure>")
+            f"<figcaption>{name}{': ' + caption if caption else ''}</figcaption></figure>")
+
+
+def _num(value: Any, unit: str = "", digits: int = 3) -> str:
+    """Return a number for a person (``n/a`` when missing)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or value != value:
+        return "n/a"
+    return f"{value:.{digits}g}{' ' + unit if unit else ''}"
+
+
+def _share(ratio: Any) -> str:
+    """Return a ratio to a limit as a percentage table cell (over 100%: marked)."""
+    if not isinstance(ratio, (int, float)) or ratio != ratio:
+        return "<td>no limit</td>"
+    over = ' class="over"' if ratio > 1.0 + 1e-9 else ""
+    return f'<td{over}>{100.0 * ratio:.3g}%</td>'
+
+
+def _variable(name: Any, summary: dict[str, Any]) -> str:
+    """Name a limited variable (``qf2``), with the arm's joint name when it has one."""
+    text = str(name or "")
+    role = {"ql": "leader", "qf": "follower"}.get(text[:2])
+    if role is not None and text[2:].isdigit():
+        names = summary.get("arms", {}).get(role, {}).get("joint_names", [])
+        j = int(text[2:]) - 1
+        if 0 <= j < len(names) and names[j] != f"joint{j + 1}":
+            return f"{text} ({names[j]})"
+    return text
+
+
+def verdict(summary: dict[str, Any]) -> str:
+    """Return the run's verdict: completed, or failed (or interrupted) and why (HTML)."""
+    status = str(summary.get("status", "completed" if summary.get("completed") else "failed"))
+    failure = summary.get("failure") or {}
+    if status == "completed":
+        text = ("<strong>Completed</strong>: the whole path D(t) was carried out within "
+                "the tolerances" + (" and every limit the solver enforces"
+                                    if summary.get("hard_limits") else "") + ".")
+    else:
+        criterion = str(failure.get("criterion", ""))
+        why = CRITERION_TEXT.get(criterion, criterion)
+        text = (f"<strong>{html.escape(status.upper())}</strong> on "
+                f"<code>{html.escape(criterion)}</code>: {html.escape(why)}.<br>"
+                f"{html.escape(str(summary.get('message', '')))}")
+    return f'<p id="verdict" class="verdict {html.escape(status)}">{text}</p>'
+
+
+def glance(summary: dict[str, Any]) -> str:
+    """Return the few numbers that say how the run went (HTML table)."""
+    settings = summary.get("settings", {})
+    tol = summary.get("tracking_tolerance_m_rad") or [None, None]
+    ctol = summary.get("closure_tolerance_m_rad") or [None, None]
+    lost = summary.get("time_lost_to_scaling_s")
+    counts = summary.get("status_counts", {})
+    rows = [
+        ("path done", f"{_num(summary.get('path_completed_pct'), digits=4)}% of D(t): "
+                      f"path time {_num(summary.get('path_time_end_s'), digits=4)} s of "
+                      f"{_num(settings.get('duration_s'), 's', 4)}, in "
+                      f"{summary.get('samples', 'n/a')} samples of "
+                      f"{_num(settings.get('dt_s'), 's')}"),
+        ("time lost to slowing", ("none" if lost == 0 else _num(lost, "s"))
+         + " (the limits slowed the path by this much)" * bool(lost)),
+        ("leader's error to D(t), worst",
+         f"{_num(summary.get('leader_pos_err_max_m'), 'm')}, "
+         f"{_num(summary.get('leader_rot_err_max_rad'), 'rad')} (tolerance "
+         f"{_num(tol[0], 'm')}, {_num(tol[1], 'rad')})"),
+        ("grasp closure error, worst",
+         f"{_num(summary.get('closure_pos_err_max_m'), 'm')}, "
+         f"{_num(summary.get('closure_rot_err_max_rad'), 'rad')} (tolerance "
+         f"{_num(ctol[0], 'm')}, {_num(ctol[1], 'rad')})"),
+        ("steps", ", ".join(f"{n} {k}" for k, n in counts.items())
+         + (f"; {summary['fallback_steps']} by the fallback solver"
+            if summary.get("fallback_steps") else "")),
+        ("solver", f"{summary.get('solver', '')}: "
+                   + ("enforces the limits (hard)" if summary.get("hard_limits")
+                      else "does not enforce the limits")),
+    ]
+    body = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
+                   for k, v in rows)
+    return f'<table class="glance">{body}</table>'
+
+
+def limits_table(summary: dict[str, Any]) -> str:
+    """Worst realised share of each limit, range and speed, per arm and grasp (HTML)."""
+    realised = summary.get("realised_limits") or {}
+    head = ("<tr><th></th><th colspan=\"2\">range</th><th colspan=\"2\">speed</th></tr>"
+            "<tr><th></th><th>worst</th><th>where</th><th>worst</th><th>where</th></tr>")
+    rows = []
+    for part, r in sorted(realised.items(), key=lambda kv: list(_PARTS).index(kv[0])
+                          if kv[0] in _PARTS else len(_PARTS)):
+        start = r.get("range_ratio_start")
+        started = (f"; started outside, at {100.0 * start:.3g}%"
+                   if isinstance(start, (int, float)) and start > 1.0 + 1e-9 else "")
+        speed = r.get("speed_ratio_max")
+        limited = isinstance(speed, (int, float)) and speed == speed
+        fastest = _variable(r.get("worst_speed"), summary) if limited else ""
+        rows.append(f"<tr><th>{html.escape(_PARTS.get(part, part))}</th>"
+                    f"{_share(r.get('range_ratio_max'))}"
+                    f"<td>{html.escape(_variable(r.get('worst_range'), summary) + started)}"
+                    f"</td>{_share(speed)}<td>{html.escape(fastest)}</td></tr>")
+    note = ("Range: 100% is at a limit (0% mid-range), above 100% outside. Speed: the "
+            "share of the speed limit, from the recorded motion. "
+            + ("The solver enforces the limits: a variable that starts outside its range "
+               "may not move further out." if summary.get("hard_limits") else
+               "This solver does not enforce the limits: shares above 100% are expected."))
+    return (f'<table class="limits">{head}{"".join(rows)}</table>'
+            f'<p class="note">{html.escape(note)}</p>')
 
 
 def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]) -> str:
     """Return the report page of the run in folder ``out``.
+
+    The page leads with what a person asks first: the verdict (completed, or failed
+    with the criterion and the message), the path done, the time lost, the errors, the
+    worst realised share of each limit with its joint, any warnings, then the figures
+    and the animation. Every value of ``summary.json`` follows, folded.
 
     Parameters
     ----------
@@ -108,22 +257,24 @@ def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]
             f"<title>{html.escape(name)}</title><style>{_STYLE}</style></head><body>")
     summary = jsonable(summary)
     parts = [head, f"<h1>{html.escape(name)}: <span class=\"{html.escape(status)}\">"
-             f"{html.escape(status)}</span></h1>"]
-    if summary.get("message"):
-        parts.append(f"<p>{html.escape(str(summary['message']))}</p>")
+             f"{html.escape(status)}</span></h1>", verdict(summary), glance(summary)]
+    if summary.get("realised_limits"):
+        parts += ["<h2>Limits: the worst realised share of each</h2>", limits_table(summary)]
+    if summary.get("warnings"):
+        parts += ["<h2>Warnings</h2>", "<ul>" + "".join(
+            f"<li>{html.escape(str(w))}</li>" for w in summary["warnings"]) + "</ul>"]
     shown = [f for f in figures if (out / f).is_file()]
     if shown:
         links = " &middot; ".join(f'<a href="#{html.escape(f)}">{html.escape(f)}</a>'
                                   for f in shown)
-        parts.append(f"<p>Figures: {links}</p>")
+        parts += ["<h2>Figures</h2>", f"<p>{links}</p>"]
+        parts += [_figure(out / f) for f in shown]
     if (out / ANIMATION_FILE).is_file():
         parts += ["<h2>Animation</h2>",
                   f'<p><a href="{ANIMATION_FILE}">open {ANIMATION_FILE}</a></p>',
                   f'<iframe src="{ANIMATION_FILE}" title="3D animation"></iframe>']
-    parts.append(summary_tables(summary))
-    if shown:
-        parts.append("<h2>Figures</h2>")
-        parts += [_figure(out / f) for f in shown]
+    parts += ['<details id="all-values"><summary>Every value of summary.json</summary>',
+              summary_tables(summary), "</details>"]
     parts.append("</body></html>\n")
     return "\n".join(parts)
 

@@ -117,7 +117,9 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     commanded (applied) rates of the row's step; ``closure_*_err_pre`` and
     ``correction_*`` the closure error before, and the size of, any position-level
     correction; ``feedback_*`` the closure feedback in the step; ``support_force`` [N]
-    the push of a supporting follower (only when it supports: Case 2).
+    the push of a supporting follower (only when it supports: Case 2). ``scale`` is the
+    task scale (:class:`~dualarm_qp.control.trace.Trace`): the share of the path rate
+    asked for that the limits allowed, 1 when not slowed, the last row included.
     """
     cols: dict[str, Any] = {"t": trace.t, "path_t": trace.tau}
     for j in range(trace.q_l.shape[1]):

@@ -220,12 +220,13 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
 def _draw_figures(out: Path, runs: dict[str, RunOutcome],
                   exps: dict[str, Experiment]) -> None:
     """Draw Fig. 5 (follower q3) and Fig. 6 (grasp) of the cases, with case (d)'s limits."""
-    from .figures import Curve, comparison_figure
+    from .figures import Curve, DisplayUnits, comparison_figure
     from .figures.canvas import save_png
 
     colours = {"a": "C0", "b": "C1", "c": "C2", "d": "C4"}
     limited = exps[LIMITS_CASE]
     follower, surface = limited.task.follower, limited.task.surface
+    units = DisplayUnits.of_file(limited.path)  # the paper's files: deg and mm
 
     def label(k: str) -> str:
         return f"({k}) {runs[k].summary['experiment']} [{runs[k].summary['solver']}]"
@@ -233,9 +234,9 @@ def _draw_figures(out: Path, runs: dict[str, RunOutcome],
     q3 = [Curve(label(k), r.result.trace.t, r.result.trace.q_f[:, 2], colours.get(k, "C5"))
           for k, r in runs.items()]
     fig = comparison_figure(q3, value_range=(follower.q_min[2], follower.q_max[2]),
-                            speed_limit=float(follower.qd_max[2]), scale=180.0 / np.pi,
-                            value_label="follower q3 [deg]",
-                            speed_label="follower q3 rate, realised [deg/s]",
+                            speed_limit=float(follower.qd_max[2]), scale=units.per_rad,
+                            unit=units.angle, value_label=f"follower q3 [{units.angle}]",
+                            speed_label=f"follower q3 rate, realised [{units.angle}/s]",
                             title="Fig. 5: follower joint 3 (dashed: its range and the "
                             "speed limit of case (d))", note=_JUMP_NOTE)
     save_png(fig, out / "fig5_joint3.png")
@@ -244,8 +245,9 @@ def _draw_figures(out: Path, runs: dict[str, RunOutcome],
                    colours.get(k, "C5")) for k in sliding]
     speed = limited.options.grasp_speed_max if limited.options.velocity_limits else None
     fig = comparison_figure(grasp, value_range=(surface.sigma_min, surface.sigma_max),
-                            speed_limit=speed, scale=1e3, value_label="grasp r2_z [mm]",
-                            speed_label="sliding speed, realised [mm/s]",
+                            speed_limit=speed, scale=units.per_m, unit=units.length,
+                            value_label=f"grasp r2_z [{units.length}]",
+                            speed_label=f"sliding speed, realised [{units.length}/s]",
                             title="Fig. 6: follower grasp position (dashed: the grasp range "
                             "of Eq. 3 and the sliding speed limit of case (d); case (a) "
                             "holds 450 mm)", note=_JUMP_NOTE)

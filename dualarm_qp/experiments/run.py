@@ -13,6 +13,7 @@ from __future__ import annotations
 import platform
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -67,22 +68,35 @@ def run_status(result: RolloutResult) -> str:
     return "interrupted" if result.failure.criterion == "interrupted" else "failed"
 
 
-def _progress(total: int, label: str, show: bool) -> tuple[Any, Any]:
+#: What the progress bar shows: the share of the path done, then the time lost.
+PROGRESS_FORMAT = "{desc}: {percentage:3.0f}% of the path |{bar}| {elapsed}<{remaining}{postfix}"
+
+
+def _progress(label: str, show: bool) -> tuple[Any, Callable[[float, float], None]]:
     """Return a progress bar (or None) and the rollout's per-sample callback.
 
-    The callback also stops the rollout when the command line received an interrupt
-    that some code swallowed (:func:`~dualarm_qp._signals.raise_if_interrupted`).
+    The bar counts the path ``D(t)`` in percent, not samples: a task that the limits
+    slow runs more samples than the nominal count, and its bar still ends at 100%. Its
+    postfix gives the time lost to the slowing so far [s]. The callback also stops the
+    rollout when the command line received an interrupt that some code swallowed
+    (:func:`~dualarm_qp._signals.raise_if_interrupted`).
     """
     bar = None
     if show:
         from tqdm import tqdm
 
-        bar = tqdm(total=total, desc=label, unit="step", leave=False, file=sys.stderr)
+        bar = tqdm(total=100.0, desc=label, leave=False, file=sys.stderr,
+                   bar_format=PROGRESS_FORMAT)
+    shown = [""]  # the postfix on the bar, set only when it changes
 
-    def update(done: int, _total: int) -> None:
+    def update(path_done: float, time_lost: float) -> None:
         raise_if_interrupted()
         if bar is not None:
-            bar.update(done - bar.n)
+            text = f"time lost to slowing {time_lost:.2f} s"
+            if text != shown[0]:
+                shown[0] = text
+                bar.set_postfix_str(text, refresh=False)
+            bar.update(100.0 * path_done - bar.n)
 
     return bar, update
 
@@ -150,8 +164,7 @@ def run_and_write(
     controller = exp.controller()
     if progress is None:
         progress = sys.stderr.isatty()
-    steps = int(exp.duration / exp.options.dt + 1e-9) + 1
-    bar, update = _progress(steps, exp.name, progress)
+    bar, update = _progress(exp.name, progress)
     t0 = time.perf_counter()
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,

@@ -14,7 +14,12 @@ Python loader package is not needed. Nothing is downloaded.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.metadata
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +55,31 @@ class RobotModelError(InvalidInputError):
     def __init__(self, message: str, field: str) -> None:
         self.field = field
         super().__init__(message)
+
+
+@contextlib.contextmanager
+def _stderr_captured() -> Iterator[list[str]]:
+    """Send file descriptor 2 (what C++ libraries print) to a buffer while the block runs.
+
+    The text is in the yielded list once the block has ended; our own message says what
+    went wrong, so the parser's lines do not also reach the terminal.
+    """
+    said: list[str] = []
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no stderr to redirect
+        yield said
+        return
+    with tempfile.TemporaryFile() as log:
+        os.dup2(log.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            log.seek(0)
+            said.append(log.read(10_000).decode("utf-8", errors="replace"))
 
 
 def urdf_arm(
@@ -98,9 +128,13 @@ def urdf_arm(
     if not path.is_file():
         raise RobotModelError(f"URDF file not found: {path}", "file")
     try:
-        full = pin.buildModelFromUrdf(str(path))
+        with _stderr_captured() as parser_said:  # urdfdom prints its errors on fd 2
+            full = pin.buildModelFromUrdf(str(path))
     except (RuntimeError, ValueError) as err:
-        raise RobotModelError(f"cannot read URDF {path}: {err}", "file") from None
+        said = next((ln.strip().removeprefix("Error:").strip()
+                     for ln in "".join(parser_said).splitlines() if ln.strip()), "")
+        raise RobotModelError(f"cannot read URDF {path}: {err}"
+                              + (f" (urdfdom: {said})" if said else ""), "file") from None
     label = full.name or path.stem
     try:
         root_id = frame_id(full, root, "root", label)

@@ -8,6 +8,12 @@ each machine that computes; every worker needs the same dualarm_qp installed).
 
 Dask's own log lines (a worker lost, a reconnect attempt) are kept off the terminal
 while the sweep runs: the sweep reports what matters itself.
+
+Starting and closing the embedded cluster are never cut short by SIGINT or SIGTERM: a
+signal that comes meanwhile is held (:class:`~dualarm_qp._signals.SignalHold`) and acted
+on once the cluster is up, or closed (a second or so). A cluster interrupted half-started
+cannot be closed (Dask's exit hook then fails with a traceback), and one interrupted
+half-closed is closed again by that hook, which waits 10 s for it.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import warnings
 from collections.abc import Iterator
 from typing import Any
 
+from .._signals import SignalHold
 from ..errors import InvalidInputError
 
 #: Seconds to wait for an existing scheduler to answer, and for its first worker.
@@ -101,31 +108,33 @@ def open_client(*, workers: int | None = None, scheduler: str | None = None) -> 
         raise InvalidInputError("give --workers or --scheduler, not both")
     if workers is not None and workers < 1:
         raise InvalidInputError(f"--workers must be at least 1, got {workers}")
-    if scheduler is not None:
-        client = _connect(scheduler)
-        try:
-            yield client
-        finally:
-            with contextlib.suppress(Exception):
-                client.close(timeout=5)
-        return
-    from distributed import Client, LocalCluster
+    from distributed import Client
+
+    cluster: Any = None
+    client: Any = None
+    try:
+        if scheduler is not None:  # nothing of ours to close if cut short: no hold
+            client = _connect(scheduler)
+        else:
+            with SignalHold():  # started whole (see the module docstring), then stopped
+                cluster = _local_cluster(workers or default_workers())
+                client = Client(cluster, set_as_default=False)
+        yield client
+    finally:
+        with SignalHold():  # closed whole, then stopped
+            for what, timeout in ((client, 5), (cluster, 10)):
+                if what is not None:
+                    with contextlib.suppress(Exception):
+                        what.close(timeout=timeout)
+
+
+def _local_cluster(workers: int) -> Any:
+    from distributed import LocalCluster
 
     with warnings.catch_warnings():  # "port 8787 in use": no dashboard is needed
         warnings.filterwarnings("ignore", message="Port .* is already in use")
-        cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                               processes=True, dashboard_address=None,
-                               silence_logs=logging.CRITICAL)
-    try:
-        client = Client(cluster, set_as_default=False)
-        try:
-            yield client
-        finally:
-            with contextlib.suppress(Exception):
-                client.close(timeout=5)
-    finally:
-        with contextlib.suppress(Exception):
-            cluster.close(timeout=10)
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                            dashboard_address=None, silence_logs=logging.CRITICAL)
 
 
 def worker_count(client: Any) -> int:

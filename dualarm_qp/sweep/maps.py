@@ -1,17 +1,20 @@
 """Figures of a sweep's table: maps over two swept keys, curves over one.
 
-Each function takes the table's rows (dicts by column) and the swept keys and returns a
-:class:`matplotlib.figure.Figure` on its own Agg canvas (no pyplot, no global state).
+Each function takes the table's rows (dicts by column), the swept keys and their axis
+labels (:mod:`.labels`) and returns a :class:`matplotlib.figure.Figure` on its own Agg
+canvas (no pyplot, no global state).
 A swept key whose values are all numbers is a numeric axis; any other key is an axis of
-categories in sorted order. Points that share the two mapped values (other keys swept
-too) are summed up per cell: the mean completion, the worst ratio, the smallest margin.
+categories in the order they first come in the table (a grid key's: the sweep file's).
+Points that share the two mapped values (other keys swept too) are summed up per cell:
+the mean completion, the worst ratio, the smallest margin. Markers (a start that cannot
+be reached) are explained in one legend below the axes, off the cells.
 """
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,10 +27,19 @@ from .points import START_UNREACHABLE
 #: Most distinct values of a numeric key drawn one by one; more are binned.
 MAX_LEVELS = 12
 
+#: Legend of the points whose start cannot be reached (crossed out on the maps).
+UNREACHABLE_LABEL = "start unreachable"
+
+#: Legend of the points that ran but never got inside every range (circled).
+NEVER_INSIDE_LABEL = "never inside every range"
+
 #: The swept key of the solver's name.
 SOLVER_KEY = "solver.name"
 
 Rows = Sequence[dict[str, Any]]
+
+#: Axis label of each swept key (a key left out is labelled by itself).
+Labels = Mapping[str, str]
 
 
 def _figure(**kwargs: Any) -> Figure:
@@ -48,11 +60,12 @@ def _is_numeric(values: Sequence[Any]) -> bool:
 class _Axis:
     """Positions of a swept key's values on a plot axis."""
 
-    def __init__(self, key: str, values: Sequence[Any]) -> None:
+    def __init__(self, key: str, values: Sequence[Any], label: str | None = None) -> None:
         self.key = key
+        self.text = label or key
         self.numeric = _is_numeric(values)
         self.levels: list[Any] = (sorted(set(values)) if self.numeric
-                                  else sorted(set(values), key=str))
+                                  else list(dict.fromkeys(values)))
 
     def pos(self, value: Any) -> float:
         return float(value) if self.numeric else float(self.levels.index(value))
@@ -66,7 +79,7 @@ class _Axis:
         return np.concatenate([[p[0] - (mid[0] - p[0])], mid, [p[-1] + (p[-1] - mid[-1])]])
 
     def label(self, ax: Any, which: str) -> None:
-        getattr(ax, f"set_{which}label")(self.key)
+        getattr(ax, f"set_{which}label")(self.text)
         if not self.numeric:
             getattr(ax, f"set_{which}ticks")(range(len(self.levels)),
                                              [str(v) for v in self.levels])
@@ -84,10 +97,15 @@ def _cells(rows: Rows, kx: str, ky: str, metric: Callable[[dict[str, Any]], floa
 
 
 def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
-              values: dict[tuple[Any, Any], float], label: str, **style: Any) -> None:
-    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots."""
-    xa = _Axis(kx, [r[kx] for r in rows])
-    ya = _Axis(ky, [r[ky] for r in rows])
+              values: dict[tuple[Any, Any], float], label: str, labels: Labels, *,
+              never_inside: bool = False, **style: Any) -> None:
+    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots.
+
+    Points whose start cannot be reached are crossed out; with ``never_inside``, points
+    that ran but never got inside every range are circled.
+    """
+    xa = _Axis(kx, [r[kx] for r in rows], labels.get(kx))
+    ya = _Axis(ky, [r[ky] for r in rows], labels.get(ky))
     full = len({(r[kx], r[ky]) for r in rows}) == len(xa.levels) * len(ya.levels)
     if full and len(xa.levels) * len(ya.levels) > 1:
         grid = np.full((len(ya.levels), len(xa.levels)), np.nan)
@@ -106,14 +124,32 @@ def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
     crossed = sorted(dead - alive, key=str)
     if crossed:
         ax.plot([xa.pos(x) for x, _ in crossed], [ya.pos(y) for _, y in crossed], "x",
-                color="black", ms=5, label="start unreachable")
-        ax.legend(loc="upper right", fontsize=7)
+                color="black", ms=5, label=UNREACHABLE_LABEL)
+    if never_inside:
+        ran = [r for r in rows if r["status"] != "interrupted"
+               and r.get("criterion") != START_UNREACHABLE]
+        inside = {(r[kx], r[ky]) for r in ran if _finite(r.get("recovered_at_s"))}
+        never = sorted({(r[kx], r[ky]) for r in ran} - inside, key=str)
+        if never:
+            ax.plot([xa.pos(x) for x, _ in never], [ya.pos(y) for _, y in never], "o",
+                    mfc="none", color="black", ms=5, label=NEVER_INSIDE_LABEL)
+
+
+def _legend_below(fig: Figure) -> None:
+    """One legend of the figure's markers, below its axes (never over a map's cells)."""
+    handles: dict[str, Any] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center",
+                   ncols=len(handles), fontsize=8, frameon=False)
 
 
 def _draw_curve(ax: Any, rows: Rows, key: str, metric: Callable[[dict[str, Any]], float],
-                agg: Callable[[list[float]], float], label: str,
+                agg: Callable[[list[float]], float], label: str, labels: Labels,
                 axis: _Axis | None = None) -> None:
-    axis = axis or _Axis(key, [r[key] for r in rows])
+    axis = axis or _Axis(key, [r[key] for r in rows], labels.get(key))
     groups: dict[Any, list[float]] = defaultdict(list)
     for r in rows:
         v = metric(r)
@@ -134,51 +170,71 @@ def _completion(r: dict[str, Any]) -> float:
     return float(r["path_completed_pct"]) if r["status"] != "interrupted" else math.nan
 
 
-def completion_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+def completion_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None
+                      ) -> Figure:
     """Path completed [%] over the first two swept keys (or along the only one)."""
+    labels = labels or {}
     fig = _figure(figsize=(7.5, 5.5), layout="constrained")
     ax = fig.subplots()
     if len(swept) >= 2:
         _draw_map(fig, ax, rows, swept[0], swept[1],
                   _cells(rows, swept[0], swept[1], _completion, _mean),
-                  "path completed [%] (mean)", cmap="RdYlGn", vmin=0.0, vmax=100.0)
+                  "path completed [%] (mean)", labels, cmap="RdYlGn", vmin=0.0, vmax=100.0)
     else:
-        _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)")
+        _draw_curve(ax, rows, swept[0], _completion, _mean, "path completed [%] (mean)",
+                    labels)
         ax.set_ylim(-5, 105)
     ax.set_title("Completion")
+    _legend_below(fig)
     return fig
 
 
-def _ratio(r: dict[str, Any]) -> float:
-    v: Any = r.get("worst_limit_ratio")
-    return float(v) if _finite(v) else math.nan
+def _field(name: str, scale: float = 1.0) -> Callable[[dict[str, Any]], float]:
+    """Return the metric reading a number of the record (NaN when missing), scaled."""
+    def metric(r: dict[str, Any]) -> float:
+        v: Any = r.get(name)
+        return float(v) * scale if _finite(v) else math.nan
+    return metric
 
 
-def _margin_deg(r: dict[str, Any]) -> float:
-    v: Any = r.get("joint_margin_min_rad")
-    return math.degrees(v) if _finite(v) else math.nan
+_ratio = _field("worst_limit_ratio_after_recovery")
+_margin_deg = _field("joint_margin_min_after_recovery_rad", 180.0 / math.pi)
+_recovered_s = _field("recovered_at_s")
 
 
-def limits_figure(rows: Rows, swept: Sequence[str]) -> Figure:
-    """Worst realised limit ratio and smallest joint margin [deg] over the first two keys."""
-    fig = _figure(figsize=(13, 5.2), layout="constrained")
-    ax_r, ax_m = fig.subplots(1, 2)
+def limits_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None) -> Figure:
+    """Draw the realised limits after the start-up recovery over the first two keys.
+
+    Three maps (curves along a single key): the worst realised range or speed ratio, the
+    smallest joint margin [deg] and the time until every variable is inside its range
+    [s] (see :mod:`.recovery`). Points that never get inside are marked with a circle.
+    """
+    labels = labels or {}
+    fig = _figure(figsize=(18, 5.4), layout="constrained")
+    ax_r, ax_m, ax_t = fig.subplots(1, 3)
+    r_text = "worst realised ratio after the recovery (max)"
+    m_text = "smallest joint margin after the recovery [deg] (min)"
+    t_text = "time to get inside every range [s] (max)"
     if len(swept) >= 2:
         kx, ky = swept[0], swept[1]
         ratios = _cells(rows, kx, ky, _ratio, max)
         top = max([*ratios.values(), 1.01])
-        _draw_map(fig, ax_r, rows, kx, ky, ratios, "worst realised limit ratio (max)",
+        _draw_map(fig, ax_r, rows, kx, ky, ratios, r_text, labels, never_inside=True,
                   cmap="RdYlGn_r", norm=TwoSlopeNorm(1.0, vmin=0.0, vmax=top))
-        margins = _cells(rows, kx, ky, _margin_deg, min)
-        _draw_map(fig, ax_m, rows, kx, ky, margins, "smallest joint margin [deg] (min)",
-                  cmap="viridis")
+        _draw_map(fig, ax_m, rows, kx, ky, _cells(rows, kx, ky, _margin_deg, min), m_text,
+                  labels, never_inside=True, cmap="viridis")
+        _draw_map(fig, ax_t, rows, kx, ky, _cells(rows, kx, ky, _recovered_s, max), t_text,
+                  labels, never_inside=True, cmap="YlOrRd", vmin=0.0)
     else:
-        _draw_curve(ax_r, rows, swept[0], _ratio, max, "worst realised limit ratio (max)")
+        _draw_curve(ax_r, rows, swept[0], _ratio, max, r_text, labels)
         ax_r.axhline(1.0, color="red", lw=0.8)
-        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, "smallest joint margin [deg]")
+        _draw_curve(ax_m, rows, swept[0], _margin_deg, min, m_text, labels)
         ax_m.axhline(0.0, color="red", lw=0.8)
-    ax_r.set_title("Worst realised range or speed ratio (above 1: outside a limit)")
-    ax_m.set_title("Smallest joint margin (below 0: outside a range)")
+        _draw_curve(ax_t, rows, swept[0], _recovered_s, max, t_text, labels)
+    ax_r.set_title("Worst range or speed ratio after the recovery\n(above 1: outside a limit)")
+    ax_m.set_title("Smallest joint margin after the recovery")
+    ax_t.set_title("Start-up recovery: time until every variable\nis inside its range")
+    _legend_below(fig)
     return fig
 
 
@@ -196,16 +252,17 @@ def _binned(axis_values: Sequence[Any]) -> Callable[[Any], Any]:
     return level
 
 
-def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
+def solver_figure(rows: Rows, swept: Sequence[str], labels: Labels | None = None) -> Figure:
     """Share of points completed against one swept key, one line per solver.
 
     The key is the first swept key that is not the solver's name; with the solver the
     only one, a bar per solver.
     """
+    labels = labels or {}
     fig = _figure(figsize=(7.5, 4.8), layout="constrained")
     ax = fig.subplots()
     ran = [r for r in rows if r["status"] != "interrupted"]
-    solvers = sorted({str(r.get("solver") or r.get(SOLVER_KEY)) for r in ran})
+    solvers = list(dict.fromkeys(str(r.get("solver") or r.get(SOLVER_KEY)) for r in ran))
     key = next((k for k in swept if k != SOLVER_KEY), None)
     if key is None:
         share = [np.mean([r["status"] == "completed" for r in ran
@@ -214,16 +271,17 @@ def solver_figure(rows: Rows, swept: Sequence[str]) -> Figure:
         ax.set_xlabel("solver")
     else:
         level = _binned([r[key] for r in ran])
-        axis = _Axis(key, [level(r[key]) for r in ran])
+        axis = _Axis(key, [level(r[key]) for r in ran], labels.get(key))
         for s in solvers:
             mine = [{**r, key: level(r[key]), "ok": float(r["status"] == "completed")}
                     for r in ran if str(r.get("solver") or r.get(SOLVER_KEY)) == s]
             if mine:
                 _draw_curve(ax, mine, key, lambda r: r["ok"], _mean, "share completed",
-                            axis)
+                            labels, axis)
                 ax.lines[-1].set_label(s)
         ax.legend(title="solver", fontsize=8)
     ax.set_ylim(-0.05, 1.05)
     ax.set_ylabel("share of points completed")
-    ax.set_title(f"Success by solver{'' if key is None else ' against ' + key}")
+    ax.set_title("Success by solver" if key is None
+                 else f"Success by solver against {labels.get(key) or key}")
     return fig

@@ -31,7 +31,7 @@ from ..errors import ConfigError, DualArmError
 from .spec import Point, SweepSpec, expand
 
 #: Version of the stored record's fields; part of every point's key.
-RECORD_FORMAT = 1
+RECORD_FORMAT = 2
 
 #: Criterion of a point whose start pose cannot be reached.
 START_UNREACHABLE = "start_unreachable"
@@ -227,11 +227,15 @@ def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
     Raises
     ------
     ConfigError
-        A bad key or value (naming the sweep file and the key), a base file that is
-        not an experiment file, or a sweep in which no point can start.
+        A bad key or value (naming the sweep file and the key), a missing base file
+        (naming the sweep file, ``base`` and the path), a base file that is not an
+        experiment file, or a sweep in which no point can start.
     """
     from ..experiments.yaml_file import read_yaml_document
 
+    if not spec.base.is_file():  # the sweep's own value: name the sweep file and the key
+        what = "is a folder, not a file" if spec.base.is_dir() else "file not found"
+        raise ConfigError(f"{what}: {spec.base}", path=spec.path, key="base")
     base = read_yaml_document(spec.base)
     if not isinstance(base, dict):
         raise ConfigError("the base experiment file must be a mapping of keys",

@@ -6,9 +6,10 @@ script) with
 1. a **completion map**: the share of the path completed [%] over the first two swept
    keys (the mean over any other swept keys; points that cannot even start are
    crossed out);
-2. a **limit map**: the worst realised limit ratio (range or speed, leader, follower or
-   grasp; above 1 is outside a limit) and the smallest joint margin [deg] over the same
-   two keys (the worst over any other keys);
+2. **limit maps** of the motion after the start-up recovery (:mod:`.recovery`): the
+   worst realised limit ratio (range or speed, leader, follower or grasp; above 1 is
+   outside a limit), the smallest joint margin [deg] and the time until every variable
+   is inside its range [s], over the same two keys (the worst over any other keys);
 3. **success by solver**: the share of points that completed against one swept key
    (the first one that is not the solver), one line per solver;
 4. the **ten worst points**: failed ones first (least path completed), then the highest
@@ -26,7 +27,7 @@ import html
 import io
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -43,7 +44,7 @@ WORST_ROWS = 10
 
 #: The figures: file name (also written beside the report) and title.
 FIGURES = (("map_completion.png", "Completion"),
-           ("map_limits.png", "Realised limits and margins"),
+           ("map_limits.png", "Realised limits and margins after the start-up recovery"),
            ("success_by_solver.png", "Success by solver"))
 
 
@@ -53,15 +54,27 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def draw_figures(rows: Sequence[dict[str, Any]], swept: Sequence[str]) -> dict[str, bytes]:
-    """Draw the report's figures as PNG bytes, by file name (see :data:`FIGURES`)."""
-    figures = (completion_figure(rows, swept), limits_figure(rows, swept),
-               solver_figure(rows, swept))
+def draw_figures(rows: Sequence[dict[str, Any]], swept: Sequence[str],
+                 labels: Mapping[str, str] | None = None) -> dict[str, bytes]:
+    """Draw the report's figures as PNG bytes, by file name (see :data:`FIGURES`).
+
+    ``labels`` are the axis labels of the swept keys (default: the keys).
+    """
+    figures = (completion_figure(rows, swept, labels), limits_figure(rows, swept, labels),
+               solver_figure(rows, swept, labels))
     return {name: _png(fig) for (name, _), fig in zip(FIGURES, figures, strict=True)}
 
 
-def _swept(rows: Sequence[dict[str, Any]], meta: dict[str, Any]) -> list[str]:
-    swept = [k for k in meta.get("swept_keys", []) if rows and k in rows[0]]
+def _swept(rows: Sequence[dict[str, Any]], meta: dict[str, Any], *,
+           axes: bool = False) -> list[str]:
+    """Return the swept keys that are table columns.
+
+    With ``axes``, only those varied freely (not the paired ones): the maps' axes.
+    """
+    keys = meta.get("swept_keys", [])
+    if axes:
+        keys = meta.get("map_keys", keys)
+    swept = [k for k in keys if rows and k in rows[0]]
     if not swept:
         raise InvalidInputError("the sweep's table has no row or no swept key column")
     return swept
@@ -111,6 +124,7 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
                   pngs: dict[str, bytes]) -> str:
     """Return the HTML text of the report (see the module docstring), ``pngs`` inlined."""
     swept = _swept(rows, meta)
+    labels = meta.get("labels") or {}
     counts = {s: sum(r["status"] == s for r in rows)
               for s in ("completed", "failed", "interrupted")}
     parts = [
@@ -121,7 +135,9 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
         f"<p>{html.escape(str(meta.get('description', '')))}</p>",
         "<p>Base experiment: <code>"
         f"{html.escape(Path(str(meta.get('base', ''))).name)}</code>; swept keys: "
-        + ", ".join(f"<code>{html.escape(k)}</code>" for k in swept)
+        + ", ".join(f"<code>{html.escape(k)}</code>"
+                    + (f" ({html.escape(labels[k])})" if labels.get(k) else "")
+                    for k in swept)
         + f"; fixed: <code>{html.escape(json.dumps(meta.get('set', {})))}</code>.</p>",
         f"<p>{len(rows)} points: {counts['completed']} completed, {counts['failed']} "
         f"failed, {counts['interrupted']} not finished.</p>",
@@ -131,8 +147,8 @@ def render_report(rows: Sequence[dict[str, Any]], meta: dict[str, Any],
         parts.append(f"<h2>{html.escape(title)}</h2>")
         parts.append(f"<img alt='{html.escape(title)}' src='data:image/png;base64,{data}'>")
     columns = [POINT_COLUMN, *swept, "status", "criterion", "solver", "path_completed_pct",
-               "worst_limit_ratio", "joint_margin_min_rad", "closure_pos_err_max_m",
-               "message"]
+               "worst_limit_ratio", "recovered_at_s", "worst_limit_ratio_after_recovery",
+               "joint_margin_min_rad", "closure_pos_err_max_m", "message"]
     parts.append(f"<h2>The {min(WORST_ROWS, len(rows))} worst points</h2>")
     parts.append(_table(worst_points(rows), columns))
     parts.append("</body></html>")
@@ -163,7 +179,7 @@ def write_report(out: Path, meta: dict[str, Any] | None = None) -> Path:
                                     "'dualarm-qp sweep SWEEP.yaml --out DIR' first")
         meta = json.loads(meta_path.read_text(encoding="utf-8"))
     rows = read_table(out)
-    pngs = draw_figures(rows, _swept(rows, meta))
+    pngs = draw_figures(rows, _swept(rows, meta, axes=True), meta.get("labels"))
     for name, data in pngs.items():
         _write_bytes(out / name, data)
     path = out / REPORT_FILE

@@ -10,11 +10,16 @@ paths into the file (``follower.base.position.0``: list items by index)::
     grid:                              # every combination of these values
       follower.base.position.0: [200, 300, 400]
       solver.name: [nullspace, "qp:daqp"]
+    paired:                            # keys that change with a grid key: a value for
+      follower.base.position.0:        # each of its values, in order
+        controller.duration: [4, 5, 6]
     random:                            # n samples (times each grid point)
       n: 20
       seed: 1
       controller.grasp_speed_max: {uniform: [50, 150]}
     repeat: 1                          # rollouts per point (step timings pooled)
+    labels:                            # axis labels of the maps (default: from the key)
+      follower.base.position.0: "follower base x [mm]"
 
 Values are in the base file's units. This module reads and checks the sweep file itself
 and expands it into points; whether each point makes a valid experiment is checked by
@@ -35,7 +40,8 @@ import numpy as np
 from ..errors import ConfigError
 
 #: Keys of a sweep file.
-SWEEP_KEYS = ("name", "description", "base", "set", "grid", "random", "repeat")
+SWEEP_KEYS = ("name", "description", "base", "set", "grid", "paired", "random", "repeat",
+              "labels")
 
 #: How a random key is drawn: ``uniform: [lo, hi]``, ``normal: [mean, sd]``,
 #: ``choice: [a, b, ...]``.
@@ -43,6 +49,12 @@ DISTRIBUTIONS = ("uniform", "normal", "choice")
 
 #: Most points one sweep may have.
 MAX_POINTS = 100_000
+
+#: Most rollouts of one point (``repeat``).
+MAX_REPEAT = 1_000
+
+#: Most rollouts of one sweep: points times ``repeat``.
+MAX_ROLLOUTS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -82,6 +94,9 @@ class SweepSpec:
         Replacements applied at every point (the file's ``set``), before the swept ones.
     grid : dict
         Values of each grid key, in file order.
+    paired : dict
+        Grid key -> {key: values}: keys that take the i-th of their values wherever the
+        grid key takes its i-th (a distance kept fixed while the speed varies, say).
     random_n : int
         Random samples (0: no ``random`` section).
     random_seed : int
@@ -90,7 +105,11 @@ class SweepSpec:
     random : tuple of RandomKey
         The random keys, in file order.
     repeat : int
-        Rollouts per point; their step timings are pooled.
+        Rollouts per point (at most :data:`MAX_REPEAT`, and at most
+        :data:`MAX_ROLLOUTS` for the whole sweep); their step timings are pooled.
+    labels : dict
+        Swept key -> the label of its map axis, as the file gives them (the others are
+        made from the key, see :mod:`.labels`).
     """
 
     path: str
@@ -99,15 +118,22 @@ class SweepSpec:
     description: str = ""
     fixed: dict[str, Any] = field(default_factory=dict)
     grid: dict[str, list[Any]] = field(default_factory=dict)
+    paired: dict[str, dict[str, list[Any]]] = field(default_factory=dict)
     random_n: int = 0
     random_seed: int = 0
     random: tuple[RandomKey, ...] = ()
     repeat: int = 1
+    labels: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def axes(self) -> list[str]:
+        """The grid keys, then the random keys: the keys varied independently (map axes)."""
+        return [*self.grid, *(r.key for r in self.random)]
 
     @property
     def swept_keys(self) -> list[str]:
-        """The grid keys, then the random keys (the table's value columns)."""
-        return [*self.grid, *(r.key for r in self.random)]
+        """The axes, then the paired keys (the table's value columns)."""
+        return [*self.axes, *(k for keys in self.paired.values() for k in keys)]
 
 
 @dataclass(frozen=True)
@@ -144,9 +170,11 @@ def check_key_path(key: Any, spec_path: str, section: str) -> str:
     return key
 
 
-def _positive_int(value: Any, spec_path: str, key: str) -> int:
+def _positive_int(value: Any, spec_path: str, key: str, cap: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise _error(spec_path, f"must be a whole number >= 1, got {value!r}", key=key)
+    if value > cap:
+        raise _error(spec_path, f"is {value:,}; at most {cap:,}", key=key)
     return value
 
 
@@ -169,6 +197,25 @@ def _grid(raw: Any, spec_path: str) -> dict[str, list[Any]]:
         if len(set(seen)) != len(seen):
             raise _error(spec_path, f"grid value {twice!r} is given twice", key=key)
         out[key] = list(values)
+    return out
+
+
+def _paired(raw: Any, spec_path: str, grid: dict[str, list[Any]]
+            ) -> dict[str, dict[str, list[Any]]]:
+    """Check the ``paired`` section: for grid keys, a list of values as long as theirs."""
+    out: dict[str, dict[str, list[Any]]] = {}
+    for gkey, keys in _mapping(raw, spec_path, "paired").items():
+        if gkey not in grid:
+            raise _error(spec_path, "pairs keys with a grid key, and this is not one",
+                         key=f"paired.{gkey}", valid=list(grid))
+        out[gkey] = {}
+        for key, values in _mapping(keys, spec_path, f"paired.{gkey}").items():
+            check_key_path(key, spec_path, f"paired.{gkey}")
+            n = len(grid[gkey])
+            if not isinstance(values, list) or len(values) != n:
+                raise _error(spec_path, f"needs a list of {n} values, one for each value "
+                             f"of '{gkey}', got {values!r}", key=f"paired.{gkey}.{key}")
+            out[gkey][key] = list(values)
     return out
 
 
@@ -202,7 +249,7 @@ def _random(raw: Any, spec_path: str) -> tuple[int, int, tuple[RandomKey, ...]]:
     if "seed" not in section:
         raise _error(spec_path, "missing 'seed': a sweep must draw the same points when "
                      "it is run again (to resume)", key="random.seed")
-    n = _positive_int(section["n"], spec_path, "random.n")
+    n = _positive_int(section["n"], spec_path, "random.n", MAX_POINTS)
     seed = section["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise _error(spec_path, f"must be a whole number >= 0, got {seed!r}",
@@ -215,6 +262,20 @@ def _random(raw: Any, spec_path: str) -> tuple[int, int, tuple[RandomKey, ...]]:
     return n, seed, keys
 
 
+def _labels(raw: Any, spec_path: str, swept: list[str]) -> dict[str, str]:
+    """Check the ``labels`` section: text for swept keys only."""
+    if not isinstance(raw, dict):
+        raise _error(spec_path, f"must be a mapping of swept keys to axis labels, got "
+                     f"{type(raw).__name__}", key="labels")
+    for key, text in raw.items():
+        if key not in swept:
+            raise _error(spec_path, "is not a swept key", key=f"labels.{key}", valid=swept)
+        if not isinstance(text, str) or not text.strip():
+            raise _error(spec_path, f"must be non-empty text, got {text!r}",
+                         key=f"labels.{key}")
+    return dict(raw)
+
+
 def _check_overlaps(spec_path: str, fixed: dict[str, Any], swept: list[str]) -> None:
     """Refuse a key swept twice, or swept together with a part of it, or also fixed."""
     for i, a in enumerate(swept):
@@ -222,7 +283,7 @@ def _check_overlaps(spec_path: str, fixed: dict[str, Any], swept: list[str]) -> 
             raise _error(spec_path, "is both set and swept; give it in one place", key=a)
         for b in swept[i + 1:]:
             if a == b:
-                raise _error(spec_path, "is swept twice (in grid and in random)", key=a)
+                raise _error(spec_path, "is swept twice (in grid, paired or random)", key=a)
             if b.startswith(a + ".") or a.startswith(b + "."):
                 raise _error(spec_path, f"is swept together with '{b}', a part of it or "
                              "the whole that holds it; sweep one of them", key=a)
@@ -260,18 +321,25 @@ def parse_sweep(data: Any, spec_path: str) -> SweepSpec:
              for k, v in _mapping(data.get("set", {}) or {}, spec_path, "set").items()}
     grid = _grid(data["grid"], spec_path) if "grid" in data else {}
     n, seed, rand = _random(data["random"], spec_path) if "random" in data else (0, 0, ())
-    _check_overlaps(spec_path, fixed, [*grid, *(r.key for r in rand)])
-    repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat")
+    paired = _paired(data["paired"], spec_path, grid) if "paired" in data else {}
+    swept = [*grid, *(r.key for r in rand), *(k for keys in paired.values() for k in keys)]
+    _check_overlaps(spec_path, fixed, swept)
+    labels = _labels(data["labels"], spec_path, swept) if "labels" in data else {}
+    repeat = _positive_int(data.get("repeat", 1), spec_path, "repeat", MAX_REPEAT)
     total = math.prod(len(v) for v in grid.values()) * max(n, 1)
     if total > MAX_POINTS:
         raise _error(spec_path, f"expands to {total:,} points; a sweep has at most "
                      f"{MAX_POINTS:,}", key="grid" if grid else "random.n")
+    if total * repeat > MAX_ROLLOUTS:
+        raise _error(spec_path, f"{total:,} points x {repeat:,} rollouts is "
+                     f"{total * repeat:,} rollouts; a sweep runs at most {MAX_ROLLOUTS:,}",
+                     key="repeat")
     base = Path(data["base"])
     if not base.is_absolute():
         base = Path(spec_path).parent / base
     return SweepSpec(path=spec_path, name=name, base=base, description=description,
-                     fixed=fixed, grid=grid, random_n=n, random_seed=seed, random=rand,
-                     repeat=repeat)
+                     fixed=fixed, grid=grid, paired=paired, random_n=n, random_seed=seed,
+                     random=rand, repeat=repeat, labels=labels)
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -298,16 +366,20 @@ def _draw(rng: np.random.Generator, r: RandomKey) -> Any:
 def expand(spec: SweepSpec) -> list[Point]:
     """Return the sweep's points.
 
-    The grid's combinations (last key fastest), each with every random sample (drawn
-    once, in order, from ``random.seed``).
+    The grid's combinations (last key fastest; a paired key takes the value at the
+    position of its grid key's), each with every random sample (drawn once, in order,
+    from ``random.seed``).
     """
     rng = np.random.default_rng(spec.random_seed)
     samples: list[dict[str, Any]] = [
         {r.key: _draw(rng, r) for r in spec.random} for _ in range(spec.random_n)] or [{}]
-    combos = itertools.product(*spec.grid.values())
+    keys = list(spec.grid)
     points: list[Point] = []
-    for combo in combos:
-        grid_values = dict(zip(spec.grid, combo, strict=True))
+    for at in itertools.product(*(range(len(v)) for v in spec.grid.values())):
+        grid_values = {k: spec.grid[k][i] for k, i in zip(keys, at, strict=True)}
+        for gkey, paired in spec.paired.items():
+            i = at[keys.index(gkey)]
+            grid_values.update({k: values[i] for k, values in paired.items()})
         for sample in samples:
             points.append(Point(len(points), {**grid_values, **sample}))
     return points

@@ -6,10 +6,12 @@ mappings as JSON), then the point's record (:func:`~.worker.point_record`): ``st
 (completed / failed / interrupted), ``criterion`` (what the run failed on), the path
 completed [%] and the time lost to slowing the task [s], the worst realised range and
 speed ratio of the leader, the follower and the grasp (above 1 is outside the limit) and
-the worst of them all, the smallest joint margin [rad] and grasp margin [m], the worst
-closure and leader tracking errors [m, rad], the step-time median and 99th percentile
-[s], the number of steps of each status, the point's wall time [s] and the worker that
-ran it, the message, and ``key`` (the point's identity in the store).
+the worst of them all, the same after the start-up recovery with the time it took [s]
+and the smallest joint margin from then on [rad] (:mod:`.recovery`), the smallest joint
+margin [rad] and grasp margin [m] of the whole run, the worst closure and leader
+tracking errors [m, rad], the step-time median and 99th percentile [s], the number of
+steps of each status, the point's wall time [s] and the worker that ran it, the
+message, and ``key`` (the point's identity in the store).
 
 A point not run yet when a sweep stopped has status ``interrupted``, its criterion saying
 why, and no numbers. Both files are written atomically: a reader sees the previous

@@ -5,8 +5,9 @@ in the worker's process, so that the library is imported once per worker and the
 scheduling cost is shared by several rollouts. Each point is built from its document
 (:func:`~dualarm_qp.experiments.setup.build_experiment`), rolled out in process with no
 files written (:func:`~dualarm_qp.experiments.run.run_experiment` without a folder),
-and summed up in one flat *record* (:func:`point_record`): the numbers of the results
-table. A point never raises: a library error or a bug becomes a failed record.
+and summed up in one flat *record* (:func:`point_record`, and the realised limits after
+the start-up recovery, :mod:`.recovery`): the numbers of the results table. A point
+never raises: a library error or a bug becomes a failed record.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ from typing import Any
 import numpy as np
 
 from .points import START_UNREACHABLE, PointTask, is_start_failure
+from .recovery import FIELDS as RECOVERY_FIELDS
+from .recovery import after_recovery
 
 #: The parts whose realised motion is measured against its limits.
 PARTS = ("leader", "follower", "grasp")
@@ -59,7 +62,8 @@ def empty_record(status: str, criterion: str | None, message: str) -> dict[str, 
         rec[f"{part}_range_ratio_max"] = math.nan
         rec[f"{part}_speed_ratio_max"] = math.nan
     rec.update({
-        "worst_limit_ratio": math.nan, "joint_margin_min_rad": math.nan,
+        "worst_limit_ratio": math.nan, **dict.fromkeys(RECOVERY_FIELDS, math.nan),
+        "joint_margin_min_rad": math.nan,
         "grasp_margin_min_m": math.nan, "closure_pos_err_max_m": math.nan,
         "closure_rot_err_max_rad": math.nan, "leader_pos_err_max_m": math.nan,
         "leader_rot_err_max_rad": math.nan, "step_time_median_s": math.nan,
@@ -141,6 +145,9 @@ def run_point(task: PointTask) -> dict[str, Any]:
                         for _ in range(task.repeat)]
             rec = point_record(outcomes[0].summary,
                                [o.result.trace.step_time_s for o in outcomes])
+            first = outcomes[0].result
+            rec.update(after_recovery(first.trace, exp.task, exp.options.grasp_speed_max,
+                                      first.dt))
             if any(o.interrupted for o in outcomes):
                 rec["status"] = "interrupted"
         except ConfigError as err:

@@ -52,6 +52,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; font: 13px/1.35 system-u
 #readout span { font-variant-numeric: tabular-nums; }
 #notes { color: #a04000; }
 .legend i { display: inline-block; width: 10px; height: 10px; margin: 0 3px 0 8px; }
+.legend i.axis { width: 4px; height: 12px; vertical-align: -1px; }
 .dg { display: none !important; }
 #dualarm-errors { display: none; }
 """
@@ -62,8 +63,11 @@ _BODY = """
   <div class="row"><span id="title"></span>
     <span class="legend"><i style="background:#3b6fb6"></i>leader<i style="background:#c9832f">
     </i>follower<i style="background:#2ca02c"></i>grasp range<i style="background:#d62728"></i>
-    grasp<i style="background:#7b2cbf"></i>path D(t)<i style="background:#ffb000"></i>joint
-    near a limit<i style="background:#e00000"></i>outside</span>
+    grasp<i style="background:#7b2cbf"></i>path D(t)<i class="axis" style="background:#333333">
+    </i>joint axis:<i class="axis" style="background:#ffb000"></i>near a limit<i class="axis"
+    style="background:#e00000"></i>outside its range</span>
+    <label title="Off: only the axes of joints near a limit or outside their range">
+    <input type="checkbox" id="all-axes"> every joint axis</label>
     <span id="notes"></span></div>
   <div class="row"><button id="play">Pause</button>
     <input id="scrub" type="range" min="0" max="0" step="1" value="0" aria-label="time">

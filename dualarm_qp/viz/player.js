@@ -93,14 +93,27 @@
     });
     return {spec: arm, nodes: nodes, joints: joints, state: joints.map(() => -1)};
   });
+  // Joint axes: every one, or only those of joints near a limit or outside their range.
+  const allAxes = $("all-axes");
+  allAxes.checked = SCENE.all_joint_axes !== false;
+  function showAxes() {
+    arms.forEach((arm) => arm.joints.forEach((mesh, i) => {
+      mesh.visible = allAxes.checked || arm.state[i] > 0;
+    }));
+  }
+  allAxes.addEventListener("change", () => { showAxes(); viewer.set_dirty(); });
   const objectNode = new THREE.Group();
   root.add(objectNode);
   const bar = material(SCENE.object.colour);
   SCENE.object.parts.forEach((p) => objectNode.add(shape(p, bar)));
   const strip = material(SCENE.object.range_colour);
   SCENE.object.range.forEach((p) => objectNode.add(shape(p, strip)));
-  const graspPoint = new THREE.Mesh(new THREE.SphereGeometry(0.018, 20, 14),
-                                    material(SCENE.object.grasp_colour));
+  // The grasp: a ball scaled to the object, drawn over the gripper that holds it.
+  const graspMaterial = material(SCENE.object.grasp_colour);
+  graspMaterial.depthTest = false;
+  const graspPoint = new THREE.Mesh(
+    new THREE.SphereGeometry(SCENE.object.grasp_radius || 0.018, 24, 16), graspMaterial);
+  graspPoint.renderOrder = 3;
   objectNode.add(graspPoint);
   const pathGeometry = new THREE.BufferGeometry().setFromPoints(
     SCENE.path.map((p) => new THREE.Vector3(p[0], p[1], p[2])));
@@ -170,6 +183,7 @@
       });
       flagged.push(arm.spec.name + ": " + (names.length ? names.join(", ") : "all inside"));
     });
+    showAxes();
     setPose(objectNode, a, o);
     graspPoint.position.set(F.local[k][0], F.local[k][1], F.local[k][2]);
     $("scrub").max = String(F.t.length - 1);
@@ -233,6 +247,14 @@
     st.dataset.armBox = [x0, y0, x1, y1].map((z) => Math.round(z)).join(",");
     st.dataset.canvas = [rect.left, rect.top, rect.width, rect.height].map(Math.round).join(",");
     st.dataset.requests = String(requests.length);
+    let shown = 0, flaggedAxes = 0, total = 0;
+    arms.forEach((arm) => arm.joints.forEach((mesh, i) => {
+      total += 1;
+      shown += mesh.visible ? 1 : 0;
+      flaggedAxes += arm.state[i] > 0 ? 1 : 0;
+    }));
+    st.dataset.axes = [shown, flaggedAxes, total].join(",");
+    st.dataset.allAxes = allAxes.checked ? "1" : "0";
     st.dataset.errors = String(report.errors.length);
     $("dualarm-errors").textContent = report.errors.concat(requests).join("\n");
     st.dataset.ready = "1";

@@ -15,7 +15,8 @@ Any other arm (a DH table), or a URDF arm some of whose meshes cannot be read, i
 as a cylinder per link between consecutive frame origins (a *capsule*), with a sphere at
 each frame origin. Every arm has a short cylinder along each joint axis that changes
 colour when the joint nears or leaves its range (drawn over the meshes, so that they do
-not hide it). The object is a bar along the grasp path
+not hide it; on such an arm the page shows only those of joints near or outside their
+range until asked for all). The object is a bar along the grasp path
 (boxes following the path, or a cylinder for a :class:`~dualarm_qp.task.surfaces.
 CylinderSurface`), with the grasp range as a green strip on the grasp surface.
 """
@@ -47,6 +48,9 @@ JOINT_RADIUS, JOINT_LENGTH = 0.04, 0.09
 MESH_JOINT_RADIUS, MESH_JOINT_LENGTH = 0.014, 0.22
 #: Bar cross-section: width along n* and depth behind the surface along -a* [m].
 BAR_WIDTH, BAR_DEPTH = 0.05, 0.025
+#: The grasp marker (a ball): its radius against the bar's width or the cylinder's
+#: diameter, and against the length of the object drawn.
+GRASP_PER_WIDTH, GRASP_PER_LENGTH = 0.6, 0.03
 #: Samples of D(t) drawn as the path line.
 PATH_SAMPLES = 200
 
@@ -214,7 +218,10 @@ def object_parts(surface: GraspSurface, grasps: FloatArray | None = None) -> dic
     Returns
     -------
     dict
-        ``parts`` (the bar), ``range`` (the grasp range strip) and ``colour``.
+        ``parts`` (the bar), ``range`` (the grasp range strip), ``colour`` and
+        ``grasp_radius`` [m]: the grasp marker's, scaled to the object (wider than its
+        cross-section, and a few percent of its length), so that it shows beside the
+        gripper that holds it.
     """
     s_origin = surface.sigma_of(np.zeros(3))
     values = [surface.sigma_min, surface.sigma_max, s_origin]
@@ -228,12 +235,16 @@ def object_parts(surface: GraspSurface, grasps: FloatArray | None = None) -> dic
         T = _frame_with_z(np.array([0.0, 0.0, 0.5 * (lo + hi)]), np.array([0.0, 0.0, 1.0]))
         bar = [{"shape": "cylinder", "radius": surface.radius, "length": hi - lo,
                 "pose": _pose_list(T)}]
+        width = 2.0 * float(surface.radius)
     else:
         bar = _strip(surface, lo, hi, width=BAR_WIDTH, depth=BAR_DEPTH, lift=-BAR_DEPTH / 2)
+        width = BAR_WIDTH
+    grasp_radius = max(GRASP_PER_WIDTH * width, GRASP_PER_LENGTH * (hi - lo))
     marks = _strip(surface, surface.sigma_min, surface.sigma_max, width=0.3 * BAR_WIDTH,
                    depth=0.004, lift=0.002)
     return {"parts": bar, "range": marks, "colour": COLOURS["object"],
-            "range_colour": COLOURS["range"], "grasp_colour": COLOURS["grasp"]}
+            "range_colour": COLOURS["range"], "grasp_colour": COLOURS["grasp"],
+            "grasp_radius": round(grasp_radius, 6)}
 
 
 def path_points(task: DualArmTask, t_start: float, t_end: float) -> list[list[float]]:
@@ -264,7 +275,11 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
     dict
         ``title``, ``arms`` (:func:`arm_parts`), ``meshes`` (the triangle buffers the
         arms' mesh parts index, :meth:`~dualarm_qp.viz.meshes.MeshLibrary.payload`),
-        ``notes`` (what could not be drawn), ``object``, ``path``, ``path_colour``.
+        ``notes`` (what could not be drawn), ``object``, ``path``, ``path_colour``, and
+        ``all_joint_axes``: whether the page starts showing the marker of every joint
+        (capsule arms: they are the joints of the stick figure) or only of those near
+        or outside their range (an arm drawn with meshes: the meshes show the joints,
+        and a rod out of each would hide them); the page has a toggle.
     """
     library = MeshLibrary()
     leader = arm_parts(task.leader, "leader", library)
@@ -272,6 +287,7 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
     _drop_shared_base_parts(leader, task.leader.base, follower, task.follower.base)
     return {"title": title, "arms": [leader, follower], "meshes": library.payload(),
             "notes": leader["notes"] + follower["notes"],
+            "all_joint_axes": not (leader["markers_on_top"] or follower["markers_on_top"]),
             "object": object_parts(task.surface, grasps),
             "path": path_points(task, t_start, t_end),
             "path_colour": COLOURS["path"]}

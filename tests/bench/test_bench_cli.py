@@ -18,12 +18,15 @@ def test_bench_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> No
             "--duration", "0.124", "--quiet"]
     assert main(args) == 0
     out = capsys.readouterr().out
-    assert "nullspace" in out and "step med us" in out and "2 of 2 jobs computed" in out
+    assert "nullspace" in out and "step med us" in out
+    assert "(2 of 2 jobs computed now)" in out  # nothing resumed, and it says so
+    assert "\n  solve/bare: " in out and "\n  margin rad: " in out  # the columns' legend
     rows = list(csv.DictReader(open(tmp_path / "bench.csv", encoding="utf-8")))
     assert [r["solver"] for r in rows] == ["reference", "nullspace"]
     assert (tmp_path / "bench.png").exists()
     assert main(args) == 0
-    assert "0 of 2 jobs computed" in capsys.readouterr().out
+    assert "(0 of 2 jobs computed now, 2 reused from the store (resumed))" in (
+        capsys.readouterr().out)
 
 
 def test_bench_bad_input_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -8,6 +8,7 @@ beyond their limit.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -21,8 +22,10 @@ from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.figures import (
     RUN_FIGURES,
     Curve,
+    DisplayUnits,
     PlotLimits,
     RunData,
+    closure_figure,
     comparison_figure,
     grasp_figure,
     joints_figure,
@@ -30,8 +33,13 @@ from dualarm_qp.experiments.figures import (
     tracking_figure,
 )
 from dualarm_qp.experiments.figures.canvas import outside_spans
+from dualarm_qp.experiments.figures.compare import range_label
 from dualarm_qp.experiments.figures.rundata import ArmLimits
-from dualarm_qp.experiments.html_report import write_run_report
+from dualarm_qp.experiments.html_report import (
+    CRITERION_TEXT,
+    render_run_report,
+    write_run_report,
+)
 from dualarm_qp.experiments.run import run_experiment
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -142,6 +150,42 @@ def test_the_report_is_self_contained(limits_run):
     assert "animation.html" not in page  # none in the folder
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] in page and summary["status"] in page
+
+
+def test_the_report_leads_with_the_verdict_and_folds_the_raw_values(limits_run):
+    _, out, _ = limits_run
+    page = (out / "report.html").read_text()
+    verdict = page.index('id="verdict"')
+    details = page.index('<details id="all-values">')
+    assert verdict < page.index("<table") < page.index("<figure") < details
+    assert "<strong>Completed</strong>: the whole path D(t)" in page[verdict:]
+    glance = page[verdict:page.index("<figure")]
+    assert "100% of D(t)" in glance and "time lost to slowing</th><td>none" in glance
+    # the worst share of each limit, with its joint; the follower starts outside (Table 2)
+    limits = glance[glance.index('<table class="limits">'):]
+    row = limits[limits.index("follower arm"):]
+    row = row[:row.index("</tr>")]
+    assert '<td class="over">103%</td><td>qf1; started outside, at 103%</td>' in row
+    assert "leader arm" in limits and "follower grasp" in limits
+    # every raw key is still there, folded below
+    assert "margin_qf_min_after_start_rad" in page[details:]
+    assert "margin_qf_min_after_start_rad" not in page[:details]
+
+
+def test_a_failed_run_says_first_why(limits_run, tmp_path):
+    _, out, _ = limits_run
+    summary = json.loads((out / "summary.json").read_text())
+    message = "path not completed: 64.9% of the path in 0.93 s (the duration cap)"
+    summary.update(status="failed", completed=False, message=message,
+                   path_completed_pct=64.9, time_lost_to_scaling_s=0.527,
+                   failure={"criterion": "path_incomplete", "sample": 30, "t_s": 0.93,
+                            "amount": 0.649, "limit": 1.0, "message": message})
+    page = render_run_report(tmp_path, summary, [])
+    verdict = page[page.index('id="verdict"'):]
+    verdict = verdict[:verdict.index("</p>")]
+    assert "<strong>FAILED</strong> on <code>path_incomplete</code>" in verdict
+    assert CRITERION_TEXT["path_incomplete"] in verdict and message in verdict
+    assert "64.9% of D(t)" in page and "0.527 s (the limits slowed the path" in page
 
 
 def test_the_report_shows_an_animation_beside_it(limits_run, tmp_path):
@@ -258,6 +302,30 @@ def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():
     assert ax.get_ylim() == pytest.approx((-115.0, 115.0))
 
 
+def test_error_axes_stop_where_the_tolerances_stop_mattering():
+    """Six decades below the smallest tolerance (1 mm: 1e-9), not at 1e-16; what is
+    smaller (the exact start, rounding) lies on the bottom edge and the legend says so."""
+    data, limits = synthetic(), synthetic_limits()
+    data.columns["leader_pos_err"] = np.concatenate(([0.0, 2e-16], np.full(8, 3e-6)))
+    data.columns["closure_rot_err"] = np.full(10, 1e-12)
+    tracking = tracking_figure(data, limits)
+    closure = closure_figure(data, limits)
+    for ax in (tracking.axes[0], closure.axes[0]):
+        assert ax.get_yscale() == "log"
+        assert ax.get_ylim() == pytest.approx((1e-9, 1e-1))  # tolerances 1e-3 m, 1e-2 rad
+        assert min(np.min(ln.get_ydata()) for ln in ax.get_lines() if len(ln.get_ydata())
+                   ) >= 1e-9
+        assert "below 1e-9: on the bottom edge" in ax.get_legend_handles_labels()[1]
+    position = next(ln for ln in tracking.axes[0].get_lines()
+                    if ln.get_label() == "position [m]")
+    assert list(position.get_ydata()[:3]) == pytest.approx([1e-9, 1e-9, 3e-6])
+    # singular values: two decades below the threshold (1e-3)
+    assert tracking.axes[1].get_ylim() == pytest.approx((1e-5, 1.0))
+    calm = synthetic()  # every error 1e-9: nothing below the axis, no note
+    labels = closure_figure(calm, limits).axes[0].get_legend_handles_labels()[1]
+    assert not any("bottom edge" in lab for lab in labels)
+
+
 def test_joint_counts_come_from_the_header_and_a_sliding_leader_grasp_is_drawn():
     data = synthetic(7, leader_grasp=True)
     assert data.n_joints("l") == data.n_joints("f") == 7
@@ -312,11 +380,100 @@ def test_a_range_limit_far_from_the_data_is_named_not_drawn():
     fig = comparison_figure([Curve("(a)", t, np.radians([-31, -40, -50, -40, -31]), "C0")],
                             value_range=(np.radians(-45), np.radians(225)),
                             speed_limit=None, scale=DEG, value_label="q3 [deg]",
-                            speed_label="[deg/s]", title="Fig. 5")
+                            speed_label="[deg/s]", title="Fig. 5", unit="deg")
     assert line_levels(fig, "limit:range") == pytest.approx([-45, -45])
-    labels = [ln.get_label() for ln in fig.axes[0].get_lines()]
-    assert any("off the axis" in lab and "225" in lab for lab in labels)
+    assert legend_texts(fig) == ["(a)", "range limit \N{MINUS SIGN}45 deg (the upper limit, "
+                                 "225 deg, is far above the axis)"]
     assert spans(fig.axes[0], "outside:range:(a)") == pytest.approx(flat([(0.15, 0.25)]))
+
+
+def test_range_legends_say_which_limits_are_drawn_and_where_the_others_are():
+    assert range_label([0.0, 400.0], [], "mm") == "range limits 0 and 400 mm"
+    assert range_label([400.0], [("lower", 0.0, "below")], "mm") == (
+        "range limit 400 mm (the lower limit, 0 mm, is far below the axis)")
+    assert range_label([], [("lower", -45.0, "below"), ("upper", 225.0, "above")],
+                       "deg") == ("range limits off the axis: the lower limit, \N{MINUS SIGN}45 "
+                                  "deg, is far below the axis; the upper limit, 225 deg, is "
+                                  "far above the axis")
+
+
+# --- readable ticks in the file's units ---------------------------------------------
+
+def legend_texts(fig) -> list[str]:
+    return [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+
+
+def shown_tick_labels(fig, ax) -> list[tuple[float, str]]:
+    """(value, label) of the y ticks inside the axis's view, as drawn."""
+    fig.canvas.draw()
+    lo, hi = ax.get_ylim()
+    return [(float(v), lab.get_text()) for v, lab in zip(ax.get_yticks(),
+                                                         ax.get_yticklabels(), strict=True)
+            if lo <= v <= hi]
+
+
+def assert_readable(label: str, value: float) -> None:
+    """A label a person reads: a plain number (no exponent) of at most two significant
+    digits (not ``57.3`` or ``114.6``), the tick's value."""
+    text = label.replace("\N{MINUS SIGN}", "-").replace(",", "")
+    assert re.fullmatch(r"-?\d+(\.\d+)?", text), label
+    assert float(text) == pytest.approx(value), (label, value)
+    digits = text.lstrip("-").replace(".", "").strip("0")
+    assert len(digits) <= 2, label
+
+
+def test_speed_ticks_are_round_numbers_in_the_display_unit():
+    """Fig. 5's rate axis: 1,000 deg/s jumps against a 114.6 deg/s (2 rad/s) limit."""
+    t = np.arange(40) * 0.031
+    q3 = np.radians(np.concatenate(([-31.0], np.linspace(-0.5, 6.0, 39))))  # a 30 deg jump
+    fig = comparison_figure([Curve("(b)", t, q3, "C1")], value_range=(np.radians(-45),
+                            np.radians(225)), speed_limit=2.0, scale=DEG, unit="deg",
+                            value_label="q3 [deg]", speed_label="q3 rate [deg/s]",
+                            title="Fig. 5")
+    speed = fig.axes[2]
+    assert speed.get_yscale() == "symlog"
+    ticks = shown_tick_labels(fig, speed)
+    for value, label in ticks:
+        assert_readable(label, value)
+    values = [v for v, _ in ticks]
+    assert {-1000.0, -100.0, -50.0, 0.0, 50.0, 100.0, 1000.0} <= set(values)
+    assert not any(np.isclose(abs(v), 2 * DEG) for v in values)  # the limit is the line
+    assert "speed limit \N{PLUS-MINUS SIGN}114.6 deg/s" in legend_texts(fig)
+
+
+def test_run_figures_show_the_files_units():
+    data = synthetic()
+    for units, per_rad, per_m in ((DisplayUnits("deg", "mm"), DEG, 1e3),
+                                  (DisplayUnits("rad", "m"), 1.0, 1.0)):
+        limits = dataclasses.replace(synthetic_limits(), units=units)
+        joints = joints_figure(data, limits)
+        assert joints.axes[0].get_ylabel() == f"[{units.angle}]"
+        assert line_levels(joints, "limit:qf3") == pytest.approx([-per_rad, per_rad])
+        rates = rates_figure(data, limits)
+        assert rates.axes[0].get_ylabel() == f"[{units.angle}/s]"
+        ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3")
+        assert line_levels(rates, "limit:qf_dot3") == pytest.approx([-3 * per_rad,
+                                                                     3 * per_rad])
+        for value, label in shown_tick_labels(rates, ax):  # 20 rad/s against 3 rad/s
+            assert_readable(label, value)
+        grasp = grasp_figure(data, limits)
+        assert grasp.axes[0].get_ylabel() == f"grasp [{units.length}]"
+        assert grasp.axes[1].get_ylabel() == f"sliding speed [{units.length}/s]"
+        assert line_levels(grasp, "limit:grasp") == pytest.approx([0.0, 0.4 * per_m])
+        for value, label in shown_tick_labels(grasp, grasp.axes[1]):
+            assert_readable(label, value)
+
+
+def test_the_display_units_are_the_experiment_files(tmp_path):
+    d = yaml.safe_load((CONFIGS / "puma_beam_limits.yaml").read_text())
+    assert DisplayUnits.of_file(CONFIGS / "puma_beam_limits.yaml") == DisplayUnits("deg", "mm")
+    d["units"] = {"length": "m", "angle": "rad", "time": "s"}  # a schema check only
+    path = tmp_path / "si.yaml"
+    path.write_text(yaml.safe_dump(d))
+    assert DisplayUnits.of_file(path) == DisplayUnits("rad", "m")
+    assert DisplayUnits.of_file("<built in code>") == DisplayUnits("deg", "mm")
+    with pytest.raises(InvalidInputError, match="display units"):
+        DisplayUnits("grad", "mm")
 
 
 # --- the bench figure -------------------------------------------------------------------

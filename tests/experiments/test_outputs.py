@@ -206,15 +206,17 @@ def _signal_at_sample(monkeypatch, sample: int, sig: int, *, calls: int = 1,
 
     def rollout(*args, progress=None, **kwargs):
         seen["n"] += 1
+        done = {"samples": 0}
 
-        def prog(done: int, total: int) -> None:
-            if seen["n"] == calls and done == sample:
+        def prog(path_done: float, time_lost: float) -> None:
+            done["samples"] += 1  # called once a sample
+            if seen["n"] == calls and done["samples"] == sample:
                 try:
                     os.kill(os.getpid(), sig)
                 except KeyboardInterrupt:
                     if not swallow:
                         raise
-            progress(done, total)
+            progress(path_done, time_lost)
 
         return real(*args, progress=prog, **kwargs)
 

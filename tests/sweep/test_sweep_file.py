@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 import yaml
-from sweep_tools import BASE, write_sweep
+from sweep_tools import BASE, NEAR, write_sweep
 
 from dualarm_qp.cli import main
 from dualarm_qp.errors import ConfigError
@@ -25,6 +25,18 @@ def test_grid_expands_last_key_fastest_with_every_random_sample():
     assert [p.values["c.0"] for p in pts[2:4]] == draws  # the same samples at every point
     again = expand(spec)
     assert [p.values for p in again] == [p.values for p in pts]  # seeded: resumable
+
+
+def test_a_paired_key_takes_the_value_at_its_grid_keys_position():
+    spec = parse_sweep({"base": "b.yaml", "grid": {"v": [10, 20, 40], "s": ["a", "b"]},
+                        "paired": {"v": {"duration": [4, 2, 1], "note": ["x", "y", "z"]}}},
+                       "s.yaml")
+    pts = expand(spec)
+    assert len(pts) == 6  # pairing adds no combination
+    assert [(p.values["v"], p.values["duration"], p.values["note"]) for p in pts[::2]] == [
+        (10, 4, "x"), (20, 2, "y"), (40, 1, "z")]
+    assert all(p.values["v"] * p.values["duration"] == 40 for p in pts)
+    assert spec.axes == ["v", "s"] and spec.swept_keys == ["v", "s", "duration", "note"]
 
 
 def test_random_distributions_are_drawn_as_given():
@@ -89,6 +101,17 @@ def _exit_and_error(capsys, path, out):
     ({"random": {"n": 3, "seed": 1, "controller.dt": {"beta": [0, 1]}}}, None,
      "controller.dt", "valid: uniform, normal, choice"),
     ({"repeat": 0}, None, "repeat", ">= 1"),
+    ({"paired": {"controller.dt": {"controller.duration": [1, 2]}}}, None,
+     "paired.controller.dt", "valid: follower.base.position.0, follower.base.position.1"),
+    ({"paired": {"follower.base.position.1": {"controller.duration": [1, 2, 3]}}}, None,
+     "paired.follower.base.position.1.controller.duration", "needs a list of 2 values"),
+    ({"paired": {"follower.base.position.1": {"controller.duration": [1, 2]}},
+      "set": {"controller.duration": 1}}, None, "controller.duration", "both set and swept"),
+    ({"labels": {"follower.base.position.2": "z"}}, None, "labels.follower.base.position.2",
+     "is not a swept key (valid: follower.base.position.0, follower.base.position.1)"),
+    ({"labels": {"follower.base.position.0": 5}}, None, "labels.follower.base.position.0",
+     "must be non-empty text"),
+    ({"labels": ["x"]}, None, "labels", "must be a mapping"),
 ])
 def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, grid, named,
                                                      says):
@@ -101,10 +124,43 @@ def test_bad_sweep_files_exit_2_naming_file_and_key(tmp_path, capsys, extra, gri
     assert not out.exists()  # nothing ran, and no empty folder is left
 
 
-def test_a_missing_base_file_names_it(tmp_path, capsys):
+def test_repeat_and_the_rollouts_of_a_sweep_are_capped_naming_the_cap():
+    doc = {"base": "b.yaml", "grid": {"a": [1, 2]}}
+    with pytest.raises(ConfigError, match="is 1,000,000,000; at most 1,000") as err:
+        parse_sweep({**doc, "repeat": 1_000_000_000}, "s.yaml")
+    assert (err.value.path, err.value.key) == ("s.yaml", "repeat")
+    random = {"n": 2000, "seed": 1, "c": {"uniform": [0, 1]}}  # 4,000 points
+    with pytest.raises(ConfigError, match=r"4,000 points x 300 rollouts .* at most "
+                       r"1,000,000") as err:
+        parse_sweep({**doc, "random": random, "repeat": 300}, "s.yaml")
+    assert err.value.key == "repeat"
+    assert parse_sweep({**doc, "random": random, "repeat": 250}, "s.yaml").repeat == 250
+
+
+def test_a_missing_base_file_names_the_sweep_file_the_key_and_the_path(tmp_path, capsys):
     path = write_sweep(tmp_path, extra={"base": "missing.yaml"})
     code, err = _exit_and_error(capsys, path, tmp_path / "out")
-    assert code == 2 and "missing.yaml" in err and "file not found" in err
+    assert code == 2, err
+    assert f"{path}: key 'base': file not found: {tmp_path / 'missing.yaml'}" in err, err
+
+
+@pytest.mark.parametrize(("content", "says"), [(None, "URDF file not found"),
+                                                ("not a URDF", "cannot read URDF")])
+def test_a_bad_file_in_the_grid_names_the_sweep_file_the_key_and_the_file(tmp_path, capfd,
+                                                                         content, says):
+    urdf = tmp_path / "arm.urdf"
+    if content is not None:
+        urdf.write_text(content)
+    follower = {"urdf": {"file": "placeholder.urdf", "root": "base_link", "tip": "tool0"},
+                "base": {"position": [300, 1380, 0]}, "initial": {"near": NEAR}}
+    path = write_sweep(tmp_path, grid={"follower.urdf.file": [str(urdf)]},
+                       extra={"set": {"controller.duration": 0.5, "follower": follower}})
+    code = main(["sweep", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capfd.readouterr().err  # file descriptor 2: what C++ code prints too
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err  # our message only, no parser lines before it
+    assert err.startswith(f"dualarm-qp: error: {path}: key 'follower.urdf.file': ")
+    assert f"{says}" in err and str(urdf) in err
 
 
 def test_a_folder_holding_other_files_is_refused(tmp_path, capsys):

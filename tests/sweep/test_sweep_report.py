@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
 
 import pytest
 
-from dualarm_qp.sweep.points import PointTask
-from dualarm_qp.sweep.report import draw_figures, render_report, worst_points
+from dualarm_qp.sweep.labels import axis_label, file_units, sweep_labels
+from dualarm_qp.sweep.maps import completion_figure, limits_figure, solver_figure
+from dualarm_qp.sweep.points import START_UNREACHABLE, PointTask
+from dualarm_qp.sweep.report import _swept, draw_figures, render_report, worst_points
 from dualarm_qp.sweep.table import build_rows, read_table, write_table
 from dualarm_qp.sweep.worker import empty_record
 
@@ -65,3 +68,76 @@ def test_importing_the_sweep_package_imports_no_dask_pyarrow_or_matplotlib():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=120, check=False)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_categories_keep_the_sweep_files_order_not_the_texts():
+    values = [{"follower.base.position": p, "b": y}
+              for p in ([5, 0, 0], [10, 0, 0], [3, 0, 0]) for y in (1, 2)]
+    rows, swept = _rows(values, ["completed"] * 6)
+    rows = [{**r, "follower.base.position": json.dumps(r["follower.base.position"])}
+            for r in rows]  # as the table holds them: JSON text
+    ax = completion_figure(rows, swept).axes[0]
+    assert [t.get_text() for t in ax.get_xticklabels()] == [  # as text: 10, 3, 5
+        "[5, 0, 0]", "[10, 0, 0]", "[3, 0, 0]"]
+
+
+def test_the_start_unreachable_legend_covers_no_map():
+    values = [{"x": x, "y": y} for x in (0, 1, 2, 3) for y in (0, 1, 2, 3)]
+    rows, swept = _rows(values, ["completed"] * 16)
+    for r in rows[-4:]:  # the top-right corner, where the legend used to sit
+        r.update(status="failed", criterion=START_UNREACHABLE, path_completed_pct=0.0)
+    for fig in (completion_figure(rows, swept), limits_figure(rows, swept)):
+        fig.canvas.draw()
+        (legend,) = fig.legends
+        assert "start unreachable" in [t.get_text() for t in legend.get_texts()]
+        box = legend.get_window_extent()
+        assert not any(box.overlaps(ax.get_window_extent()) for ax in fig.axes)
+        assert not any(ax.get_legend() for ax in fig.axes)
+
+
+def test_axis_labels_name_the_key_and_its_unit_in_the_files_units():
+    mm = file_units({"units": {"length": "mm", "angle": "deg"}})
+    assert axis_label("follower.base.position.0", mm) == "follower base x [mm]"
+    assert axis_label("follower.base.position.1", file_units({})) == "follower base y [m]"
+    assert axis_label("trajectory.velocity.0", mm) == "object velocity x [mm/s]"
+    assert axis_label("leader.qd_max.2", mm) == "leader q3 speed limit [deg/s]"
+    assert axis_label("controller.duration", mm) == "duration [s]"
+    assert axis_label("solver.name", mm) == "solver"
+    assert axis_label("controller.weights.leader_joints", mm) == \
+        "controller weights leader joints"  # no rule: the path, no unit
+    labels = sweep_labels(["a.b", "controller.dt"], mm, {"a.b": "my a"})
+    assert labels == {"a.b": "my a", "controller.dt": "sampling interval [s]"}
+
+
+def test_maps_show_the_labels():
+    rows, swept = _rows([{"a.0": x, "v": y} for x in (1, 2, 3) for y in (1, 2)],
+                        ["completed"] * 6)
+    labels = {"a.0": "follower base x [mm]", "v": "object velocity x [mm/s]"}
+    ax = completion_figure(rows, swept, labels).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == tuple(labels.values())
+    fig = solver_figure(rows, swept, labels)
+    assert fig.axes[0].get_xlabel() == labels["a.0"]
+    assert fig.axes[0].get_title() == "Success by solver against follower base x [mm]"
+
+
+def test_the_limit_maps_circle_points_that_never_got_inside_their_ranges():
+    rows, swept = _rows([{"x": x, "y": y} for x in (0, 1) for y in (0, 1)], ["completed"] * 4)
+    for i, r in enumerate(rows):
+        r.update(recovered_at_s=0.5 * i, worst_limit_ratio_after_recovery=0.9,
+                 joint_margin_min_after_recovery_rad=0.1)
+    rows[3].update(recovered_at_s=math.nan, worst_limit_ratio_after_recovery=math.nan,
+                   joint_margin_min_after_recovery_rad=math.nan)
+    fig = limits_figure(rows, swept)
+    circled = [ln for ax in fig.axes for ln in ax.lines if ln.get_label() ==
+               "never inside every range"]
+    assert len(circled) == 3  # on each of the three maps, at the one point
+    assert {(tuple(ln.get_xdata()), tuple(ln.get_ydata())) for ln in circled} == {((1.0,),
+                                                                                    (1.0,))}
+
+
+def test_maps_are_drawn_over_the_free_keys_not_the_paired_ones():
+    rows, swept = _rows([{"v": v, "solver.name": s, "duration": 40 / v}
+                         for v in (10, 20) for s in ("a", "b")], ["completed"] * 4)
+    meta = {"swept_keys": swept, "map_keys": ["v", "solver.name"]}
+    assert _swept(rows, meta, axes=True) == ["v", "solver.name"]
+    assert _swept(rows, meta) == ["v", "solver.name", "duration"]  # the table's columns

@@ -9,6 +9,7 @@ import signal
 import subprocess
 
 import pyarrow.parquet as pq
+import pytest
 from sweep_tools import restore_sigint, stop, sweep_cmd, wait_for_lines, write_sweep
 
 from dualarm_qp.cli import main
@@ -34,6 +35,7 @@ def _store_keys(out):
     return [json.loads(line)["key"] for line in (out / "points.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.slow
 def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster, capsys):
     sweep = write_sweep(tmp_path)
     local, remote = tmp_path / "local", tmp_path / "remote"
@@ -48,6 +50,10 @@ def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster
     statuses = {(r["follower.base.position.0"], r["follower.base.position.1"]): r["status"]
                 for r in a}
     assert statuses[(300, 1380)] == "completed"
+    paper = next(r for r in a if (r["follower.base.position.0"],
+                                  r["follower.base.position.1"]) == (300, 1380))
+    assert 0 < paper["recovered_at_s"] < 1  # the grasp starts 50 mm outside its range
+    assert paper["worst_limit_ratio_after_recovery"] <= 1 + 1e-6 < paper["worst_limit_ratio"]
     assert statuses[(0, 1000)] == "failed"
     assert {r["criterion"] for r in a if r["status"] == "failed"} >= {"start_unreachable"}
     ran_on = {r["worker"] for r in b if r["criterion"] != "start_unreachable"}
@@ -57,6 +63,9 @@ def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster
     assert header.split(",")[:3] == ["point", "follower.base.position.0",
                                      "follower.base.position.1"]
     assert len(lines) == 6
+    meta = json.loads((remote / "sweep.json").read_text())
+    assert meta["labels"] == {"follower.base.position.0": "follower base x [mm]",
+                              "follower.base.position.1": "follower base y [mm]"}
     html = (remote / "report.html").read_text()
     assert "data:image/png;base64," in html and "<script" not in html
     # Rerun: every point is stored, nothing is computed again.
@@ -73,6 +82,7 @@ def cluster_workers(cluster):
         return list(client.scheduler_info()["workers"])
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -95,6 +105,7 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     assert len(keys) == len(set(keys)) == 12  # every point stored once
 
 
+@pytest.mark.slow
 def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     grid = {"follower.base.position.0": [100, 200, 300, 400, 500],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -131,6 +142,7 @@ def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     assert all(r["status"] != "interrupted" for r in _rows(out))
 
 
+@pytest.mark.slow
 def test_the_scheduler_gone_mid_sweep_is_a_clear_error(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}

@@ -63,6 +63,12 @@ def test_the_page_loads_offline_without_errors_or_requests(page, tmp_path):
     assert attrs["requests"] == "0", errors.group(1) if errors else ""
     assert int(attrs["frame"]) > 0  # #t= chose a later sample
     assert "grasp" in dom and 'id="r-status">' in dom
+    # Joint axes: every one on capsule arms; on mesh arms only those near a limit or
+    # outside their range, unless the toggle asks for all.
+    shown, flagged, total = (int(v) for v in attrs["axes"].split(","))
+    meshes = "ur5run" in page
+    assert attrs["all-axes"] == ("0" if meshes else "1")
+    assert shown == (flagged if meshes else total) and total == 12
 
 
 def test_two_timeline_positions_differ_where_the_arms_are(page, tmp_path):

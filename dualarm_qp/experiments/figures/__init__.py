@@ -19,8 +19,8 @@ from .run_figures import (
     tracking_figure,
     write_run_figures,
 )
-from .rundata import PlotLimits, RunData
+from .rundata import DisplayUnits, PlotLimits, RunData
 
-__all__ = ["RUN_FIGURES", "Curve", "PlotLimits", "RunData", "closure_figure",
+__all__ = ["RUN_FIGURES", "Curve", "DisplayUnits", "PlotLimits", "RunData", "closure_figure",
            "comparison_figure", "grasp_figure", "joints_figure", "rates_figure",
            "tracking_figure", "write_run_figures"]

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator, NullLocator
 from numpy.typing import NDArray
 
 from ..._io import atomic_write_with
@@ -135,6 +136,26 @@ def limit_lines(ax: Any, values: Sequence[float], name: str, *, scale: float = 1
     return lines
 
 
+def tick_text(value: float) -> str:
+    """Return a tick label a person reads: ``0``, ``0.05``, ``50``, ``1,000``, ``-10,000``.
+
+    Positional notation (never ``1e+03``), thousands separated, a true minus sign (as
+    matplotlib's own labels).
+    """
+    if value == 0:
+        return "0"
+    size = abs(float(value))
+    text = (f"{size:,.0f}" if size >= 1000
+            else np.format_float_positional(size, precision=4, trim="-"))
+    return ("\N{MINUS SIGN}" if value < 0 else "") + text
+
+
+def round_ticks(top: float, bins: int = 3) -> list[float]:
+    """Round numbers (1, 2, 2.5 or 5 times a power of ten) from 0 up to ``top`` > 0."""
+    values = MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]).tick_values(0.0, top)
+    return [float(v) for v in values if 0.0 <= v <= top * (1 + 1e-9)]
+
+
 def speed_axis(ax: Any, limit: float | None, peak: float) -> None:
     """Scale the y axis of a speed panel against its limit (display units).
 
@@ -145,6 +166,11 @@ def speed_axis(ax: Any, limit: float | None, peak: float) -> None:
     huge sample does not squeeze everything else to a line. Without a finite,
     positive limit the threshold is the power of ten nearest ``peak / 100`` (linear
     when ``peak`` is 0).
+
+    The ticks are round numbers in the display units (:func:`round_ticks`): a few
+    inside the limit, then the powers of ten from three times the limit (or one of 2
+    or 5 times a power of ten when none fits), labelled by :func:`tick_text`. The limit
+    itself is the dashed line, named in the legend.
     """
     lin = float(limit) if limit is not None and np.isfinite(limit) and limit > 0 else 0.0
     if lin and peak <= 1.05 * lin:
@@ -155,13 +181,61 @@ def speed_axis(ax: Any, limit: float | None, peak: float) -> None:
             return
         lin = float(10.0 ** np.round(np.log10(peak / 100.0)))
     ax.set_yscale("symlog", linthresh=lin, linscale=1.5)
-    top = 10.0 ** np.ceil(np.log10(max(peak, lin) * 1.0001))
-    decades = 10.0 ** np.arange(np.floor(np.log10(lin)) + 1, np.log10(top) + 0.5)
-    decades = decades[decades >= 3.0 * lin]  # apart from the labels at +-lin
-    ticks = np.concatenate((-decades[::-1], [-lin, -lin / 2, 0.0, lin / 2, lin], decades))
-    ticks = np.unique(ticks)
-    ax.set_yticks(ticks, [f"{v:.3g}" for v in ticks])
-    ax.set_ylim(-1.6 * peak, 1.6 * peak)
+    top = 1.6 * peak
+    exponents = np.arange(np.floor(np.log10(lin)), np.ceil(np.log10(top)) + 1)
+    outer = [10.0 ** e for e in exponents if 3.0 * lin <= 10.0 ** e <= top]
+    if not outer:  # no power of ten fits: one of 2 or 5 times one
+        outer = [m * 10.0 ** e for e in exponents for m in (2.0, 5.0)
+                 if 3.0 * lin <= m * 10.0 ** e <= top][:1]
+    half = [*round_ticks(lin), *outer]
+    ticks = sorted({-v for v in half} | set(half))
+    ax.set_yticks(ticks, [tick_text(v) for v in ticks])
+    ax.yaxis.set_minor_locator(NullLocator())
+    ax.set_ylim(-top, top)
+
+
+def log_axis(ax: Any, levels: Sequence[float], values: Sequence[Any], *,
+             decades: float) -> float:
+    """Limit a log y axis to the scale that matters, and return its bottom.
+
+    The axis runs from ``decades`` below the smallest of the ``levels`` that matter
+    (tolerances, thresholds; without one, the largest value) to above the largest level
+    or value. Draw the values through ``np.maximum(values, bottom)``: smaller ones
+    (exact zeros, rounding at 1e-16) lie on the bottom edge instead of stretching the
+    axis down to them, and :func:`note_bottom` says so in the legend.
+
+    Parameters
+    ----------
+    ax : Axes
+        A log-scaled y axis.
+    levels : sequence of float
+        The lines the data are read against (non-positive ones are ignored).
+    values : sequence of array_like
+        The data drawn (NaN ignored).
+    decades : float
+        How far below the smallest level the axis goes (powers of ten).
+    """
+    data = [np.asarray(v, dtype=float).ravel() for v in values]
+    finite = np.concatenate([d[np.isfinite(d)] for d in data]) if data else np.zeros(0)
+    marks = [float(v) for v in levels if v is not None and np.isfinite(v) and v > 0]
+    positive = finite[finite > 0]
+    reference = min(marks) if marks else float(positive.max()) if positive.size else 1.0
+    bottom = float(10.0 ** (np.floor(np.log10(reference)) - decades))
+    high = max([*marks, float(positive.max()) if positive.size else reference])
+    ax.set_ylim(bottom, float(10.0 ** np.ceil(np.log10(2.0 * high))))
+    return bottom
+
+
+def note_bottom(ax: Any, bottom: float, values: Sequence[Any]) -> None:
+    """Add a legend entry saying that values below ``bottom`` lie on the bottom edge.
+
+    Only when some of the ``values`` (array_like, NaN ignored) are below it.
+    """
+    low = [np.nanmin(a) for a in (np.asarray(v, dtype=float) for v in values)
+           if a.size and np.isfinite(a).any()]
+    if low and min(low) < bottom:
+        power = f"1e{round(np.log10(bottom))}" if bottom > 0 else f"{bottom:g}"
+        ax.plot([], [], color="none", label=f"below {power}: on the bottom edge")
 
 
 def finite_max_abs(*arrays: Any) -> float:

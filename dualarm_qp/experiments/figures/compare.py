@@ -25,6 +25,7 @@ from .canvas import (
     outside_spans,
     shade_spans,
     speed_axis,
+    tick_text,
 )
 from .rundata import realised_rate
 
@@ -66,8 +67,39 @@ def _view(values: Sequence[FloatArray], extra: Sequence[float] = ()) -> tuple[fl
     return lo - pad, hi + pad
 
 
+def _number(value: float, unit: str) -> str:
+    """Return a value for a legend, to 4 digits, with its unit (``"114.6 deg"``)."""
+    return f"{tick_text(float(f'{value:.4g}'))} {unit}".strip()
+
+
+def range_label(near: Sequence[float], far: Sequence[tuple[str, float, str]],
+                unit: str) -> str:
+    """Legend text of the range limits on an axis (display units).
+
+    Parameters
+    ----------
+    near : sequence of float
+        The limits drawn (dashed).
+    far : sequence of (str, float, str)
+        ``(which, value, where)`` of each limit left out because it lies far from the
+        data: ``which`` is ``"lower"`` or ``"upper"``, ``where`` ``"above"`` or
+        ``"below"`` the axis.
+    unit : str
+        Display unit.
+    """
+    drawn = " and ".join(_number(v, "") for v in near)
+    if not far:
+        return f"range limit{'s' if len(near) > 1 else ''} {drawn} {unit}".rstrip()
+    away = "; ".join(f"the {which} limit, {_number(v, unit)}, is far {where} the axis"
+                     for which, v, where in far)
+    if not near:
+        return f"range limits off the axis: {away}"
+    return f"range limit {drawn} {unit} ({away})"
+
+
 def _range_panel(ax: Any, curves: Sequence[Curve], value_range: tuple[float, float],
-                 scale: float, name: str, window: tuple[float, float] | None) -> None:
+                 scale: float, unit: str, name: str, window: tuple[float, float] | None
+                 ) -> None:
     """Draw the values, the range limits near them, and the outside shading."""
     lo_r, hi_r = value_range
     shown_vals = []
@@ -83,21 +115,26 @@ def _range_panel(ax: Any, curves: Sequence[Curve], value_range: tuple[float, flo
     # squeeze the curves (Fig. 5: q3's upper limit, 225 deg, against data below 7 deg).
     lo, hi = _view(shown_vals)
     span = hi - lo
-    finite = [v for v in (lo_r, hi_r) if np.isfinite(v)]
-    near = [v for v in finite if lo - 0.5 * span <= v * scale <= hi + 0.5 * span]
-    far = [v for v in finite if v not in near]
-    limit_lines(ax, near, name, scale=scale,
-                label="range " + ", ".join(f"{v * scale:.4g}" for v in near) if near else None)
-    if far:
-        ax.plot([], [], color="none", label="off the axis: range limit "
-                + ", ".join(f"{v * scale:.4g}" for v in far))
-    ax.set_ylim(*_view(shown_vals, [v * scale for v in near]))
+    near, far = [], []
+    for which, v in (("lower", lo_r), ("upper", hi_r)):
+        if not np.isfinite(v):
+            continue
+        shown = v * scale
+        if lo - 0.5 * span <= shown <= hi + 0.5 * span:
+            near.append(shown)
+        else:
+            far.append((which, shown, "above" if shown > hi else "below"))
+    label = range_label(near, far, unit) if near or far else None
+    limit_lines(ax, near, name, label=label if near else None)
+    if far and not near:
+        ax.plot([], [], color="none", label=label)
+    ax.set_ylim(*_view(shown_vals, near))
     if window is not None:
         ax.set_xlim(*window)
 
 
 def _speed_panel(ax: Any, curves: Sequence[Curve], speed_limit: float | None, scale: float,
-                 name: str, window: tuple[float, float] | None) -> None:
+                 unit: str, name: str, window: tuple[float, float] | None) -> None:
     """Draw the realised rates, the speed limit and the over-the-limit shading."""
     vmax = float(speed_limit) if speed_limit is not None else np.inf
     peak = 0.0
@@ -112,7 +149,7 @@ def _speed_panel(ax: Any, curves: Sequence[Curve], speed_limit: float | None, sc
                     f"{name}:{c.label}", colour=c.colour, alpha=0.15)
     if np.isfinite(vmax):
         limit_lines(ax, (-vmax, vmax), name, scale=scale,
-                    label=f"speed limit {vmax * scale:.4g}")
+                    label=f"speed limit \N{PLUS-MINUS SIGN}{_number(vmax * abs(scale), unit)}/s")
     speed_axis(ax, vmax * abs(scale), peak)
     if window is not None:
         ax.set_xlim(*window)
@@ -121,7 +158,7 @@ def _speed_panel(ax: Any, curves: Sequence[Curve], speed_limit: float | None, sc
 def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, float],
                       speed_limit: float | None, scale: float, value_label: str,
                       speed_label: str, title: str, zoom: float = ZOOM_S,
-                      note: str = "") -> Figure:
+                      note: str = "", unit: str = "") -> Figure:
     """Draw one quantity of several runs: whole run and first ``zoom`` seconds.
 
     Parameters
@@ -143,6 +180,8 @@ def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, floa
         Length of the zoomed window [s] from the first sample.
     note : str
         Small print under the axes.
+    unit : str
+        The display unit of the quantity (``"deg"``, ``"mm"``), for the legends.
 
     Returns
     -------
@@ -157,21 +196,27 @@ def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, floa
     dts = [float(np.median(np.diff(c.t))) for c in curves if c.t.size > 1]
     half = 0.5 * min(dts) if dts else 0.0
     window = (t0 - half, t0 + zoom)
-    _range_panel(axes[0][0], curves, value_range, scale, "range", None)
-    _range_panel(axes[0][1], curves, value_range, scale, "range", window)
-    _speed_panel(axes[1][0], curves, speed_limit, scale, "speed", None)
-    _speed_panel(axes[1][1], curves, speed_limit, scale, "speed", window)
+    _range_panel(axes[0][0], curves, value_range, scale, unit, "range", None)
+    _range_panel(axes[0][1], curves, value_range, scale, unit, "range", window)
+    _speed_panel(axes[1][0], curves, speed_limit, scale, unit, "speed", None)
+    _speed_panel(axes[1][1], curves, speed_limit, scale, unit, "speed", window)
     axes[0][0].set_ylabel(value_label)
     axes[1][0].set_ylabel(speed_label)
     axes[0][1].set_title(f"first {zoom:g} s", fontsize=9)
     axes[1][1].set_title(f"first {zoom:g} s", fontsize=9)
     for ax in axes[1]:
         ax.set_xlabel("t [s]")
-    axes[0][0].legend(fontsize=7)
-    if axes[1][0].get_legend_handles_labels()[0]:
-        axes[1][0].legend(fontsize=7, loc="lower right")
+    # One legend for the figure, under the title: the runs, the range, the speed limit
+    # (inside a panel it would hide the curves).
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    more, more_labels = axes[1][0].get_legend_handles_labels()
+    ncol = 2
+    fig.legend([*handles, *more], [*labels, *more_labels], loc="upper center",
+               bbox_to_anchor=(0.5, 0.96), ncol=ncol, fontsize=7, frameon=False)
+    rows = -(-(len(labels) + len(more_labels)) // ncol)
     fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0, 0.025 * (note.count("\n") + 2) if note else 0, 1, 1))
+    top = 1.0 - 0.022 * rows
+    fig.tight_layout(rect=(0, 0.025 * (note.count("\n") + 2) if note else 0, 1, top))
     if note:
         fig.text(0.01, 0.012, note, fontsize=7, color="0.3")
     return fig

@@ -3,17 +3,19 @@
 One function per figure returns the :class:`~matplotlib.figure.Figure` (so that tests
 can read what was drawn); :func:`write_run_figures` writes them all as PNG files:
 
-- ``joints.png``: every joint [deg] against its range, shaded where outside;
-- ``rates.png``: every joint rate [deg/s], commanded and realised (finite differences
+- ``joints.png``: every joint against its range, shaded where outside;
+- ``rates.png``: every joint rate, commanded and realised (finite differences
   of the recorded joints), against its speed limit, shaded where the realised rate is
   over it;
-- ``grasp.png``: the grasp coordinate [mm] against its range, and the sliding speed
-  [mm/s] against its limit;
+- ``grasp.png``: the grasp coordinate against its range, and the sliding speed
+  against its limit;
 - ``tracking.png``: the leader's tracking error, the smallest singular value of each
   arm's Jacobian and the task scale;
 - ``closure.png``: the grasp closure error (Eq. 15).
 
-Speed axes are symmetric-logarithmic, linear inside the limit
+Angles and lengths are shown in the experiment file's units (deg or rad, mm or m:
+:class:`~.rundata.DisplayUnits`). Speed axes are symmetric-logarithmic, linear inside
+the limit, with round ticks
 (:func:`~.canvas.speed_axis`): the paper's unbounded first step, thousands of times the
 limit, stays on the axis without flattening the rest.
 """
@@ -29,12 +31,15 @@ from matplotlib.figure import Figure
 from .canvas import (
     finite_max_abs,
     limit_lines,
+    log_axis,
     new_figure,
+    note_bottom,
     outside_mask,
     outside_spans,
     save_png,
     shade_spans,
     speed_axis,
+    tick_text,
 )
 from .rundata import PlotLimits, RunData, realised_rate
 
@@ -45,8 +50,10 @@ if TYPE_CHECKING:
 RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.png")
 
 _ARMS = (("l", "leader"), ("f", "follower"))
-DEG = 180.0 / np.pi
-MM = 1e3
+
+#: How far the error axes go below the smallest tolerance [powers of ten]: an error a
+#: million times smaller than its tolerance is drawn on the bottom edge.
+LOG_DECADES = 6
 
 
 def _speed_note(limits: PlotLimits) -> str:
@@ -70,9 +77,13 @@ def _arm_grid(data: RunData, height: float, bottom: float) -> tuple[Figure, Any,
 
 
 def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Both arms' joints [deg] against time, range limits dashed, outside shaded."""
+    """Both arms' joints against time, range limits dashed, outside shaded.
+
+    Angles in the file's unit (deg or rad).
+    """
     fig, axes, n = _arm_grid(data, 5.2, 0.55)
     t = data.t
+    per_rad, unit = limits.units.per_rad, limits.units.angle
     for row, (arm, label) in enumerate(_ARMS):
         q = data.joints(arm)
         lim = limits.arm(arm)
@@ -82,22 +93,24 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
                 ax.set_visible(False)
                 continue
             name = f"q{arm}{j + 1}"
-            ax.plot(t, q[:, j] * DEG, color="C2" if row == 0 else "C0", lw=1.2)
-            limit_lines(ax, (lim.q_min[j], lim.q_max[j]), name, scale=DEG)
+            ax.plot(t, q[:, j] * per_rad, color="C2" if row == 0 else "C0", lw=1.2)
+            limit_lines(ax, (lim.q_min[j], lim.q_max[j]), name, scale=per_rad)
             shade_spans(ax, outside_spans(t, outside_mask(q[:, j], lim.q_min[j],
                                                           lim.q_max[j])), name)
             ax.set_title(f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
             if row == 1:
                 ax.set_xlabel("t [s]", fontsize=8)
-        axes[row][0].set_ylabel("[deg]", fontsize=8)
+        axes[row][0].set_ylabel(f"[{unit}]", fontsize=8)
     fig.suptitle((title + ": " if title else "")
                  + "joints against their ranges (dashed; shaded: outside)", fontsize=10)
     return fig
 
 
 def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Joint rates [deg/s], commanded and realised, against the speed limits.
+    """Joint rates, commanded and realised, against the speed limits.
+
+    Angles in the file's unit (deg or rad) per second.
 
     The realised rate is the finite difference of the recorded joints; it differs
     from the commanded one where a position-level correction moved the joints. The
@@ -106,6 +119,7 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     """
     fig, axes, n = _arm_grid(data, 5.6, 0.85)
     t = data.t
+    per_rad, unit = limits.units.per_rad, limits.units.angle
     for row, (arm, label) in enumerate(_ARMS):
         cmd = data.commanded_rates(arm)
         real = data.realised_rates(arm)
@@ -117,17 +131,17 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
                 continue
             name = f"q{arm}_dot{j + 1}"
             vmax = float(lim.qd_max[j])
-            ax.plot(t[:-1], cmd[:-1, j] * DEG, color="C0", lw=1.1, label="commanded")
-            ax.plot(t, real[:, j] * DEG, color="C1", lw=0.9, ls=":", label="realised")
-            limit_lines(ax, (-vmax, vmax), name, scale=DEG, label=_speed_note(limits))
+            ax.plot(t[:-1], cmd[:-1, j] * per_rad, color="C0", lw=1.1, label="commanded")
+            ax.plot(t, real[:, j] * per_rad, color="C1", lw=0.9, ls=":", label="realised")
+            limit_lines(ax, (-vmax, vmax), name, scale=per_rad, label=_speed_note(limits))
             shade_spans(ax, outside_spans(t, outside_mask(real[:, j], -vmax, vmax)), name,
                         label="realised over the limit")
-            speed_axis(ax, vmax * DEG, finite_max_abs(cmd[:, j], real[:, j]) * DEG)
+            speed_axis(ax, vmax * per_rad, finite_max_abs(cmd[:, j], real[:, j]) * per_rad)
             ax.set_title(f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
             if row == 1:
                 ax.set_xlabel("t [s]", fontsize=8)
-        axes[row][0].set_ylabel("[deg/s]", fontsize=8)
+        axes[row][0].set_ylabel(f"[{unit}/s]", fontsize=8)
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
     fig.suptitle((title + ": " if title else "")
@@ -136,7 +150,9 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
 
 
 def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Grasp coordinate [mm] against its range, sliding speed [mm/s] against its limit.
+    """Grasp coordinate against its range, sliding speed against its limit.
+
+    Lengths in the file's unit (mm or m).
 
     The commanded sliding speed is the ``m`` column (without the last row's, never
     applied), the realised one the finite difference of the recorded grasp. A
@@ -146,49 +162,50 @@ def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     fig = new_figure(figsize=(8, 6))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     t = data.t
+    per_m, unit = limits.units.per_m, limits.units.length
     lo, hi = limits.grasp_range
     grasp = data.col("grasp")
-    ax1.plot(t, grasp * MM, color="C0", label="follower grasp")
-    limit_lines(ax1, (lo, hi), "grasp", scale=MM, label="grasp range")
+    ax1.plot(t, grasp * per_m, color="C0", label="follower grasp")
+    limit_lines(ax1, (lo, hi), "grasp", scale=per_m, label="grasp range")
     shade_spans(ax1, outside_spans(t, outside_mask(grasp, lo, hi)), "grasp",
                 label="outside the range")
     if data.has("grasp_leader"):
         g_l = data.col("grasp_leader")
-        ax1.plot(t, g_l * MM, color="C2", label="leader grasp")
+        ax1.plot(t, g_l * per_m, color="C2", label="leader grasp")
         if limits.leader_grasp_range is not None:
             lo_l, hi_l = limits.leader_grasp_range
-            limit_lines(ax1, (lo_l, hi_l), "grasp_leader", scale=MM, colour="C2",
+            limit_lines(ax1, (lo_l, hi_l), "grasp_leader", scale=per_m, colour="C2",
                         label="leader grasp range")
             shade_spans(ax1, outside_spans(t, outside_mask(g_l, lo_l, hi_l)), "grasp_leader",
                         colour="C2")
-    ax1.set_ylabel("grasp [mm]")
+    ax1.set_ylabel(f"grasp [{unit}]")
     ax1.legend(fontsize=7)
 
     speed = limits.grasp_speed_max
     real = realised_rate(t, grasp)
     m = data.col("m")[:-1]
-    ax2.plot(t[:-1], m * MM, color="C0", lw=1.1, label="commanded m")
-    ax2.plot(t, real * MM, color="C1", lw=0.9, ls=":", label="realised")
-    peak = finite_max_abs(m, real) * MM
+    ax2.plot(t[:-1], m * per_m, color="C0", lw=1.1, label="commanded m")
+    ax2.plot(t, real * per_m, color="C1", lw=0.9, ls=":", label="realised")
+    peak = finite_max_abs(m, real) * per_m
     if data.has("grasp_leader"):
         real_l = realised_rate(t, data.col("grasp_leader"))
-        ax2.plot(t, real_l * MM, color="C2", lw=0.9, ls=":", label="leader grasp, realised")
-        peak = max(peak, finite_max_abs(real_l) * MM)
+        ax2.plot(t, real_l * per_m, color="C2", lw=0.9, ls=":", label="leader grasp, realised")
+        peak = max(peak, finite_max_abs(real_l) * per_m)
         if data.has("m_leader"):
-            ax2.plot(t[:-1], data.col("m_leader")[:-1] * MM, color="C2", lw=1.1,
+            ax2.plot(t[:-1], data.col("m_leader")[:-1] * per_m, color="C2", lw=1.1,
                      label="leader grasp, commanded")
-            peak = max(peak, finite_max_abs(data.col("m_leader")[:-1]) * MM)
+            peak = max(peak, finite_max_abs(data.col("m_leader")[:-1]) * per_m)
     if np.isfinite(speed):
-        limit_lines(ax2, (-speed, speed), "grasp_speed", scale=MM,
-                    label=f"speed limit {speed * MM:g} mm/s")
+        limit_lines(ax2, (-speed, speed), "grasp_speed", scale=per_m,
+                    label=f"speed limit {tick_text(speed * per_m)} {unit}/s")
         shade_spans(ax2, outside_spans(t, outside_mask(real, -speed, speed)), "grasp_speed",
                     label="realised over the limit")
     else:
         ax2.plot([], [], color="none", label="no sliding speed limit in this run")
-    speed_axis(ax2, speed * MM, peak)
-    ax2.set_ylabel("sliding speed [mm/s]")
+    speed_axis(ax2, speed * per_m, peak)
+    ax2.set_ylabel(f"sliding speed [{unit}/s]")
     ax2.set_xlabel("t [s]")
-    ax2.legend(fontsize=7, title=f"largest |speed| {peak:.4g} mm/s", title_fontsize=7)
+    ax2.legend(fontsize=7, title=f"largest |speed| {peak:.4g} {unit}/s", title_fontsize=7)
     fig.suptitle((title + ": " if title else "") + "grasp position along the bar",
                  fontsize=10)
     fig.tight_layout()
@@ -200,22 +217,26 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     fig = new_figure(figsize=(8, 7.5))
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
     t = data.t
-    floor = 1e-16
-    ax1.semilogy(t, np.maximum(data.col("leader_pos_err"), floor), color="C0",
-                 label="position [m]")
-    ax1.semilogy(t, np.maximum(data.col("leader_rot_err"), floor), color="C1",
-                 label="rotation [rad]")
+    errors = (data.col("leader_pos_err"), data.col("leader_rot_err"))
+    ax1.set_yscale("log")
+    floor = log_axis(ax1, limits.tracking, errors, decades=LOG_DECADES)
+    ax1.plot(t, np.maximum(errors[0], floor), color="C0", label="position [m]")
+    ax1.plot(t, np.maximum(errors[1], floor), color="C1", label="rotation [rad]")
     limit_lines(ax1, (limits.tracking[0],), "tracking_pos", colour="C0",
                 label=f"tolerance {limits.tracking[0]:g} m")
     limit_lines(ax1, (limits.tracking[1],), "tracking_rot", colour="C1",
                 label=f"tolerance {limits.tracking[1]:g} rad")
+    note_bottom(ax1, floor, errors)
     ax1.set_ylabel("leader error to D(t)")
     ax1.legend(fontsize=7, ncol=2)
 
+    s_min = limits.singular_value_min
+    ax2.set_yscale("log")
+    floor = log_axis(ax2, (s_min,), (data.col("sigma_min_l"), data.col("sigma_min_f")),
+                     decades=2)
     for name, colour, label in (("sigma_min_l", "C2", "leader"),
                                 ("sigma_min_f", "C0", "follower")):
-        ax2.semilogy(t, np.maximum(data.col(name), floor), color=colour, label=label)
-    s_min = limits.singular_value_min
+        ax2.plot(t, np.maximum(data.col(name), floor), color=colour, label=label)
     if s_min > 0:
         limit_lines(ax2, (s_min,), "singular_value_min",
                     label=f"singularity threshold {s_min:g}")
@@ -223,11 +244,11 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
             data.col("sigma_min_f"), s_min)
         shade_spans(ax2, outside_spans(t, near), "singular_value_min",
                     label="an arm below the threshold")
+    note_bottom(ax2, floor, (data.col("sigma_min_l"), data.col("sigma_min_f")))
     ax2.set_ylabel("smallest singular\nvalue of J")
     ax2.legend(fontsize=7, ncol=2)
 
-    # The last row's command is computed but never applied (its scale is 0 where the
-    # path ends): left out.
+    # The last row's command is computed but never applied (the path is done): left out.
     scale = data.col("scale")[:-1]
     ax3.plot(t[:-1], scale, color="C0", label="task scale")
     if data.has("leader_scale"):
@@ -254,19 +275,23 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     fig = new_figure(figsize=(8, 3.8))
     ax = fig.subplots()
     t = data.t
-    floor = 1e-16
     marker = "o" if len(data) < 20 else None
-    ax.semilogy(t, np.maximum(data.col("closure_pos_err"), floor), marker=marker,
-                color="C0", label="position [m]")
-    ax.semilogy(t, np.maximum(data.col("closure_rot_err"), floor), marker=marker,
-                color="C1", label="rotation [rad]")
-    if np.nanmax(data.col("correction_f"), initial=0.0) > 0.0:
-        ax.semilogy(t, np.maximum(data.col("closure_pos_err_pre"), floor), color="C0",
-                    ls=":", lw=0.9, label="position before the position-level correction")
+    corrected = np.nanmax(data.col("correction_f"), initial=0.0) > 0.0
+    errors = [data.col("closure_pos_err"), data.col("closure_rot_err")]
+    drawn = [*errors, data.col("closure_pos_err_pre") if corrected else np.zeros(0)]
+    ax.set_yscale("log")
+    floor = log_axis(ax, limits.closure, drawn, decades=LOG_DECADES)
+    ax.plot(t, np.maximum(errors[0], floor), marker=marker, color="C0", label="position [m]")
+    ax.plot(t, np.maximum(errors[1], floor), marker=marker, color="C1",
+            label="rotation [rad]")
+    if corrected:
+        ax.plot(t, np.maximum(data.col("closure_pos_err_pre"), floor), color="C0",
+                ls=":", lw=0.9, label="position before the position-level correction")
     limit_lines(ax, (limits.closure[0],), "closure_pos", colour="C0",
                 label=f"tolerance {limits.closure[0]:g} m (the run fails above)")
     limit_lines(ax, (limits.closure[1],), "closure_rot", colour="C1",
                 label=f"tolerance {limits.closure[1]:g} rad")
+    note_bottom(ax, floor, drawn)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("closure error")
     ax.legend(fontsize=7)

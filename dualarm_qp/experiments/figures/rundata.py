@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...errors import InvalidInputError
+from ...errors import DualArmError, InvalidInputError
+from ..config import ANGLE_SCALE, LENGTH_SCALE, load_config
 
 if TYPE_CHECKING:
     from ..setup import Experiment
@@ -154,6 +155,53 @@ class ArmLimits:
 
 
 @dataclass(frozen=True)
+class DisplayUnits:
+    """The units the figures show angles and lengths in: the experiment file's.
+
+    Attributes
+    ----------
+    angle : {"deg", "rad"}
+        Unit of joint angles (and ``<angle>/s`` of joint rates).
+    length : {"mm", "m"}
+        Unit of the grasp coordinate (and ``<length>/s`` of the sliding speed).
+    """
+
+    angle: str = "deg"
+    length: str = "mm"
+
+    def __post_init__(self) -> None:
+        if self.angle not in ANGLE_SCALE or self.length not in LENGTH_SCALE:
+            raise InvalidInputError(f"display units must be an angle in {list(ANGLE_SCALE)} "
+                                    f"and a length in {list(LENGTH_SCALE)}, got "
+                                    f"{self.angle!r}, {self.length!r}")
+
+    @property
+    def per_rad(self) -> float:
+        """Display units of angle in one radian."""
+        return 1.0 / ANGLE_SCALE[self.angle]
+
+    @property
+    def per_m(self) -> float:
+        """Display units of length in one metre."""
+        return 1.0 / LENGTH_SCALE[self.length]
+
+    @classmethod
+    def of_file(cls, path: str | Path) -> DisplayUnits:
+        """Read the ``units`` block of the experiment file at ``path``.
+
+        Degrees and millimetres when there is no readable experiment file (an
+        experiment built in code).
+        """
+        if not Path(path).is_file():
+            return cls()
+        try:
+            units = load_config(Path(path)).units
+        except DualArmError:
+            return cls()
+        return cls(angle=units.angle, length=units.length)
+
+
+@dataclass(frozen=True)
 class PlotLimits:
     """The limits a run's figures draw, in SI units.
 
@@ -174,6 +222,8 @@ class PlotLimits:
         Singularity threshold on the smallest singular value (0: none).
     leader_grasp_range : (float, float) or None
         Range [m] of the leader's grasp when it slides too (None: a rigid grasp).
+    units : DisplayUnits
+        What the figures show angles and lengths in (default degrees and millimetres).
     """
 
     leader: ArmLimits
@@ -185,10 +235,11 @@ class PlotLimits:
     tracking: tuple[float, float]
     singular_value_min: float
     leader_grasp_range: tuple[float, float] | None = None
+    units: DisplayUnits = DisplayUnits()
 
     @classmethod
     def from_experiment(cls, exp: Experiment) -> PlotLimits:
-        """Read the limits from the experiment a run was made with."""
+        """Read the limits from the experiment a run was made with, and its file's units."""
         task = exp.task
 
         def arm(a: Any) -> ArmLimits:
@@ -206,7 +257,7 @@ class PlotLimits:
                    closure=(float(exp.limits.closure[0]), float(exp.limits.closure[1])),
                    tracking=(float(exp.limits.tracking[0]), float(exp.limits.tracking[1])),
                    singular_value_min=float(exp.limits.singular_value_min),
-                   leader_grasp_range=leader_range)
+                   leader_grasp_range=leader_range, units=DisplayUnits.of_file(exp.path))
 
     def arm(self, arm: str) -> ArmLimits:
         """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""
