@@ -95,8 +95,11 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
         speed = r["speed_ratio_max"]
         speed_text = ("n/a (no limit)" if speed is None or speed != speed
                       else f"{speed:.3g} ({r['worst_speed']})")
+        accel = r.get("acceleration_ratio_max")
+        accel_text = ("" if accel is None or accel != accel
+                      else f", acceleration {accel:.3g} ({r['worst_acceleration']})")
         print(f"    {part:<12} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
-              f"speed {speed_text}")
+              f"speed {speed_text}{accel_text}")
     lead = s.get("grasp_leader_start_m")
     lead_text = (f" (leader's {lead * 1e3:.1f} -> {s['grasp_leader_end_m'] * 1e3:.1f} mm)"
                  if isinstance(lead, float) and lead == lead else "")

@@ -344,7 +344,7 @@ def canonical_steps(config: BenchConfig, settings: BenchSettings) -> list[StepPr
             problems.append(out.build.problem)
 
     rollout(_controller(exp, settings, keep), exp.initial, duration=exp.duration,
-            project=exp.project, limits=exp.limits)
+            project=exp.project, limits=exp.limits, initial_rates=exp.start_rates())
     return problems
 
 
@@ -379,9 +379,10 @@ def run_job(config: BenchConfig, solver: str, settings: BenchSettings,
     opts = exp.solver_options
     planned = math.floor(exp.duration / exp.options.dt + 1e-9) + 1
     runs = []
+    start = exp.start_rates()
     for _ in range(settings.repeat):
         runs.append(rollout(_controller(exp, settings), exp.initial, duration=exp.duration,
-                            project=exp.project, limits=exp.limits))
+                            project=exp.project, limits=exp.limits, initial_rates=start))
     first = runs[0]
     tr = first.trace
     planned = max(planned, len(tr))  # a slowed task runs past its nominal samples

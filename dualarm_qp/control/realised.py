@@ -2,9 +2,13 @@
 
 A limit is kept when the recorded motion keeps it, not when the commanded step did.
 Speeds are the finite differences of consecutive recorded positions over ``dt``;
-ranges are read from the recorded positions. Two rules:
+accelerations the finite differences of those speeds over ``dt`` (the first one from the
+rates the run started with, zero from rest); ranges are read from the recorded
+positions. Three rules:
 
 * **speed**: ``|q[k+1] - q[k]| / dt <= v_max (1 + SPEED_RTOL)`` for every sample;
+* **acceleration** (when the run keeps acceleration limits):
+  ``|v[k] - v[k-1]| / dt <= a_max (1 + ACCEL_RTOL)``, with ``v[-1]`` the initial rates;
 * **range**: the distance outside ``[lo, hi]`` never exceeds its smallest earlier value
   by more than ``RANGE_TOL``: a variable that starts outside its range never moves
   further out, and one that is inside (or got back inside) never leaves it (compared
@@ -25,6 +29,9 @@ FloatArray = NDArray[np.float64]
 #: Relative slack on a speed limit for finite-difference rounding.
 SPEED_RTOL = 1e-6
 
+#: Relative slack on an acceleration limit for finite-difference rounding.
+ACCEL_RTOL = 1e-6
+
 #: Absolute slack [rad or m] on a range: the solvers' bound tolerance (1e-7 per s) over
 #: one sample, plus rounding.
 RANGE_TOL = 1e-9
@@ -36,18 +43,18 @@ class Breach:
 
     Attributes
     ----------
-    criterion : {"range", "speed"}
+    criterion : {"range", "speed", "acceleration"}
         Which rule was broken.
     variable : str
         Name of the variable (``"ql2"``, ``"qf3"``, ``"grasp"``).
     sample : int
         Row of the trace (for a speed: the first row of the pair).
     amount : float
-        The realised value: distance outside the range [rad or m], or speed [rad/s
-        or m/s].
+        The realised value: distance outside the range [rad or m], speed [rad/s or
+        m/s] or acceleration [rad/s^2 or m/s^2].
     limit : float
-        What it was allowed: the smallest earlier distance outside the range, or the
-        speed limit.
+        What it was allowed: the smallest earlier distance outside the range, the
+        speed limit or the acceleration limit.
     """
 
     criterion: str
@@ -58,6 +65,10 @@ class Breach:
 
     def describe(self, dt: float) -> str:
         """One line for a person."""
+        if self.criterion == "acceleration":
+            return (f"{self.variable} accelerated at {self.amount:.6g} per s^2 at sample "
+                    f"{self.sample} (limit {self.limit:.6g}, "
+                    f"{self.amount / self.limit:.3g}x)")
         if self.criterion == "speed":
             return (f"{self.variable} moved at {self.amount:.6g} per s between samples "
                     f"{self.sample} and {self.sample + 1} (limit {self.limit:.6g}, "
@@ -90,6 +101,10 @@ class LimitReport:
         The variables that reached ``range_ratio`` and ``speed_ratio``.
     breach : Breach or None
         The first broken rule, if any.
+    acceleration_ratio : float
+        ``max |dv/dt| / a_max`` (NaN when no acceleration limit is finite).
+    worst_acceleration : str
+        The variable that reached it.
     """
 
     range_ratio: float
@@ -99,6 +114,8 @@ class LimitReport:
     worst_range: str
     worst_speed: str
     breach: Breach | None
+    acceleration_ratio: float = math.nan
+    worst_acceleration: str = ""
 
     def as_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -106,11 +123,15 @@ class LimitReport:
                 "range_ratio_start": self.range_ratio_start,
                 "speed_ratio_max": self.speed_ratio,
                 "range_excess_max": self.range_excess, "worst_range": self.worst_range,
-                "worst_speed": self.worst_speed}
+                "worst_speed": self.worst_speed,
+                "acceleration_ratio_max": self.acceleration_ratio,
+                "worst_acceleration": self.worst_acceleration}
 
 
 def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt: float,
-            names: Sequence[str], *, speed_rule: bool = True) -> LimitReport:
+            names: Sequence[str], *, speed_rule: bool = True,
+            a_max: FloatArray | None = None, v_start: FloatArray | None = None,
+            acceleration_rule: bool = False) -> LimitReport:
     """Measure the realised motion ``x`` (rows: samples) against its limits.
 
     Parameters
@@ -128,6 +149,12 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     speed_rule : bool
         Whether a speed above ``v_max`` is a breach (False: the speed ratio is only
         reported, for a run whose step did not impose the speed limits).
+    a_max : ndarray, shape (n,), optional
+        Acceleration limits [per s^2] (may be infinite; None: not measured).
+    v_start : ndarray, shape (n,), optional
+        The rates the run started with [per s] (default zero: from rest).
+    acceleration_rule : bool
+        Whether an acceleration above ``a_max`` is a breach.
     """
     x = np.asarray(x, dtype=np.float64)
     x = x.reshape(x.shape[0], -1) if x.ndim != 2 else x
@@ -156,6 +183,23 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         if speed_rule:
             over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
             first += [(int(k), "speed", int(j)) for k, j in over[:1]]
+    accel_ratio, ja, accel = math.nan, 0, np.zeros((0, x.shape[1]))
+    if a_max is not None:
+        a_lim = np.broadcast_to(np.asarray(a_max, dtype=np.float64), x.shape[1:])
+        limited = np.isfinite(a_lim)
+        if limited.any():
+            accel_ratio = 0.0
+            if rows > 1:
+                v0 = (np.zeros(x.shape[1]) if v_start is None
+                      else np.asarray(v_start, dtype=np.float64))
+                v = np.vstack([v0, np.diff(x, axis=0) / dt])
+                accel = np.abs(np.diff(v, axis=0)) / dt  # row k: between v[k-1] and v[k]
+                aratio = np.where(limited, accel / np.where(limited, a_lim, 1.0), 0.0)
+                ja = int(np.argmax(aratio.max(axis=0)))
+                accel_ratio = float(aratio[:, ja].max())
+                if acceleration_rule:
+                    over = np.argwhere(limited & (accel > a_lim * (1.0 + ACCEL_RTOL)))
+                    first += [(int(k), "acceleration", int(j)) for k, j in over[:1]]
     best = np.minimum.accumulate(excess, axis=0)
     grew = np.argwhere(excess[1:] > best[:-1] + RANGE_TOL)
     first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
@@ -164,11 +208,15 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         k, what, j = min(first)
         if what == "speed":
             breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
+        elif what == "acceleration":
+            breach = Breach("acceleration", names[j], k, float(accel[k, j]),
+                            float(np.broadcast_to(np.asarray(a_max), x.shape[1:])[j]))
         else:
             breach = Breach("range", names[j], k, float(excess[k, j]), float(best[k - 1, j]))
     return LimitReport(float(ratio[:, jr].max()), float(ratio[0].max()), speed_ratio,
                        float(excess.max()), names[jr], names[js] if rows > 1 else "none moved",
-                       breach)
+                       breach, accel_ratio,
+                       names[ja] if rows > 1 and accel_ratio == accel_ratio else "")
 
 
-__all__ = ["RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]
+__all__ = ["ACCEL_RTOL", "RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

@@ -40,7 +40,7 @@ FloatArray = NDArray[np.float64]
 #: Criteria a run can fail on (``Failure.criterion``).
 CRITERIA = ("unreachable", "solver", "support", "closure", "tracking", "singularity",
             "stalled", "path_incomplete",
-            "range", "speed", "interrupted")
+            "range", "speed", "acceleration", "interrupted")
 
 #: Criteria whose failure message names its cause (:mod:`.diagnosis`).
 EXPLAINED = ("closure", "tracking", "stalled", "path_incomplete")
@@ -277,6 +277,7 @@ def rollout(
     progress: Callable[[float, float], None] | None = None,
     stop_on_interrupt: bool = False,
     preflight: bool = True,
+    initial_rates: FloatArray | None = None,
 ) -> RolloutResult:
     """Run ``controller`` from ``initial`` along ``duration`` seconds of path.
 
@@ -324,6 +325,10 @@ def rollout(
         Before the first sample, check that both arms can reach the path at its
         waypoints (:mod:`.preflight`); a waypoint out of reach fails the run on
         criterion ``"unreachable"`` with no sample run. Default True.
+    initial_rates : ndarray, optional
+        The rates the pair moves at when the run starts [rad/s, m/s], in the
+        controller's decision order (:attr:`DualArmController.layout`); default zero (the
+        run starts at rest). Acceleration limits and their realised check start from it.
 
     Returns
     -------
@@ -371,7 +376,8 @@ def rollout(
     t_wall = path_start
     pre: tuple[float, float] | None = None  # closure error before correction, if any
     corr = (0.0, 0.0)
-    controller.reset()
+    controller.reset(initial_rates)
+    v_start = controller.applied
     if preflight:
         miss = unreachable_waypoint(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
                                     path_end, within_ranges=hard)
@@ -380,7 +386,7 @@ def rollout(
                 tr.truncate(0), Failure("unreachable", 0, path_start, miss.position_error,
                                         REACH_TOLERANCE[0], f"before the run: {miss.message}"),
                 controller.solver.name, dt, path_start, path_end,
-                _realised(controller, tr.truncate(0), dt), hard,
+                _realised(controller, tr.truncate(0), dt, v_start), hard,
                 extras={"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint,
                                         "t_s": miss.t}})
     failure: Failure | None = None
@@ -460,7 +466,7 @@ def rollout(
             raise
         interrupted = exc
     trace = tr.truncate(rows)
-    realised = _realised(controller, trace, dt)
+    realised = _realised(controller, trace, dt, v_start)
     if interrupted is not None:
         t_last = float(trace.t[-1]) if rows else path_start
         failure = Failure("interrupted", max(rows - 1, 0), t_last, math.nan, math.nan,
@@ -550,28 +556,41 @@ def _explained(controller: DualArmController, trace: Trace, failure: Failure) ->
     return dataclasses.replace(failure, message=f"{failure.message}; {why}")
 
 
-def _realised(controller: DualArmController, trace: Trace, dt: float
-              ) -> dict[str, LimitReport]:
-    """Measure the realised motion of both arms and of the grasp against their limits."""
+def _realised(controller: DualArmController, trace: Trace, dt: float,
+              v_start: FloatArray | None = None) -> dict[str, LimitReport]:
+    """Measure the realised motion of both arms and of the grasp against their limits.
+
+    ``v_start`` holds the rates the run started with (decision order; default zero).
+    Speeds and accelerations are measured against the arms' limits always; they decide
+    completion only when the step imposed them (``velocity_limits``,
+    ``acceleration_limits``).
+    """
     task, opts = controller.task, controller.options
+    lay = controller.layout
+    start = lay.split(np.zeros(lay.n) if v_start is None else v_start)
     reports = {}
-    speed_rule = opts.velocity_limits  # speeds are reported against the arms' limits always
-    for role, arm, q in (("leader", task.leader, trace.q_l),
-                         ("follower", task.follower, trace.q_f)):
+    speed_rule = opts.velocity_limits
+    accel_rule = opts.acceleration_limits
+    for role, arm, q, v0 in (("leader", task.leader, trace.q_l, start[0]),
+                             ("follower", task.follower, trace.q_f, start[1])):
         prefix = "ql" if role == "leader" else "qf"
         reports[role] = measure(q, arm.q_min, arm.q_max, arm.qd_max, dt,
                                 [f"{prefix}{j + 1}" for j in range(arm.n)],
-                                speed_rule=speed_rule)
+                                speed_rule=speed_rule, a_max=arm.qdd_max, v_start=v0,
+                                acceleration_rule=accel_rule)
     surface = task.surface
+    a_grasp = np.array([opts.grasp_acc_max])
     reports["grasp"] = measure(trace.grasp[:, None], np.array([surface.sigma_min]),
                                np.array([surface.sigma_max]),
                                np.array([opts.grasp_speed_max]), dt, ["grasp"],
-                               speed_rule=speed_rule)
+                               speed_rule=speed_rule, a_max=a_grasp,
+                               v_start=np.array([start[2]]), acceleration_rule=accel_rule)
     lead = task.leader_surface
     if lead is not None:
         reports["grasp_leader"] = measure(
             trace.grasp_leader[:, None], np.array([lead.sigma_min]), np.array([lead.sigma_max]),
-            np.array([opts.grasp_speed_max]), dt, ["grasp_leader"], speed_rule=speed_rule)
+            np.array([opts.grasp_speed_max]), dt, ["grasp_leader"], speed_rule=speed_rule,
+            a_max=a_grasp, v_start=np.array([start[3]]), acceleration_rule=accel_rule)
     return reports
 
 

@@ -233,6 +233,7 @@ class ArmSpec(_Model):
     q_min: list[LimitNum] | None = None
     q_max: list[LimitNum] | None = None
     qd_max: list[LimitNum] | None = None
+    qdd_max: list[LimitNum] | None = None
     initial: InitialSpec
 
     @model_validator(mode="after")
@@ -434,6 +435,10 @@ class ControllerSpec(_Model):
     ``singular_value_min`` (default 1e-3, SI) and ``singularity_action`` (warn, stop
     or ignore) say what a Jacobian near a singularity does; ``duration_cap`` (time
     unit, default twice ``duration``) is how long a slowed task may run.
+    ``acceleration_limits`` keeps every joint within its arm's ``qdd_max`` and every
+    grasp within ``grasp_acc_max`` (length unit / time unit^2); ``initial_rates`` says
+    how the run starts: ``rest`` (the default) or ``path`` (already moving as the first
+    step of the path asks, its answer without acceleration limits).
     """
 
     dt: Num
@@ -441,6 +446,9 @@ class ControllerSpec(_Model):
     weights: WeightsSpec = Field(default_factory=WeightsSpec)
     velocity_limits: Flag = True
     grasp_speed_max: Num | None = None
+    acceleration_limits: Flag = False
+    grasp_acc_max: Num | None = None
+    initial_rates: Literal["rest", "path"] = "rest"
     correction_gain: Num | None = None
     leader_gain: Num | None = None
     centre_horizon: Num | None = None
@@ -477,7 +485,8 @@ class ControllerSpec(_Model):
                          f"{MAX_SAMPLES:,} are allowed: raise dt or shorten the run")
         return self
 
-    @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap")
+    @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap",
+                     "grasp_acc_max")
     @classmethod
     def _positive_time(cls, v: float | None) -> float | None:
         if v is not None and not (math.isfinite(v) and v > 0):

@@ -168,6 +168,7 @@ def run_and_write(
     t0 = time.perf_counter()
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
+                         initial_rates=exp.start_rates(),
                          limits=exp.limits, progress=update, stop_on_interrupt=True)
     except BaseException:
         if bar is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -32,6 +33,7 @@ from ..solvers.registry import (
     solver_info,
 )
 from ..step.options import StepOptions
+from ..step.parts import Limit
 from ..step.state import DualArmState
 from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.scene import DualArmTask
@@ -102,6 +104,11 @@ class Experiment:
         Solver for a feasible step the configured hard-limit solver fails on.
     notes : dict
         Reconstruction facts worth reporting (leader IK branch, follower base, ...).
+    initial_rates : {"rest", "path"}
+        How the run starts: at rest, or moving as the path's first step asks
+        (:meth:`start_rates`).
+    limits_extra : tuple of Limit
+        Limits of the user's added to the step (``limits=`` of the controller).
     """
 
     name: str
@@ -118,6 +125,8 @@ class Experiment:
     project: bool | None = None
     fallback: str | None = "nullspace"
     notes: dict[str, Any] = field(default_factory=dict)
+    initial_rates: str = "rest"
+    limits_extra: tuple[Limit, ...] = ()
 
     def controller(
         self,
@@ -125,6 +134,7 @@ class Experiment:
         fallback: bool = True,
         tolerance: Tolerance | None = None,
         on_step: Callable[[ControlOutput], None] | None = None,
+        acceleration_limits: bool | None = None,
     ) -> DualArmController:
         """Return a fresh controller with the configured solver.
 
@@ -142,6 +152,14 @@ class Experiment:
         on_step : callable, optional
             Called with every step's :class:`~dualarm_qp.control.controller.ControlOutput`
             (see :class:`~dualarm_qp.control.controller.DualArmController`).
+        acceleration_limits : bool, optional
+            Override the configured ``acceleration_limits`` (:meth:`start_rates` solves
+            the first step without them).
+
+        Raises
+        ------
+        PairingError
+            A limit that gives rows with a solver that takes boxes only.
         """
         solver = get_solver(self.solver_name, **self.solver_options)
         backup = None
@@ -152,11 +170,29 @@ class Experiment:
         # sample (the lookahead slows it otherwise): the other half is the feedback's.
         budget = (0.5 * min(self.limits.tracking[0], self.limits.closure[0]),
                   0.5 * min(self.limits.tracking[1], self.limits.closure[1]))
-        return DualArmController(self.task, solver, self.options,
+        options = self.options
+        if acceleration_limits is not None:
+            options = dataclasses.replace(options, acceleration_limits=acceleration_limits)
+        return DualArmController(self.task, solver, options,
                                  leader_gain=self.leader_gain, policy=self.policy,
                                  tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
                                  fallback=backup, on_step=on_step, error_budget=budget,
-                                 singularity_escape=self.limits.singular_value_min or 1e-3)
+                                 singularity_escape=self.limits.singular_value_min or 1e-3,
+                                 limits=self.limits_extra)
+
+    def start_rates(self) -> FloatArray | None:
+        """Return the rates the run starts with [rad/s, m/s] (decision order), or None.
+
+        With ``initial_rates: path`` the pair is taken to move already as the path's
+        first step asks: that step's answer without acceleration limits.
+        """
+        if self.initial_rates == "rest":
+            return None
+        free = self.controller(acceleration_limits=False)
+        out = free.step(self.initial)
+        if not out.applied:
+            return None
+        return free.layout.join(out.ql_dot, out.qf_dot, out.m, out.m_leader)
 
 
 def _pose(spec: PoseSpec, sc: Scales) -> FloatArray:
@@ -182,7 +218,8 @@ def _vec(values: list[float] | None, scale: float, n: int, key: str, path: str) 
     if len(values) != n:
         raise ConfigError(f"needs {n} values, got {len(values)}", path=path, key=key)
     arr = np.asarray(values, dtype=float) * scale
-    if not np.isfinite(arr).all() and not key.endswith(("q_min", "q_max", "qd_max")):
+    if not np.isfinite(arr).all() and not key.endswith(("q_min", "q_max", "qd_max",
+                                                        "qdd_max")):
         raise ConfigError("values must be finite numbers", path=path, key=key)
     if np.isnan(arr).any():
         raise ConfigError("values must not be NaN", path=path, key=key)
@@ -215,7 +252,8 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
     q_min = _vec(spec.q_min, sc.angle, n, f"{role}.q_min", path)
     q_max = _vec(spec.q_max, sc.angle, n, f"{role}.q_max", path)
     qd_max = _vec(spec.qd_max, sc.angle / sc.time, n, f"{role}.qd_max", path)
-    if q_min is None and q_max is None and qd_max is None:
+    qdd_max = _vec(spec.qdd_max, sc.angle / sc.time**2, n, f"{role}.qdd_max", path)
+    if q_min is None and q_max is None and qd_max is None and qdd_max is None:
         return arm
     lo = arm.q_min if q_min is None else q_min
     hi = arm.q_max if q_max is None else q_max
@@ -231,12 +269,14 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
         raise ConfigError(f"joint {i + 1}: q_min ({lo[i] / sc.angle:g}) is above q_max "
                           f"({hi[i] / sc.angle:g})", path=path,
                           key=f"{role}.q_min" if q_min is not None else f"{role}.q_max")
-    if qd_max is not None and not (qd_max > 0).all():
-        i = int(np.flatnonzero(~(qd_max > 0))[0])
-        raise ConfigError(f"joint {i + 1}: a speed limit must be > 0, got "
-                          f"{qd_max[i] * sc.time / sc.angle:g}", path=path,
-                          key=f"{role}.qd_max")
-    return arm.with_limits(q_min, q_max, qd_max)
+    for key, values, unit in (("qd_max", qd_max, sc.angle / sc.time),
+                              ("qdd_max", qdd_max, sc.angle / sc.time**2)):
+        if values is not None and not (values > 0).all():
+            i = int(np.flatnonzero(~(values > 0))[0])
+            what = "a speed" if key == "qd_max" else "an acceleration"
+            raise ConfigError(f"joint {i + 1}: {what} limit must be > 0, got "
+                              f"{values[i] / unit:g}", path=path, key=f"{role}.{key}")
+    return arm.with_limits(q_min, q_max, qd_max, qdd_max)
 
 
 def _robot_arm(spec: ArmSpec, role: str, base: FloatArray | None, tool: FloatArray | None,
@@ -542,6 +582,9 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
             velocity_limits=c.velocity_limits,
             grasp_speed_max=math.inf if c.grasp_speed_max is None
             else c.grasp_speed_max * sc.length / sc.time,
+            acceleration_limits=c.acceleration_limits,
+            grasp_acc_max=math.inf if c.grasp_acc_max is None
+            else c.grasp_acc_max * sc.length / sc.time**2,
             correction_gain=None if c.correction_gain is None else c.correction_gain / sc.time,
             recovery_fraction=c.recovery_fraction,
             exact_orientation=c.exact_orientation,
@@ -579,6 +622,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
         project=c.projection,
         fallback=fallback,
         notes=notes,
+        initial_rates=c.initial_rates,
     )
 
 

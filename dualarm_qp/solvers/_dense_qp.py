@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import solve_triangular
+from scipy.linalg import lapack
 
 from ._affine import RANK_RTOL
 
@@ -96,7 +96,7 @@ def solve_dense_qp(R: FloatArray, t_free: FloatArray, M: FloatArray, f: FloatArr
     k = M.shape[0]
     limit = 10 * (k + d) + 10 if max_iter is None else max_iter
     # J0 = R^-1, so that J0 J0^T = (R^T R)^-1: the inverse Hessian, factored.
-    J0 = solve_triangular(R, np.eye(d), lower=False) if d else np.zeros((0, 0))
+    J0 = _upper_solve(R, np.eye(d)) if d else np.zeros((0, 0))
     t = t_free.astype(np.float64, copy=True)
     active: list[int] = []
     u: list[float] = []
@@ -121,7 +121,7 @@ def solve_dense_qp(R: FloatArray, t_free: FloatArray, M: FloatArray, f: FloatArr
             v = J0.T @ n_p
             w2 = J2.T @ n_p
             z = J2 @ w2
-            r = solve_triangular(Ra, J1.T @ n_p, lower=False) if active else np.zeros(0)
+            r = _upper_solve(Ra, J1.T @ n_p) if active else np.zeros(0)
             # Partial step: the largest dual step keeping every multiplier >= 0.
             t1, drop = np.inf, -1
             if r.size:
@@ -150,6 +150,14 @@ def solve_dense_qp(R: FloatArray, t_free: FloatArray, M: FloatArray, f: FloatArr
                 break
             del active[drop], u[drop]
     return _result("optimal", t, active, u, -1, iterations)
+
+
+def _upper_solve(R: FloatArray, B: FloatArray) -> FloatArray:
+    """``R^-1 B`` for an upper triangular ``R`` (LAPACK ``dtrtrs``, no checks: tiny sizes)."""
+    x, info = lapack.dtrtrs(R, B, lower=0)
+    if info != 0:  # a zero on the diagonal: the rows were dependent (never chosen so)
+        return np.asarray(np.linalg.lstsq(R, B, rcond=None)[0], dtype=np.float64)
+    return np.asarray(x, dtype=np.float64)
 
 
 def _split(J0: FloatArray, M: FloatArray, active: list[int]

@@ -20,14 +20,16 @@ tolerance and one optimality check:
 
 The KKT check does not trust the solver's multipliers or its working set: the active
 set is read from ``x`` (every bound and row within :data:`ACTIVE_TOL` of binding, both
-sides of a zero-width box), and the multipliers are found by non-negative least
-squares of the projected stationarity condition
+sides of a zero-width box), the exact minimiser on that active set is recomputed and
+must lie within :data:`STEP_RTOL` of ``x``, and the multipliers are found by
+non-negative least squares of the projected stationarity condition
 
     Z^T (W (x - c) + C_a^T mu) = 0,   mu >= 0
 
 on the null space ``Z`` of ``A`` (rank at :data:`~._affine.RANK_RTOL`). Non-negative
 least squares finds a valid multiplier vector whenever one exists, also on degenerate
-vertices where the minimum-norm multipliers have the wrong sign.
+vertices where the minimum-norm multipliers have the wrong sign (see
+:func:`kkt_holds`).
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from numpy.typing import NDArray
 from scipy.optimize import nnls
 
 from ..step.problem import StepProblem
-from ._affine import problem_factor
+from ._affine import least_distance_eq, problem_factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
 FloatArray = NDArray[np.float64]
@@ -49,8 +51,10 @@ FloatArray = NDArray[np.float64]
 #: Distance (units of ``x``, rows unit-norm) within which a bound or row is active.
 ACTIVE_TOL = 1e-9
 
-#: Relative size of the projected gradient accepted as stationary.
-DUAL_TOL = 1e-9
+#: How far (relative to ``max(1, |x|)``, units of ``x``) a claimed optimum may lie from
+#: the exact minimiser on its active set, and how long the Newton step to stationarity
+#: may be.
+STEP_RTOL = 1e-8
 
 #: Rounding allowance of the stationarity check: a thousand ulps of the gradient's
 #: largest term ``w_i (x_i - c_i)`` (with a sliding weight of 1e9 one ulp of the
@@ -120,7 +124,8 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
             message = message or _worst_breach(problem, x, box >= rows, claims_bounds)
         elif status is Status.OPTIMAL and not kkt_holds(problem, x, bounds=claims_bounds):
             status = Status.FEASIBLE
-            message = "the optimality certificate (KKT) does not confirm the claimed optimum"
+            message = ((message + "; ") if message else "") + (
+                "the optimality certificate (KKT) does not confirm the claimed optimum")
     active_lo = gap_lo >= -ACTIVE_TOL
     active_up = gap_up >= -ACTIVE_TOL
     active_rows: tuple[str, ...] = ()
@@ -151,7 +156,25 @@ def _worst_breach(problem: StepProblem, x: FloatArray, box: bool, claims_bounds:
 
 
 def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bool:
-    """Whether ``x`` (feasible) satisfies the KKT conditions of the step QP.
+    """Whether ``x`` is the minimiser of the step QP, to :data:`STEP_RTOL` in ``x``.
+
+    The test does not trust a solver's working set or multipliers. The limits active at
+    ``x`` (within :data:`ACTIVE_TOL`; none with ``bounds=False``) are held as
+    equalities with ``A x = b``, and the exact minimiser ``x*`` of Eq. 37 on that
+    affine set is computed (:func:`~._affine.least_distance_eq`). ``x`` passes when
+
+    1. ``|x - x*| <= tol``: ``x`` is that minimiser, the equality met exactly (a
+       residual inside the feasibility tolerance along a near-null direction of an
+       ill-conditioned ``A`` can hide a large distance: it does not pass), and
+    2. the active limits have multipliers of the right sign: the gradient at ``x*``
+       on the null space of ``A`` is a non-negative combination of the active limits'
+       normals, found by non-negative least squares (valid multipliers are found also
+       at degenerate vertices, where the minimum-norm ones may have the wrong sign),
+       with a residual whose Newton step in ``x`` is at most ``tol``.
+
+    ``tol = STEP_RTOL max(1, |x|) + ROUNDING |W (x - c)| / lambda_min`` [units of
+    ``x``]: the second term is the rounding of the gradient carried into a Newton step
+    (``lambda_min``: the smallest curvature of Eq. 37 on the null space).
 
     Parameters
     ----------
@@ -162,23 +185,38 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     bounds : bool
         Include the boxes and rows (False: the minimiser over ``A x = b`` alone).
     """
+    A, b = problem.A, problem.b
+    if bounds:
+        ineq = problem.inequalities()
+        active = ineq.C @ x - ineq.e >= -ACTIVE_TOL * np.maximum(1.0, np.abs(ineq.e))
+        C_act = ineq.C[active]
+        E = np.vstack([A, C_act])
+        r = np.concatenate([b, ineq.e[active]])
+    else:
+        C_act = np.zeros((0, problem.n))
+        E, r = A, b
+    x_star, _ = least_distance_eq(problem, E, r)
+    if not np.isfinite(x_star).all():
+        return False
     Z = problem_factor(problem).N
-    grad = problem.gradient(x)
-    g = Z.T @ grad
-    w = problem.weights if problem.diagonal_cost else np.abs(problem.weights).sum(axis=1)
-    dtol = (DUAL_TOL * max(1.0, float(np.abs(grad).max(initial=0.0)))
-            + ROUNDING * float((w * (np.abs(x) + np.abs(problem.center))).max(initial=0.0)))
-    if not Z.shape[1] or float(np.abs(g).max()) <= dtol:
+    grad = problem.gradient(x_star)
+    H = Z.T @ (problem.weight_matrix() @ Z)
+    lam_min = float(np.linalg.eigvalsh(H)[0]) if Z.shape[1] else 1.0
+    tol = (STEP_RTOL * max(1.0, float(np.abs(x).max(initial=0.0)))
+           + ROUNDING * float(np.abs(grad).max(initial=0.0)) / max(lam_min, 1e-300))
+    if float(np.abs(x - x_star).max(initial=0.0)) > tol:
+        return False
+    if not Z.shape[1]:
         return True
-    if not bounds:
-        return False
-    ineq = problem.inequalities()
-    active = ineq.C @ x - ineq.e >= -ACTIVE_TOL
-    if not active.any():
-        return False
-    M = Z.T @ ineq.C[active].T  # d x k: the projected normals of the active limits
-    mu, _ = nnls(M, -g, maxiter=50 * (M.shape[1] + 1))
-    return float(np.abs(g + M @ mu).max()) <= dtol
+    g = Z.T @ grad
+    if C_act.shape[0]:
+        M = Z.T @ C_act.T  # the projected normals of the active limits
+        L = np.linalg.cholesky(H)
+        mu, _ = nnls(np.linalg.solve(L, M), -np.linalg.solve(L, g),
+                     maxiter=50 * (M.shape[1] + 1))
+        g = g + M @ mu
+    step = Z @ np.linalg.solve(H, g)  # the Newton step that would make x* stationary
+    return float(np.abs(step).max(initial=0.0)) <= tol
 
 
 __all__ = ["ACTIVE_TOL", "certify", "equality_limit", "kkt_holds", "residuals"]

@@ -153,7 +153,9 @@ class SNSSolver:
         # The claim: the minimiser of Eq. 37 with the saturated set held. Whether it is
         # the minimiser of the step is the certificate's decision (FEASIBLE otherwise).
         del lam
-        return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+        message = ("SNS point; held: " + ", ".join(extras["saturated"])
+                   if extras["saturated"] else "")
+        return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name, message=message,
                             solve_time=time.perf_counter() - start, extras=extras)
 
 

@@ -1,4 +1,4 @@
-"""The controller applies only solutions checked with its own tolerances."""
+"""The controller applies only solutions certified once, with its own tolerances."""
 
 from __future__ import annotations
 
@@ -7,10 +7,11 @@ import pinocchio as pin
 import pytest
 
 from dualarm_qp import puma560
-from dualarm_qp.control import controller as controller_module
 from dualarm_qp.control.controller import DualArmController
+from dualarm_qp.solvers import certify as certify_module
 from dualarm_qp.solvers import get_solver
-from dualarm_qp.solvers.base import Status, StepSolution, Tolerance, verify
+from dualarm_qp.solvers.base import Status, StepSolution, Tolerance
+from dualarm_qp.solvers.certify import certify
 from dualarm_qp.step.options import StepOptions
 from dualarm_qp.step.problem import StepProblem
 from dualarm_qp.step.state import DualArmState
@@ -49,7 +50,7 @@ class Unverified:
 
 
 class VerifiedWith:
-    """Verifies its (wrong) answer, but against tolerances of its own."""
+    """Certifies its (wrong) answer, but against tolerances of its own."""
 
     name = "verified_with"
 
@@ -58,21 +59,22 @@ class VerifiedWith:
 
     def solve(self, problem: StepProblem) -> StepSolution:
         x = get_solver("nullspace").solve(problem).x + self.shift
-        return verify(problem, StepSolution(x=x, status=Status.OPTIMAL), self.tol)
+        return certify(problem, StepSolution(x=x, status=Status.OPTIMAL), self.tol)
 
 
-def test_a_verified_solution_is_applied_and_not_checked_again(monkeypatch):
+def test_a_step_is_certified_once(monkeypatch):
     controller, state = make_controller(get_solver("nullspace"))
     calls = []
-    def counting_verify(*args, **kwargs):
-        calls.append(args)
-        return verify(*args, **kwargs)
 
-    monkeypatch.setattr(controller_module, "verify", counting_verify)
+    def counting_certify(*args, **kwargs):
+        calls.append(args)
+        return certify(*args, **kwargs)
+
+    monkeypatch.setattr(certify_module, "certify", counting_certify)
     out = controller.step(state)
     assert out.applied and out.status in (Status.OPTIMAL, Status.RECOVERING)
     assert out.solution.verified_with == controller.tolerance
-    assert calls == []
+    assert len(calls) == 1
 
 
 @pytest.mark.parametrize("shift", [1e-3, 1e6])
@@ -85,7 +87,7 @@ def test_an_unverified_wrong_solution_is_flagged_and_not_applied(shift):
     assert out.solution.verified_with == controller.tolerance
 
 
-def test_a_solution_verified_with_looser_tolerances_is_checked_again():
+def test_a_solution_certified_with_looser_tolerances_is_certified_again():
     loose = Tolerance(equality=1.0, bounds=1e9)
     controller, state = make_controller(VerifiedWith(loose, 1e-3))
     out = controller.step(state)

@@ -11,7 +11,7 @@ from solver_cases import lp_max_scale, random_problem
 
 from dualarm_qp.errors import InfeasibleStepError
 from dualarm_qp.solvers import Status, StepSolution, available_solvers, get_solver, solve_step
-from dualarm_qp.solvers.base import failed, verified_solution
+from dualarm_qp.solvers.base import failed
 from dualarm_qp.solvers.nullspace import NullspaceSolver
 from dualarm_qp.step.problem import StepProblem
 
@@ -28,7 +28,7 @@ class Failing:
         self.calls += 1
         if self.status is Status.VIOLATION:  # a usable claim that breaks the bounds
             x = problem.upper + 1.0
-            return verified_solution(problem, x, Status.OPTIMAL, solver=self.name)
+            return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name)
         return failed(problem, self.status, self.name, "deliberate failure", 1e-3)
 
 

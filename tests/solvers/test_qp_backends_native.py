@@ -120,7 +120,7 @@ def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
     "interrupted"; the step is not taken and the KeyboardInterrupt reaches the caller."""
     signal.signal(signal.SIGINT, signal.default_int_handler)
     solver = get_solver("qp:osqp")
-    solver._native = _endless_osqp()
+    solver.inner._native = _endless_osqp()
     problem = load_suite(SUITE).problems[0]
     timer = _interrupt_in(0.3)
     start = time.perf_counter()
@@ -140,7 +140,7 @@ def test_osqp_interrupted_is_never_a_result() -> None:
     seen: list[int] = []
     signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
     solver = get_solver("qp:osqp")
-    solver._native = _endless_osqp()
+    solver.inner._native = _endless_osqp()
     problem = load_suite(SUITE).problems[0]
     timer = _interrupt_in(0.3)
     try:

@@ -24,7 +24,8 @@ from solver_cases import lp_max_scale, random_problem, relative_error
 
 from dualarm_qp.kinematics import puma560
 from dualarm_qp.solvers import Status, available_solvers, get_solver
-from dualarm_qp.solvers._affine import RANK_RTOL, affine_solutions, factor, max_task_scale
+from dualarm_qp.solvers._affine import RANK_RTOL, affine_solutions, factor
+from dualarm_qp.solvers._scale import max_task_scale
 from dualarm_qp.solvers._kkt import refine
 from dualarm_qp.step.problem import StepProblem
 
@@ -306,10 +307,11 @@ def test_square_step_outside_the_box(seed: int) -> None:
     x = np.linalg.solve(problem.A, problem.b)
     sol = get_solver("nullspace").solve(problem)
     assert sol.status is Status.INFEASIBLE
-    (conflict,) = sol.extras["conflicts"]
-    name, side = conflict.split()
-    i = problem.names.index(name)
-    assert (x[i] > problem.upper[i]) if side == "upper" else (x[i] < problem.lower[i])
+    assert sol.extras["conflicts"]
+    for conflict in sol.extras["conflicts"]:  # every bound x breaks, each named once
+        name, side = conflict.split()
+        i = problem.names.index(name)
+        assert (x[i] > problem.upper[i]) if side == "upper" else (x[i] < problem.lower[i])
     with np.errstate(divide="ignore"):
         ratios = np.where(x > 0, problem.upper / x, np.where(x < 0, problem.lower / x, np.inf))
     k = int(np.argmin(ratios))

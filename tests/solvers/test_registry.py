@@ -15,7 +15,7 @@ from dualarm_qp.solvers import (
     get_solver,
     list_solvers,
     register,
-    verify,
+    certify,
 )
 from dualarm_qp.solvers import registry as registry_module
 
@@ -86,18 +86,18 @@ def test_bad_solver_option_is_invalid_input() -> None:
         get_solver("nullspace", no_such_option=1)
 
 
-def test_verify_downgrades_a_false_claim() -> None:
+def test_certify_downgrades_a_false_claim() -> None:
     problem = random_problem(np.random.default_rng(1))
     good = get_solver("nullspace").solve(problem)
-    off_task = verify(problem, StepSolution(x=good.x + 0.1, status=Status.OPTIMAL))
+    off_task = certify(problem, StepSolution(x=good.x + 0.1, status=Status.OPTIMAL))
     assert off_task.status is Status.VIOLATION
     assert "equality residual" in off_task.message
     out_of_box = problem.upper + 1.0
     fake = StepSolution(x=out_of_box, status=Status.OPTIMAL)
-    assert verify(problem, fake).status is Status.VIOLATION
-    nan = verify(problem, StepSolution(x=np.full(7, np.nan), status=Status.OPTIMAL))
+    assert certify(problem, fake).status is Status.VIOLATION
+    nan = certify(problem, StepSolution(x=np.full(7, np.nan), status=Status.OPTIMAL))
     assert nan.status is Status.ERROR
     assert np.array_equal(nan.x, np.zeros(7))
-    honest = verify(problem, good)
+    honest = certify(problem, good)
     assert honest.status is Status.OPTIMAL
     assert honest.objective == pytest.approx(problem.objective(good.x))

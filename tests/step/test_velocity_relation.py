@@ -146,22 +146,21 @@ def test_grasp_rate_range_matches_eqs_30_31():
 
 
 def test_start_outside_box_is_recovering_and_never_moves_further_out():
-    from dualarm_qp.step.bounds import rate_bounds
+    from test_step_builder import stacked_box
 
     x = np.array([-1.0, 0.5, 2.0])
-    lo, hi, c, rec = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, 4.0), 0.1, 0.5)
+    lo, hi, rec = stacked_box(x, np.zeros(3), np.ones(3), np.full(3, 4.0), 0.1, 0.5)
     assert rec.tolist() == [True, False, True]
     assert lo[0] > 0 and hi[2] < 0  # can only move back inside
     assert lo[0] == pytest.approx(2.0) and hi[2] == pytest.approx(-2.0)  # 0.5 * speed limit
     assert lo[1] == pytest.approx(-4.0) and hi[1] == pytest.approx(4.0)
-    np.testing.assert_allclose(c, (0.5 - x) / 0.1)
     # Unlimited speed: return all the way in one step.
-    lo, hi, _, _ = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, np.inf), 0.1, 0.5)
+    lo, hi, _ = stacked_box(x, np.zeros(3), np.ones(3), np.full(3, np.inf), 0.1, 0.5)
     assert lo[0] == pytest.approx(10.0) and hi[2] == pytest.approx(-10.0)
     # The default (no forced return): the box only forbids moving further out, so it
     # always contains 0 and a step stays feasible at task scale 0.
     for v in (4.0, np.inf):
-        lo, hi, _, rec = rate_bounds(x, np.zeros(3), np.ones(3), np.full(3, v), 0.1, 0.0)
+        lo, hi, rec = stacked_box(x, np.zeros(3), np.ones(3), np.full(3, v), 0.1, 0.0)
         assert lo[0] == 0.0 and hi[2] == 0.0
         assert hi[0] == pytest.approx(min(v, 20.0)) and lo[2] == pytest.approx(max(-v, -20.0))
         assert rec.tolist() == [True, False, True]
