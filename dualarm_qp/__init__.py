@@ -33,6 +33,7 @@ from .errors import (
     KinematicsError,
     LimitsError,
     NonFiniteError,
+    PairingError,
     ShapeError,
     SolverError,
     SolverNotFoundError,
@@ -63,11 +64,15 @@ if _TYPE_CHECKING:
         Status,
         StepSolution,
         StepSolver,
+        available_solvers,
         get_solver,
         list_solvers,
         solve_step,
     )
     from .solvers.registry import SolverOptionError
+    from .step.context import StepContext
+    from .step.layout import Layout
+    from .step.parts import Constraint, Limit
 
 __version__ = "0.1.0"
 
@@ -81,8 +86,13 @@ _LAZY = {
     "Status": "solvers",
     "StepSolution": "solvers",
     "StepSolver": "solvers",
+    "available_solvers": "solvers",
     "get_solver": "solvers",
     "list_solvers": "solvers",
+    "Constraint": "step.parts",
+    "Limit": "step.parts",
+    "StepContext": "step.context",
+    "Layout": "step.layout",
     "solve_step": "solvers",
     "SolverOptionError": "solvers.registry",
     "Experiment": "experiments",
@@ -112,13 +122,18 @@ __all__ = [
     "Trajectory",
     "WaypointTrajectory",
     # step
+    "Constraint",
     "DualArmState",
+    "Layout",
+    "Limit",
+    "StepContext",
     "StepOptions",
     "StepProblem",
     # solvers
     "Status",
     "StepSolution",
     "StepSolver",
+    "available_solvers",
     "get_solver",
     "list_solvers",
     "solve_step",
@@ -142,6 +157,7 @@ __all__ = [
     "KinematicsError",
     "LimitsError",
     "NonFiniteError",
+    "PairingError",
     "RobotModelError",
     "ShapeError",
     "SolverError",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from ..control.controller import ControlOutput, DualArmController
 from ..control.rollout import RunLimits
-from ..errors import ConfigError, DualArmError, SolverNotFoundError
+from ..errors import ConfigError, DualArmError, PairingError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
@@ -29,6 +29,7 @@ from ..solvers.registry import (
     SolverInfo,
     SolverOptionError,
     canonical_name,
+    check_pairing,
     get_solver,
     solver_info,
 )
@@ -395,6 +396,7 @@ def build_experiment(
     *,
     solver: str | None = None,
     solver_options: SolverOptions | None = None,
+    limits: Sequence[Limit] = (),
 ) -> Experiment:
     """Build the task, initial state and controller settings of an experiment.
 
@@ -410,6 +412,10 @@ def build_experiment(
         Options per solver name from the command line
         (:func:`~dualarm_qp.experiments.options.parse_solver_options`); those of the
         solver that runs are applied over the file's.
+    limits : sequence of Limit
+        Limits of the user's added to the step (:mod:`dualarm_qp.step.parts`), checked
+        against the solver here (a limit that gives rows needs a solver that takes
+        rows).
 
     Notes
     -----
@@ -426,14 +432,22 @@ def build_experiment(
         an option the file's solver refuses, ...), naming the file and key.
     InvalidInputError
         A command-line option the running solver refuses, naming ``--solver-option``.
+    PairingError
+        A limit that gives rows (of ``limits`` or of the file) with a solver that takes
+        boxes only: the message names the solver, the limit and the solvers that can.
     """
     try:
-        return _build(cfg, path, solver, solver_options)
+        exp = _build(cfg, path, solver, solver_options)
+        if limits:
+            exp.limits_extra = tuple(limits)
+        check_pairing(solver_info(exp.solver_name),
+                      [lim.name for lim in exp.limits_extra if lim.gives_rows])
+        return exp
     except ConfigError as err:
         if err.path is None:
             raise ConfigError(str(err), path=path) from None
         raise
-    except SolverFlagError:
+    except (SolverFlagError, PairingError):
         raise
     except DualArmError as err:
         raise ConfigError(str(err), path=path) from None

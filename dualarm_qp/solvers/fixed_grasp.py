@@ -52,4 +52,4 @@ class FixedGraspSolver:
 
 register("fixed_grasp", FixedGraspSolver,
          description="Zheng-Luh: grasp fixed (sliding speeds 0), joint rates from A x = b",
-         hard_bounds=False, dense_cost=False)
+         hard_bounds=False, takes_rows=False, dense_cost=False)

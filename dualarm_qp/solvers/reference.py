@@ -82,4 +82,4 @@ def _psd_pinv(M: np.ndarray, rank: int) -> np.ndarray:
 
 register("reference", ReferenceSolver,
          description="Suh-Shin 1988 Eq. 29: pseudoinverse + optimal null-space term, no bounds",
-         hard_bounds=False)
+         hard_bounds=False, takes_rows=False)

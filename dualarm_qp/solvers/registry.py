@@ -64,12 +64,15 @@ class SolverInfo:
         """
         rows = tuple(row_limits)
         if rows and not self.takes_rows:
-            able = [i.name for i in _REGISTRY.values() if i.takes_rows and i.available]
-            return (f"solver '{self.name}' takes boxes only, and the limit "
-                    f"{', '.join(repr(r) for r in rows)} gives rows; solvers that take "
+            able = [i.name for i in _REGISTRY.values()
+                    if i.takes_rows and i.available and i.hard_bounds]
+            what = "keeps no limits" if not self.hard_bounds else "takes boxes only"
+            return (f"solver '{self.name}' {what}, and the limit "
+                    f"{', '.join(repr(r) for r in rows)} gives rows; solvers that keep "
                     f"rows: {', '.join(able)}")
         if dense_cost and not self.dense_cost:
-            able = [i.name for i in _REGISTRY.values() if i.dense_cost and i.available]
+            able = [i.name for i in _REGISTRY.values()
+                    if i.dense_cost and i.available and i.hard_bounds]
             return (f"solver '{self.name}' takes a diagonal cost only; solvers that take "
                     f"a full weighting matrix: {', '.join(able)}")
         return None
@@ -92,7 +95,7 @@ def check_pairing(info: SolverInfo, row_limits: Iterable[str] = (),
     rows = tuple(dict.fromkeys(row_limits))
     why = info.refusal(rows, dense_cost)
     if why is not None:
-        able = [i.name for i in _REGISTRY.values() if i.available
+        able = [i.name for i in _REGISTRY.values() if i.available and i.hard_bounds
                 and (i.takes_rows or not rows) and (i.dense_cost or not dense_cost)]
         raise PairingError(why, solver=info.name, limits=rows, able=able)
 

@@ -91,6 +91,22 @@ class StepBuild:
     context: StepContext | None = None
 
 
+#: A box that the limits together leave empty by at most this (relative to
+#: ``max(1, |lower|)``) is rounding, not an infeasible step (on an acceleration limit's
+#: braking profile the box shrinks to one rate, and the distance left is a sum over many
+#: samples): it is pinned at its lower end.
+PIN_RTOL = 1e-9
+
+
+def pin_rounding(lower: FloatArray, upper: FloatArray) -> FloatArray:
+    """Raise ``upper`` to ``lower`` where a box is empty by rounding only.
+
+    See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step).
+    """
+    rounding = (upper < lower) & (lower - upper <= PIN_RTOL * np.maximum(1.0, np.abs(lower)))
+    return np.where(rounding, lower, upper) if rounding.any() else upper
+
+
 def smallest_singular_value(J: FloatArray) -> float:
     """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
     m, n = J.shape
@@ -320,6 +336,7 @@ class StepBuilder:
                 h_parts.append(np.atleast_1d(c.h))
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                    for i in range(len(c.h))]
+        upper = pin_rounding(lower, upper)
         labels = self._labels
         problem = StepProblem(
             A, b, cost.weights, cost.center, lower, upper,

@@ -61,7 +61,20 @@ def _check_compare_solvers(out: str) -> None:
         assert float(row.group(3)) > 0.0
 
 
+def _check_custom_limit(out: str) -> None:
+    rows = re.findall(r"^(\S+)\s+(completed|FAILED); the tool came within (-?[\d.]+) mm",
+                      out, re.MULTILINE)
+    solvers = {name for name, _, _ in rows}
+    assert {"nullspace", "qp:daqp"} <= solvers, out
+    for name, verdict, gap in rows:
+        assert verdict == "completed", name
+        assert float(gap) >= 0.0, name  # never past the wall
+    assert re.search(r"^sns\s+refused: solver 'sns' takes boxes only, and the limit 'wall' "
+                     r"gives rows; solvers that keep rows: nullspace", out, re.MULTILINE), out
+
+
 CHECKS = {
+    "custom_limit.py": _check_custom_limit,
     "own_control_loop.py": _check_own_control_loop,
     "task_in_python.py": _check_task_in_python,
     "urdf_robot_pair.py": _check_urdf_robot_pair,

@@ -104,3 +104,58 @@ def lp_max_scale(problem: StepProblem, cap: float = 1.0) -> float | None:
 def relative_error(x: np.ndarray, ref: np.ndarray) -> float:
     """max |x - ref| / max(1, max |ref|)."""
     return float(np.abs(x - ref).max() / max(1.0, np.abs(ref).max()))
+
+
+def with_rows(problem: StepProblem, rng: np.random.Generator, rows: int,
+              tight: float = 0.3) -> StepProblem:
+    """``problem`` with ``rows`` random general rows ``G x <= h`` (random normals, scaled
+    by up to 3), each within ``tight`` of the unconstrained-by-rows optimum's far side so
+    that some bind; every row holds at a feasible point ``x_f`` of the original problem
+    (a point of the box that meets ``A x = b``), so the problem stays feasible."""
+    x_f = np.linalg.lstsq(problem.A, problem.b, rcond=None)[0]
+    N = np.linalg.svd(problem.A)[2][problem.m:].T
+    # A feasible point: the least-squares point moved into the box along the null space.
+    res = linprog(np.zeros(N.shape[1]), A_ub=np.vstack([N, -N]),
+                  b_ub=np.concatenate([problem.upper - x_f, x_f - problem.lower]),
+                  bounds=[(None, None)] * N.shape[1], method="highs")
+    if res.status == 0:
+        x_f = x_f + N @ res.x
+    G = rng.standard_normal((rows, problem.n)) * rng.uniform(0.3, 3.0, (rows, 1))
+    h = G @ x_f + rng.uniform(0.0, tight, rows) * np.linalg.norm(G, axis=1)
+    return StepProblem(A=problem.A, b=problem.b, weights=problem.weights,
+                       center=problem.center, lower=problem.lower, upper=problem.upper,
+                       G=G, h=h, n_grasp=problem.n_grasp,
+                       row_names=tuple(f"row{i + 1}" for i in range(rows)))
+
+
+def reference_qp_rows(problem: StepProblem) -> np.ndarray | None:
+    """Exact minimiser of Eq. 37 with ``A x = b``, the box and the rows ``G x <= h``, by
+    enumerating active sets of boxes and rows (KKT system solved directly); None when no
+    active set of at most ``n - m`` limits gives a KKT point. Shares no code with the
+    library."""
+    n, m = problem.n, problem.m
+    C = np.vstack([np.eye(n), -np.eye(n), problem.G])
+    e = np.concatenate([problem.upper, -problem.lower, problem.h])
+    W = np.diag(problem.weights)
+    best: np.ndarray | None = None
+    for k in range(n - m + 1):
+        for idx in itertools.combinations(range(C.shape[0]), k):
+            Ca = C[list(idx)]
+            K = np.block([[W, problem.A.T, Ca.T],
+                          [problem.A, np.zeros((m, m + k))],
+                          [Ca, np.zeros((k, m + k))]])
+            rhs = np.concatenate([W @ problem.center, problem.b, e[list(idx)]])
+            try:
+                sol = np.linalg.solve(K, rhs)
+            except np.linalg.LinAlgError:
+                continue
+            sol += np.linalg.solve(K, rhs - K @ sol)
+            x, mu = sol[:n], sol[n + m:]
+            if (C @ x - e > 1e-9 * np.maximum(1.0, np.abs(e))).any():
+                continue
+            # W (x - c) + A^T lam + C_a^T mu = 0: an active upper limit needs mu >= 0.
+            if (mu < -1e-9 * max(1.0, float(np.abs(mu).max(initial=0.0)))).any():
+                continue
+            if best is None or problem.objective(x) < problem.objective(best):
+                best = x
+    return best

@@ -25,8 +25,8 @@ from solver_cases import lp_max_scale, random_problem, relative_error
 from dualarm_qp.kinematics import puma560
 from dualarm_qp.solvers import Status, available_solvers, get_solver
 from dualarm_qp.solvers._affine import RANK_RTOL, affine_solutions, factor
-from dualarm_qp.solvers._scale import max_task_scale
 from dualarm_qp.solvers._kkt import refine
+from dualarm_qp.solvers._scale import max_task_scale
 from dualarm_qp.step.problem import StepProblem
 
 seeds = st.integers(min_value=0, max_value=2**32 - 1)

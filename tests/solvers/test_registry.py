@@ -12,10 +12,10 @@ from dualarm_qp.solvers import (
     StepSolution,
     StepSolver,
     available_solvers,
+    certify,
     get_solver,
     list_solvers,
     register,
-    certify,
 )
 from dualarm_qp.solvers import registry as registry_module
 

@@ -11,8 +11,8 @@ import pytest
 from dualarm_qp import puma560
 from dualarm_qp.errors import InvalidInputError, NonFiniteError
 from dualarm_qp.se3 import pose_error
-from dualarm_qp.step.limits import RangeLimit, SpeedLimit
 from dualarm_qp.step.build import StepBuilder
+from dualarm_qp.step.limits import RangeLimit, SpeedLimit
 from dualarm_qp.step.options import StepOptions
 from dualarm_qp.step.state import DualArmState
 from dualarm_qp.task.scene import DualArmTask
