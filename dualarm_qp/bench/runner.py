@@ -488,7 +488,7 @@ class _BareProbe:
         import scipy.sparse as sp
 
         backend = self.solver.backend
-        if (problem.lower > problem.upper).any():
+        if problem.has_empty_box():
             return None
         c = problem.center
         P: Any = np.diag(problem.weights)

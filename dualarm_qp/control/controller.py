@@ -149,7 +149,8 @@ class DualArmController:
     options : StepOptions
         Step-problem settings (dt, weights, limits, correction gain).
     leader_gain : float, optional
-        Feedback gain [1/s] of the object's tracking of ``D(t)``; default ``1/dt``.
+        Feedback gain [1/s] of the object's tracking of ``D(t)``; default
+        ``options.leader_gain`` (``1/dt`` unless set).
     policy : {"scale", "relax", "stop"}
         What to do with an infeasible step (see :func:`dualarm_qp.solvers.solve_step`).
     tolerance : Tolerance
@@ -222,7 +223,8 @@ class DualArmController:
         self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds,
                                     limits=limits)
         check_pairing(self.solver.info, self._builder.row_limits)
-        self.leader_gain = 1.0 / options.dt if leader_gain is None else leader_gain
+        if leader_gain is not None:  # else the builder's, from the options
+            self.leader_gain = leader_gain
         self._x_prev: FloatArray | None = None
         self._x_applied = np.zeros(self._builder.n)
         self._lookahead: Lookahead | None = None

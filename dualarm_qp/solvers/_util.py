@@ -11,16 +11,17 @@ def bound_label(problem: StepProblem, index: int, upper: bool) -> str:
     return f"{problem.names[index]} {'upper' if upper else 'lower'}"
 
 
-def empty_box_failure(problem: StepProblem, solver: str, solve_time: float = 0.0
-                      ) -> StepSolution | None:
+def empty_box_failure(problem: StepProblem, solver: str, solve_time: float = 0.0,
+                      note: str = "", **extras: object) -> StepSolution | None:
     """INFEASIBLE solution naming the empty boxes (``lower > upper``), or None if there are none.
 
-    The conflicts are the names of the variables whose box is empty; they are also
-    stored in ``extras["conflicts"]``.
+    The one answer to an empty box, for every solver and the policies. The conflicts
+    are the names of the variables whose box is empty; they are also stored in
+    ``extras["conflicts"]``. ``note`` is appended to the message.
     """
-    if not (problem.lower > problem.upper).any():
+    if not problem.has_empty_box():
         return None
     names = problem.empty_bounds()
     return failed(problem, Status.INFEASIBLE, solver,
-                  f"empty box (lower > upper) for {', '.join(names)}",
-                  solve_time, conflicts=names)
+                  f"empty box (lower > upper) for {', '.join(names)}{note}",
+                  solve_time, conflicts=names, **extras)

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from ..step.problem import StepProblem
 from ._affine import RANK_RTOL, affine_solutions, cost_root
 from ._dense_qp import solve_dense_qp
+from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register
 
@@ -69,11 +70,9 @@ class NullspaceSolver:
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve one step exactly; see the module docstring."""
         start = time.perf_counter()
-        if problem.has_empty_box():
-            names = problem.empty_bounds()
-            return failed(problem, Status.INFEASIBLE, self.name,
-                          f"empty box (lower > upper) for {', '.join(names)}",
-                          time.perf_counter() - start, conflicts=names)
+        empty = empty_box_failure(problem, self.name)
+        if empty is not None:
+            return empty
         aff = affine_solutions(problem.A, problem.b)
         if aff is None:
             return failed(problem, Status.INFEASIBLE, self.name,

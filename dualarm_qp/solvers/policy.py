@@ -55,6 +55,7 @@ from ..errors import InfeasibleStepError, InvalidInputError
 from ..step.problem import StepProblem
 from ._dense_qp import solve_dense_qp
 from ._scale import TaskScale, max_task_scale
+from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, failed
 from .certify import certify
 from .registry import certified
@@ -189,11 +190,10 @@ def _scaled(solver: StepSolver, problem: StepProblem, reach: TaskScale, tol: Tol
 def _relaxed(name: str, problem: StepProblem, blocking: tuple[str, ...], relax_eps: float,
              tol: Tolerance, start: float) -> StepSolution:
     """Least squares within every limit: the limits hold, ``A x = b`` as well as it can."""
-    if problem.has_empty_box():
-        names = problem.empty_bounds()
-        return failed(problem, Status.INFEASIBLE, name,
-                      f"empty box (lower > upper) for {', '.join(names)}: cannot relax",
-                      time.perf_counter() - start, policy="relax", conflicts=names)
+    empty = empty_box_failure(problem, name, time.perf_counter() - start, ": cannot relax",
+                              policy="relax")
+    if empty is not None:
+        return empty
     x = relaxed_point(problem, relax_eps)
     if x is None:
         return failed(problem, Status.ERROR, name,

@@ -129,7 +129,8 @@ class StepBuilder:
     options : StepOptions
         Weights, limits and gains.
     leader_gain : float, optional
-        Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``; default ``1/dt``.
+        Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``; default
+        ``options.leader_gain``.
     leader_bounds : bool
         Impose the leader's joint ranges and speed and acceleration limits (hard-limit
         solvers); False leaves its box open (the paper's methods, which ignore limits by
@@ -165,8 +166,8 @@ class StepBuilder:
         self.options = options
         self.carry = CarryModel(leader, task.surface, task.H1, task.leader_surface)
         self.layout = Layout(n_l, n_f, self.carry.n_grasp)
-        self.path_task = ObjectPathTask(1.0 / options.dt if leader_gain is None
-                                        else leader_gain)
+        self.path_task = ObjectPathTask(float(options.leader_gain or 0.0)
+                                        if leader_gain is None else leader_gain)
         self.closure_task = GraspClosureTask(float(options.correction_gain or 0.0),
                                              exact_orientation=options.exact_orientation)
         self.tasks: tuple[Task, ...] = (self.path_task, self.closure_task)

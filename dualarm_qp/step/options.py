@@ -33,6 +33,9 @@ class StepOptions:
     correction_gain : float, optional
         Gain ``K`` [1/s] of the closure-error feedback, ``b = ... + K e``; 0 disables it.
         Default ``1/dt``, which removes the whole error in one step (to first order).
+    leader_gain : float, optional
+        Gain ``K_l`` [1/s] of the feedback of the object's pose error to ``D(t)``;
+        default ``1/dt`` likewise. (The one place where the ``1/dt`` defaults are set.)
     centre_horizon : float, optional
         Time [s] in which the range centres of Eqs. 39-40 ask each variable to reach the
         middle of its range: the centre rate is ``(middle - x) / centre_horizon``.
@@ -67,6 +70,7 @@ class StepOptions:
     leader_joint_weights: FloatArray | None = None
     acceleration_limits: bool = False
     grasp_acc_max: float = float("inf")
+    leader_gain: float | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -84,10 +88,12 @@ class StepOptions:
             raise InvalidInputError("grasp_speed_max must be positive")
         if not self.grasp_acc_max > 0:
             raise InvalidInputError("grasp_acc_max must be positive")
-        if self.correction_gain is None:
-            object.__setattr__(self, "correction_gain", 1.0 / self.dt)
-        elif not (np.isfinite(self.correction_gain) and self.correction_gain >= 0):
-            raise InvalidInputError("correction_gain must be a finite number >= 0 [1/s]")
+        for name in ("correction_gain", "leader_gain"):
+            gain = getattr(self, name)
+            if gain is None:
+                object.__setattr__(self, name, 1.0 / self.dt)
+            elif not (np.isfinite(gain) and gain >= 0):
+                raise InvalidInputError(f"{name} must be a finite number >= 0 [1/s]")
         if self.centre_horizon is None:
             object.__setattr__(self, "centre_horizon", self.dt)
         elif not (np.isfinite(self.centre_horizon) and self.centre_horizon > 0):

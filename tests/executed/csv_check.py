@@ -20,6 +20,7 @@ import numpy as np
 from oracle import inv_pose, is_puma, puma_fk
 
 SPEED_RTOL = 1e-6      # |dx|/dt <= v_max * (1 + SPEED_RTOL)
+ACCEL_RTOL = 1e-6      # |dv|/dt <= a_max * (1 + ACCEL_RTOL), v from consecutive rows
 RANGE_TOL = 1e-9       # the distance outside [lo, hi] may not grow by more than this
 PATH_TOL = 1e-9        # last path_t == t0 + duration
 POSITION_TOL = 1e-3    # leader tracking and grasp closure, metres
@@ -27,7 +28,7 @@ POSITION_TOL = 1e-3    # leader tracking and grasp closure, metres
 LEADER = [f"ql{i}" for i in range(1, 7)]     # the PUMA 560's columns
 FOLLOWER = [f"qf{i}" for i in range(1, 7)]
 FAILURE_CRITERIA = frozenset({"unreachable", "solver", "closure", "tracking", "singularity",
-                              "stalled", "path_incomplete", "range", "speed"})
+                              "stalled", "path_incomplete", "range", "speed", "acceleration"})
 
 
 def read_trajectory(path: str | Path) -> dict[str, np.ndarray]:
@@ -66,6 +67,9 @@ class Limits:
     speed_limits: bool
     bounds: dict[str, tuple[float, float]]   # column -> (lo, hi)
     speeds: dict[str, float]                 # column -> v_max
+    acceleration_limits: bool = False
+    accelerations: dict[str, float] | None = None   # column -> a_max
+    start_rates: dict[str, float] | None = None     # column -> rate before row 0
 
 
 def joint_columns(traj: dict[str, np.ndarray], prefix: str) -> list[str]:
@@ -81,18 +85,30 @@ def limits_of(exp: Any) -> Limits:
     task, opts = exp.task, exp.options
     bounds: dict[str, tuple[float, float]] = {}
     speeds: dict[str, float] = {}
+    accelerations: dict[str, float] = {}
     for prefix, arm in (("ql", task.leader), ("qf", task.follower)):
         for i in range(arm.n):
             bounds[f"{prefix}{i + 1}"] = (float(arm.q_min[i]), float(arm.q_max[i]))
             speeds[f"{prefix}{i + 1}"] = float(arm.qd_max[i])
+            accelerations[f"{prefix}{i + 1}"] = float(arm.qdd_max[i])
     surfaces = [("grasp", task.surface)]
     if task.leader_surface is not None:
         surfaces.append(("grasp_leader", task.leader_surface))
     for c, surface in surfaces:
         bounds[c] = (float(surface.sigma_min), float(surface.sigma_max))
         speeds[c] = float(opts.grasp_speed_max)
+        accelerations[c] = float(opts.grasp_acc_max)
+    # The rates before the first row: zero from rest (the config's default), otherwise
+    # the experiment's own start (read from the experiment, not from the run's outputs).
+    start = np.zeros(len(accelerations))
+    rates = exp.start_rates()
+    if rates is not None:
+        start = np.asarray(rates, dtype=float)
     return Limits(dt=float(opts.dt), t_end=float(exp.initial.t) + float(exp.duration),
-                  speed_limits=bool(opts.velocity_limits), bounds=bounds, speeds=speeds)
+                  speed_limits=bool(opts.velocity_limits), bounds=bounds, speeds=speeds,
+                  acceleration_limits=bool(opts.acceleration_limits),
+                  accelerations=accelerations,
+                  start_rates=dict(zip(accelerations, start.tolist(), strict=True)))
 
 
 def check_valid(traj: dict[str, np.ndarray]) -> list[str]:
@@ -136,6 +152,28 @@ def check_speeds(traj: dict[str, np.ndarray], lim: Limits) -> list[str]:
             out.append(f"speed {c}: {bad.size} steps over; worst rows {k}->{k + 1} "
                        f"(t={traj['t'][k]:.6g} s): {v[k]:.9g} > {vmax:.9g} "
                        f"(ratio {v[k] / vmax:.9g})")
+    return out
+
+
+def check_accelerations(traj: dict[str, np.ndarray], lim: Limits) -> list[str]:
+    """|v[k] - v[k-1]| / dt <= a_max (1 + 1e-6), with v[k] = (x[k+1] - x[k]) / dt and
+    v[-1] the rates the run started with (zero from rest): the first sample from rest
+    counts too."""
+    if not lim.acceleration_limits or lim.accelerations is None:
+        return []
+    out = []
+    for c, amax in lim.accelerations.items():
+        if not math.isfinite(amax):
+            continue
+        v0 = (lim.start_rates or {}).get(c, 0.0)
+        v = np.concatenate([[v0], np.diff(traj[c]) / lim.dt])
+        a = np.abs(np.diff(v)) / lim.dt
+        bad = np.flatnonzero(a > amax * (1 + ACCEL_RTOL))
+        if bad.size:
+            k = int(bad[np.argmax(a[bad])])
+            out.append(f"acceleration {c}: {bad.size} samples over; worst at row {k} "
+                       f"(t={traj['t'][k]:.6g} s): {a[k]:.9g} > {amax:.9g} "
+                       f"(ratio {a[k] / amax:.9g})")
     return out
 
 
@@ -205,8 +243,9 @@ def check_completed_run(traj: dict[str, np.ndarray], exp: Any) -> list[str]:
     if bad:
         return bad
     lim = limits_of(exp)
-    return (check_speeds(traj, lim) + check_ranges(traj, lim)
-            + check_path_complete(traj, lim) + check_geometry(traj, exp))
+    return (check_speeds(traj, lim) + check_accelerations(traj, lim)
+            + check_ranges(traj, lim) + check_path_complete(traj, lim)
+            + check_geometry(traj, exp))
 
 
 def worst_shares(traj: dict[str, np.ndarray], exp: Any) -> dict[str, float]:

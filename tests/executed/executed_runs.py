@@ -54,8 +54,11 @@ def _variants() -> dict[str, Any]:
     out: dict[str, Any] = {name: (lambda n=name: load(n)) for name in (
         "puma_beam_limits", "puma_beam_fixed", "puma_beam_sliding_s7_100",
         "puma_beam_sliding_s7_1000", "curved_bar_waypoints", "puma_beam_fast",
-        "puma_beam_leader_near_singular", "puma_beam_wrist_singular")}
+        "puma_beam_leader_near_singular", "puma_beam_wrist_singular", "puma_beam_accel")}
     out["puma_beam_limits_x3"] = lambda: speed_up(load("puma_beam_limits"), 3.0)
+    # Three times faster from rest, with the PUMA's acceleration limits: the first
+    # samples cannot reach the path's speed, so the path is slowed (time is lost).
+    out["puma_beam_limits_x3_accel"] = lambda: speed_up(load("puma_beam_accel"), 3.0)
     # The shipped file's path ends out of the leader's reach (the run is refused before
     # it starts); its first 13 s stay in reach and pass close to a singularity.
     out["puma_beam_leader_near_singular_13s"] = lambda: _with_duration(
@@ -68,7 +71,8 @@ def _variants() -> dict[str, Any]:
 #: variant name -> zero-argument function returning the config dict.
 VARIANTS = _variants()
 #: Cases the exact solvers must complete (else the test fails: report, don't loosen).
-MUST_COMPLETE = ("puma_beam_limits", "curved_bar_waypoints", "puma_beam_limits_x3")
+MUST_COMPLETE = ("puma_beam_limits", "curved_bar_waypoints", "puma_beam_limits_x3",
+                 "puma_beam_accel", "puma_beam_limits_x3_accel")
 
 
 def build(variant: str, solver: str) -> Any:

@@ -35,6 +35,7 @@ from executed_runs import EXACT, HARD_SOLVERS, MUST_COMPLETE, VARIANTS, run
 
 #: Variants run with every hard-limit solver (short runs, or the paper's baseline).
 FULL_MATRIX = ("puma_beam_limits", "puma_beam_fast", "puma_beam_limits_x3",
+               "puma_beam_limits_x3_accel",
                "puma_beam_fixed", "puma_beam_sliding_s7_100", "puma_beam_sliding_s7_1000",
                "puma_beam_tight_limits_scale", "puma_beam_wrist_singular")
 #: The solvers run on the other (long) variants: both exact ones, SNS and the one

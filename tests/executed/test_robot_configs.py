@@ -27,6 +27,7 @@ import pytest
 import yaml
 from csv_check import (
     Limits,
+    check_accelerations,
     check_path_complete,
     check_ranges,
     check_speeds,
@@ -51,7 +52,8 @@ pytestmark = pytest.mark.skipif(
     reason="example-robot-data is not installed (pip install -e '.[robots]'; '.[dev]' has it)")
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
-ROBOT_CONFIGS = ("ur5_pair_sliding_bar", "panda_pair", "baxter_tray", "both_sliding_bar")
+ROBOT_CONFIGS = ("ur5_pair_sliding_bar", "panda_pair", "baxter_tray", "both_sliding_bar",
+                 "panda_pair_accel")
 #: The runs' tracking and closure tolerances (the configs keep the defaults).
 POSITION_TOL, ANGLE_TOL = 1e-3, 1e-2
 LENGTH = {"m": 1.0, "mm": 1e-3}
@@ -72,6 +74,16 @@ class Spec:
         self.dt = float(c["dt"])
         self.duration = float(c["duration"])
         self.grasp_speed = float(c["grasp_speed_max"]) * self.length
+        self.acceleration_limits = bool(c.get("acceleration_limits", False))
+        self.grasp_acc = float(c.get("grasp_acc_max", math.inf)) * self.length
+        assert c.get("initial_rates", "rest") == "rest"  # the checks start from rest
+
+    def joint_accelerations(self, role: str, n: int) -> np.ndarray:
+        """The YAML's ``qdd_max`` [rad/s^2] (a URDF states none: inf)."""
+        arm = self.data[role]
+        if "qdd_max" not in arm:
+            return np.full(n, np.inf)
+        return np.array(arm["qdd_max"], dtype=float) * self.angle
 
     def pose(self, spec: dict[str, Any] | None) -> np.ndarray:
         if spec is None:
@@ -166,18 +178,24 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
 def independent_limits(spec: Spec) -> Limits:
     bounds: dict[str, tuple[float, float]] = {}
     speeds: dict[str, float] = {}
+    accels: dict[str, float] = {}
     for role, prefix in (("leader", "ql"), ("follower", "qf")):
         lo, hi, vel = spec.joint_limits(role, spec.chain(role))
+        acc = spec.joint_accelerations(role, lo.size)
         for i in range(lo.size):
             bounds[f"{prefix}{i + 1}"] = (float(lo[i]), float(hi[i]))
             speeds[f"{prefix}{i + 1}"] = float(vel[i])
+            accels[f"{prefix}{i + 1}"] = float(acc[i])
     bounds["grasp"] = spec.grasp_range("surface")
     speeds["grasp"] = spec.grasp_speed
+    accels["grasp"] = spec.grasp_acc
     if spec.leader_slides:
         bounds["grasp_leader"] = spec.grasp_range("leader_surface")
         speeds["grasp_leader"] = spec.grasp_speed
+        accels["grasp_leader"] = spec.grasp_acc
     return Limits(dt=spec.dt, t_end=spec.duration, speed_limits=True, bounds=bounds,
-                  speeds=speeds)
+                  speeds=speeds, acceleration_limits=spec.acceleration_limits,
+                  accelerations=accels, start_rates={c: 0.0 for c in accels})
 
 
 def rows(traj: dict[str, np.ndarray], prefix: str) -> np.ndarray:
@@ -208,8 +226,8 @@ def test_recorded_motion_keeps_every_limit(name: str, runs: dict[str, Any]) -> N
     assert not check_valid(traj)
     lim = independent_limits(spec)
     assert ("grasp_leader" in traj) == spec.leader_slides
-    problems = (check_speeds(traj, lim) + check_ranges(traj, lim)
-                + check_path_complete(traj, lim))
+    problems = (check_speeds(traj, lim) + check_accelerations(traj, lim)
+                + check_ranges(traj, lim) + check_path_complete(traj, lim))
     assert not problems, "\n".join(problems)
     # Starting inside every range, the run stays inside (not just "never further out").
     for c, (lo, hi) in lim.bounds.items():
@@ -313,3 +331,12 @@ def test_config_does_what_its_header_says(name: str, runs: dict[str, Any]) -> No
         assert geometry(spec, traj)["tilt"] <= ANGLE_TOL  # the tray's x axis stays down
     elif name == "both_sliding_bar":
         assert spec.leader_slides and travel(traj["grasp_leader"]) > 0.01
+    elif name == "panda_pair_accel":
+        # From rest, a joint and the sliding reach their acceleration limits (recomputed
+        # here from the CSV), and the bar is slowed on some steps.
+        v = {c: np.concatenate([[0.0], np.diff(traj[c]) / spec.dt]) for c in lim.speeds}
+        accel_ratio = {c: float(np.max(np.abs(np.diff(v[c])))) / spec.dt / a
+                       for c, a in (lim.accelerations or {}).items() if math.isfinite(a)}
+        assert max(accel_ratio.values()) > 0.99
+        assert accel_ratio["grasp"] > 0.99
+        assert np.sum(traj["scale"] < 1 - 1e-9) > 0
