@@ -8,8 +8,8 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.patches import FancyArrowPatch, FancyBboxPatch  # noqa: E402
+import matplotlib.pyplot as plt
+from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
 OUT = Path(__file__).with_name("architecture.png")
 
@@ -27,7 +27,8 @@ BOXES = {
     "builder": (2.0, 2.9, 4.6, 0.8, "#fff2cc", "StepBuilder: stacks the parts"),
     "problem": (2.0, 1.8, 4.6, 0.8, "#fff2cc",
                 "StepProblem: A x = s b, lower <= x <= upper, G x <= h, cost"),
-    "pairing": (7.0, 1.8, 2.5, 0.8, "#f8d7da", "pairing check\n(rows need a solver\nthat takes rows)"),
+    "pairing": (7.0, 1.8, 2.5, 0.8, "#f8d7da",
+                "pairing check\n(rows need a solver\nthat takes rows)"),
     "policy": (0.2, 0.6, 3.0, 0.9, "#fde2cf", "policy: scale / relax / stop\nfallback"),
     "solver": (3.5, 0.6, 2.6, 0.9, "#fde2cf", "solver (registry)\nnullspace, qp:*, SNS, ..."),
     "certify": (6.4, 0.6, 3.1, 0.9, "#f8d7da",
@@ -49,12 +50,14 @@ ARROWS = [("state", "right", "context", "left"), ("context", "bottom", "tasks", 
 
 
 def anchor(name: str, side: str) -> tuple[float, float]:
+    """Return the middle of one side of a box (a little outside it)."""
     x, y, w, h, _, _ = BOXES[name]
     return {"top": (x + w / 2, y + h + 0.05), "bottom": (x + w / 2, y - 0.05),
             "left": (x - 0.05, y + h / 2), "right": (x + w + 0.05, y + h / 2)}[side]
 
 
 def main() -> None:
+    """Draw and save the picture."""
     fig, ax = plt.subplots(figsize=(11, 8.2))
     for x, y, w, h, colour, text in BOXES.values():
         ax.add_patch(FancyBboxPatch((x, y), w, h, boxstyle="round,pad=0.05",
