@@ -228,7 +228,8 @@ class AffineSet:
         return int(self.N.shape[1])
 
 
-def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
+def affine_solutions(A: FloatArray, b: FloatArray, f: Factor | None = None
+                     ) -> AffineSet | None:
     """Parametrise the solutions of ``A x = b`` as ``x0 + N t``.
 
     One truncated SVD (:func:`factor`): the rank is the number of singular values above
@@ -241,6 +242,8 @@ def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
         Equality matrix (units of ``b`` per unit of ``x``).
     b : ndarray, shape (m,)
         Right-hand side [m/s; rad/s].
+    f : Factor, optional
+        ``factor(A)`` when already computed (:func:`problem_factor`).
 
     Returns
     -------
@@ -249,7 +252,8 @@ def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
         ``CONSISTENCY_TOL * max(1, max |b|)`` (``A`` rank-deficient, ``b`` outside its
         numerical range).
     """
-    f = factor(A)
+    if f is None:
+        f = factor(A)
     x0 = f.solve(b)
     # Full row rank: every b is in the range, the residual is rounding only.
     if f.rank < A.shape[0] and not _consistent(A, b, f, x0):

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import CONSISTENCY_TOL, factor
+from ._affine import CONSISTENCY_TOL, problem_factor
 
 FloatArray = NDArray[np.float64]
 
@@ -107,7 +107,7 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     if problem.has_empty_box():
         return TaskScale(None, None, problem.empty_bounds())
     A = problem.A
-    f = factor(A)
+    f = problem_factor(problem)
     x_b, x_d = f.solve(base), f.solve(direction)
     s_lo, s_hi = 0.0, float(cap)
     rank_limited = False
@@ -136,7 +136,7 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     if found is None:
         return TaskScale(None, None, (), rank_limited=rank_limited)
     ok, t, s, rows = found
-    labels = tuple(dict.fromkeys(ineq.labels[i] for i in rows))
+    labels = ineq.labels(rows)
     if not ok:
         return TaskScale(None, None, labels, rank_limited=rank_limited)
     s = min(max(s, s_lo), s_hi)

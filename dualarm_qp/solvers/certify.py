@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 from scipy.optimize import nnls
 
 from ..step.problem import StepProblem
-from ._affine import least_distance_eq, problem_factor
+from ._affine import factor, problem_factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
 FloatArray = NDArray[np.float64]
@@ -133,7 +133,7 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         ineq = problem.inequalities()
         general = ineq.kind == 0
         on = general & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
-        active_rows = tuple(ineq.labels[i] for i in np.flatnonzero(on))
+        active_rows = ineq.labels(np.flatnonzero(on))
     return replace(claim, status=status, message=message, objective=problem.objective(x),
                    eq_residual=eq, bound_violation=box, row_violation=rows,
                    active_lower=active_lo, active_upper=active_up, active_rows=active_rows,
@@ -161,7 +161,8 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     The test does not trust a solver's working set or multipliers. The limits active at
     ``x`` (within :data:`ACTIVE_TOL`; none with ``bounds=False``) are held as
     equalities with ``A x = b``, and the exact minimiser ``x*`` of Eq. 37 on that
-    affine set is computed (:func:`~._affine.least_distance_eq`). ``x`` passes when
+    affine set is computed in the null-space coordinates of ``A`` (its factorisation
+    is the problem's, shared with the solver). ``x`` passes when
 
     1. ``|x - x*| <= tol``: ``x`` is that minimiser, the equality met exactly (a
        residual inside the feasibility tolerance along a near-null direction of an
@@ -185,22 +186,37 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     bounds : bool
         Include the boxes and rows (False: the minimiser over ``A x = b`` alone).
     """
-    A, b = problem.A, problem.b
+    f = problem_factor(problem)
+    Z = f.N
+    x0 = f.solve(problem.b)  # the minimum-norm solution of the equality
+    C_act = np.zeros((0, problem.n))
     if bounds:
         ineq = problem.inequalities()
         active = ineq.C @ x - ineq.e >= -ACTIVE_TOL * np.maximum(1.0, np.abs(ineq.e))
         C_act = ineq.C[active]
-        E = np.vstack([A, C_act])
-        r = np.concatenate([b, ineq.e[active]])
+    root = problem.cost_root()
+    RZ = root @ Z
+    r0 = root @ (problem.center - x0)
+    # x* = x0 + Z t*: the minimiser of Eq. 37 on A x = b with the active limits held, in
+    # the null-space coordinates t (d of them): min |RZ t - r0| subject to M t = g_act.
+    if C_act.shape[0] and Z.shape[1]:
+        M = C_act @ Z
+        fm = factor(M)
+        t_p = fm.solve(ineq.e[active] - C_act @ x0)
+        if fm.nullity:
+            RN = RZ @ fm.N
+            u = np.linalg.lstsq(RN, r0 - RZ @ t_p, rcond=None)[0]
+            t_p = t_p + fm.N @ u
+        t_star = t_p
+    elif Z.shape[1]:
+        t_star = np.linalg.lstsq(RZ, r0, rcond=None)[0]
     else:
-        C_act = np.zeros((0, problem.n))
-        E, r = A, b
-    x_star, _ = least_distance_eq(problem, E, r)
+        t_star = np.zeros(0)
+    x_star = x0 + Z @ t_star
     if not np.isfinite(x_star).all():
         return False
-    Z = problem_factor(problem).N
     grad = problem.gradient(x_star)
-    H = Z.T @ (problem.weight_matrix() @ Z)
+    H = RZ.T @ RZ
     lam_min = float(np.linalg.eigvalsh(H)[0]) if Z.shape[1] else 1.0
     tol = (STEP_RTOL * max(1.0, float(np.abs(x).max(initial=0.0)))
            + ROUNDING * float(np.abs(grad).max(initial=0.0)) / max(lam_min, 1e-300))
@@ -210,11 +226,11 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
         return True
     g = Z.T @ grad
     if C_act.shape[0]:
-        M = Z.T @ C_act.T  # the projected normals of the active limits
+        Mz = Z.T @ C_act.T  # the projected normals of the active limits
         L = np.linalg.cholesky(H)
-        mu, _ = nnls(np.linalg.solve(L, M), -np.linalg.solve(L, g),
-                     maxiter=50 * (M.shape[1] + 1))
-        g = g + M @ mu
+        mu, _ = nnls(np.linalg.solve(L, Mz), -np.linalg.solve(L, g),
+                     maxiter=50 * (Mz.shape[1] + 1))
+        g = g + Mz @ mu
     step = Z @ np.linalg.solve(H, g)  # the Newton step that would make x* stationary
     return float(np.abs(step).max(initial=0.0)) <= tol
 

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..step.problem import StepProblem
-from ._affine import RANK_RTOL, affine_solutions, cost_root
+from ._affine import RANK_RTOL, affine_solutions, cost_root, problem_factor
 from ._dense_qp import solve_dense_qp
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
@@ -73,7 +73,7 @@ class NullspaceSolver:
         empty = empty_box_failure(problem, self.name)
         if empty is not None:
             return empty
-        aff = affine_solutions(problem.A, problem.b)
+        aff = affine_solutions(problem.A, problem.b, problem_factor(problem))
         if aff is None:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",
@@ -121,8 +121,7 @@ class NullspaceSolver:
 
     def _infeasible(self, problem: StepProblem, rows: list[int], start: float,
                     extras: dict[str, Any]) -> StepSolution:
-        labels = problem.inequalities().labels
-        conflicts = tuple(dict.fromkeys(labels[i] for i in rows))
+        conflicts = problem.inequalities().labels(rows)
         return failed(problem, Status.INFEASIBLE, self.name,
                       "no x meets A x = b within the limits; conflicting: "
                       + ", ".join(conflicts), time.perf_counter() - start,

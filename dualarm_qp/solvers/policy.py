@@ -235,7 +235,7 @@ def _active(problem: StepProblem, x: np.ndarray) -> tuple[str, ...]:
     """Limits active at ``x`` (within 1e-9), as labels."""
     ineq = problem.inequalities()
     on = ineq.C @ x - ineq.e >= -1e-9
-    return tuple(ineq.labels[i] for i in np.flatnonzero(on))
+    return ineq.labels(np.flatnonzero(on))
 
 
 def _relaxed_conflicts(problem: StepProblem, relax_eps: float) -> tuple[str, ...]:

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from ..step.problem import StepProblem
-from ._affine import factor
+from ._affine import problem_factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_tolerance, register
 
@@ -41,7 +41,7 @@ class ReferenceSolver:
         start = time.perf_counter()
         A, b = problem.A, problem.b
         S = problem.weight_matrix()
-        rank = factor(A).rank
+        rank = problem_factor(problem).rank
         if rank < problem.m:  # decided at RANK_RTOL, not by an LU pivot
             return failed(problem, Status.ERROR, self.name,
                           f"J_f has rank {rank} < {problem.m} (RANK_RTOL): J_f^+ = "

@@ -51,19 +51,31 @@ class Inequalities:
         divided by its Euclidean norm (rows of zeros are kept as they are).
     e : ndarray, shape (k,)
         Right-hand sides in the same units (of ``x``).
-    labels : tuple of str
-        One name per row (``"qf4 upper (joint speed)"``, ``"wall"``).
     kind : ndarray of int, shape (k,)
         ``+1`` upper box, ``-1`` lower box, ``0`` general row.
     index : ndarray of int, shape (k,)
         The variable (boxes) or the row of ``G`` (general rows).
+    problem : StepProblem
+        The problem they come from (for the names of the rows, made on demand).
     """
 
     C: FloatArray
     e: FloatArray
-    labels: tuple[str, ...]
     kind: NDArray[np.int8]
     index: NDArray[np.intp]
+    problem: StepProblem = field(repr=False, compare=False)
+
+    def label(self, i: int) -> str:
+        """Name of row ``i``: ``"qf4 upper (joint speed)"``, ``"wall"``."""
+        k, j = int(self.kind[i]), int(self.index[i])
+        if k == 0:
+            return self.problem.row_names[j]
+        return self.problem.bound_label(j, k > 0)
+
+    def labels(self, rows: Any = None) -> tuple[str, ...]:
+        """Names of ``rows`` (indices; default every row), each once, in order."""
+        picked = range(self.C.shape[0]) if rows is None else rows
+        return tuple(dict.fromkeys(self.label(int(i)) for i in picked))
 
 
 @dataclass(frozen=True)
@@ -217,8 +229,13 @@ class StepProblem:
 
         Its right-hand side is ``scale b``; ``x_prev`` replaces the warm start when given.
         """
-        return replace(self, b=scale * self.b,
-                       x_prev=self.x_prev if x_prev is None else x_prev)
+        out = replace(self, b=scale * self.b,
+                      x_prev=self.x_prev if x_prev is None else x_prev)
+        # The same A, boxes, rows and cost: their factorisations carry over.
+        for key in ("factor", "ineq", "root"):
+            if key in self._cache:
+                out._cache[key] = self._cache[key]
+        return out
 
     def weight_matrix(self) -> FloatArray:
         """``W`` as an ``n x n`` matrix."""
@@ -288,18 +305,23 @@ class StepProblem:
         lo = np.flatnonzero(np.isfinite(self.lower))
         G, h = self.G, self.h
         rows = np.flatnonzero(np.isfinite(h))
-        norms = np.linalg.norm(G[rows], axis=1) if rows.size else np.zeros(0)
-        safe = np.where(norms > 0.0, norms, 1.0)
-        eye = np.eye(n)
-        C = np.vstack([eye[up], -eye[lo], G[rows] / safe[:, None]])
-        e = np.concatenate([self.upper[up], -self.lower[lo], h[rows] / safe])
-        labels = (tuple(self.bound_label(int(i), True) for i in up)
-                  + tuple(self.bound_label(int(i), False) for i in lo)
-                  + tuple(self.row_names[int(i)] for i in rows))
-        kind = np.concatenate([np.ones(up.size), -np.ones(lo.size),
-                               np.zeros(rows.size)]).astype(np.int8)
+        k_up, k_lo = up.size, lo.size
+        C = np.zeros((k_up + k_lo + rows.size, n))
+        C[np.arange(k_up), up] = 1.0
+        C[k_up + np.arange(k_lo), lo] = -1.0
+        e = np.empty(C.shape[0])
+        e[:k_up] = self.upper[up]
+        e[k_up:k_up + k_lo] = -self.lower[lo]
+        if rows.size:
+            norms = np.linalg.norm(G[rows], axis=1)
+            safe = np.where(norms > 0.0, norms, 1.0)
+            C[k_up + k_lo:] = G[rows] / safe[:, None]
+            e[k_up + k_lo:] = h[rows] / safe
+        kind = np.zeros(C.shape[0], dtype=np.int8)
+        kind[:k_up] = 1
+        kind[k_up:k_up + k_lo] = -1
         index = np.concatenate([up, lo, rows]).astype(np.intp)
-        out = Inequalities(C, e, labels, kind, index)
+        out = Inequalities(C, e, kind, index, self)
         self._cache["ineq"] = out
         return out
 

@@ -61,8 +61,9 @@ def _speed_note(limits: PlotLimits) -> str:
             else "speed limit (not enforced in this run)")
 
 
-def _arm_grid(data: RunData, height: float, bottom: float) -> tuple[Figure, Any, int]:
-    """Return a 2 x n grid (leader, follower) with fixed margins [in].
+def _arm_grid(data: RunData, height: float, bottom: float, rows: int = 2
+              ) -> tuple[Figure, Any, int]:
+    """Return a rows x n grid (leader, follower, ...) with fixed margins [in].
 
     Fixed margins rather than ``tight_layout``, which costs more than the drawing on
     grids this size.
@@ -70,7 +71,7 @@ def _arm_grid(data: RunData, height: float, bottom: float) -> tuple[Figure, Any,
     n = max(data.n_joints("l"), data.n_joints("f"), 1)
     width = 2.4 * n + 0.8
     fig = new_figure(figsize=(width, height))
-    axes = fig.subplots(2, n, sharex=True, squeeze=False)
+    axes = fig.subplots(rows, n, sharex=True, squeeze=False)
     fig.subplots_adjust(left=0.75 / width, right=1 - 0.15 / width, top=1 - 0.75 / height,
                         bottom=bottom / height, wspace=0.38, hspace=0.32)
     return fig, axes, n
@@ -108,16 +109,19 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
 
 
 def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Joint rates, commanded and realised, against the speed limits.
+    """Joint rates against the speed limits (and accelerations against theirs).
 
-    Angles in the file's unit (deg or rad) per second.
+    Angles in the file's unit (deg or rad) per second (per second squared).
 
     The realised rate is the finite difference of the recorded joints; it differs
     from the commanded one where a position-level correction moved the joints. The
     shading marks the samples whose realised rate is over the limit. The last row's
-    command, computed but never applied, is left out.
+    command, computed but never applied, is left out. When the run kept acceleration
+    limits, two more rows show the realised accelerations (finite differences of the
+    realised rates, the first from rest) against ``qdd_max``.
     """
-    fig, axes, n = _arm_grid(data, 5.6, 0.85)
+    accel = limits.acceleration_limits_enforced
+    fig, axes, n = _arm_grid(data, 10.4 if accel else 5.6, 0.85, rows=4 if accel else 2)
     t = data.t
     per_rad, unit = limits.units.per_rad, limits.units.angle
     for row, (arm, label) in enumerate(_ARMS):
@@ -139,13 +143,43 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
             speed_axis(ax, vmax * per_rad, finite_max_abs(cmd[:, j], real[:, j]) * per_rad)
             ax.set_title(f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
-            if row == 1:
-                ax.set_xlabel("t [s]", fontsize=8)
         axes[row][0].set_ylabel(f"[{unit}/s]", fontsize=8)
-    handles, labels = axes[0][0].get_legend_handles_labels()
+    if accel:
+        for row, (arm, label) in enumerate(_ARMS, start=2):
+            acc = data.realised_accelerations(arm)
+            lim = limits.arm(arm)
+            a_max = (lim.qdd_max if lim.qdd_max is not None
+                     else np.full(acc.shape[1], np.inf))
+            for j in range(n):
+                ax = axes[row][j]
+                if j >= acc.shape[1]:
+                    ax.set_visible(False)
+                    continue
+                name = f"q{arm}_ddot{j + 1}"
+                amax = float(a_max[j])
+                ax.plot(t, acc[:, j] * per_rad, color="C3", lw=0.9,
+                        label="realised acceleration")
+                limit_lines(ax, (-amax, amax), name, scale=per_rad,
+                            label="acceleration limit")
+                shade_spans(ax, outside_spans(t, outside_mask(acc[:, j], -amax, amax)),
+                            name, label="realised over the limit")
+                speed_axis(ax, amax * per_rad, finite_max_abs(acc[:, j]) * per_rad)
+                ax.set_title(f"{label} q{j + 1} acceleration", fontsize=9)
+                ax.tick_params(labelsize=7)
+            axes[row][0].set_ylabel(f"[{unit}/s^2]", fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]", fontsize=8)
+    handles, labels = [], []
+    for ax in (axes[0][0], *(axes[2][:1] if accel else ())):
+        h, lab = ax.get_legend_handles_labels()
+        for hh, ll in zip(h, lab, strict=True):
+            if ll not in labels:
+                handles.append(hh)
+                labels.append(ll)
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
     fig.suptitle((title + ": " if title else "")
-                 + "joint rates against their speed limits (dashed)", fontsize=10)
+                 + "joint rates against their speed limits (dashed)"
+                 + ("; accelerations against theirs" if accel else ""), fontsize=10)
     return fig
 
 

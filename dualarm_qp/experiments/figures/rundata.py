@@ -110,6 +110,18 @@ class RunData:
         """
         return realised_rate(self.col("t"), self.joints(arm))
 
+    def realised_accelerations(self, arm: str) -> FloatArray:
+        """Realised joint accelerations of ``arm`` [rad/s^2], from the realised rates.
+
+        Row k is ``(v[k] - v[k-1]) / dt`` with ``v[k]`` the realised rate over sample k
+        and ``v[-1] = 0`` (the run started at rest); the last row is NaN.
+        """
+        v = self.realised_rates(arm)
+        t = self.col("t")
+        dt = np.diff(t, append=np.nan)
+        before = np.vstack([np.zeros((1, v.shape[1])), v[:-1]])
+        return (v - before) / dt[:, None]
+
     @property
     def t(self) -> FloatArray:
         """Sample times [s]."""
@@ -147,11 +159,12 @@ def realised_rate(t: Any, values: Any) -> FloatArray:
 
 @dataclass(frozen=True)
 class ArmLimits:
-    """Range [rad] and speed limit [rad/s] of each joint of one arm."""
+    """Range [rad], speed [rad/s] and acceleration limit [rad/s^2] of each joint of one arm."""
 
     q_min: FloatArray
     q_max: FloatArray
     qd_max: FloatArray
+    qdd_max: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -224,6 +237,8 @@ class PlotLimits:
         Range [m] of the leader's grasp when it slides too (None: a rigid grasp).
     units : DisplayUnits
         What the figures show angles and lengths in (default degrees and millimetres).
+    acceleration_limits_enforced : bool
+        Whether the run's step kept the joints' acceleration limits.
     """
 
     leader: ArmLimits
@@ -236,6 +251,7 @@ class PlotLimits:
     singular_value_min: float
     leader_grasp_range: tuple[float, float] | None = None
     units: DisplayUnits = DisplayUnits()
+    acceleration_limits_enforced: bool = False
 
     @classmethod
     def from_experiment(cls, exp: Experiment) -> PlotLimits:
@@ -244,7 +260,9 @@ class PlotLimits:
 
         def arm(a: Any) -> ArmLimits:
             return ArmLimits(np.asarray(a.q_min, dtype=float), np.asarray(a.q_max, dtype=float),
-                             np.asarray(a.qd_max, dtype=float))
+                             np.asarray(a.qd_max, dtype=float),
+                             np.asarray(getattr(a, "qdd_max", np.full(a.n, np.inf)),
+                                        dtype=float))
 
         opts = exp.options
         speed = float(opts.grasp_speed_max) if opts.velocity_limits else float("inf")
@@ -257,7 +275,9 @@ class PlotLimits:
                    closure=(float(exp.limits.closure[0]), float(exp.limits.closure[1])),
                    tracking=(float(exp.limits.tracking[0]), float(exp.limits.tracking[1])),
                    singular_value_min=float(exp.limits.singular_value_min),
-                   leader_grasp_range=leader_range, units=DisplayUnits.of_file(exp.path))
+                   leader_grasp_range=leader_range, units=DisplayUnits.of_file(exp.path),
+                   acceleration_limits_enforced=bool(getattr(opts, "acceleration_limits",
+                                                             False)))
 
     def arm(self, arm: str) -> ArmLimits:
         """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""
