@@ -209,7 +209,7 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
             t_p = t_p + fm.N @ u
         t_star = t_p
     elif Z.shape[1]:
-        t_star = np.linalg.lstsq(RZ, r0, rcond=None)[0]
+        t_star = np.asarray(np.linalg.lstsq(RZ, r0, rcond=None)[0], dtype=np.float64)
     else:
         t_star = np.zeros(0)
     x_star = x0 + Z @ t_star
