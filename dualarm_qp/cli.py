@@ -58,13 +58,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
     exp = build_experiment(load_config(args.config), str(args.config), solver=args.solver,
                            solver_options=solver_options)
     check_solver_options(solver_options, used=[exp.solver_name])
-    exp.controller()  # fail early (exit 2) on an unknown or missing solver
+    controller = exp.controller()  # fail early (exit 2) on an unknown or missing solver
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
     out = _output_folder(out)
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
-                             plots=not args.no_plots, animate=args.animate)
+                             plots=not args.no_plots, animate=args.animate,
+                             controller=controller)
     print_run_summary(outcome.summary, str(out))
     if outcome.interrupted:
         _err(f"{outcome.summary['message']}; the samples done are written")

@@ -20,6 +20,7 @@ from typing import Any
 
 from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
+from ..control.controller import DualArmController
 from ..control.rollout import RolloutResult, rollout
 from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
@@ -108,6 +109,7 @@ def run_experiment(
     progress: bool | None = None,
     plots: bool = True,
     animate: bool = False,
+    controller: DualArmController | None = None,
 ) -> RunOutcome:
     """Roll the experiment out and write its outputs.
 
@@ -124,6 +126,9 @@ def run_experiment(
         Draw the PNG plots and write ``report.html`` (the page that gathers them).
     animate : bool
         Also write ``animation.html``, the run's 3D animation (:mod:`dualarm_qp.viz`).
+    controller : DualArmController, optional
+        The controller to run, already built by ``exp.controller()`` (default: built
+        here).
 
     Returns
     -------
@@ -135,7 +140,7 @@ def run_experiment(
         are written is raised once they all are.
     """
     outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots,
-                                  animate=animate)
+                                  animate=animate, controller=controller)
     hold.deliver()
     return outcome
 
@@ -147,6 +152,7 @@ def run_and_write(
     progress: bool | None = None,
     plots: bool = True,
     animate: bool = False,
+    controller: DualArmController | None = None,
 ) -> tuple[RunOutcome, SignalHold]:
     """Do what :func:`run_experiment` does, but hand back a signal held while writing.
 
@@ -161,7 +167,8 @@ def run_and_write(
         ``hold.signum`` is the SIGINT or SIGTERM that came while the files were
         written (None if none did).
     """
-    controller = exp.controller()
+    if controller is None:
+        controller = exp.controller()
     if progress is None:
         progress = sys.stderr.isatty()
     bar, update = _progress(exp.name, progress)

@@ -186,7 +186,11 @@ class QPSolver:
         if self.backend.solver in _native.NATIVE:
             self._native = _native.NATIVE[self.backend.solver](self.options)
         if options:
-            self._check_options(options)
+            # The backend judges a set of options once per process: a probe solve.
+            key = (self.name, tuple(sorted((k, repr(v)) for k, v in options.items())))
+            if key not in _JUDGED:
+                self._check_options(options)
+                _JUDGED.add(key)
 
     def _check_options(self, options: dict[str, Any]) -> None:
         """Let the backend itself judge the (already type-checked) options, once.
@@ -319,6 +323,9 @@ class QPSolver:
                       f"{what}{note}; the step is feasible", time.perf_counter() - start,
                       **extras)
 
+
+#: Option sets a backend has accepted in this process (see ``QPSolver.__init__``).
+_JUDGED: set[tuple[str, tuple[tuple[str, str], ...]]] = set()
 
 #: Options that dualarm-qp sets itself on every backend (output stays silent).
 _MANAGED_OPTIONS = frozenset({"verbose"})

@@ -216,3 +216,22 @@ def test_valid_options_reach_the_backend(solver, options):
     s = get_solver(solver, **options)
     for key, value in options.items():
         assert s.options[key] == value  # type: ignore[attr-defined]
+
+
+def test_a_run_with_a_solver_option_judges_it_once(tmp_path, monkeypatch):
+    """The options are validated once at the boundary: one probe solve for the whole run,
+    and the controller the command line built is the one that runs."""
+    import dualarm_qp.solvers.qp as qp
+    from dualarm_qp.cli import main
+
+    qp._JUDGED.clear()
+    probes = []
+    real = qp.QPSolver._probe
+    monkeypatch.setattr(qp.QPSolver, "_probe",
+                        lambda self, opts: probes.append(opts) or real(self, opts))
+    config = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_limits.yaml"
+    code = main(["run", str(config), "--solver", "qp:daqp", "--solver-option",
+                 "qp:daqp.primal_tol=1e-9", "--out", str(tmp_path / "run"), "--no-plots",
+                 "--quiet"])
+    assert code == 0
+    assert len(probes) == 1
