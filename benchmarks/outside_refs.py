@@ -39,6 +39,7 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -48,7 +49,8 @@ from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.setup import Experiment
 from dualarm_qp.se3 import pose_error
-from dualarm_qp.step.bounds import clip_rates, grasp_rate_range
+from dualarm_qp.step.bounds import grasp_rate_range
+from dualarm_qp.step.limits import RangeLimit, SpeedLimit
 from dualarm_qp.step.state import DualArmState
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -348,6 +350,7 @@ class SamePinkStep:
         self.v_max = np.r_[task.leader.qd_max if limits else np.full(n_l, inf), m_max,
                            task.follower.qd_max if limits else np.full(n_f, inf)]
         self.recovery = opts.recovery_fraction
+        self.everything = np.ones(n_l + n_f + 1, dtype=bool)
         horizon = opts.centre_horizon or opts.dt
         self.centre_factor = opts.dt / horizon
         w = np.empty(n_l + n_f + 1)
@@ -396,7 +399,15 @@ class SamePinkStep:
                                             surf.r_max, dt)
         lo[n_l] = max(rho_min, (surf.sigma_min - s) / dt)
         hi[n_l] = min(rho_max, (surf.sigma_max - s) / dt)
-        lower, upper, centre, _ = clip_rates(lo, hi, self.v_max, self.recovery)
+        # The step's own range and speed limits on these rate ranges, intersected.
+        ctx = SimpleNamespace(rate_lo=lo, rate_hi=hi)
+        box = [RangeLimit("range", self.everything, self.v_max, self.recovery).constraint(ctx),
+               SpeedLimit("speed", self.v_max).constraint(ctx)]
+        lower = np.maximum(box[0].lower, box[1].lower)
+        upper = np.minimum(box[0].upper, box[1].upper)
+        bounded = np.isfinite(lo) & np.isfinite(hi)
+        centre = np.where(bounded, 0.5 * (np.where(bounded, lo, 0) + np.where(bounded, hi, 0)),
+                          0.0)
         sc = self.tangent_scale
         self.lower, self.upper = lower * sc, upper * sc
         return centre * self.centre_factor * sc

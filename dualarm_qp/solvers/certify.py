@@ -188,41 +188,51 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     """
     f = problem_factor(problem)
     Z = f.N
+    d = Z.shape[1]
     x0 = f.solve(problem.b)  # the minimum-norm solution of the equality
-    C_act = np.zeros((0, problem.n))
+    C_act = _NO_ROWS
+    e_act = _NO_RHS
     if bounds:
         ineq = problem.inequalities()
         active = ineq.C @ x - ineq.e >= -ACTIVE_TOL * np.maximum(1.0, np.abs(ineq.e))
-        C_act = ineq.C[active]
-    root = problem.cost_root()
-    RZ = root @ Z
-    r0 = root @ (problem.center - x0)
+        if active.any():
+            C_act, e_act = ineq.C[active], ineq.e[active]
+    # Eq. 37 as |R (x - c)|^2: R = diag(sqrt(w)) (a vector) or the Cholesky factor.
+    root = problem.cost_root() if not problem.diagonal_cost else np.sqrt(problem.weights)
+    RZ = root[:, None] * Z if root.ndim == 1 else root @ Z
+    dc = problem.center - x0
+    r0 = root * dc if root.ndim == 1 else root @ dc
     # x* = x0 + Z t*: the minimiser of Eq. 37 on A x = b with the active limits held, in
     # the null-space coordinates t (d of them): min |RZ t - r0| subject to M t = g_act.
-    if C_act.shape[0] and Z.shape[1]:
+    if d == 0:
+        t_star = np.zeros(0)
+    elif C_act.shape[0]:
         M = C_act @ Z
         fm = factor(M)
-        t_p = fm.solve(ineq.e[active] - C_act @ x0)
+        t_star = fm.solve(e_act - C_act @ x0)
         if fm.nullity:
             RN = RZ @ fm.N
-            u = np.linalg.lstsq(RN, r0 - RZ @ t_p, rcond=None)[0]
-            t_p = t_p + fm.N @ u
-        t_star = t_p
-    elif Z.shape[1]:
-        t_star = np.asarray(np.linalg.lstsq(RZ, r0, rcond=None)[0], dtype=np.float64)
+            u = np.linalg.lstsq(RN, r0 - RZ @ t_star, rcond=None)[0]
+            t_star = t_star + fm.N @ u
     else:
-        t_star = np.zeros(0)
+        Q, Rt = np.linalg.qr(RZ)
+        t_star = np.linalg.solve(Rt, Q.T @ r0)
     x_star = x0 + Z @ t_star
     if not np.isfinite(x_star).all():
         return False
     grad = problem.gradient(x_star)
     H = RZ.T @ RZ
-    lam_min = float(np.linalg.eigvalsh(H)[0]) if Z.shape[1] else 1.0
+    if d == 0:
+        lam_min = 1.0
+    elif d == 1:
+        lam_min = float(H[0, 0])
+    else:
+        lam_min = float(np.linalg.eigvalsh(H)[0])
     tol = (STEP_RTOL * max(1.0, float(np.abs(x).max(initial=0.0)))
            + ROUNDING * float(np.abs(grad).max(initial=0.0)) / max(lam_min, 1e-300))
     if float(np.abs(x - x_star).max(initial=0.0)) > tol:
         return False
-    if not Z.shape[1]:
+    if d == 0:
         return True
     g = Z.T @ grad
     if C_act.shape[0]:
@@ -233,6 +243,10 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
         g = g + Mz @ mu
     step = Z @ np.linalg.solve(H, g)  # the Newton step that would make x* stationary
     return float(np.abs(step).max(initial=0.0)) <= tol
+
+
+_NO_ROWS = np.zeros((0, 0))
+_NO_RHS = np.zeros(0)
 
 
 __all__ = ["ACTIVE_TOL", "certify", "equality_limit", "kkt_holds", "residuals"]
