@@ -125,9 +125,23 @@ def test_docs_and_examples_show_a_status_by_its_value():
     assert not STATUS_AS_TEXT.search("view.update(state, status=out.status.value)")
 
 
+def test_the_limit_snippet_runs_and_keeps_its_wall():
+    """The snippet of "Writing a limit": the follower's tool stops 150 mm (less the
+    1 mm margin) from where it started, where the run without the wall slides 300 mm."""
+    section = API_PAGE.read_text().split("## Writing a limit")[1].split("\n## ")[0]
+    (code,) = re.findall(r"```python\n(.*?)```", section, re.DOTALL)
+    proc = subprocess.run([sys.executable, "-c", code], cwd=API_PAGE.parents[1],
+                          capture_output=True, text=True, check=False, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    completed, travel = proc.stdout.split()
+    assert completed == "True"
+    assert -0.150 <= float(travel) <= -0.140
+
+
 def test_the_api_page_snippets_run(tmp_path):
     """The two snippets of "Building a task in Python", run one after the other."""
-    blocks = re.findall(r"```python\n(.*?)```", API_PAGE.read_text(), re.DOTALL)
+    section = API_PAGE.read_text().split("## Building a task in Python")[1].split("\n## ")[0]
+    blocks = re.findall(r"```python\n(.*?)```", section, re.DOTALL)
     assert len(blocks) == 2
     code = "\n".join(blocks) + "\nprint('end', state.t, round(state.sigma, 4))\n"
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
