@@ -8,9 +8,9 @@ must then hold a consistent set: ``summary.json`` (``reproduce.json``) present, 
 listing exactly the other files, no temporary files, every CSV row whole; exit 130 when
 the set says "interrupted".
 
-The child gets SIGINT back at its default action: a process started in the background
-by a non-interactive shell inherits SIGINT as *ignored*, and the test would otherwise
-pass on a terminal and fail in CI.
+The child gets SIGINT back at its default action (``sigint.child_default_sigint``): a
+process started in the background by a non-interactive shell inherits SIGINT as
+*ignored*, and the test would otherwise pass on a terminal and fail in CI.
 """
 
 from __future__ import annotations
@@ -30,8 +30,10 @@ from pathlib import Path
 
 import pytest
 import yaml
+from sigint import child_default_sigint
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
+pytestmark = [pytest.mark.skipif(os.name != "posix", reason="POSIX signals"),
+              pytest.mark.sigint]
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 CASES = ("puma_beam_fixed.yaml", "puma_beam_sliding_s7_100.yaml",
@@ -63,10 +65,6 @@ def configs(tmp_path_factory) -> dict[str, Path]:
     return {"run": run, "cases": cases}
 
 
-def _child_default_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 @dataclass
 class Trial:
     returncode: int
@@ -82,7 +80,7 @@ def _launch(argv: list[str], out: Path, sig: int | None, delay: float,
     """Start the CLI, wait for its output folder, sleep ``delay``, send ``sig``."""
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", *argv],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=_child_default_sigint)
+                            preexec_fn=child_default_sigint)
     signalled = False
     try:
         deadline = time.monotonic() + timeout
@@ -175,7 +173,7 @@ def _calibrate(argv: list[str], out: Path, check) -> float:
     """Seconds from the output folder's appearance to the end of an uninterrupted run."""
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", *argv],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=_child_default_sigint)
+                            preexec_fn=child_default_sigint)
     while not out.exists() and proc.poll() is None:
         time.sleep(0.002)
     t0 = time.monotonic()

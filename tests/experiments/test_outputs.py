@@ -221,6 +221,7 @@ def _signal_at_sample(monkeypatch, sample: int, sig: int, *, calls: int = 1,
     monkeypatch.setattr(run_module, "rollout", rollout)
 
 
+@pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_run_writes_the_partial_trace(tmp_path, monkeypatch, capsys, sig):
     _signal_at_sample(monkeypatch, 5, sig)
@@ -239,6 +240,7 @@ def test_interrupted_run_writes_the_partial_trace(tmp_path, monkeypatch, capsys,
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+@pytest.mark.sigint
 def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     _signal_at_sample(monkeypatch, 5, signal.SIGINT, swallow=True)
     out = tmp_path / "o"
@@ -247,6 +249,7 @@ def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     assert s["status"] == "interrupted" and s["samples"] == 5
 
 
+@pytest.mark.sigint
 def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, capsys):
     from dualarm_qp.experiments.figures import run_figures
 

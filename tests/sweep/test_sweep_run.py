@@ -9,7 +9,9 @@ import signal
 import subprocess
 
 import pyarrow.parquet as pq
-from sweep_tools import restore_sigint, stop, sweep_cmd, wait_for_lines, write_sweep
+import pytest
+from sigint import child_default_sigint
+from sweep_tools import stop, sweep_cmd, wait_for_lines, write_sweep
 
 from dualarm_qp.cli import main
 
@@ -95,6 +97,7 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     assert len(keys) == len(set(keys)) == 12  # every point stored once
 
 
+@pytest.mark.sigint
 def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     grid = {"follower.base.position.0": [100, 200, 300, 400, 500],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -103,7 +106,7 @@ def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     proc = subprocess.Popen(sweep_cmd(str(sweep), "--out", str(out), "--workers", "1",
                                       "--quiet", "--batch", "1"),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=restore_sigint)
+                            preexec_fn=child_default_sigint)
     try:
         wait_for_lines(out / "points.jsonl", 2, proc)
         assert proc.poll() is None, "the sweep ended before it could be interrupted"
