@@ -65,6 +65,21 @@ def configs(tmp_path_factory) -> dict[str, Path]:
     return {"run": run, "cases": cases}
 
 
+def test_a_ctrl_c_during_the_rollout_stops_the_command(tmp_path):
+    """The fast loop's trial: SIGINT 0.2 s into a rollout of 15,500 samples (several
+    seconds) stops it there: exit 130, the partial set, no traceback."""
+    config = _shorter(CONFIGS / "puma_beam_limits.yaml", tmp_path / "long.yaml",
+                      duration=15.5, dt=0.001)
+    out = tmp_path / "out"
+    trial = _launch(["run", str(config), "--out", str(out), "--quiet", "--no-plots"], out,
+                    signal.SIGINT, 0.2)
+    assert trial.signalled
+    assert check_run_folder(out) == "interrupted"
+    _check_exit(trial, "interrupted")
+    s = json.loads((out / "summary.json").read_text())
+    assert "SIGINT" in s["message"] and 0 < s["samples"] < 15500
+
+
 @dataclass
 class Trial:
     returncode: int
@@ -216,6 +231,7 @@ def _trials(tmp_path: Path, argv_for, check, *, seed: int, reach: float, power: 
         return list(pool.map(one, plan))
 
 
+@pytest.mark.slow
 def test_interrupted_runs_leave_a_consistent_set(tmp_path, configs):
     def argv(out: Path, i: int) -> list[str]:
         plots = [] if i % 5 == 4 else ["--no-plots"]  # the plots take most of the time
@@ -231,6 +247,7 @@ def test_interrupted_runs_leave_a_consistent_set(tmp_path, configs):
             assert signal.Signals(trial.sig).name in s["message"]
 
 
+@pytest.mark.slow
 def test_interrupted_reproductions_leave_a_consistent_set(tmp_path, configs):
     def argv(out: Path, i: int) -> list[str]:
         return ["reproduce", "--out", str(out), "--configs", str(configs["cases"]),
