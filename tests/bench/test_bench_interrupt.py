@@ -163,6 +163,7 @@ def _trial(base: Path, sig: signal.Signals, i: int, ref: dict[str, Any],
     return f"{run.returncode}:{stored}"
 
 
+@pytest.mark.slow
 @pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_interrupted_bench_stores_only_whole_jobs_and_resumes(
