@@ -36,6 +36,7 @@ def _store_keys(out):
     return [json.loads(line)["key"] for line in (out / "points.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.slow
 def test_local_cluster_and_external_cluster_give_the_same_rows(tmp_path, cluster, capsys):
     sweep = write_sweep(tmp_path)
     local, remote = tmp_path / "local", tmp_path / "remote"
@@ -75,6 +76,7 @@ def cluster_workers(cluster):
         return list(client.scheduler_info()["workers"])
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -97,6 +99,7 @@ def test_a_worker_killed_mid_sweep_loses_nothing(tmp_path, cluster):
     assert len(keys) == len(set(keys)) == 12  # every point stored once
 
 
+@pytest.mark.slow
 @pytest.mark.sigint
 def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     grid = {"follower.base.position.0": [100, 200, 300, 400, 500],
@@ -134,6 +137,7 @@ def test_sigint_leaves_a_partial_table_and_the_sweep_resumes(tmp_path):
     assert all(r["status"] != "interrupted" for r in _rows(out))
 
 
+@pytest.mark.slow
 def test_the_scheduler_gone_mid_sweep_is_a_clear_error(tmp_path, cluster):
     grid = {"follower.base.position.0": [100, 200, 300, 400],
             "follower.base.position.1": [1300, 1380, 1450]}
@@ -153,3 +157,91 @@ def test_the_scheduler_gone_mid_sweep_is_a_clear_error(tmp_path, cluster):
     rows = _rows(out)
     assert len(rows) == 12
     assert {r["key"] for r in rows if r["status"] != "interrupted"} == set(_store_keys(out))
+
+
+@pytest.fixture
+def in_process_cluster():
+    """A scheduler and one single-threaded worker in this process: no process to start."""
+    from distributed import LocalCluster
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                           dashboard_address=None)
+    try:
+        yield cluster
+    finally:
+        cluster.close()
+
+
+def test_a_sweep_stores_every_point_once_and_a_rerun_computes_none(
+        tmp_path, in_process_cluster, capsys):
+    """The fast loop's sweep: the driver, the batches, the store, the table and the report
+    on a cluster inside this process (the tests above use real worker processes)."""
+    sweep = write_sweep(tmp_path)
+    out = tmp_path / "out"
+    argv = ["sweep", str(sweep), "--out", str(out), "--scheduler",
+            in_process_cluster.scheduler_address, "--quiet"]
+    assert main(argv) == 0
+    assert "(6 computed now)" in capsys.readouterr().out
+    rows = _rows(out)
+    assert [r["point"] for r in rows] == list(range(6))
+    statuses = {(r["follower.base.position.0"], r["follower.base.position.1"]): r["status"]
+                for r in rows}
+    assert statuses[(300, 1380)] == "completed" and statuses[(0, 1000)] == "failed"
+    header, *lines = (out / "results.csv").read_text().splitlines()
+    assert header.split(",")[:3] == ["point", "follower.base.position.0",
+                                     "follower.base.position.1"] and len(lines) == 6
+    assert "data:image/png;base64," in (out / "report.html").read_text()
+    assert main(argv) == 0
+    assert "(0 computed now)" in capsys.readouterr().out
+    for ra, rb in zip(_comparable(_rows(out)), _comparable(rows), strict=True):
+        assert ra.keys() == rb.keys() and all(_same(ra[k], rb[k]) for k in ra)
+    assert len(_store_keys(out)) == 6
+
+
+@pytest.mark.sigint
+def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
+        tmp_path, in_process_cluster, monkeypatch, capsys):
+    """The fast loop's interrupted sweep: a Ctrl-C while the third point runs (the slow
+    test above sends it to a real process)."""
+    from dualarm_qp.sweep import worker
+
+    real, calls = worker.run_point, []
+
+    def interrupting(task):
+        calls.append(task)
+        if len(calls) == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(task)
+
+    monkeypatch.setattr(worker, "run_point", interrupting)
+    sweep = write_sweep(tmp_path)
+    out = tmp_path / "out"
+    argv = ["sweep", str(sweep), "--out", str(out), "--scheduler",
+            in_process_cluster.scheduler_address, "--quiet", "--batch", "1"]
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "interrupted (SIGINT)" in err
+    rows = _rows(out)
+    assert len(rows) == 6  # a valid table of every point
+    done = [r for r in rows if r["status"] != "interrupted"]
+    assert 1 <= len(done) < 6
+    assert {r["criterion"] for r in rows if r["status"] == "interrupted"} == {
+        "sweep interrupted (SIGINT)"}
+    stored = set(_store_keys(out))
+    assert {r["key"] for r in done} == stored
+    monkeypatch.setattr(worker, "run_point", real)
+    assert main(argv) == 0
+    assert f"({6 - len(stored)} computed now)" in capsys.readouterr().out
+    keys = _store_keys(out)
+    assert len(keys) == len(set(keys)) == 6
+    assert all(r["status"] != "interrupted" for r in _rows(out))
+
+
+def test_the_embedded_cluster_has_the_workers_asked_for_and_closes():
+    """``--workers``' cluster of worker processes (the sweeps above run on other ones)."""
+    from dualarm_qp.sweep.cluster import open_client, worker_count
+
+    with open_client(workers=1) as client:
+        assert worker_count(client) == 1
+        assert client.submit(sum, [1, 2]).result(timeout=60) == 3
+    assert client.status == "closed"
