@@ -81,6 +81,11 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
     status = s.get("status", "completed" if s["completed"] else "failed")
     print(f"{s['experiment']}: solver {s['solver']}, {s['samples']} samples, "
           f"{status if status == 'completed' else status.upper()}")
+    if not s["samples"]:  # refused before the first sample: there is nothing to sum up
+        failure = s.get("failure") or {}
+        print(f"  no sample was run; failed on: {failure.get('criterion', '?')}")
+        print(f"  outputs: {out}")
+        return
     print(f"  path completed: {s['path_completed_pct']:.1f}%; time lost to scaling: "
           f"{s['time_lost_to_scaling_s']:.3g} s")
     print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "

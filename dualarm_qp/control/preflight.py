@@ -52,7 +52,7 @@ class Unreachable:
     arm : {"leader", "follower"}
         The arm that cannot reach it.
     waypoint : str
-        Which point of the path (``"waypoint 2"``, ``"the path's end"``).
+        Which point of the path (``"waypoint 2 of the path"``, ``"the end of the path"``).
     t : float
         Path time of that point [s].
     position_error, rotation_error : float
@@ -68,7 +68,7 @@ class Unreachable:
     @property
     def message(self) -> str:
         """One line for a person."""
-        return (f"the {self.arm} cannot reach {self.waypoint} of the path (t = {self.t:.4g} s)"
+        return (f"the {self.arm} cannot reach {self.waypoint} (t = {self.t:.4g} s)"
                 f" within its joint ranges: the closest it gets is {self.position_error:.3g} m"
                 f", {self.rotation_error:.3g} rad away")
 
@@ -81,9 +81,9 @@ def checkpoints(task: DualArmTask, t_start: float, t_end: float) -> list[tuple[f
     """
     traj = task.trajectory
     if isinstance(traj, WaypointTrajectory):
-        return [(float(t), f"waypoint {i}") for i, t in enumerate(traj.times.tolist())
-                if t_start < t <= t_end + 1e-12]
-    return [(t_end, "the path's end")]
+        return [(float(t), f"waypoint {i} of the path") for i, t in
+                enumerate(traj.times.tolist()) if t_start < t <= t_end + 1e-12]
+    return [(t_end, "the end of the path")]
 
 
 def unreachable_waypoint(task: DualArmTask, initial: DualArmState, t_end: float, *,

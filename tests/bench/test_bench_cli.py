@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -98,3 +100,31 @@ def test_bench_jobs_without_a_usable_step_fail(
     assert "no usable step" in cap.out and "no answer at all" in cap.out
     row = next(csv.DictReader(open(tmp_path / "bench.csv", encoding="utf-8")))
     assert row["error"].startswith("no usable step") and "no answer at all" in row["message"]
+
+
+@pytest.mark.sigint
+def test_a_ctrl_c_during_a_job_exits_130_and_the_rerun_resumes(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fast loop's bench interrupt (tests/bench/test_bench_interrupt.py sends the
+    signals to real processes at random moments): the job under way is not stored."""
+    from dualarm_qp.bench import runner
+
+    real = runner.run_job
+
+    def interrupted_second(config, solver, *args):  # type: ignore[no-untyped-def]
+        if solver == "nullspace":
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(config, solver, *args)
+
+    monkeypatch.setattr(runner, "run_job", interrupted_second)
+    args = ["bench", CONFIG, "--solvers", "reference,nullspace", "--out", str(tmp_path),
+            "--duration", "0.124", "--quiet", "--no-plots"]
+    assert main(args) == 130
+    cap = capsys.readouterr()
+    assert "interrupted (SIGINT): 1 of 2 jobs done and stored" in cap.err
+    assert "Traceback" not in cap.err
+    assert len((tmp_path / "results.jsonl").read_text().splitlines()) == 1
+    monkeypatch.setattr(runner, "run_job", real)
+    assert main(args) == 0
+    assert "1 of 2 jobs computed" in capsys.readouterr().out

@@ -10,8 +10,8 @@ uninterrupted bench's jobs, and sends the signal. Then:
 * the same command again, without a signal, exits 0 and leaves exactly the
   uninterrupted bench's jobs, each once, with the same non-timing fields.
 
-SIGINT's default is restored in the child: a process started in the background by a
-non-interactive shell (CI) inherits SIGINT as ignored.
+SIGINT's default is restored in the child (``sigint.child_default_sigint``): a process
+started in the background by a non-interactive shell (CI) inherits SIGINT as ignored.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from sigint import child_default_sigint
 
 from dualarm_qp.solvers import available_solvers
 
@@ -54,10 +55,6 @@ def _env() -> dict[str, str]:
     return env
 
 
-def _restore_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 @dataclass
 class Run:
     returncode: int
@@ -70,7 +67,7 @@ def _bench(out: Path, sig: signal.Signals | None = None, delay: float = 0.0) -> 
     """Run the bench into ``out``; send ``sig`` ``delay`` s after its ready line."""
     proc = subprocess.Popen([*CMD, "--out", str(out)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=_env(),
-                            preexec_fn=_restore_sigint)
+                            preexec_fn=child_default_sigint)
     assert proc.stderr is not None and proc.stdout is not None
     lines: list[str] = []
     ready = threading.Event()
@@ -166,6 +163,8 @@ def _trial(base: Path, sig: signal.Signals, i: int, ref: dict[str, Any],
     return f"{run.returncode}:{stored}"
 
 
+@pytest.mark.slow
+@pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_interrupted_bench_stores_only_whole_jobs_and_resumes(
         sig: signal.Signals, reference: tuple[dict[str, Any], float], tmp_path: Path) -> None:

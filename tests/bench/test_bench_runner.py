@@ -169,6 +169,7 @@ def test_a_transient_backend_interrupt_is_retried(tmp_path: Path) -> None:
     assert len((tmp_path / "results.jsonl").read_text().splitlines()) == 1
 
 
+@pytest.mark.sigint
 def test_handlers_keep_an_ignored_sigint_ignored() -> None:
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
@@ -227,6 +228,7 @@ def test_job_failure_reasons() -> None:
     assert runner.job_failure(nothing) == "no usable step: step 0: no answer"
 
 
+@pytest.mark.sigint
 @pytest.mark.skipif("qp:osqp" not in available_solvers(), reason="osqp not installed")
 def test_bare_probe_passes_on_a_sigint_that_osqp_swallowed(
         monkeypatch: pytest.MonkeyPatch) -> None:

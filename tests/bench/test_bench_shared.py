@@ -12,6 +12,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from dualarm_qp.bench import BenchSettings, run_bench, run_job
 from dualarm_qp.bench.runner import read_config, settings_hash
 from dualarm_qp.bench.store import (
@@ -36,6 +38,7 @@ def _env() -> dict[str, str]:
     return env
 
 
+@pytest.mark.slow  # four bench processes; the claims are tested in process below
 def test_two_benches_on_one_folder_split_the_jobs(tmp_path: Path) -> None:
     cmd = [sys.executable, "-m", "dualarm_qp", "bench", LIMITS, "--solvers", ",".join(SOLVERS),
            "--duration", "0.31", "--no-plots", "--out", str(tmp_path)]

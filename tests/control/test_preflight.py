@@ -29,7 +29,7 @@ def test_a_path_ending_out_of_reach_is_refused_before_the_first_sample() -> None
     res = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits)
     assert res.failure is not None and res.failure.criterion == "unreachable"
     assert len(res.trace) == 0
-    assert "leader cannot reach the path's end" in res.message
+    assert "leader cannot reach the end of the path" in res.message
     assert "t = 15.5 s" in res.message
     assert res.failure.amount > 0.01  # 26 mm short, not a rounding miss
     # The same path cut before it leaves the leader's reach passes the check.
@@ -40,16 +40,17 @@ def test_a_waypoint_out_of_reach_is_named() -> None:
     exp = build_experiment(parse_config(waypoint_config(far_mm=2000.0), "far"), "far")
     res = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits)
     assert res.failure is not None and res.failure.criterion == "unreachable"
-    assert "waypoint 1" in res.message and "t = 4 s" in res.message
-    assert res.summary()["unreachable"] == {"arm": "leader", "waypoint": "waypoint 1",
-                                            "t_s": 4.0}
+    assert "waypoint 1 of the path" in res.message and "t = 4 s" in res.message
+    assert res.summary()["unreachable"] == {"arm": "leader",
+                                            "waypoint": "waypoint 1 of the path", "t_s": 4.0}
 
 
 def test_checkpoints_are_the_waypoints_after_the_start() -> None:
     exp = build_experiment(load_config(CONFIGS / "curved_bar_waypoints.yaml"))
-    assert checkpoints(exp.task, 0.0, 8.0) == [(4.0, "waypoint 1"), (8.0, "waypoint 2")]
+    assert checkpoints(exp.task, 0.0, 8.0) == [(4.0, "waypoint 1 of the path"),
+                                               (8.0, "waypoint 2 of the path")]
     beam = build_experiment(load_config(CONFIGS / "puma_beam_limits.yaml"))
-    assert checkpoints(beam.task, 0.0, 15.5) == [(15.5, "the path's end")]
+    assert checkpoints(beam.task, 0.0, 15.5) == [(15.5, "the end of the path")]
 
 
 @pytest.mark.parametrize("name", ["puma_beam_limits", "curved_bar_waypoints",
@@ -68,7 +69,7 @@ def test_the_command_line_exits_1_with_the_criterion(tmp_path: Path) -> None:
                            str(out), "--no-plots", "--quiet"], capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == 1, proc.stderr
-    assert "cannot reach waypoint 1" in proc.stderr
+    assert "cannot reach waypoint 1 of the path" in proc.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["failure"]["criterion"] == "unreachable"
     assert summary["samples"] == 0

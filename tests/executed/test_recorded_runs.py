@@ -5,7 +5,7 @@ ranges, path completed, leader tracking and grasp closure by the independent FK 
 a failed run must name a known criterion and leave a valid CSV. The verdict is read from
 summary.json, but the limits are checked from the CSV only. Every hard-limit solver runs
 the short variants and the baseline (FULL_MATRIX); the long ones run a representative
-subset (SUBSET) to keep the suite near 90 s on two cores.
+subset (SUBSET). The fast loop (``-m "not slow"``) keeps the cases ``_fast`` selects.
 
 Set DUALARM_EXECUTED_LOG=FILE to append one JSON line per case (for reports).
 """
@@ -14,9 +14,8 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -33,6 +32,8 @@ from csv_check import (
 )
 from executed_runs import EXACT, HARD_SOLVERS, MUST_COMPLETE, VARIANTS, run
 
+from dualarm_qp.cli import main
+
 #: Variants run with every hard-limit solver (short runs, or the paper's baseline).
 FULL_MATRIX = ("puma_beam_limits", "puma_beam_fast", "puma_beam_limits_x3",
                "puma_beam_limits_x3_accel",
@@ -41,6 +42,16 @@ FULL_MATRIX = ("puma_beam_limits", "puma_beam_fast", "puma_beam_limits_x3",
 #: The solvers run on the other (long) variants: both exact ones, SNS and the one
 #: first-order QP backend (OSQP), which is the likeliest to graze a bound.
 SUBSET = ("nullspace", "qp:daqp", "sns", "qp:osqp")
+#: Variants every hard-limit solver runs in the fast loop (a fraction of a second each).
+QUICK = ("puma_beam_fixed", "puma_beam_sliding_s7_100", "puma_beam_sliding_s7_1000",
+         "puma_beam_fast")
+
+
+def _fast(variant: str, solver: str) -> bool:
+    """In the fast loop: every solver on QUICK, the exact ones on the baseline, each
+    policy with ``nullspace``; the other cases take 1-5 s each and are marked slow."""
+    return (variant in QUICK or (variant == "puma_beam_limits" and solver in EXACT)
+            or (variant.startswith("puma_beam_tight_limits_") and solver == "nullspace"))
 
 assert HARD_SOLVERS, "no hard-limit solver available"
 
@@ -52,13 +63,14 @@ def _log(record: dict) -> None:
             fh.write(json.dumps(record) + "\n")
 
 
-def _cases() -> list[tuple[str, str]]:
+def _cases() -> list[Any]:
     """Every hard-limit solver on the short cases; a representative subset on the long ones."""
     cases = []
     for variant in VARIANTS:
         solvers = HARD_SOLVERS if variant in FULL_MATRIX else [
             s for s in HARD_SOLVERS if s in SUBSET]
-        cases += [(variant, s) for s in solvers]
+        cases += [pytest.param(variant, s, marks=() if _fast(variant, s) else pytest.mark.slow)
+                  for s in solvers]
     return cases
 
 
@@ -99,17 +111,16 @@ def test_recorded_run_keeps_limits(variant: str, solver: str, tmp_path: Path) ->
 
 
 @pytest.mark.parametrize("variant", ["puma_beam_fast", "puma_beam_fixed"])
-def test_cli_exit_code_matches_summary(variant: str, tmp_path: Path) -> None:
-    """The CLI's exit code is 0 for a completed run, 1 for a failed one, as summary says."""
+def test_cli_exit_code_matches_summary(variant: str, tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """The CLI's exit code is 0 for a completed run, 1 for a failed one, as summary says
+    (``main``'s return value is the process's exit code: ``sys.exit(main())``)."""
     cfg = tmp_path / f"{variant}.yaml"
     cfg.write_text(yaml.safe_dump(VARIANTS[variant]()))
     out = tmp_path / "out"
-    exe = Path(sys.executable).with_name("dualarm-qp")
-    proc = subprocess.run([str(exe), "run", str(cfg), "--solver", "nullspace", "--out",
-                           str(out), "--no-plots", "--quiet"], capture_output=True, text=True,
-                          timeout=120)
+    code = main(["run", str(cfg), "--solver", "nullspace", "--out", str(out), "--no-plots",
+                 "--quiet"])
     summary = json.loads((out / "summary.json").read_text())
-    assert proc.returncode == (0 if summary["completed"] else 1), (proc.returncode,
-                                                                   proc.stderr)
+    assert code == (0 if summary["completed"] else 1), (code, capsys.readouterr().err)
     traj = read_trajectory(out / "trajectory.csv")
     assert not check_valid(traj)

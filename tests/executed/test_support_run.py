@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -23,20 +21,20 @@ import yaml
 from csv_check import check_valid, read_trajectory
 from oracle import inv_pose, puma_fk
 
+from dualarm_qp.cli import main
+
 CONFIG = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_support.yaml"
-EXE = Path(sys.executable).with_name("dualarm-qp")
 
 
-def _cli(cfg: Path, out: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([str(EXE), "run", str(cfg), "--out", str(out), "--no-plots",
-                           "--quiet"], capture_output=True, text=True, timeout=300)
+def _cli(cfg: Path, out: Path) -> int:
+    """``dualarm-qp run`` in this process; its exit code."""
+    return main(["run", str(cfg), "--out", str(out), "--no-plots", "--quiet"])
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     out = tmp_path_factory.mktemp("support") / "out"
-    proc = _cli(CONFIG, out)
-    assert proc.returncode == 0, proc.stderr
+    assert _cli(CONFIG, out) == 0
     summary = json.loads((out / "summary.json").read_text())
     return read_trajectory(out / "trajectory.csv"), summary
 
@@ -140,11 +138,13 @@ BAD = {
 
 
 @pytest.mark.parametrize("case", sorted(BAD))
-def test_bad_support_configs_exit_2_naming_the_key(case: str, tmp_path: Path) -> None:
+def test_bad_support_configs_exit_2_naming_the_key(case: str, tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
     data, key = BAD[case]
-    proc = _cli(_bad(data, tmp_path / f"{case}.yaml"), tmp_path / "out")
-    assert proc.returncode == 2, (proc.returncode, proc.stderr)
-    assert f"'{key}'" in proc.stderr, proc.stderr
+    code = _cli(_bad(data, tmp_path / f"{case}.yaml"), tmp_path / "out")
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"'{key}'" in err, err
 
 
 def test_a_step_that_would_need_a_pull_fails_on_criterion_support():

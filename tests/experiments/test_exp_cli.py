@@ -150,8 +150,9 @@ def test_atomic_write_keeps_old_file_on_failure(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["f.txt"]
 
 
-def test_console_script_entry_point(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "dualarm_qp.cli", "--version"],
+@pytest.mark.parametrize("module", ["dualarm_qp.cli", "dualarm_qp"])
+def test_console_script_entry_point(tmp_path, module):
+    proc = subprocess.run([sys.executable, "-m", module, "--version"],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 0 and "dualarm-qp" in proc.stdout
 

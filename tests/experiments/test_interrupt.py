@@ -8,9 +8,9 @@ must then hold a consistent set: ``summary.json`` (``reproduce.json``) present, 
 listing exactly the other files, no temporary files, every CSV row whole; exit 130 when
 the set says "interrupted".
 
-The child gets SIGINT back at its default action: a process started in the background
-by a non-interactive shell inherits SIGINT as *ignored*, and the test would otherwise
-pass on a terminal and fail in CI.
+The child gets SIGINT back at its default action (``sigint.child_default_sigint``): a
+process started in the background by a non-interactive shell inherits SIGINT as
+*ignored*, and the test would otherwise pass on a terminal and fail in CI.
 """
 
 from __future__ import annotations
@@ -30,8 +30,10 @@ from pathlib import Path
 
 import pytest
 import yaml
+from sigint import child_default_sigint
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
+pytestmark = [pytest.mark.skipif(os.name != "posix", reason="POSIX signals"),
+              pytest.mark.sigint]
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 CASES = ("puma_beam_fixed.yaml", "puma_beam_sliding_s7_100.yaml",
@@ -63,8 +65,19 @@ def configs(tmp_path_factory) -> dict[str, Path]:
     return {"run": run, "cases": cases}
 
 
-def _child_default_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+def test_a_ctrl_c_during_the_rollout_stops_the_command(tmp_path):
+    """The fast loop's trial: SIGINT 0.2 s into a rollout of 15,500 samples (several
+    seconds) stops it there: exit 130, the partial set, no traceback."""
+    config = _shorter(CONFIGS / "puma_beam_limits.yaml", tmp_path / "long.yaml",
+                      duration=15.5, dt=0.001)
+    out = tmp_path / "out"
+    trial = _launch(["run", str(config), "--out", str(out), "--quiet", "--no-plots"], out,
+                    signal.SIGINT, 0.2)
+    assert trial.signalled
+    assert check_run_folder(out) == "interrupted"
+    _check_exit(trial, "interrupted")
+    s = json.loads((out / "summary.json").read_text())
+    assert "SIGINT" in s["message"] and 0 < s["samples"] < 15500
 
 
 @dataclass
@@ -82,7 +95,7 @@ def _launch(argv: list[str], out: Path, sig: int | None, delay: float,
     """Start the CLI, wait for its output folder, sleep ``delay``, send ``sig``."""
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", *argv],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=_child_default_sigint)
+                            preexec_fn=child_default_sigint)
     signalled = False
     try:
         deadline = time.monotonic() + timeout
@@ -175,7 +188,7 @@ def _calibrate(argv: list[str], out: Path, check) -> float:
     """Seconds from the output folder's appearance to the end of an uninterrupted run."""
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", *argv],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=_child_default_sigint)
+                            preexec_fn=child_default_sigint)
     while not out.exists() and proc.poll() is None:
         time.sleep(0.002)
     t0 = time.monotonic()
@@ -218,6 +231,7 @@ def _trials(tmp_path: Path, argv_for, check, *, seed: int, reach: float, power: 
         return list(pool.map(one, plan))
 
 
+@pytest.mark.slow
 def test_interrupted_runs_leave_a_consistent_set(tmp_path, configs):
     def argv(out: Path, i: int) -> list[str]:
         plots = [] if i % 5 == 4 else ["--no-plots"]  # the plots take most of the time
@@ -233,6 +247,7 @@ def test_interrupted_runs_leave_a_consistent_set(tmp_path, configs):
             assert signal.Signals(trial.sig).name in s["message"]
 
 
+@pytest.mark.slow
 def test_interrupted_reproductions_leave_a_consistent_set(tmp_path, configs):
     def argv(out: Path, i: int) -> list[str]:
         return ["reproduce", "--out", str(out), "--configs", str(configs["cases"]),

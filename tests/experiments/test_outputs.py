@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+from functools import partial
 from pathlib import Path
 
 import pytest
@@ -18,6 +19,7 @@ from dualarm_qp._io import atomic_write_with
 from dualarm_qp._signals import InterruptHandlers, SignalHold
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.experiments import reproduce as reproduce_module
 from dualarm_qp.experiments import run as run_module
 from dualarm_qp.experiments.outputs import owned_entries
 from dualarm_qp.experiments.reproduce import CASES, is_reproduction_folder
@@ -25,6 +27,7 @@ from dualarm_qp.experiments.reproduce import CASES, is_reproduction_folder
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 RUN_FILES = ["closure.png", "config.yaml", "grasp.png", "joints.png", "rates.png", "report.html",
              "summary.json", "tracking.png", "trajectory.csv"]
+NO_PLOTS_FILES = ["config.yaml", "summary.json", "trajectory.csv"]
 
 
 def short_config(tmp_path: Path, name: str = "puma_beam_limits.yaml", **controller) -> Path:
@@ -43,6 +46,27 @@ def cases(tmp_path) -> Path:
         short = short_config(tmp_path, name)
         short.rename(folder / name)
     return folder
+
+
+@pytest.fixture(params=[pytest.param(False, id="no-plots"),
+                        pytest.param(True, id="plots", marks=pytest.mark.slow)])
+def plots(request) -> bool:
+    """Whether a test's first run draws its plots (about 2 s a run, hence slow)."""
+    return request.param
+
+
+def plot_options(plots: bool) -> list[str]:
+    return [] if plots else ["--no-plots"]
+
+
+@pytest.fixture(params=[pytest.param(False, id="no-case-plots"),
+                        pytest.param(True, id="case-plots", marks=pytest.mark.slow)])
+def case_plots(request, monkeypatch) -> bool:
+    """Whether a reproduction's cases draw their plots (about 2 s a case, hence slow)."""
+    if not request.param:
+        real = reproduce_module.run_and_write
+        monkeypatch.setattr(reproduce_module, "run_and_write", partial(real, plots=False))
+    return request.param
 
 
 def names(folder: Path) -> list[str]:
@@ -70,13 +94,13 @@ def test_existing_empty_folder_is_fresh(tmp_path):
     out = tmp_path / "empty"
     out.mkdir()
     assert run(short_config(tmp_path), out, "--no-plots") == 0
-    assert names(out) == ["config.yaml", "summary.json", "trajectory.csv"]
+    assert names(out) == NO_PLOTS_FILES
 
 
-def test_used_folder_is_refused_and_left_alone(tmp_path, capsys):
+def test_used_folder_is_refused_and_left_alone(tmp_path, capsys, plots):
     config = short_config(tmp_path)
     out = tmp_path / "o"
-    assert run(config, out) == 0
+    assert run(config, out, *plot_options(plots)) == 0
     before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
     capsys.readouterr()
     assert run(config, out) == 2
@@ -95,10 +119,10 @@ def test_folder_with_other_files_is_refused_without_force(tmp_path, capsys):
     assert names(out) == ["notes.txt"]
 
 
-def test_force_replaces_only_what_a_run_owns(tmp_path):
+def test_force_replaces_only_what_a_run_owns(tmp_path, plots):
     config = short_config(tmp_path)
     out = tmp_path / "o"
-    assert run(config, out) == 0
+    assert run(config, out, *plot_options(plots)) == 0
     (out / "notes.txt").write_text("mine")
     (out / "joints.png.bak").write_text("mine too")
     (out / "sub").mkdir()
@@ -124,17 +148,17 @@ def test_force_into_a_fresh_folder_is_fine(tmp_path):
     assert run(short_config(tmp_path), tmp_path / "o", "--force", "--no-plots") == 0
 
 
-def test_library_run_replaces_an_earlier_set(tmp_path):
+def test_library_run_replaces_an_earlier_set(tmp_path, plots):
     exp = build_experiment(load_config(short_config(tmp_path)))
     out = tmp_path / "o"
-    run_module.run_experiment(exp, out, progress=False)
+    run_module.run_experiment(exp, out, progress=False, plots=plots)
     (out / "notes.txt").write_text("mine")
     outcome = run_module.run_experiment(exp, out, progress=False, plots=False)
     assert names(out) == ["notes.txt", "summary.json", "trajectory.csv"]
     assert outcome.summary["outputs"] == ["trajectory.csv"]
 
 
-def test_summary_is_written_last(tmp_path, monkeypatch):
+def test_summary_is_written_last(tmp_path, monkeypatch, plots):
     order = []
     real = run_module.write_json
 
@@ -143,8 +167,8 @@ def test_summary_is_written_last(tmp_path, monkeypatch):
         real(path, data)
 
     monkeypatch.setattr(run_module, "write_json", spy)
-    assert run(short_config(tmp_path), tmp_path / "o") == 0
-    assert order == [sorted(set(RUN_FILES) - {"summary.json"})]
+    assert run(short_config(tmp_path), tmp_path / "o", *plot_options(plots)) == 0
+    assert order == [sorted(set(RUN_FILES if plots else NO_PLOTS_FILES) - {"summary.json"})]
 
 
 def test_owned_entries_match_only_names_and_their_temporary_files(tmp_path):
@@ -155,7 +179,7 @@ def test_owned_entries_match_only_names_and_their_temporary_files(tmp_path):
     assert found == [".summary.json.k2_9ab0x.json", "summary.json"]
 
 
-def test_reproduce_twice_into_the_same_folder(tmp_path, cases, capsys):
+def test_reproduce_twice_into_the_same_folder(tmp_path, cases, case_plots, capsys):
     out = tmp_path / "reproduction"
     argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
     assert main(argv) in (0, 1)
@@ -173,7 +197,7 @@ def test_reproduce_twice_into_the_same_folder(tmp_path, cases, capsys):
     assert "error" not in capsys.readouterr().err
 
 
-def test_reproduce_recognises_its_files_without_reproduce_json(tmp_path, cases):
+def test_reproduce_recognises_its_files_without_reproduce_json(tmp_path, cases, case_plots):
     out = tmp_path / "reproduction"
     argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
     assert main(argv) in (0, 1)
@@ -183,7 +207,8 @@ def test_reproduce_recognises_its_files_without_reproduce_json(tmp_path, cases):
     assert not is_reproduction_folder(out)
 
 
-def test_reproduce_refuses_a_foreign_folder_unless_forced(tmp_path, cases, capsys):
+def test_reproduce_refuses_a_foreign_folder_unless_forced(tmp_path, cases, case_plots,
+                                                        capsys):
     out = tmp_path / "busy"
     out.mkdir()
     (out / "notes.txt").write_text("mine")
@@ -223,24 +248,26 @@ def _signal_at_sample(monkeypatch, sample: int, sig: int, *, calls: int = 1,
     monkeypatch.setattr(run_module, "rollout", rollout)
 
 
+@pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_interrupted_run_writes_the_partial_trace(tmp_path, monkeypatch, capsys, sig):
+def test_interrupted_run_writes_the_partial_trace(tmp_path, monkeypatch, capsys, sig, plots):
     _signal_at_sample(monkeypatch, 5, sig)
     out = tmp_path / "o"
-    assert run(short_config(tmp_path), out) == 130
+    assert run(short_config(tmp_path), out, *plot_options(plots)) == 130
     s = summary(out)
     assert s["status"] == "interrupted" and s["completed"] is False
     assert s["failure"]["criterion"] == "interrupted"
     assert signal.Signals(sig).name in s["message"]
     assert s["samples"] == 5
     assert len((out / "trajectory.csv").read_text().splitlines()) == 1 + 5
-    assert names(out) == RUN_FILES
+    assert names(out) == (RUN_FILES if plots else NO_PLOTS_FILES)
     captured = capsys.readouterr()
     assert "INTERRUPTED" in captured.out and "interrupted" in captured.err
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # restored
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+@pytest.mark.sigint
 def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     _signal_at_sample(monkeypatch, 5, signal.SIGINT, swallow=True)
     out = tmp_path / "o"
@@ -249,6 +276,7 @@ def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     assert s["status"] == "interrupted" and s["samples"] == 5
 
 
+@pytest.mark.sigint
 def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, capsys):
     from dualarm_qp.experiments.figures import run_figures
 
@@ -266,7 +294,9 @@ def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, c
     assert "interrupted" in capsys.readouterr().err
 
 
-def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, monkeypatch, capsys):
+def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, case_plots, monkeypatch,
+                                                    capsys):
+    rollout = run_module.rollout
     _signal_at_sample(monkeypatch, 3, signal.SIGTERM, calls=2)  # case (b)
     out = tmp_path / "r"
     argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
@@ -279,7 +309,7 @@ def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, monkeypatch
     assert summary(out / "case_b")["samples"] == 3
     assert "interrupted in case (b)" in capsys.readouterr().err
     # and the next reproduction into it just works
-    monkeypatch.undo()
+    monkeypatch.setattr(run_module, "rollout", rollout)
     assert main(argv) in (0, 1)
     rep = json.loads((out / "reproduce.json").read_text())
     assert rep["status"] != "interrupted" and list(rep["cases"]) == ["a", "b", "c", "d"]

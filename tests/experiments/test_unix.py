@@ -68,6 +68,7 @@ def test_debug_after_run_is_accepted(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
 
 
+@pytest.mark.sigint
 def test_an_error_caused_by_an_interrupt_is_an_interrupt(monkeypatch, capsys):
     """Ctrl-C during an extension module's import surfaces as "ImportError:
     initialization failed"; the command must still say "interrupted" and exit 130."""

@@ -32,6 +32,7 @@ def assert_reaches(arm: SerialArm, sol: IKSolution, T: np.ndarray) -> None:
     assert puma560_indicators(arm, sol.q) == sol.indicators
 
 
+@pytest.mark.slow  # the tests below check fewer poses in the fast loop
 @pytest.mark.parametrize("placed", [False, True])
 def test_round_trip_thousands_of_poses(placed: bool) -> None:
     rng = np.random.default_rng(11 + placed)

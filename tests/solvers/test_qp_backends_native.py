@@ -9,7 +9,6 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -98,27 +97,17 @@ def _endless_osqp() -> _native.OSQPNative:
                                "time_limit": 5.0})
 
 
-@pytest.fixture
-def restore_sigint() -> Iterator[None]:
-    previous = signal.getsignal(signal.SIGINT)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def _interrupt_in(seconds: float) -> threading.Timer:
     timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
     return timer
 
 
+@pytest.mark.sigint  # Python's SIGINT handler
 @pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
-@pytest.mark.usefixtures("restore_sigint")
 def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
     """osqp's own SIGINT handler catches a Ctrl-C during a solve and returns
     "interrupted"; the step is not taken and the KeyboardInterrupt reaches the caller."""
-    signal.signal(signal.SIGINT, signal.default_int_handler)
     solver = get_solver("qp:osqp")
     solver.inner._native = _endless_osqp()
     problem = load_suite(SUITE).problems[0]
@@ -132,8 +121,8 @@ def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
     assert time.perf_counter() - start < 3.0  # at the signal, not at the time limit
 
 
+@pytest.mark.sigint  # the handler installed below is replaced after the test
 @pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
-@pytest.mark.usefixtures("restore_sigint")
 def test_osqp_interrupted_is_never_a_result() -> None:
     """With a handler that does not raise, the interrupted call is an ERROR with no x,
     and the program's handler still sees the signal."""

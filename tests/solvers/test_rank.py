@@ -123,6 +123,7 @@ def _check_all(problem: StepProblem, ref: np.ndarray, rng: np.random.Generator) 
             assert relative_error(out.x, ref) < AGREE, name
 
 
+@pytest.mark.slow  # every backend on 25 examples: the tests below are the fast loop's
 @settings(max_examples=25, deadline=None)
 @given(seed=seeds, n=st.sampled_from([7, 8]))
 def test_perturbed_rank_deficient_blocks(seed: int, n: int) -> None:

@@ -93,11 +93,6 @@ class Cluster:
         stop(self.scheduler)
 
 
-def restore_sigint() -> None:
-    """In the child: SIGINT back at its default (a background child inherits it ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def sweep_cmd(*args: str) -> list[str]:
     return [sys.executable, "-m", "dualarm_qp.cli", "sweep", *args]
 

@@ -10,7 +10,8 @@ import time
 import distributed
 import psutil
 import pytest
-from sweep_tools import restore_sigint, stop, sweep_cmd, wait_for_lines, write_sweep
+from sigint import child_default_sigint
+from sweep_tools import stop, sweep_cmd, wait_for_lines, write_sweep
 
 from dualarm_qp._signals import InterruptHandlers
 from dualarm_qp.sweep import cluster
@@ -59,7 +60,7 @@ def test_a_signal_while_the_cluster_closes_stops_the_sweep_once_all_is_closed(mo
 def _interrupt_when(sweep_args: list[str], ready, timeout: float = 180):
     """Run a sweep, send it SIGINT once ``ready(proc)``; return (code, stderr, s to exit)."""
     proc = subprocess.Popen(sweep_cmd(*sweep_args), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=restore_sigint)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=child_default_sigint)
     try:
         end = time.monotonic() + timeout
         while not ready(proc) and proc.poll() is None and time.monotonic() < end:
@@ -74,6 +75,7 @@ def _interrupt_when(sweep_args: list[str], ready, timeout: float = 180):
 
 
 @pytest.mark.slow
+@pytest.mark.sigint
 def test_sigint_while_the_local_cluster_starts_exits_130_without_a_traceback(tmp_path):
     sweep = write_sweep(tmp_path)
 
@@ -92,6 +94,7 @@ def test_sigint_while_the_local_cluster_starts_exits_130_without_a_traceback(tmp
 
 
 @pytest.mark.slow
+@pytest.mark.sigint
 def test_sigint_after_the_last_point_exits_promptly(tmp_path):
     sweep = write_sweep(tmp_path, grid={"follower.base.position.0": [300, 350]})
     out = tmp_path / "out"

@@ -17,8 +17,9 @@ import pytest
 PIL = pytest.importorskip("PIL.Image", reason="Pillow (a matplotlib dependency) reads PNGs")
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed "
-                                "(apt-get install -y chromium; CI installs it)")
+pytestmark = [pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed "
+                                 "(apt-get install -y chromium; CI installs it)"),
+              pytest.mark.slow]  # a browser per test: 5 to 30 s each
 
 WIDTH, HEIGHT = 1280, 800
 FLAGS = ["--headless", "--no-sandbox", "--use-gl=angle", "--use-angle=swiftshader",
