@@ -29,8 +29,12 @@ def _run(exp, **kwargs):
 
 
 def _interrupt_at(sample: int):
-    def progress(done: int, total: int) -> None:
-        if done == sample:
+    """A progress callback (called after every sample) that interrupts after ``sample``."""
+    calls = [0]
+
+    def progress(path_done: float, time_lost: float) -> None:
+        calls[0] += 1
+        if calls[0] == sample:
             raise KeyboardInterrupt
 
     return progress
