@@ -19,19 +19,29 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import (
-    AfterValidator,
-    AllowInfNan,
     BaseModel,
     BeforeValidator,
-    ConfigDict,
     Field,
     ValidationError,
     field_validator,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
 
 from ..errors import ConfigError
+from .config_scene import CollisionSpec, SceneSpec, ShapeSpec
+from .config_types import (
+    MAX_MAGNITUDE,
+    Flag,
+    Indicator,
+    LimitNum,
+    Model,
+    Num,
+    PoseSpec,
+    Units,
+    Vec3,
+    keyed,
+    scalar_to_list,
+)
 from .yaml_file import MAX_DEPTH, read_yaml_document
 
 FloatArray = NDArray[np.float64]
@@ -51,98 +61,7 @@ MIN_DT_S = 1e-6
 
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-def _keyed(key: str, message: str) -> PydanticCustomError:
-    """Return a validation error of a model-level check that belongs to one key.
-
-    :func:`parse_config` appends ``key`` to the model's location, so the message names
-    e.g. ``controller.dt`` rather than ``controller``.
-    """
-    return PydanticCustomError("keyed", "{message}", {"key": key, "message": message})
-
-
-def _number(value: Any) -> Any:
-    """Refuse what pydantic would otherwise turn into a number: booleans and text.
-
-    ``dt: true`` would read as 1 and ``dt: "0.1"`` as 0.1; both are mistakes in a file.
-    """
-    if isinstance(value, bool):
-        raise ValueError(f"must be a valid number, not {str(value).lower()}")
-    if isinstance(value, (str, bytes)):
-        raise ValueError("must be a valid number, not text")
-    return value
-
-
-def _not_nan(value: float) -> float:
-    if math.isnan(value):
-        raise ValueError("must be a number, not NaN")
-    return value
-
-
-#: Largest magnitude of a number in a file: beyond it (1e12 m, rad, s, ...) the
-#: arithmetic of a run overflows long before it means anything.
-MAX_MAGNITUDE = 1e12
-
-#: A finite number (int or float; not a boolean, text, NaN or infinity), at most
-#: :data:`MAX_MAGNITUDE` in size.
-Num = Annotated[float, BeforeValidator(_number), AllowInfNan(False),
-                Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
-#: A number that may be infinite (a joint limit that does not limit); never NaN.
-LimitNum = Annotated[float, BeforeValidator(_number), AfterValidator(_not_nan)]
-
-#: A yes/no setting: only ``true`` or ``false`` (YAML 1.2), never ``yes``, ``on``, 1 or text.
-Flag = Annotated[bool, Field(strict=True)]
-
-Vec3 = Annotated[list[Num], Field(min_length=3, max_length=3)]
-
-
-def _indicator(value: Any) -> Any:
-    if isinstance(value, bool):
-        raise ValueError(f"must be +1 or -1, not {str(value).lower()}")
-    return value
-
-
-Indicator = Annotated[Literal[1, -1], BeforeValidator(_indicator)]
-
-
-def _scalar_to_list(value: Any) -> Any:
-    return value if isinstance(value, (list, tuple)) else [value]
-
-
-class Units(_Model):
-    """Units used by the numbers of this file."""
-
-    length: Literal["m", "mm"] = "m"
-    angle: Literal["rad", "deg"] = "rad"
-    time: Literal["s", "ms"] = "s"
-
-
-class PoseSpec(_Model):
-    """A pose: ``position`` plus either ``rpy`` or a 3x3 ``rotation`` matrix.
-
-    ``rpy`` is roll, pitch, yaw about the fixed x, y, z axes: R = Rz(yaw) Ry(pitch) Rx(roll).
-    """
-
-    position: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
-    rpy: Vec3 | None = None
-    rotation: Annotated[list[Vec3], Field(min_length=3, max_length=3)] | None = None
-
-    @model_validator(mode="after")
-    def _one_rotation(self) -> PoseSpec:
-        if self.rpy is not None and self.rotation is not None:
-            raise _keyed("rotation", "give either rpy or rotation, not both")
-        if self.rotation is not None:
-            R = np.asarray(self.rotation, dtype=float)
-            if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-                raise _keyed("rotation", "must be a proper rotation matrix (orthonormal "
-                             "to 1e-6, determinant +1)")
-        return self
-
-
-class DHSpec(_Model):
+class DHSpec(Model):
     """A DH table: rows ``[a, alpha, d]`` or ``[a, alpha, d, offset]``."""
 
     convention: Literal["standard", "modified"] = "standard"
@@ -157,7 +76,7 @@ class DHSpec(_Model):
         return rows
 
 
-class IKBranch(_Model):
+class IKBranch(Model):
     """Closed-form IK branch indicators (+1 / -1) for the PUMA 560, all three required."""
 
     arm: Indicator
@@ -165,7 +84,7 @@ class IKBranch(_Model):
     wrist: Indicator
 
 
-class InitialSpec(_Model):
+class InitialSpec(Model):
     """Initial joints: given, or solved at the arm's target pose at t0.
 
     ``joints`` are the initial joints; ``ik_branch`` (PUMA 560 preset) solves the
@@ -198,7 +117,7 @@ def _name(value: Any) -> Any:
 Name = Annotated[str, BeforeValidator(_name)]
 
 
-class UrdfSpec(_Model):
+class UrdfSpec(Model):
     """One chain of a URDF, from link ``root`` (the base frame) to link ``tip``.
 
     ``file`` is relative to the experiment file's folder, or absolute.
@@ -209,7 +128,7 @@ class UrdfSpec(_Model):
     tip: Name
 
 
-class ExampleRobotSpec(_Model):
+class ExampleRobotSpec(Model):
     """One chain of a robot of example-robot-data (``name``: ur5, panda, baxter, ...)."""
 
     name: Name
@@ -221,7 +140,7 @@ class ExampleRobotSpec(_Model):
 ARM_MODEL_KEYS = ("preset", "dh", "urdf", "example_robot")
 
 
-class ArmSpec(_Model):
+class ArmSpec(Model):
     """One arm: its model (a preset, a DH table or a URDF chain), base, limits, start."""
 
     preset: Literal["puma560"] | None = None
@@ -234,6 +153,7 @@ class ArmSpec(_Model):
     q_max: list[LimitNum] | None = None
     qd_max: list[LimitNum] | None = None
     qdd_max: list[LimitNum] | None = None
+    link_radius: Annotated[list[Num], Field(min_length=1, max_length=64)] | None = None
     initial: InitialSpec
 
     @model_validator(mode="after")
@@ -250,7 +170,7 @@ class ArmSpec(_Model):
         return next(k for k in ARM_MODEL_KEYS if getattr(self, k) is not None)
 
 
-class SurfaceSpec(_Model):
+class SurfaceSpec(Model):
     """The object surface and the follower's sliding path on it.
 
     ``plane_bar`` (the paper's bar): the grasp slides along object z on the plane x = 0,
@@ -273,29 +193,29 @@ class SurfaceSpec(_Model):
             extra = [k for k in ("radius", "azimuth", "side", "grasp_range")
                      if getattr(self, k) is not None]
             if extra:
-                raise _keyed(extra[0], f"a plane_bar takes r_min and r_max, not "
+                raise keyed(extra[0], f"a plane_bar takes r_min and r_max, not "
                              f"{', '.join(extra)}")
             if self.r_min is not None and self.r_max is not None and any(
                     lo > hi for lo, hi in zip(self.r_min, self.r_max, strict=True)):
-                raise _keyed("r_min", "must not exceed r_max in any coordinate")
+                raise keyed("r_min", "must not exceed r_max in any coordinate")
         else:
             if self.radius is None or not self.radius > 0:
-                raise _keyed("radius", f"a {self.type} needs a positive 'radius'")
+                raise keyed("radius", f"a {self.type} needs a positive 'radius'")
             if self.grasp_range is None:
-                raise _keyed("grasp_range", f"a {self.type} needs 'grasp_range: [min, max]'")
+                raise keyed("grasp_range", f"a {self.type} needs 'grasp_range: [min, max]'")
             if self.grasp_range[0] > self.grasp_range[1]:
-                raise _keyed("grasp_range", "must be [min, max] with min <= max")
+                raise keyed("grasp_range", "must be [min, max] with min <= max")
             for k in ("r_min", "r_max"):
                 if getattr(self, k) is not None:
-                    raise _keyed(k, f"a {self.type} takes grasp_range, not r_min / r_max")
+                    raise keyed(k, f"a {self.type} takes grasp_range, not r_min / r_max")
             if self.type == "cylinder" and self.side is not None:
-                raise _keyed("side", "'side' is for a curved_bar")
+                raise keyed("side", "'side' is for a curved_bar")
             if self.type == "curved_bar" and self.azimuth is not None:
-                raise _keyed("azimuth", "'azimuth' is for a cylinder")
+                raise keyed("azimuth", "'azimuth' is for a cylinder")
         return self
 
 
-class ObjectSpec(_Model):
+class ObjectSpec(Model):
     """The carried object.
 
     ``surface`` and ``grasp_initial`` are the follower's sliding path and its start.
@@ -320,28 +240,29 @@ class ObjectSpec(_Model):
     mass: Num | None = None
     mass_centre: Vec3 | None = None
     gravity: Vec3 | None = None
+    shape: ShapeSpec | None = None
 
     @model_validator(mode="after")
     def _contact(self) -> ObjectSpec:
         if self.contact == "grasp":
             given = [k for k in ("mass", "mass_centre", "gravity") if getattr(self, k) is not None]
             if given:
-                raise _keyed(given[0], "is only used with 'contact: support' (a grasping "
+                raise keyed(given[0], "is only used with 'contact: support' (a grasping "
                              "follower needs no mass)")
             return self
         if self.mass is None:
-            raise _keyed("mass", "missing required key: a supporting follower ('contact: "
+            raise keyed("mass", "missing required key: a supporting follower ('contact: "
                          "support') needs the object's mass [kg]")
         if not self.mass > 0:
-            raise _keyed("mass", f"must be > 0 kg (got {self.mass:g})")
+            raise keyed("mass", f"must be > 0 kg (got {self.mass:g})")
         if self.surface.type != "plane_bar":
-            raise _keyed("surface.type", f"a support ('contact: support') needs a plane_bar "
+            raise keyed("surface.type", f"a support ('contact: support') needs a plane_bar "
                          f"surface, got {self.surface.type}")
         if self.leader_surface is not None:
-            raise _keyed("leader_surface", "a support ('contact: support') needs a rigid "
+            raise keyed("leader_surface", "a support ('contact: support') needs a rigid "
                          "leader grasp: leave 'leader_surface' out")
         if self.gravity is not None and not any(self.gravity):
-            raise _keyed("gravity", "must be a non-zero vector")
+            raise keyed("gravity", "must be a non-zero vector")
         return self
 
     @model_validator(mode="after")
@@ -349,22 +270,22 @@ class ObjectSpec(_Model):
         if (self.leader_surface is None) != (self.leader_grasp_initial is None):
             missing = "leader_grasp_initial" if self.leader_grasp_initial is None \
                 else "leader_surface"
-            raise _keyed(missing, "a sliding leader grasp needs both 'leader_surface' and "
+            raise keyed(missing, "a sliding leader grasp needs both 'leader_surface' and "
                          "'leader_grasp_initial'")
         if self.leader_surface is not None and self.H1 is not None:
-            raise _keyed("H1", "with a sliding leader grasp the object is placed by "
+            raise keyed("H1", "with a sliding leader grasp the object is placed by "
                          "'leader_surface': leave 'H1' out")
         return self
 
 
-class Waypoint(_Model):
+class Waypoint(Model):
     """One waypoint of the object path."""
 
     t: Num
     pose: PoseSpec
 
 
-class TrajectorySpec(_Model):
+class TrajectorySpec(Model):
     """The desired object path D(t) in the world."""
 
     type: Literal["linear", "waypoints"] = "linear"
@@ -377,27 +298,27 @@ class TrajectorySpec(_Model):
         if self.type == "linear":
             for k in ("start", "velocity"):
                 if getattr(self, k) is None:
-                    raise _keyed(k, "a linear trajectory needs 'start' and 'velocity'")
+                    raise keyed(k, "a linear trajectory needs 'start' and 'velocity'")
             if self.waypoints is not None:
-                raise _keyed("waypoints", "a linear trajectory takes start and velocity, "
+                raise keyed("waypoints", "a linear trajectory takes start and velocity, "
                              "not waypoints")
         if self.type == "waypoints":
             if not self.waypoints or len(self.waypoints) < 2:
-                raise _keyed("waypoints", "a waypoints trajectory needs at least two "
+                raise keyed("waypoints", "a waypoints trajectory needs at least two "
                              "'waypoints'")
             times = [w.t for w in self.waypoints]
             bad = next((i for i in range(1, len(times)) if times[i] <= times[i - 1]), None)
             if bad is not None:
-                raise _keyed(f"waypoints.{bad}.t", "waypoint times must be strictly "
+                raise keyed(f"waypoints.{bad}.t", "waypoint times must be strictly "
                              f"increasing (got {times[bad - 1]:g} then {times[bad]:g})")
             for k in ("start", "velocity"):
                 if getattr(self, k) is not None:
-                    raise _keyed(k, "a waypoints trajectory takes waypoints, not start / "
+                    raise keyed(k, "a waypoints trajectory takes waypoints, not start / "
                                  "velocity")
         return self
 
 
-class WeightsSpec(_Model):
+class WeightsSpec(Model):
     """Diagonal of S (Eq. 37).
 
     ``joints`` weighs follower joint rates in (rad/s)^-2 whatever the file's angle unit,
@@ -407,9 +328,9 @@ class WeightsSpec(_Model):
     ``grasp_unit: mm`` is 1e8 in SI, with ``grasp_unit: m`` it is 100.
     """
 
-    joints: Annotated[list[Num], BeforeValidator(_scalar_to_list),
+    joints: Annotated[list[Num], BeforeValidator(scalar_to_list),
                       Field(min_length=1)] = Field(default_factory=lambda: [1.0])
-    leader_joints: Annotated[list[Num], BeforeValidator(_scalar_to_list),
+    leader_joints: Annotated[list[Num], BeforeValidator(scalar_to_list),
                              Field(min_length=1)] = Field(default_factory=lambda: [1.0])
     grasp: Num = 1.0
     grasp_unit: Literal["m", "mm"] | None = None
@@ -422,7 +343,7 @@ class WeightsSpec(_Model):
         return v
 
 
-class ControllerSpec(_Model):
+class ControllerSpec(Model):
     """Sampling, limits, weights and gains of the controller.
 
     ``correction_gain`` and ``leader_gain`` are in 1/(time unit), default ``1/dt``;
@@ -472,15 +393,15 @@ class ControllerSpec(_Model):
     @model_validator(mode="after")
     def _cap(self) -> ControllerSpec:
         if self.duration_cap is not None and self.duration_cap < self.duration:
-            raise _keyed("duration_cap", f"duration_cap ({self.duration_cap:g}) must be at "
+            raise keyed("duration_cap", f"duration_cap ({self.duration_cap:g}) must be at "
                          f"least the duration ({self.duration:g})")
         if self.duration < self.dt:
-            raise _keyed("duration", f"the duration ({self.duration:g}) is shorter than "
+            raise keyed("duration", f"the duration ({self.duration:g}) is shorter than "
                          f"one sample (dt = {self.dt:g}); it must be at least dt")
         cap = 2.0 * self.duration if self.duration_cap is None else self.duration_cap
         samples = cap / self.dt
         if samples > MAX_SAMPLES:
-            raise _keyed("dt", f"dt = {self.dt:g} with a run of up to {cap:g} (duration_cap, "
+            raise keyed("dt", f"dt = {self.dt:g} with a run of up to {cap:g} (duration_cap, "
                          f"default twice duration) asks for {samples:.3g} samples; at most "
                          f"{MAX_SAMPLES:,} are allowed: raise dt or shorten the run")
         return self
@@ -515,7 +436,7 @@ class ControllerSpec(_Model):
         return v
 
 
-class SolverSpec(_Model):
+class SolverSpec(Model):
     """Which solver from the registry, with its options.
 
     ``fallback`` names the solver that takes a step on which a hard-limit solver fails
@@ -532,12 +453,12 @@ class SolverSpec(_Model):
     def _scalars(cls, v: dict[str, Any]) -> dict[str, Any]:
         for key, value in v.items():
             if not (value is None or isinstance(value, (bool, int, float, str))):
-                raise _keyed(key, "a solver option must be a single value (number, "
+                raise keyed(key, "a solver option must be a single value (number, "
                              f"true/false or text), got a {type(value).__name__}")
         return v
 
 
-class ExperimentConfig(_Model):
+class ExperimentConfig(Model):
     """A whole experiment file (the values as written, in the file's units)."""
 
     name: Annotated[str, Field(min_length=1, max_length=200)] = "experiment"
@@ -549,6 +470,8 @@ class ExperimentConfig(_Model):
     trajectory: TrajectorySpec
     controller: ControllerSpec
     solver: SolverSpec = Field(default_factory=SolverSpec)
+    scene: SceneSpec = Field(default_factory=SceneSpec)
+    collision: CollisionSpec = Field(default_factory=CollisionSpec)
 
     @field_validator("name")
     @classmethod
