@@ -89,7 +89,12 @@ def test_every_example_is_checked_and_none_is_collected_as_a_test():
     assert not [n for n in names if n.startswith("test_") or n.endswith("_test.py")]
 
 
-@pytest.mark.parametrize("name", sorted(CHECKS))
+#: Examples that take more than a few seconds (every solver in turn): the full suite only.
+SLOW = {"custom_limit.py"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW
+                                  else n for n in sorted(CHECKS)])
 def test_example_runs_and_prints_its_result(name, tmp_path):
     if name in NEEDS_ROBOTS and example_robots_dir() is None:
         pytest.skip("needs the robots extra (example-robot-data)")
