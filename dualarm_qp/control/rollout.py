@@ -30,6 +30,8 @@ from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
 from ..step.state import DualArmState
+from ..collision.clearance import ClearanceReport
+from .collisions import blocked_by_pair, path_collision_of, record_clearance
 from .controller import DualArmController
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
@@ -38,9 +40,9 @@ from .trace import Trace, record, record_state
 FloatArray = NDArray[np.float64]
 
 #: Criteria a run can fail on (``Failure.criterion``).
-CRITERIA = ("unreachable", "solver", "support", "closure", "tracking", "singularity",
-            "stalled", "path_incomplete",
-            "range", "speed", "acceleration", "interrupted")
+CRITERIA = ("unreachable", "path_collision", "solver", "support", "closure", "tracking",
+            "singularity", "stalled", "path_incomplete",
+            "range", "speed", "acceleration", "collision", "interrupted")
 
 #: Criteria whose failure message names its cause (:mod:`.diagnosis`).
 EXPLAINED = ("closure", "tracking", "stalled", "path_incomplete")
@@ -155,6 +157,8 @@ class RolloutResult:
         What a person should know although the run may have completed.
     extras : dict
         Further settings to report.
+    clearance : ClearanceReport or None
+        The recorded motion's smallest clearance (a task with a collision scene).
     """
 
     trace: Trace
@@ -167,6 +171,7 @@ class RolloutResult:
     hard_bounds: bool
     warnings: list[str] = field(default_factory=list)
     extras: dict[str, Any] = field(default_factory=dict)
+    clearance: ClearanceReport | None = None
 
     @property
     def completed(self) -> bool:
@@ -262,6 +267,8 @@ class RolloutResult:
             "step_time_median_s": float(np.median(step)) if step.size else float("nan"),
             "step_time_p99_s": float(np.percentile(step, 99)) if step.size else float("nan"),
         }
+        if self.clearance is not None:
+            out["realised_limits"]["clearance"] = self.clearance.as_dict()
         out.update(self.extras)
         return out
 
@@ -389,6 +396,16 @@ def rollout(
                 _realised(controller, tr.truncate(0), dt, v_start), hard,
                 extras={"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint,
                                         "t_s": miss.t}})
+        blocked = path_collision_of(task, path_start, path_end, dt)
+        if blocked is not None:
+            return RolloutResult(
+                tr.truncate(0), Failure("path_collision", 0, blocked.t, blocked.distance,
+                                        blocked.safety_distance,
+                                        f"before the run: {blocked.message}"),
+                controller.solver.name, dt, path_start, path_end,
+                _realised(controller, tr.truncate(0), dt, v_start), hard,
+                extras={"path_collision": {"obstacle": blocked.obstacle, "t_s": blocked.t,
+                                           "distance_m": blocked.distance}})
     failure: Failure | None = None
     warnings: list[str] = []
     projection_failures = 0
@@ -480,12 +497,23 @@ def rollout(
             f"(the duration cap; the task was slowed)")
     if failure is None and hard:
         failure = _realised_failure(realised, trace, dt)
+    clearance = record_clearance(task, trace)
+    if clearance is not None:
+        if failure is None and clearance.enforced and not clearance.kept:
+            failure = clearance_failure(clearance, trace)
+        elif clearance.minimum < 0.0 and not clearance.enforced:
+            warnings.append(f"the recorded motion penetrates: {clearance.pair} at "
+                            f"{clearance.minimum * 1e3:.1f} mm (sample {clearance.sample}; "
+                            "collision avoidance is off)")
+    if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
+        failure = blocked_by_pair(controller, trace, failure)
     if failure is not None and failure.criterion in EXPLAINED and len(trace):
         failure = _explained(controller, trace, failure)
     return RolloutResult(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
-        warnings=warnings,
-        extras={"projection": project, "reresolve_orientation": reresolve_orientation,
+        warnings=warnings, clearance=clearance,
+        extras={**({} if task.scene is None else {"collision": task.scene.summary()}),
+                "projection": project, "reresolve_orientation": reresolve_orientation,
                 "projection_failures": projection_failures,
                 "closure_tolerance_m_rad": list(limits.closure),
                 "tracking_tolerance_m_rad": list(limits.tracking),
@@ -592,6 +620,20 @@ def _realised(controller: DualArmController, trace: Trace, dt: float,
             np.array([opts.grasp_speed_max]), dt, ["grasp_leader"], speed_rule=speed_rule,
             a_max=a_grasp, v_start=np.array([start[3]]), acceleration_rule=accel_rule)
     return reports
+
+
+def clearance_failure(report: ClearanceReport, trace: Trace) -> Failure:
+    """The failure of a run whose recorded clearance fell below ``d_s - allowance``."""
+    k = report.breach_sample
+    t = float(trace.t[k])
+    d = float(min(trace.clearance_arm_arm[k], trace.clearance_arm_object[k],
+                  trace.clearance_obstacles[k], trace.clearance_self[k]))
+    limit = report.safety_distance - report.allowance
+    return Failure("collision", k, t, d, limit,
+                   f"step {k} at t = {t:.4f} s: the recorded motion brought "
+                   f"{trace.clearance_pair[k]} to {d * 1e3:.2f} mm, below the safety "
+                   f"distance {report.safety_distance * 1e3:.1f} mm less the allowance "
+                   f"{report.allowance * 1e3:.1f} mm")
 
 
 def _realised_failure(realised: dict[str, LimitReport], trace: Trace, dt: float

@@ -40,6 +40,11 @@ class Trace:
     step's limits bound. ``support_force`` is the push ``h`` [N] of a supporting
     follower (Case 2) at the row's state (NaN for a grasp, and for a step that raised).
 
+    ``clearance_*`` are the smallest signed distances [m] of each group of pairs of the
+    task's collision scene at the row's state (``inf`` for a group without pairs; NaN
+    without a scene) and ``clearance_pair`` the nearest pair: measured from the recorded
+    joints once the run is over (:mod:`dualarm_qp.collision.clearance`).
+
     ``scale`` is the task scale of the row's step: the share of the path rate asked for
     that the limits allowed (1: not slowed; 0 for a command not applied). The rollout
     asks for full speed, except on the sample where the path ends, which it shortens to
@@ -86,6 +91,11 @@ class Trace:
     solve_time_s: FloatArray
     step_time_s: FloatArray
     support_force: FloatArray
+    clearance_arm_arm: FloatArray
+    clearance_arm_object: FloatArray
+    clearance_obstacles: FloatArray
+    clearance_self: FloatArray
+    clearance_pair: list[str]
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
@@ -94,7 +104,7 @@ class Trace:
                   "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f}
         values: dict[str, Any] = {}
         for f in fields(cls):
-            if f.name == "status":
+            if f.name in ("status", "clearance_pair"):
                 values[f.name] = [""] * rows
             elif f.name in widths:
                 values[f.name] = np.full((rows, widths[f.name]), np.nan)

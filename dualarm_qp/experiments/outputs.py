@@ -117,7 +117,11 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     commanded (applied) rates of the row's step; ``closure_*_err_pre`` and
     ``correction_*`` the closure error before, and the size of, any position-level
     correction; ``feedback_*`` the closure feedback in the step; ``support_force`` [N]
-    the push of a supporting follower (only when it supports: Case 2). ``scale`` is the
+    the push of a supporting follower (only when it supports: Case 2). With a collision
+    scene, ``clearance_arm_arm``, ``clearance_arm_object``, ``clearance_obstacles`` (and
+    ``clearance_self`` for arms with self-collision pairs) are the smallest signed
+    distance [m] of each group of pairs (``inf``: a group without pairs) and
+    ``clearance_pair`` the nearest pair. ``scale`` is the
     task scale (:class:`~dualarm_qp.control.trace.Trace`): the share of the path rate
     asked for that the limits allowed, 1 when not slowed, the last row included.
     """
@@ -165,6 +169,13 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         cols["margin_grasp_leader"] = trace.margin_grasp_leader
     if len(trace) and not np.isnan(trace.support_force).all():  # a supporting follower
         cols["support_force"] = trace.support_force
+    if len(trace) and not np.isnan(trace.clearance_arm_arm).all():  # a collision scene
+        cols["clearance_arm_arm"] = trace.clearance_arm_arm
+        cols["clearance_arm_object"] = trace.clearance_arm_object
+        cols["clearance_obstacles"] = trace.clearance_obstacles
+        if np.isfinite(trace.clearance_self).any():  # arms with self-collision pairs
+            cols["clearance_self"] = trace.clearance_self
+        cols["clearance_pair"] = trace.clearance_pair
     return cols
 
 

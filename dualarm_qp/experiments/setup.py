@@ -52,6 +52,7 @@ from .config import (
     SurfaceSpec,
 )
 from .options import SolverFlagError, SolverOptions, flag_error, options_for
+from .setup_scene import scene_of
 
 #: A start further than this from its pose at t0 (leader: D(t0) H1^-1; follower: the
 #: grasp closure) is an error in the file: [m] and [rad] (1 mm, 0.1 deg), or the run's
@@ -576,6 +577,10 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     if q_f0 is None:
         q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,
                                  sigma_l0)
+    scene = scene_of(cfg, sc.length, sc.angle, sc.time, task.leader, task.follower,
+                     (q_l0, q_f0, task.leader.fk(q_l0) @ task.H1_at(sigma_l0)), dt, path)
+    if scene is not None:
+        task = dataclasses.replace(task, scene=scene)
 
     weights = np.asarray(c.weights.joints, dtype=float)
     if weights.size not in (1, follower.n):

@@ -162,11 +162,7 @@ class Box:
         ShapeError, NonFiniteError, InvalidInputError
             ``T_world_frame`` is not a rigid transform.
         """
-        T = checked_pose(T_world_frame, "T_world_frame")
-        box = object.__new__(Box)
-        object.__setattr__(box, "size", self.size)
-        object.__setattr__(box, "pose", _frozen(T @ self.pose))
-        return box
+        return placed_box(self, checked_pose(T_world_frame, "T_world_frame"))
 
     def __repr__(self) -> str:
         return f"Box(size={self.size.tolist()}, centre={self.centre.tolist()})"
@@ -213,6 +209,28 @@ def transform_points(T: Any, points: Any) -> FloatArray:
     T = np.asarray(T, dtype=np.float64)
     p = np.asarray(points, dtype=np.float64)
     out: FloatArray = np.einsum("kij,kj->ki", T[:, :3, :3], p) + T[:, :3, 3]
+    return out
+
+
+def placed_capsule(capsule: Capsule, T: FloatArray) -> Capsule:
+    """:meth:`Capsule.placed` for a pose already known to be rigid (no validation; hot path).
+
+    Parameters
+    ----------
+    capsule : Capsule
+        A capsule in its frame.
+    T : ndarray, shape (4, 4)
+        World pose of its frame [m], a rigid transform (not checked).
+    """
+    R, p = T[:3, :3], T[:3, 3]
+    return _capsule(R @ capsule.a + p, R @ capsule.b + p, capsule.radius)
+
+
+def placed_box(box: Box, T: FloatArray) -> Box:
+    """:meth:`Box.placed` for a pose already known to be rigid (no validation; hot path)."""
+    out = object.__new__(Box)
+    object.__setattr__(out, "size", box.size)
+    object.__setattr__(out, "pose", _frozen(T @ box.pose))
     return out
 
 

@@ -270,6 +270,19 @@ class SerialArm:
         """Names of the joints, base to tip (``joint1`` ... for a DH arm)."""
         return [str(s) for s in list(self._template.names)[1:]]
 
+    @property
+    def link_frame_ids(self) -> tuple[int, ...]:
+        """Indices in :attr:`model` of the frames of :meth:`link_frames` (0: the base)."""
+        return tuple(int(i) for i in self._links)
+
+    @property
+    def link_names(self) -> list[str]:
+        """Names of the links of :meth:`link_frames`: ``base``, ``link1`` .. ``link<n>``.
+
+        Link ``i`` is the body joint ``i`` moves (``joint_names[i - 1]``), for every arm.
+        """
+        return ["base", *(f"link{i + 1}" for i in range(len(self._links) - 1))]
+
     def __repr__(self) -> str:
         if self.dh is not None:
             return (f"SerialArm(name={self.name!r}, n={self.n}, "
@@ -391,12 +404,15 @@ class SerialArm:
         J : ndarray, shape (6, n)
             Geometric Jacobian, see :meth:`jacobian`.
         """
-        data = self._data
-        J: FloatArray = pin.computeFrameJacobian(self._model, data, self.check_q(q),
-                                                 self._tool_id, _LWA)
+        model, data, tool = self._model, self._data, self._tool_id
+        # Every joint's Jacobian (not only the tool's chain): :attr:`data` then also
+        # serves the Jacobians of the link frames (collision rows).
+        pin.computeJointJacobians(model, data, self.check_q(q))
+        T: FloatArray = pin.updateFramePlacement(model, data, tool).homogeneous
+        J: FloatArray = pin.getFrameJacobian(model, data, tool, _LWA)
         if J.ndim == 1:  # eigenpy returns a 6x1 matrix as a vector
             J = J.reshape(6, 1)
-        return data.oMf[self._tool_id].homogeneous, J
+        return T, J
 
 
 # ------------------------------------------------------------------ model builders

@@ -36,7 +36,7 @@ from ..task.scene import DualArmTask
 from ..task.support import SupportLine
 from ..task.surfaces import GraspSurface
 from .bounds import grasp_rate_range
-from .context import StepContext
+from .context import ArmKinematics, StepContext
 from .cost import CentringCost
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
@@ -191,6 +191,8 @@ class StepBuilder:
             [] if task.leader_surface is None else [task.leader_surface])
         self._contact = task.contact
         self._zeros = np.zeros(lay.n)
+        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l)
+        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f)
         self._no_rows = np.zeros((0, lay.n))
         self._no_rhs = np.zeros(0)
         self._labels = tuple(limit.name for limit in self.limits)
@@ -275,7 +277,8 @@ class StepBuilder:
             hi[j] = min(rho_max, (surf.sigma_max - s) / dt)
         ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T_f, J_f,
                           tuple(self._surfaces), positions, lo, hi,
-                          self._zeros if x_applied is None else x_applied, e_l, e_c)
+                          self._zeros if x_applied is None else x_applied, e_l, e_c,
+                          self._leader_arm, self._follower_arm)
         return ctx, support_force
 
     def build(self, state: DualArmState, *, scale_max: float = 1.0,

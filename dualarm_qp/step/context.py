@@ -8,8 +8,10 @@ cost term and limit; none of them computes kinematics of its own.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..task.carry import CarryKinematics
@@ -19,6 +21,50 @@ from .layout import Layout
 from .state import DualArmState
 
 FloatArray = NDArray[np.float64]
+
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@dataclass(frozen=True, slots=True)
+class ArmKinematics:
+    """One arm's Pinocchio model and data at this step, its kinematics already computed.
+
+    For limits that need more than the tools' poses (the links of an arm, for
+    collisions): the builder ran forward kinematics and the joint Jacobians once; these
+    read them. The leader's model is the carried-object model (the leader's joints
+    first, then the sliding grasps); the follower's is the arm's.
+
+    Attributes
+    ----------
+    model, data : pinocchio.Model, pinocchio.Data
+        The model and its data at this step's joints (valid during this step only).
+    n_joints : int
+        The arm's joints (the first columns of its Jacobians).
+    """
+
+    model: Any
+    data: Any
+    n_joints: int
+
+    def frame_pose(self, frame: int) -> FloatArray:
+        """World pose (4, 4) [m] of the model's frame ``frame``."""
+        return np.asarray(pin.updateFramePlacement(self.model, self.data, frame).homogeneous)
+
+    def frame_jacobian(self, frame: int) -> FloatArray:
+        """Jacobian (6, n_joints) of frame ``frame``'s origin, world axes ``[v; w]``."""
+        J = pin.getFrameJacobian(self.model, self.data, frame, _LWA)
+        return np.asarray(J[:, :self.n_joints])
+
+    def point_jacobian(self, frame: int, point: FloatArray) -> FloatArray:
+        """Jacobian (3, n_joints) of the world point ``point`` [m] fixed to frame ``frame``."""
+        J = self.frame_jacobian(frame)
+        r = point - self.frame_pose(frame)[:3, 3]
+        return J[:3] - _skew(r) @ J[3:]
+
+
+def _skew(r: FloatArray) -> FloatArray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +105,9 @@ class StepContext:
         ``[dp; dw]`` from the object frame to ``D(t)`` [m, rad].
     closure_error : ndarray, shape (6,)
         ``[dp; dw]`` from the follower's tool to its target [m, rad].
+    leader_arm, follower_arm : ArmKinematics
+        The arms' Pinocchio models and data at this step (their links, for limits that
+        need them).
     """
 
     state: DualArmState
@@ -76,6 +125,8 @@ class StepContext:
     x_applied: FloatArray
     leader_error: FloatArray
     closure_error: FloatArray
+    leader_arm: ArmKinematics
+    follower_arm: ArmKinematics
 
     @property
     def outside(self) -> NDArray[np.bool_]:
@@ -83,4 +134,4 @@ class StepContext:
         return (self.rate_lo > 0.0) | (self.rate_hi < 0.0)
 
 
-__all__ = ["StepContext"]
+__all__ = ["ArmKinematics", "StepContext"]

@@ -23,6 +23,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._validate import as_pose
+from ..collision.scene import CollisionScene
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from .contact import SupportContact
@@ -56,6 +57,11 @@ class DualArmTask:
         only supports it (Case 2); ``surface`` is then the support line at the start,
         and the step builder replaces it by the line for the object's orientation at
         every step (docs/support.md). Needs a rigid leader grasp.
+    scene : CollisionScene, optional
+        The bodies that may collide (links, object, obstacles) and the pairs checked;
+        with ``scene.settings.enabled`` the step keeps them apart
+        (:mod:`dualarm_qp.step.limits.collision`), otherwise their clearance is only
+        measured. None (the default): no geometry.
     """
 
     leader: SerialArm
@@ -65,6 +71,7 @@ class DualArmTask:
     trajectory: Trajectory
     leader_surface: GraspSurface | None = None
     contact: SupportContact | None = None
+    scene: CollisionScene | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "H1", as_pose(self.H1, "H1"))
@@ -80,6 +87,14 @@ class DualArmTask:
             if self.leader_surface is not None:
                 raise InvalidInputError("a supporting follower needs a rigid leader grasp "
                                         "(no leader_surface)")
+        if self.scene is not None:
+            if not isinstance(self.scene, CollisionScene):
+                raise InvalidInputError("scene must be None or a CollisionScene")
+            if self.scene.n_frames != (self.leader.n + 1, self.follower.n + 1):
+                raise InvalidInputError(
+                    f"the collision scene was built for arms of {self.scene.n_frames[0] - 1} "
+                    f"and {self.scene.n_frames[1] - 1} joints, the task's have "
+                    f"{self.leader.n} and {self.follower.n}")
 
     @property
     def n_grasp(self) -> int:

@@ -1,16 +1,17 @@
 """The step's limits, one module each, stacked in registration order.
 
 Importing this package registers every standard limit (:mod:`.ranges`,
-:mod:`.speeds`, :mod:`.acceleration`); a new limit is one module that defines the
+:mod:`.speeds`, :mod:`.acceleration`, :mod:`.collision`); a new limit is one module that defines the
 limit and registers its factory (:func:`~.registry.register_limit`), plus one import
 line here.
 """
 
-from . import acceleration, ranges, speeds  # noqa: F401  (registration)
+from . import acceleration, collision, ranges, speeds  # noqa: F401  (registration)
 from .acceleration import AccelerationLimit, braking_bound
+from .collision import CollisionLimit
 from .ranges import RangeLimit
 from .registry import LimitSetup, register_limit, registered_limits, standard_limits
 from .speeds import SpeedLimit
 
-__all__ = ["AccelerationLimit", "LimitSetup", "RangeLimit", "SpeedLimit", "braking_bound",
+__all__ = ["AccelerationLimit", "CollisionLimit", "LimitSetup", "RangeLimit", "SpeedLimit", "braking_bound",
            "register_limit", "registered_limits", "standard_limits"]

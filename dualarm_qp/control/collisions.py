@@ -1,0 +1,111 @@
+"""The run's collision checks: the path before it, the recorded clearance after it, and
+the pair that blocked a task.
+
+* before the first sample, :func:`path_collision_of` asks whether ``D(t)`` itself brings
+  the object into an obstacle (:mod:`dualarm_qp.collision.path`);
+* after the last, :func:`record_clearance` measures every pair at every recorded
+  sample, writes the trace's ``clearance_*`` columns and reports the smallest distance
+  (:mod:`dualarm_qp.collision.clearance`);
+* a run that stalled, ran out of time or found no step is re-read by
+  :func:`blocked_by_pair`: when a collision row is what stops the task at the failing
+  state, the failure becomes criterion ``"collision"``, naming the pair and its
+  distance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..collision.clearance import ClearanceReport, clearance_history, clearance_report
+from ..collision.path import PathCollision, path_collision
+from ..errors import DualArmError
+from ..solvers._scale import max_task_scale
+from ..step.limits.collision import ROW_PREFIX
+from ..step.state import DualArmState
+from ..task.scene import DualArmTask
+from .trace import Trace
+
+if TYPE_CHECKING:
+    from .controller import DualArmController
+    from .rollout import Failure
+
+#: A task scale below this at the failing state counts as stopped by its blocking rows.
+BLOCKED_SCALE = 1e-3
+
+
+def path_collision_of(task: DualArmTask, t0: float, t1: float, dt: float
+                      ) -> PathCollision | None:
+    """Where ``D(t)`` brings the object within ``d_s`` of an obstacle (collision avoidance
+    on), or None."""
+    scene = task.scene
+    if scene is None or not scene.settings.enabled:
+        return None
+    return path_collision(scene, task.trajectory, t0, t1, dt)
+
+
+def record_clearance(task: DualArmTask, trace: Trace) -> ClearanceReport | None:
+    """Measure the recorded motion's clearance into ``trace``; its report (None: no scene)."""
+    scene = task.scene
+    if scene is None:
+        return None
+    sigma_l = trace.grasp_leader if task.leader_surface is not None else None
+    history = clearance_history(task, trace.q_l, trace.q_f, sigma_l)
+    g = history.groups
+    trace.clearance_arm_arm[:] = g[:, 0]
+    trace.clearance_arm_object[:] = g[:, 1]
+    trace.clearance_obstacles[:] = g[:, 2]
+    trace.clearance_self[:] = g[:, 3]
+    trace.clearance_pair[:] = history.pair
+    return clearance_report(scene, history)
+
+
+def blocked_by_pair(controller: DualArmController, trace: Trace, failure: Failure) -> Failure:
+    """``failure`` as criterion ``"collision"`` when a collision row stops the task at its
+    sample, naming the pair and its distance; else ``failure`` unchanged."""
+    scene = controller.task.scene
+    if scene is None or not scene.settings.enabled:
+        return failure
+    k = min(failure.sample, len(trace) - 1)
+    sigma_l = float(trace.grasp_leader[k])
+    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
+                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    try:
+        problem = controller.builder.build(state).problem
+    except DualArmError:
+        return failure
+    whole = max_task_scale(problem, cap=1.0)
+    if whole.scale is not None and whole.scale >= BLOCKED_SCALE:
+        return failure
+    pairs = [label[len(ROW_PREFIX):] for label in whole.blocking if label.startswith(ROW_PREFIX)]
+    if not pairs:
+        return failure
+    names = scene.pair_names
+    distance = {}
+    for name in pairs:
+        distance[name] = _pair_distance(controller, state, names.index(name))
+    worst = min(pairs, key=lambda p: distance[p])
+    d_s = scene.settings.safety_distance
+    why = (f"blocked by a collision pair: {worst} at {distance[worst] * 1e3:.1f} mm "
+           f"(safety distance {d_s * 1e3:.1f} mm) stops the path"
+           + (f" (also: {', '.join(p for p in pairs if p != worst)})" if len(pairs) > 1
+              else ""))
+    return dataclasses.replace(failure, criterion="collision", amount=distance[worst],
+                               limit=d_s, message=f"{failure.message}; {why}")
+
+
+def _pair_distance(controller: DualArmController, state: DualArmState, pair: int) -> float:
+    """Distance [m] of pair ``pair`` of the task's scene at ``state``."""
+    task = controller.task
+    scene = task.scene
+    assert scene is not None
+    frames = scene.frames(task.leader.link_frames(state.q_l), task.follower.link_frames(
+        state.q_f), task.leader.fk(state.q_l) @ task.H1_at(state.sigma_leader))
+    sub = scene.subset([pair])
+    return float(np.asarray(sub.measure(frames).prox.distance)[0])
+
+
+__all__ = ["BLOCKED_SCALE", "blocked_by_pair", "path_collision_of", "record_clearance"]
