@@ -141,10 +141,11 @@ def segment_closest_points(
     f = (d2 * r).sum(0)
     a_safe = a + (a == 0.0)  # a == 0: d1 = 0, so b = c = 0 and s stays 0
     e_safe = e + (e == 0.0)  # e == 0: d2 = 0, so b = f = 0 and t stays 0
-    # Interior stationary t of the two lines: d2 with its part along d1 removed.
+    # Stationary t of the two lines, from r and d2 with their parts along d1 removed
+    # (removing r's part first keeps t accurate for nearly parallel segments).
     perp = d2 - (b / a_safe) * d1
     pp = (perp * perp).sum(0)
-    t = _unit_clip((r * perp).sum(0) / (pp + (pp == 0.0)))  # parallel: t = 0
+    t = _unit_clip(((r - (c / a_safe) * d1) * perp).sum(0) / (pp + (pp == 0.0)))
     # Clamp, then the best s for that t, the best t for that s, the best s for that t.
     s = _unit_clip((t * b - c) / a_safe)
     t = _unit_clip((s * b + f) / e_safe)
