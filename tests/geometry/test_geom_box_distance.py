@@ -204,3 +204,17 @@ def test_box_distance_rate_is_normal_dot_witness_velocity(box, a, b, radius, xi)
     # a flat contact (a face against the axis, nearly parallel) has no unique witness
     # points but the rate is the same for each of them
     assert rate == pytest.approx(predicted, abs=1e-4)
+
+
+def test_fallback_normal_rule_for_a_degenerate_coal_normal():
+    """Used only if coal returns a normal that is not unit (never seen in these tests):
+    the witness direction signed by the distance, else the centres' direction, else +z."""
+    from dualarm_qp.geometry.distance import _fallback_normal
+
+    np.testing.assert_allclose(_fallback_normal(np.array([0.0, 2.0, 0.0]), 2.0, np.ones(3)),
+                               [0.0, 1.0, 0.0])
+    np.testing.assert_allclose(_fallback_normal(np.array([0.0, 2.0, 0.0]), -2.0, np.ones(3)),
+                               [0.0, -1.0, 0.0])
+    np.testing.assert_allclose(_fallback_normal(np.zeros(3), 0.0, np.array([3.0, 0.0, 4.0])),
+                               [0.6, 0.0, 0.8])
+    np.testing.assert_array_equal(_fallback_normal(np.zeros(3), 0.0, np.zeros(3)), [0, 0, 1])

@@ -259,6 +259,8 @@ def test_distance_rate_is_normal_dot_witness_velocity(p0, p1, q0, q1, ra, rb, xi
 
 
 # ------------------------------------------------------------------ input
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning",
+                            "ignore:invalid value encountered:RuntimeWarning")
 def test_batch_input_errors():
     z3, z = np.zeros((2, 3)), np.zeros(2)
     with pytest.raises(ShapeError, match="b1"):
@@ -271,6 +273,14 @@ def test_batch_input_errors():
     bad[1, 2] = np.nan
     with pytest.raises(NonFiniteError, match="a1"):
         capsule_proximities(z3, bad, z, z3 + 1, z3 + 1, z)
+    far, x_axis = z3 + 1, z3 + np.array([1.0, 0.0, 0.0])
+    far[0, 0] = -np.inf
+    with pytest.raises(NonFiniteError, match="b0"):
+        capsule_proximities(z3, x_axis, z, far, z3 + 1, z)
+    with pytest.raises(NonFiniteError, match="b1"):
+        capsule_proximities(z3, x_axis, z, z3 + 1, far, z)
+    with pytest.raises(InvalidInputError, match="too large"):
+        capsule_proximities(z3, z3 + 1e200, z, z3 - 1e200, z3, z)
     with pytest.raises(NonFiniteError, match="radius_b"):
         capsule_proximities(z3, z3, z, z3 + 1, z3 + 1, [0.1, np.inf])
     with pytest.raises(InvalidInputError, match="non-negative"):
