@@ -169,7 +169,7 @@ class Box:
         return box
 
     def __repr__(self) -> str:
-        return f"Box(size={self.size.tolist()}, centre={self.centre.tolist()})"
+        return f"Box(size={self.size.tolist()}, pose={self.pose.tolist()})"
 
 
 #: A collision shape of this package.

@@ -4,10 +4,14 @@
   ``[0, 1]^2`` in exact rational arithmetic: the interior stationary point if it lies in
   the square, and the minimum of each of the four edges (a clamped 1-D quadratic).
 * :func:`point_box_distance`: clamping a point into the box, in the box frame.
+* :func:`segment_box_distance`, :func:`box_box_distance`: bounded least squares over
+  the parameters of both sets (the distance when apart, zero when they meet).
 * :func:`support_signed_distance`: the signed distance of two convex sets from their
   support functions, ``max over unit n of (-h_b(-n) - h_a(n))`` (the distance when
   apart, minus the penetration depth when overlapping), by dense sampling of the
-  sphere refined with Nelder-Mead.
+  sphere and the separating axes of :func:`separating_axes` (where the maximum sits on a
+  kink), refined with Nelder-Mead. Any direction gives a lower bound, so the oracle can
+  only err low.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numpy as np
-from scipy.optimize import minimize
+from scipy.optimize import lsq_linear, minimize
 
 
 def segment_distance_exact(p0, p1, q0, q1) -> float:
@@ -67,6 +71,27 @@ def point_box_distance(point, box) -> float:
     return float(np.linalg.norm(x - np.clip(x, -box.half_size, box.half_size)))
 
 
+def _bounded_least_squares(A, target, lower, upper) -> float:
+    res = lsq_linear(A, target, bounds=(lower, upper), method="bvls", tol=1e-14)
+    return float(np.linalg.norm(A @ res.x - target))
+
+
+def segment_box_distance(a, b, box) -> float:
+    """min over t in [0, 1] and u in the box of |a + t (b - a) - (c + R u)| (bounded
+    least squares): the distance of a segment from a box, zero if they meet."""
+    R, c, h = box.pose[:3, :3], box.pose[:3, 3], box.half_size
+    A = np.column_stack([b - a, -R])
+    return _bounded_least_squares(A, c - a, np.r_[0.0, -h], np.r_[1.0, h])
+
+
+def box_box_distance(box_a, box_b) -> float:
+    """min over u in box a and v in box b of |c_a + R_a u - c_b - R_b v|, zero if they meet."""
+    A = np.column_stack([box_a.pose[:3, :3], -box_b.pose[:3, :3]])
+    target = box_b.pose[:3, 3] - box_a.pose[:3, 3]
+    return _bounded_least_squares(A, target, np.r_[-box_a.half_size, -box_b.half_size],
+                                  np.r_[box_a.half_size, box_b.half_size])
+
+
 def capsule_support(cap):
     def h(n):
         return np.maximum(n @ cap.a, n @ cap.b) + cap.radius
@@ -89,11 +114,23 @@ def _directions(count: int) -> np.ndarray:
                             np.cos(phi)])
 
 
-def support_signed_distance(h_a, h_b) -> float:
+def separating_axes(*frames_and_axes) -> np.ndarray:
+    """Candidate directions where the maximum may sit on a kink of the support functions
+    (the separating-axis theorem): the given face normals and edge directions, and the
+    cross products of every two of them, both signs."""
+    axes = [np.asarray(v, dtype=float) for v in frames_and_axes]
+    crosses = [np.cross(u, v) for i, u in enumerate(axes) for v in axes[i + 1:]]
+    out = [v / np.linalg.norm(v) for v in axes + crosses if np.linalg.norm(v) > 1e-9]
+    return np.array(out + [-v for v in out]).reshape(-1, 3)
+
+
+def support_signed_distance(h_a, h_b, axes=None) -> float:
     def gap(n):
         return -h_b(-n) - h_a(n)
 
     dirs = _directions(20_000)
+    if axes is not None:
+        dirs = np.vstack([dirs, axes])
     values = gap(dirs)
     best = -np.inf
     for j in np.argsort(values)[-6:]:

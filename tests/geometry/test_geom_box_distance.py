@@ -1,5 +1,6 @@
 """Pairs with a box (through coal): coal's conventions, and independent checks by
-clamping, by a 1-D minimisation along the capsule's axis, and by support functions."""
+clamping, by a 1-D minimisation along the capsule's axis, by bounded least squares and
+(for overlapping shapes) by support functions."""
 
 from __future__ import annotations
 
@@ -8,11 +9,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from geom_oracles import (
+    box_box_distance,
     box_local,
     box_support,
     capsule_support,
     point_box_distance,
     point_segment_distance,
+    segment_box_distance,
+    separating_axes,
     support_signed_distance,
 )
 from hypothesis import assume, given, settings
@@ -56,8 +60,10 @@ def test_sphere_box_matches_clamping(box, centre, radius):
         assume(np.sort(depths)[1] - depths[axis] > 1e-6)  # one nearest face
         expected = -depths[axis] - radius
         outward = np.zeros(3)
-        outward[axis] = np.sign(local[axis])
+        outward[axis] = 1.0 if local[axis] >= 0.0 else -1.0
         box_normal = box.pose[:3, :3] @ outward  # from the box out through that face
+        if local[axis] == 0.0:  # centred between two faces: either one will do
+            box_normal *= -np.sign(box_normal @ proximity(sphere(radius, centre), box).normal)
     else:
         gap = local - np.clip(local, -half, half)
         assume(np.linalg.norm(gap) > 1e-9)
@@ -102,23 +108,31 @@ def test_capsule_box_apart_matches_a_minimisation_along_the_axis(box, a, b, radi
 
 
 # ------------------------------------------------------------------ overlapping: support functions
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(boxes, vec3, vec3, st.floats(0.01, 0.3))
 def test_capsule_box_signed_distance_matches_support_functions(box, a, b, radius):
     a = 0.5 * a  # near the box: often overlapping
     b = a + 0.6 * b
     cap = Capsule(a, b, radius)
     p = proximity(cap, box)
-    expected = support_signed_distance(capsule_support(cap), box_support(box))
+    axis_distance = segment_box_distance(a, b, box)
+    if axis_distance > 1e-6:  # the axis outside the box: the capsule is that much thinner
+        expected = axis_distance - radius
+    else:  # the axis meets the box: the penetration depth from the support functions
+        axes = separating_axes(*box.pose[:3, :3].T, b - a)
+        expected = support_signed_distance(capsule_support(cap), box_support(box), axes)
     assert p.distance == pytest.approx(expected, abs=1e-7)
     check_conventions(p)
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(boxes, boxes)
 def test_box_box_signed_distance_matches_support_functions(box_a, box_b):
     p = proximity(box_a, box_b)
-    expected = support_signed_distance(box_support(box_a), box_support(box_b))
+    expected = box_box_distance(box_a, box_b)
+    if expected <= 1e-6:  # overlapping: the penetration depth from the support functions
+        axes = separating_axes(*box_a.pose[:3, :3].T, *box_b.pose[:3, :3].T)
+        expected = support_signed_distance(box_support(box_a), box_support(box_b), axes)
     assert p.distance == pytest.approx(expected, abs=1e-7)
     check_conventions(p)
 
@@ -192,6 +206,11 @@ def test_box_distance_rate_is_normal_dot_witness_velocity(box, a, b, radius, xi)
     p = proximity(cap, box)
     assume(p.distance > 0.02)
     assume(np.linalg.norm(b - a) > 0.05)
+    # unique witness points: the axis parallel to no face and no edge of the box (a flat
+    # contact has a set of witness points, and the distance has only one-sided
+    # derivatives there)
+    u = (b - a) / np.linalg.norm(b - a)
+    assume(np.abs(box.pose[:3, :3].T @ u).min() > 0.1)
     h = 1e-5
 
     def moved(sign):
@@ -201,8 +220,6 @@ def test_box_distance_rate_is_normal_dot_witness_velocity(box, a, b, radius, xi)
     rate = (moved(1.0) - moved(-1.0)) / (2 * h)
     v, w = np.array(xi[:3]), np.array(xi[3:])
     predicted = p.normal @ (v + np.cross(w, p.point_b))
-    # a flat contact (a face against the axis, nearly parallel) has no unique witness
-    # points but the rate is the same for each of them
     assert rate == pytest.approx(predicted, abs=1e-4)
 
 
