@@ -64,10 +64,11 @@ def urdf_capsules(file: str | Path, root: str, tip: str, *,
     -------
     dict of int to Capsule
         Key ``i`` in 1..n: the capsule containing the collision geometry of every link
-        joint ``i`` moves (below it, up to the next joint of the arm), in the frame of
-        joint ``i``. Key 0: the geometry of the links at or below ``root`` that no arm
-        joint moves, in the base frame (``root``). Geometry of links that are not below
-        ``root`` (another arm, a torso) is left out. Other joints are at zero, as in
+        joint ``i`` moves (below it, up to the next joint of the arm, locked joints such
+        as a gripper's included), in the frame of joint ``i``. Key 0: the geometry of
+        ``root`` and of the links fixed to it (no joint in between), in the base frame
+        (``root``). Everything else (another arm, a head, a torso above ``root``) is
+        left out. Joints that are not the arm's are at zero, as in
         :func:`~dualarm_qp.kinematics.urdf_arm`.
 
     Raises
@@ -95,11 +96,13 @@ def urdf_capsules(file: str | Path, root: str, tip: str, *,
     pin.forwardKinematics(model, data, pin.neutral(model))
     pin.updateFramePlacements(model, data)
     root_id = frame_id(model, root, "root", model.name)
+    root_joint = model.frames[root_id].parentJoint
     balls: dict[int, list[tuple[Any, Any]]] = {}
     for obj in geom.geometryObjects:
-        if not _below(model, obj.parentFrame, root_id):
-            continue
         movers = [j for j in model.supports[obj.parentJoint] if j in chain]
+        if not (movers or (obj.parentJoint == root_joint
+                           and _below(model, obj.parentFrame, root_id))):
+            continue  # not on the arm: another arm, a head, a torso
         key = chain.index(movers[-1]) + 1 if movers else 0
         frame = data.oMi[movers[-1]] if movers else data.oMf[root_id]
         # GeometryObject.placement is relative to its parent joint.

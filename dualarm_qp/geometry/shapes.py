@@ -165,7 +165,7 @@ class Box:
         return placed_box(self, checked_pose(T_world_frame, "T_world_frame"))
 
     def __repr__(self) -> str:
-        return f"Box(size={self.size.tolist()}, centre={self.centre.tolist()})"
+        return f"Box(size={self.size.tolist()}, pose={self.pose.tolist()})"
 
 
 #: A collision shape of this package.
