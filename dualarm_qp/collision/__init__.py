@@ -9,9 +9,9 @@ The rows that keep the pairs apart are one limit of the step
 (:mod:`dualarm_qp.step.limits.collision`).
 """
 
-from .settings import CLEARANCE_ALLOWANCE, CollisionSettings
-from .scene import GROUPS, Body, CollisionScene, Measured, Pair
 from .clearance import ClearanceHistory, ClearanceReport, clearance_history, clearance_report
+from .scene import GROUPS, Body, CollisionScene, Measured, Pair
+from .settings import CLEARANCE_ALLOWANCE, CollisionSettings
 
 __all__ = ["CLEARANCE_ALLOWANCE", "GROUPS", "Body", "ClearanceHistory", "ClearanceReport",
            "CollisionScene", "CollisionSettings", "Measured", "Pair", "clearance_history",

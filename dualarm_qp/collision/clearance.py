@@ -134,7 +134,7 @@ def _groups(scene: CollisionScene, frames: FloatArray) -> tuple[FloatArray, floa
 
 
 def clearance_report(scene: CollisionScene, history: ClearanceHistory) -> ClearanceReport:
-    """The smallest clearance of a history and its first breach of ``d_s - allowance``."""
+    """Return the smallest clearance of a history and its first breach of ``d_s - allowance``."""
     s = scene.settings
     if history.nearest.size == 0 or not np.isfinite(history.nearest).any():
         return ClearanceReport(math.inf, "", -1, s.safety_distance, CLEARANCE_ALLOWANCE,

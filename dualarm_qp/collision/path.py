@@ -1,4 +1,4 @@
-"""Before a run: does the desired path itself bring the object into an obstacle?
+"""Before a run: the desired path must not bring the object into an obstacle.
 
 The object follows ``D(t)``; if the object's shape placed at ``D(t)`` comes closer to an
 obstacle than the safety distance at some ``t``, no motion of the arms can keep the
@@ -55,8 +55,9 @@ class PathCollision:
 
 def path_collision(scene: CollisionScene, trajectory: Trajectory, t0: float, t1: float,
                    dt: float) -> PathCollision | None:
-    """The first sample of ``D(t)``, ``t`` in ``[t0, t1]``, where the object is closer than
-    ``d_s`` to an obstacle, or None.
+    """Return the first sample of ``D(t)`` where the object is within ``d_s`` of an obstacle.
+
+    The path is sampled over ``[t0, t1]``; None when no sample is that close.
 
     Parameters
     ----------

@@ -37,7 +37,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
-from ..geometry.distance import Proximities, capsule_proximities, proximity
+from ..geometry.distance import (
+    Proximities,
+    capsule_proximities,
+    coal_proximity,
+    coal_shape,
+)
 from ..geometry.links import arm_capsules
 from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
 from ..kinematics.arm import SerialArm
@@ -135,20 +140,20 @@ class CollisionScene:
         start = {"leader": 0, "follower": n_l, "object": n_l + n_f, "world": n_l + n_f + 1}
         self._frame = np.array([start[b.owner] + max(b.link, 0) for b in self.bodies],
                                dtype=np.intp)
-        caps = [isinstance(b.shape, Capsule) for b in self.bodies]
-        # Capsule endpoints in their frames; a box's entries are its centre (bounding only).
-        self._a = np.array([b.shape.a if isinstance(b.shape, Capsule) else b.shape.centre
-                            for b in self.bodies]).reshape(-1, 3)
-        self._b = np.array([b.shape.b if isinstance(b.shape, Capsule) else b.shape.centre
-                            for b in self.bodies]).reshape(-1, 3)
-        self._r = np.array([b.shape.radius if isinstance(b.shape, Capsule)
-                            else float(np.linalg.norm(b.shape.half_size))
-                            for b in self.bodies])
-        self._bound = 0.5 * np.linalg.norm(self._b - self._a, axis=1) + self._r
+        # Every body as a capsule in its frame: its own, or one containing its box (the
+        # box's longest axis, radius the half-diagonal of the other two): for a box the
+        # closed form then gives a lower bound, and coal the distance.
+        bounds = [_bounding_capsule(b.shape) for b in self.bodies]
+        self._a = np.array([c[0] for c in bounds]).reshape(-1, 3)
+        self._b = np.array([c[1] for c in bounds]).reshape(-1, 3)
+        self._r = np.array([c[2] for c in bounds])
+        self._sphere = 0.5 * np.linalg.norm(self._b - self._a, axis=1) + self._r
+        self._coal = [coal_shape(b.shape) if isinstance(b.shape, Box) else None
+                      for b in self.bodies]
         self._ia = np.array([p.a for p in self.pairs], dtype=np.intp)
         self._ib = np.array([p.b for p in self.pairs], dtype=np.intp)
-        both = np.array([caps[p.a] and caps[p.b] for p in self.pairs], dtype=bool)
-        self._capsule_pair = both
+        boxed = [isinstance(b.shape, Box) for b in self.bodies]
+        self._boxed = np.array([boxed[p.a] or boxed[p.b] for p in self.pairs], dtype=bool)
         self.group_of = np.array([GROUPS.index(p.group) for p in self.pairs], dtype=np.intp)
 
     # -- names -------------------------------------------------------------------------
@@ -170,7 +175,7 @@ class CollisionScene:
     # -- placing and measuring -------------------------------------------------------------
     def frames(self, leader_frames: FloatArray, follower_frames: FloatArray,
                T_object: FloatArray) -> FloatArray:
-        """The stack of frames the bodies are read from, shape (n_l + n_f + 4, 4, 4).
+        """Return the stack of frames the bodies are read from, shape (n_l + n_f + 4, 4, 4).
 
         Parameters
         ----------
@@ -200,8 +205,9 @@ class CollisionScene:
         frames : ndarray, shape (n_l + n_f + 4, 4, 4)
             The stack of :meth:`frames` [m].
         within : float
-            Measure only the pairs whose bounding spheres are closer than this [m] (the
-            others are certainly farther apart); ``inf``: every pair.
+            Measure only the pairs that may be closer than this [m] (the others are
+            certainly farther apart: their bounding spheres, then their bounding
+            capsules, are); ``inf``: every pair.
 
         Returns
         -------
@@ -214,34 +220,38 @@ class CollisionScene:
         B = np.einsum("kij,kj->ki", R, self._b) + p
         ia, ib = self._ia, self._ib
         if np.isfinite(within):
-            C = 0.5 * (A + B)
-            gap = C[ia] - C[ib]
-            lower = np.sqrt(np.einsum("ki,ki->k", gap, gap)) - self._bound[ia] - self._bound[ib]
+            gap = (A[ia] + B[ia] - A[ib] - B[ib]) * 0.5
+            lower = np.sqrt(np.einsum("ki,ki->k", gap, gap)) - self._sphere[ia] - self._sphere[ib]
             keep = np.flatnonzero(lower < within)
         else:
             keep = np.arange(len(self.pairs))
-        k = keep.size
-        dist = np.empty(k)
-        pa = np.empty((k, 3))
-        pb = np.empty((k, 3))
-        normal = np.empty((k, 3))
-        caps = self._capsule_pair[keep]
-        if caps.any():
-            sel = keep[caps]
-            a, b = ia[sel], ib[sel]
-            prox = capsule_proximities(A[a], B[a], self._r[a], A[b], B[b], self._r[b])
-            dist[caps], pa[caps], pb[caps], normal[caps] = (prox.distance, prox.point_a,
-                                                            prox.point_b, prox.normal)
-        for j in np.flatnonzero(~caps).tolist():
-            pair = self.pairs[int(keep[j])]
-            one = proximity(self._place(pair.a, frames), self._place(pair.b, frames))
+        a, b = ia[keep], ib[keep]
+        prox = capsule_proximities(A[a], B[a], self._r[a], A[b], B[b], self._r[b])
+        boxed = np.flatnonzero(self._boxed[keep])
+        if boxed.size == 0:
+            return Measured(keep, prox)
+        # Pairs with a box: the capsule distance is a lower bound; coal where it matters.
+        exact = boxed[prox.distance[boxed] < within]
+        dist, pa, pb, normal = (prox.distance.copy(), prox.point_a.copy(),
+                                prox.point_b.copy(), prox.normal.copy())
+        for j in exact.tolist():
+            one = coal_proximity(*self._coal_at(int(a[j]), frames),
+                                 *self._coal_at(int(b[j]), frames))
             dist[j], pa[j], pb[j], normal[j] = one.distance, one.point_a, one.point_b, one.normal
+        if np.isfinite(within):  # pairs with a box left at their lower bound: drop them
+            kept = np.ones(keep.size, dtype=bool)
+            kept[np.setdiff1d(boxed, exact)] = False
+            return Measured(keep[kept], Proximities(dist[kept], pa[kept], pb[kept],
+                                                    normal[kept]))
         return Measured(keep, Proximities(dist, pa, pb, normal))
 
-    def _place(self, body: int, frames: FloatArray) -> Capsule | Box:
-        shape = self.bodies[body].shape
-        T = frames[self._frame[body]]
-        return placed_capsule(shape, T) if isinstance(shape, Capsule) else placed_box(shape, T)
+    def _coal_at(self, body: int, frames: FloatArray) -> tuple[object, FloatArray]:
+        """Coal geometry of ``body`` and its world pose."""
+        cached = self._coal[body]
+        if cached is None:
+            cached = self._coal[body] = coal_shape(self.bodies[body].shape)
+        geom, local = cached
+        return geom, frames[self._frame[body]] @ local
 
     def nearest(self, frames: FloatArray) -> tuple[FloatArray, list[str]]:
         """Smallest distance of each group [m] (``inf`` for an empty group) and its pair."""
@@ -338,8 +348,9 @@ class CollisionScene:
 
     def _without_contact_at_start(self, frames: FloatArray,
                                   grasp: dict[str, FloatArray]) -> CollisionScene:
-        """Leave out the grasping hands' links near their grasp points, and the pairs that
-        overlap at the start (no limit could separate them).
+        """Leave out the grasping hands' links near their grasp points, and overlapping pairs.
+
+        Pairs that overlap at the start are left out: no limit could separate them.
         """
         placed = self.placed(frames)
         prox = self.measure(frames).prox
@@ -372,7 +383,7 @@ class CollisionScene:
 
 
 def _group(a: Body, b: Body, n_l: int, n_f: int) -> str | None:
-    """The group of a pair of bodies, or None when the pair is not checked."""
+    """Return the group of a pair of bodies, or None when the pair is not checked."""
     owners = {a.owner, b.owner}
     if owners == {"leader", "follower"}:
         return "arm_arm"
@@ -385,6 +396,17 @@ def _group(a: Body, b: Body, n_l: int, n_f: int) -> str | None:
         if n > 6 and abs(a.link - b.link) >= SELF_GAP:
             return "self"
     return None
+
+
+def _bounding_capsule(shape: Capsule | Box) -> tuple[FloatArray, FloatArray, float]:
+    """Return a capsule containing ``shape``, in the shape's frame: (a, b, radius)."""
+    if isinstance(shape, Capsule):
+        return shape.a, shape.b, shape.radius
+    h = shape.half_size
+    k = int(np.argmax(h))
+    axis = shape.pose[:3, k] * h[k]
+    c = shape.centre
+    return c - axis, c + axis, float(np.sqrt(max(float(h @ h) - h[k] ** 2, 1e-24)))
 
 
 def _distance_to_point(shape: Capsule | Box, point: FloatArray) -> float:

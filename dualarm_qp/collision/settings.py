@@ -78,7 +78,7 @@ class CollisionSettings:
         return self.influence_distance - self.safety_distance
 
     def allowed_rate(self, distance: float) -> float:
-        """The smallest rate of change [m/s] of a distance ``distance`` [m] allowed."""
+        """Return the smallest rate of change [m/s] allowed at the distance ``distance`` [m]."""
         return -self.approach_speed_max * (distance - self.safety_distance) / self.band
 
     def check_dt(self, dt: float) -> None:

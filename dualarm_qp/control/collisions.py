@@ -1,5 +1,4 @@
-"""The run's collision checks: the path before it, the recorded clearance after it, and
-the pair that blocked a task.
+"""The run's collision checks: the path before it, the clearance after it, the blocking pair.
 
 * before the first sample, :func:`path_collision_of` asks whether ``D(t)`` itself brings
   the object into an obstacle (:mod:`dualarm_qp.collision.path`);
@@ -39,8 +38,10 @@ BLOCKED_SCALE = 1e-3
 
 def path_collision_of(task: DualArmTask, t0: float, t1: float, dt: float
                       ) -> PathCollision | None:
-    """Where ``D(t)`` brings the object within ``d_s`` of an obstacle (collision avoidance
-    on), or None."""
+    """Return where ``D(t)`` brings the object within ``d_s`` of an obstacle, or None.
+
+    Only with collision avoidance on.
+    """
     scene = task.scene
     if scene is None or not scene.settings.enabled:
         return None
@@ -64,8 +65,12 @@ def record_clearance(task: DualArmTask, trace: Trace) -> ClearanceReport | None:
 
 
 def blocked_by_pair(controller: DualArmController, trace: Trace, failure: Failure) -> Failure:
-    """``failure`` as criterion ``"collision"`` when a collision row stops the task at its
-    sample, naming the pair and its distance; else ``failure`` unchanged."""
+    """Return ``failure`` as criterion ``"collision"`` when a collision row stops the task.
+
+    The failure's sample is posed again: when its largest feasible task scale is below
+    :data:`BLOCKED_SCALE` and collision rows block it, the message names the pair and
+    its distance. Otherwise ``failure`` is returned unchanged.
+    """
     scene = controller.task.scene
     if scene is None or not scene.settings.enabled:
         return failure

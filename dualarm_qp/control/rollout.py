@@ -25,12 +25,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from ..collision.clearance import ClearanceReport
 from ..errors import DualArmError, InfeasibleStepError, InvalidInputError, SupportLostError
 from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
 from ..step.state import DualArmState
-from ..collision.clearance import ClearanceReport
 from .collisions import blocked_by_pair, path_collision_of, record_clearance
 from .controller import DualArmController
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
@@ -623,7 +623,7 @@ def _realised(controller: DualArmController, trace: Trace, dt: float,
 
 
 def clearance_failure(report: ClearanceReport, trace: Trace) -> Failure:
-    """The failure of a run whose recorded clearance fell below ``d_s - allowance``."""
+    """Return the failure of a run whose recorded clearance fell below ``d_s - allowance``."""
     k = report.breach_sample
     t = float(trace.t[k])
     d = float(min(trace.clearance_arm_arm[k], trace.clearance_arm_object[k],

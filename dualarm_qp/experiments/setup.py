@@ -33,6 +33,7 @@ from ..solvers.registry import (
     get_solver,
     solver_info,
 )
+from ..step.build import StepBuilder
 from ..step.options import StepOptions
 from ..step.parts import Limit
 from ..step.state import DualArmState
@@ -442,7 +443,7 @@ def build_experiment(
         if limits:
             exp.limits_extra = tuple(limits)
         check_pairing(solver_info(exp.solver_name),
-                      [lim.name for lim in exp.limits_extra if lim.gives_rows])
+                      StepBuilder(exp.task, exp.options, limits=exp.limits_extra).row_limits)
         return exp
     except ConfigError as err:
         if err.path is None:

@@ -1,5 +1,7 @@
-"""The collision scene of an experiment file, in SI units (the file's ``scene:``,
-``collision:``, ``object.shape`` and the arms' ``link_radius``).
+"""The collision scene of an experiment file, in SI units.
+
+It is read from the file's ``scene:``, ``collision:``, ``object.shape`` and the arms'
+``link_radius``.
 
 A task gets a scene when the file gives any geometry (an obstacle, the object's shape)
 or enables collision avoidance. With ``collision.enabled: false`` the scene is only
@@ -28,8 +30,10 @@ FloatArray = NDArray[np.float64]
 
 
 def shape_of(spec: ShapeSpec, length: float, angle: float) -> Capsule | Box:
-    """The shape of ``spec`` in SI: a capsule along its pose's z axis, centred on the
-    pose; a sphere at the pose's position; a box centred on the pose.
+    """Return the shape of ``spec`` in SI.
+
+    A capsule lies along its pose's z axis, centred on the pose; a sphere sits at the
+    pose's position; a box is centred on the pose.
 
     Parameters
     ----------
@@ -54,7 +58,7 @@ def scene_of(cfg: ExperimentConfig, length: float, angle: float, time: float,
              leader: SerialArm, follower: SerialArm, start: tuple[FloatArray, FloatArray,
                                                                   FloatArray],
              dt: float, path: str) -> CollisionScene | None:
-    """The file's collision scene, or None when it gives no geometry.
+    """Return the file's collision scene, or None when it gives no geometry.
 
     Parameters
     ----------
@@ -100,9 +104,9 @@ def scene_of(cfg: ExperimentConfig, length: float, angle: float, time: float,
         except DualArmError as err:
             raise ConfigError(str(err), path=path, key=f"scene.obstacles.{i}") from None
     radii = {}
-    for role, arm, spec in (("leader", leader, cfg.leader), ("follower", follower,
-                                                              cfg.follower)):
-        radii[role] = _radii(spec, arm, role, length, path)
+    for role, arm, arm_spec in (("leader", leader, cfg.leader),
+                                ("follower", follower, cfg.follower)):
+        radii[role] = _radii(arm_spec, arm, role, length, path)
     try:
         return CollisionScene.build(
             leader, follower, settings=settings, object_shape=object_shape,
@@ -117,7 +121,7 @@ def scene_of(cfg: ExperimentConfig, length: float, angle: float, time: float,
 
 
 def _radii(spec: ArmSpec, arm: SerialArm, role: str, length: float, path: str) -> Any:
-    """The arm's capsule radii [m] (DH arms), checked against its links."""
+    """Return the arm's capsule radii [m] (DH arms), checked against its links."""
     if spec.link_radius is None:
         if arm.dh is not None and arm.source != "preset:puma560":
             raise ConfigError(f"the {role} is a DH arm: give its capsule radii, one per link "

@@ -333,20 +333,37 @@ def proximity(shape_a: Capsule | Box, shape_b: Capsule | Box) -> Proximity:
 
 def _coal_proximity(shape_a: Capsule | Box, shape_b: Capsule | Box) -> Proximity:
     """:func:`proximity` through ``coal.distance``."""
-    geom_a, T_a = _to_coal(shape_a)
-    geom_b, T_b = _to_coal(shape_b)
+    geom_a, T_a = coal_shape(shape_a)
+    geom_b, T_b = coal_shape(shape_b)
+    return coal_proximity(geom_a, T_a, geom_b, T_b)
+
+
+def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray) -> Proximity:
+    """Signed distance, witness points and normal of two coal geometries.
+
+    The same conventions as :func:`proximity` (which calls it for pairs with a box);
+    for callers that keep their coal geometries across calls (the collision scene).
+
+    Parameters
+    ----------
+    geom_a, geom_b : coal.CollisionGeometry
+        The geometries, in their own frames (:func:`coal_shape`).
+    T_a, T_b : ndarray, shape (4, 4)
+        Their poses in the world [m].
+    """
     request = coal.DistanceRequest()
     request.gjk_tolerance = 1e-10
     request.epa_tolerance = 1e-10
     result = coal.DistanceResult()
-    distance = float(coal.distance(geom_a, T_a, geom_b, T_b, request, result))
+    distance = float(coal.distance(geom_a, coal.Transform3s(T_a[:3, :3], T_a[:3, 3]),
+                                   geom_b, coal.Transform3s(T_b[:3, :3], T_b[:3, 3]),
+                                   request, result))
     point_a = np.array(result.getNearestPoint1(), dtype=np.float64)
     point_b = np.array(result.getNearestPoint2(), dtype=np.float64)
     normal = np.array(result.normal, dtype=np.float64)
     length = float(np.linalg.norm(normal)) if np.isfinite(normal).all() else 0.0
     if abs(length - 1.0) > 1e-6:
-        normal = _fallback_normal(point_b - point_a, distance,
-                                  _centre(shape_b) - _centre(shape_a))
+        normal = _fallback_normal(point_b - point_a, distance, T_b[:3, 3] - T_a[:3, 3])
     else:
         normal /= length
     return Proximity(distance, point_a, point_b, normal)
@@ -361,26 +378,22 @@ def _fallback_normal(gap: FloatArray, distance: float, centres: FloatArray) -> F
     return np.array([0.0, 0.0, 1.0])
 
 
-def _centre(shape: Capsule | Box) -> FloatArray:
-    """Centre of a placed shape [m]."""
-    if isinstance(shape, Box):
-        return shape.centre
-    return (shape.a + shape.b) / 2.0
+def coal_shape(shape: Capsule | Box) -> tuple[Any, FloatArray]:
+    """Coal geometry of a shape and the pose (4, 4) of that geometry in the shape's frame.
 
-
-def _to_coal(shape: Capsule | Box) -> tuple[Any, Any]:
-    """Coal geometry and its ``Transform3s`` for a placed shape."""
+    Coal's capsule lies along its local z axis, centred on its origin; a zero-length
+    capsule is a coal sphere; a box is centred on its pose.
+    """
     if isinstance(shape, Box):
-        return (coal.Box(*shape.size.tolist()),
-                coal.Transform3s(np.array(shape.pose[:3, :3]), np.array(shape.pose[:3, 3])))
+        return coal.Box(*shape.size.tolist()), np.array(shape.pose)
     axis = shape.b - shape.a
     length = float(np.linalg.norm(axis))
-    centre = (shape.a + shape.b) / 2.0
+    T = np.eye(4)
+    T[:3, 3] = (shape.a + shape.b) / 2.0
     if length == 0.0:
-        return coal.Sphere(shape.radius), coal.Transform3s(np.eye(3), centre)
-    # coal's capsule lies along its local z axis, centred on its origin.
-    return (coal.Capsule(shape.radius, length),
-            coal.Transform3s(_frame_with_z(axis / length), centre))
+        return coal.Sphere(shape.radius), T
+    T[:3, :3] = _frame_with_z(axis / length)
+    return coal.Capsule(shape.radius, length), T
 
 
 def _frame_with_z(z: FloatArray) -> FloatArray:

@@ -30,7 +30,6 @@ from typing import Any
 import coal  # type: ignore[import-untyped]
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import minimize
 
 from .._validate import as_array
 from ..errors import InvalidInputError, ShapeError
@@ -89,6 +88,8 @@ def fit_capsule(points: Any, radii: Any = None) -> Capsule:
 
     scale = float(np.sqrt((spread * spread).sum(axis=1).max())) or 1.0
     simplex = np.vstack([np.zeros(4), np.diag([0.1, 0.1, 0.1 * scale, 0.1 * scale])])
+    from scipy.optimize import minimize  # on first fit: SciPy's optimiser is slow to import
+
     res = minimize(volume, np.zeros(4), method="Nelder-Mead",
                    options={"initial_simplex": simplex, "xatol": 1e-7 * scale,
                             "fatol": 1e-12, "maxiter": 800})

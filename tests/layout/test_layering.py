@@ -14,6 +14,7 @@ LAYERS = {
     "errors": 0, "_validate": 0, "se3": 0, "poses": 0, "_io": 0, "_signals": 0,
     "kinematics": 1,
     "task": 2, "geometry": 2,  # shapes, distances, capsules fitted to arms (kinematics)
+    "collision": 2,  # the bodies and pairs of a task, their clearance (geometry)
     "step": 3,
     "solvers": 4,
     "control": 5, "viz": 5,  # draws tasks and recorded runs; knows no experiment files

@@ -13,5 +13,5 @@ from .ranges import RangeLimit
 from .registry import LimitSetup, register_limit, registered_limits, standard_limits
 from .speeds import SpeedLimit
 
-__all__ = ["AccelerationLimit", "CollisionLimit", "LimitSetup", "RangeLimit", "SpeedLimit", "braking_bound",
-           "register_limit", "registered_limits", "standard_limits"]
+__all__ = ["AccelerationLimit", "CollisionLimit", "LimitSetup", "RangeLimit", "SpeedLimit",
+           "braking_bound", "register_limit", "registered_limits", "standard_limits"]

@@ -68,7 +68,7 @@ class CollisionLimit:
         self._names = [ROW_PREFIX + p.name for p in scene.pairs]
 
     def frames(self, ctx: StepContext) -> FloatArray:
-        """The scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
+        """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
         lf, ff = self._frames
         leader = np.array([ctx.leader_arm.frame_pose(f) for f in lf])
         follower = np.array([ctx.follower_arm.frame_pose(f) for f in ff])
@@ -116,9 +116,10 @@ class CollisionLimit:
             arm: ArmKinematics = ctx.leader_arm if leader else ctx.follower_arm
             frame = self._frames[0 if leader else 1][link]
             key = (owner, link)
-            J = cache.get(key)
-            if J is None:
-                J = cache[key] = arm.frame_jacobian(frame)
+            cached = cache.get(key)
+            if cached is None:
+                cached = cache[key] = arm.frame_jacobian(frame)
+            J = cached
             origin = frames[link if leader else lay.n_l + 1 + link, :3, 3]
             sl = lay.leader if leader else lay.follower
             cols = np.arange(sl.start, sl.stop)
