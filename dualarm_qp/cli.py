@@ -95,6 +95,8 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
               if s["hard_limits"] else "limits not enforced by this solver")
     print(f"  realised motion, worst share of each limit, above 1 is outside ({limits}):")
     for part, r in s["realised_limits"].items():
+        if part == "clearance":  # a collision scene: printed below
+            continue
         start = r["range_ratio_start"]
         started = (f"; started outside, at {start:.3g}"
                    if start is not None and start > 1.0 else "")
@@ -106,6 +108,13 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
                       else f", acceleration {accel:.3g} ({r['worst_acceleration']})")
         print(f"    {part:<12} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
               f"speed {speed_text}{accel_text}")
+    clearance = s["realised_limits"].get("clearance")
+    if clearance is not None and clearance["min_m"] is not None:
+        verdict = ("penetration" if clearance["penetration"] else
+                   "kept" if clearance["kept"] else "below the safety distance")
+        print(f"  clearance: nearest {clearance['min_m'] * 1e3:.1f} mm ({clearance['pair']}), "
+              f"safety distance {clearance['safety_distance_m'] * 1e3:.0f} mm"
+              f"{'' if clearance['enforced'] else ' (not enforced in this run)'}: {verdict}")
     lead = s.get("grasp_leader_start_m")
     lead_text = (f" (leader's {lead * 1e3:.1f} -> {s['grasp_leader_end_m'] * 1e3:.1f} mm)"
                  if isinstance(lead, float) and lead == lead else "")

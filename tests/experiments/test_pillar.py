@@ -11,12 +11,16 @@ with the library's kinematics or distances.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
+from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.experiments.figures import RunData
 from dualarm_qp.geometry.shapes import Box, Capsule
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -25,6 +29,14 @@ PILLAR = CONFIGS / "puma_beam_pillar.yaml"
 PILLAR_AXIS = np.array([0.630, 1.100])  # the file's pillar [m]
 PILLAR_RADIUS = 0.050
 D_S = 0.020  # the file's safety distance [m]
+
+
+def short_pillar(tmp_path: Path, duration: float) -> Path:
+    d = yaml.safe_load(PILLAR.read_text())
+    d["controller"]["duration"] = duration
+    path = tmp_path / "pillar_short.yaml"
+    path.write_text(yaml.safe_dump(d))
+    return path
 
 
 def test_the_pillar_file_builds_a_scene_with_the_pillar_and_the_beam():
@@ -59,3 +71,17 @@ def test_the_pillar_file_builds_a_scene_with_the_pillar_and_the_beam():
     # The path is free: at the end of D(t) (x = 499.7 mm) the beam's side face stands at
     # x = 519.7 mm, the pillar's surface at 580 mm.
     assert PILLAR_AXIS[0] - PILLAR_RADIUS - (0.4997 + 0.020) > D_S
+
+
+def test_a_run_with_a_scene_prints_its_clearance_and_draws_its_figures(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", str(short_pillar(tmp_path, 0.31)), "--out", str(out),
+                 "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "clearance: nearest" in printed and "(follower.link1 - pillar)" in printed
+    s = json.loads((out / "summary.json").read_text())
+    assert {"joints.png", "grasp.png", "report.html"} <= set(s["outputs"])
+    data = RunData.read(out / "trajectory.csv")  # the nearest pair's name is text
+    assert set(data.columns["clearance_pair"]) == {"follower.link1 - pillar"}
+    np.testing.assert_allclose(np.nanmin(data.col("clearance_obstacles")),
+                               s["realised_limits"]["clearance"]["min_m"])

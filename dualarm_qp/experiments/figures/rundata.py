@@ -26,8 +26,9 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-#: Columns holding text, not numbers.
-TEXT_COLUMNS = ("status", "leader_status")
+#: Columns holding text, not numbers (``clearance_pair``: the nearest pair of a run with a
+#: collision scene).
+TEXT_COLUMNS = ("status", "leader_status", "clearance_pair")
 
 
 @dataclass(frozen=True)
