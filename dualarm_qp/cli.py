@@ -1,6 +1,6 @@
 """Command-line interface of ``dualarm-qp``.
 
-Commands: run, animate, reproduce, bench, sweep, sweep-report, solvers.
+Commands: run, animate, reproduce, collisions, bench, sweep, sweep-report, solvers.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
 input (configuration, arguments, missing solver, an output folder in use), 130
@@ -170,6 +170,36 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         print(f"  {'yes' if held else 'NO '}  {claim.replace('_', ' ')}")
     print("  figures: fig5_joint3.png, fig6_grasp.png; details in reproduce.json")
     return EXIT_OK if rep.ok else EXIT_FAILED
+
+
+def _cmd_collisions(args: argparse.Namespace) -> int:
+    from .experiments.avoidance import (
+        compare_avoidance,
+        describe,
+        is_comparison_folder,
+        variant_experiments,
+    )
+    from .experiments.config import safe_name
+    from .experiments.outputs import check_unused_folder
+
+    exps = variant_experiments(args.config)  # bad input: exit 2 before any folder is made
+    out = Path(args.out if args.out else Path("runs") / safe_name(exps["avoiding"].name)
+               / "collisions")
+    if not is_comparison_folder(out):  # its own earlier output is replaced freely
+        check_unused_folder(out, force=args.force, what="a comparison")
+    comparison = compare_avoidance(args.config, _output_folder(out),
+                                   progress=None if not args.quiet else False,
+                                   plots=not args.no_plots, animate=args.animate)
+    print(f"{exps['avoiding'].name}: collision avoidance on and off, and the fixed grasp "
+          f"-> {out}/")
+    for line in describe(comparison):
+        print(line)
+    if comparison.interrupted is not None:
+        _err(f"interrupted in the run '{comparison.interrupted}'; the runs done are written, "
+             "without the figure; see collisions.json")
+        return EXIT_INTERRUPTED
+    print("  figure: collisions.png; details in collisions.json")
+    return EXIT_OK if comparison.ok else EXIT_FAILED
 
 
 def _cmd_solvers(args: argparse.Namespace) -> int:
@@ -347,6 +377,23 @@ def build_parser() -> argparse.ArgumentParser:
                     help="write into a folder that holds other files, keeping them (an "
                          "earlier reproduction there is replaced even without --force)")
     rp.set_defaults(func=_cmd_reproduce)
+
+    c = sub.add_parser("collisions", help="run a file with a collision scene with collision "
+                       "avoidance, without it and with the fixed grasp; draw the clearances "
+                       "and the grasp travel")
+    c.add_argument("config", type=Path, help="experiment YAML file with a collision scene "
+                   "(obstacles, an object shape)")
+    c.add_argument("--out", help="output folder (default runs/<name>/collisions)")
+    c.add_argument("--no-plots", action="store_true",
+                   help="skip each run's own PNG plots and report.html (collisions.png is "
+                        "always drawn)")
+    c.add_argument("--animate", action="store_true",
+                   help="also write each run's animation.html")
+    c.add_argument("--quiet", action="store_true", help="no progress bar")
+    c.add_argument("--force", action="store_true",
+                   help="write into a folder that holds other files, keeping them (an "
+                        "earlier comparison there is replaced even without --force)")
+    c.set_defaults(func=_cmd_collisions)
 
     b = sub.add_parser("bench", help="run every config with every solver, compare them")
     b.add_argument("configs", nargs="*", type=Path, metavar="CONFIG",
