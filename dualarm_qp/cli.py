@@ -87,7 +87,7 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
         print(f"  outputs: {out}")
         return
     print(f"  path completed: {s['path_completed_pct']:.1f}%; time lost to scaling: "
-          f"{s['time_lost_to_scaling_s']:.3g} s")
+          f"{s['time_lost_to_scaling_s'] + 0.0:.3g} s")
     print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "
           f"{s['leader_rot_err_max_rad']:.3g} rad; closure error max: "
           f"{s['closure_pos_err_max_m']:.3g} m, {s['closure_rot_err_max_rad']:.3g} rad")
@@ -95,6 +95,8 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
               if s["hard_limits"] else "limits not enforced by this solver")
     print(f"  realised motion, worst share of each limit, above 1 is outside ({limits}):")
     for part, r in s["realised_limits"].items():
+        if part == "clearance":  # a distance, not a share of a limit: its own line below
+            continue
         start = r["range_ratio_start"]
         started = (f"; started outside, at {start:.3g}"
                    if start is not None and start > 1.0 else "")
@@ -106,6 +108,13 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
                       else f", acceleration {accel:.3g} ({r['worst_acceleration']})")
         print(f"    {part:<12} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
               f"speed {speed_text}{accel_text}")
+    clear = s["realised_limits"].get("clearance")
+    if clear is not None and clear.get("min_m") is not None:
+        kept = ("kept" if clear["kept"] else "NOT kept") if clear["enforced"] else (
+            "measured only, collision avoidance off")
+        print(f"  clearance: smallest {clear['min_m'] * 1e3:.1f} mm ({clear['pair']}, sample "
+              f"{clear['sample']}); safety distance {clear['safety_distance_m'] * 1e3:.1f} mm, "
+              f"{kept}")
     lead = s.get("grasp_leader_start_m")
     lead_text = (f" (leader's {lead * 1e3:.1f} -> {s['grasp_leader_end_m'] * 1e3:.1f} mm)"
                  if isinstance(lead, float) and lead == lead else "")
