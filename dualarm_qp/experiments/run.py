@@ -27,7 +27,8 @@ from .setup import Experiment
 
 #: The files a run owns in its output folder (``summary.json`` lists the others written).
 OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
-                "tracking.png", "closure.png", "report.html", "config.yaml", "animation.html")
+                "tracking.png", "closure.png", "clearance.png", "report.html", "config.yaml",
+                "animation.html")
 
 #: What ``summary.json``'s ``status`` says.
 STATUSES = ("completed", "failed", "interrupted")
