@@ -24,6 +24,7 @@ from importlib import import_module as _import_module
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 from typing import Any as _Any
 
+from .collision import CollisionScene, CollisionSettings
 from .errors import (
     ConfigError,
     DualArmError,
@@ -39,7 +40,6 @@ from .errors import (
     SolverNotFoundError,
     SupportLostError,
 )
-from .collision import CollisionScene, CollisionSettings
 from .geometry import Box, Capsule, sphere
 from .kinematics import (
     DHTable,

@@ -29,7 +29,7 @@ def _scene(**kw):
 def test_pairs_have_their_groups_and_names():
     bar = Box([0.04, 0.04, 0.7], pose([0, 0, 0.35]))
     pillar = Capsule([0.45, 1.23, -0.6], [0.45, 1.23, 0.6], 0.05)
-    scene, leader, follower = _scene(object_shape=bar, obstacles=[("pillar", pillar)])
+    scene, _, _ = _scene(object_shape=bar, obstacles=[("pillar", pillar)])
     # 6 capsules per PUMA (the column below the shoulder has none): 36 arm-arm pairs,
     # 12 link-object pairs, 13 obstacle pairs (12 links and the object); no self pairs
     # for six joints.
@@ -69,7 +69,7 @@ def test_exclusions_by_name_grasp_clearance_and_start_overlap():
 
 
 def test_a_bad_exclude_name_lists_the_bodies():
-    with pytest.raises(InvalidInputError, match="no body of the scene.*leader.link1"):
+    with pytest.raises(InvalidInputError, match=r"no body of the scene.*leader\.link1"):
         _scene(exclude=[("leader.link9", "object")])
 
 
