@@ -39,6 +39,8 @@ from .errors import (
     SolverNotFoundError,
     SupportLostError,
 )
+from .collision import CollisionScene, CollisionSettings
+from .geometry import Box, Capsule, sphere
 from .kinematics import (
     DHTable,
     RobotModelError,
@@ -112,6 +114,12 @@ __all__ = [
     "urdf_arm",
     # poses
     "pose",
+    # collision geometry
+    "Box",
+    "Capsule",
+    "CollisionScene",
+    "CollisionSettings",
+    "sphere",
     # task
     "CurvedBar",
     "CylinderSurface",
