@@ -64,7 +64,7 @@ def _fast(variant: str, solver: str) -> bool:
     policy with ``nullspace``; the other cases take 1-5 s each and are marked slow."""
     return (variant in QUICK or (variant == "puma_beam_limits" and solver in EXACT)
             or (variant.startswith("puma_beam_tight_limits_") and solver == "nullspace")
-            or (variant in ("puma_beam_ball_off", "puma_beam_pillar") and solver == "nullspace"))
+            or (variant == "puma_beam_ball_off" and solver == "nullspace"))
 
 assert HARD_SOLVERS, "no hard-limit solver available"
 
