@@ -14,7 +14,12 @@ One run measures, side by side (median and p99 of wall-clock time per call):
    and on ``configs/both_sliding_bar.yaml`` (UR5 pair, both grasps sliding).
 4. **In-process rollout rate** of ``configs/puma_beam_limits.yaml``: samples per second
    of wall time of ``rollout`` (target: 20,000 steps/s or more).
-5. **pink on the same work**: the PUMA pair's step posed to pink on one Pinocchio model
+5. **The step with collision rows** on the collision configs (``puma_beam_pillar``,
+   ``ur5_pair_collision``, ``panda_pair_shelf``): the pairs of the scene, the rows per
+   step (pairs within the influence distance), the step's median and p99 on the states
+   of one rollout with collision avoidance on, the same states with it off, and the step
+   interleaved against pink's UR5 daqp step.
+6. **pink on the same work**: the PUMA pair's step posed to pink on one Pinocchio model
    (leader, object, the follower's grasp joint, follower), solved by ``solve_ik`` with
    daqp; its velocity is compared with our answer on rollout states, and its time with
    ours (target: pink-on-the-same-work at least 2x our step).
@@ -32,6 +37,7 @@ shared: medians are reported, with the load average before and after the run.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import sys
@@ -57,6 +63,9 @@ ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = ROOT / "configs"
 
 #: Project targets (stated in the model-layer issue); printed, never asserted.
+#: The configs whose step is timed with collision rows (section 5), when present.
+COLLISION_CONFIGS = ("puma_beam_pillar", "ur5_pair_collision", "panda_pair_shelf")
+
 TARGET_STEP_VS_PINK_UR5 = 0.5  # our step median / pink's UR5 daqp step median, at most
 TARGET_ROLLOUT_STEPS_PER_S = 20_000.0  # in-process rollout rate, at least
 TARGET_PINK_SAME_VS_OURS = 2.0  # pink-on-the-same-work median / our step median, at least
@@ -199,6 +208,50 @@ def rollout_rate(exp: Experiment, repeats: int) -> dict[str, Any]:
             "steps_per_s": [float(r) for r in rates],
             "steps_per_s_median": float(np.median(rates)),
             "steps_per_s_best": float(np.max(rates))}
+
+
+def collision_step(name: str, samples: int, pink_step: Callable[[int], Any] | None
+                   ) -> dict[str, Any] | None:
+    """The step with collision rows on ``name``'s rollout states, and without them.
+
+    Returns None when the config is missing.
+    """
+    path = CONFIGS / f"{name}.yaml"
+    if not path.exists():
+        return None
+    exp = experiment(name)
+    scene = exp.task.scene
+    if scene is None or not scene.settings.enabled:
+        return None
+    states, info = record_states(exp)
+    rows: list[int] = []
+    ctrl = exp.controller(on_step=lambda out: rows.append(sum(
+        1 for r in out.build.problem.row_names if r.startswith("clearance "))))
+    for state, scale_max in states:
+        ctrl.step(state, scale_max=scale_max)
+    with_rows = time_controller(exp, states, samples)
+    off = dataclasses.replace(exp, task=dataclasses.replace(exp.task, scene=None))
+    without = time_controller(off, states, samples)
+    res: dict[str, Any] = {
+        "pairs": len(scene.pairs), "states": len(states),
+        "rows per step, median": float(np.median(rows)) if rows else 0.0,
+        "rows per step, max": int(max(rows, default=0)),
+        "step with collision rows": with_rows["step"],
+        "  kinematics": with_rows["kinematics"], "  assembly": with_rows["assembly"],
+        "  solve": with_rows["solve"],
+        "step without them (same states)": without["step"],
+        "rollout": info,
+    }
+    if pink_step is not None:
+        ctrl2 = exp.controller()
+
+        def ours(i: int) -> None:
+            state, scale_max = states[i % len(states)]
+            ctrl2.step(state, scale_max=scale_max)
+
+        res["interleaved / pink ur5 daqp step"] = interleaved(ours, pink_step,
+                                                              min(samples, 1000))
+    return res
 
 
 # --------------------------------------------------------------------------------------
@@ -582,7 +635,15 @@ def main(argv: list[str] | None = None) -> int:
     rate = rollout_rate(exps["puma_beam_limits"], args.rollouts)
     out["rollout_rate_puma_beam_limits"] = rate
 
-    # 5. pink on the same work.
+    # 5. The step with collision rows.
+    collisions: dict[str, Any] = {}
+    for name in COLLISION_CONFIGS:
+        res = collision_step(name, n, ref.get("_daqp_step"))
+        if res is not None:
+            collisions[name] = res
+    out["collision_step"] = collisions
+
+    # 6. pink on the same work.
     same: dict[str, Any] = {}
     if pink is not None:
         pink_same_work(exps["puma_beam_limits"], states_of["puma_beam_limits"], n,
@@ -592,7 +653,7 @@ def main(argv: list[str] | None = None) -> int:
             ours["puma_beam_limits"]["step"])
     out["pink_same_work_puma_beam_limits"] = same
 
-    # 6. The two ratios again, timed interleaved (call by call), so that both sides see
+    # 7. The two ratios again, timed interleaved (call by call), so that both sides see
     # the same machine state: pink's UR5 step against our PUMA step, and pink on the
     # same work against our step, on the same recorded states.
     paired: dict[str, Any] = {}
@@ -647,14 +708,25 @@ def main(argv: list[str] | None = None) -> int:
           f"({rate['samples_per_rollout']} samples, {rate['repeats']} rollouts)")
     print(f"  steps/s median {rate['steps_per_s_median']:,.0f}, best "
           f"{rate['steps_per_s_best']:,.0f} (target at least {TARGET_ROLLOUT_STEPS_PER_S:,.0f})")
+    for name, res in collisions.items():
+        rows = {k: v for k, v in res.items() if isinstance(v, dict) and "median_us" in v}
+        print_section(f"5. our step with collision rows, {name} ({res['pairs']} pairs, "
+                      f"{res['states']} rollout states; rows per step: median "
+                      f"{res['rows per step, median']:g}, max {res['rows per step, max']})",
+                      rows)
+        inter = res.get("interleaved / pink ur5 daqp step")
+        if inter is not None:
+            print(f"  interleaved with pink's UR5 daqp step: {inter['ratio_median']:.2f}x "
+                  f"(medians {inter['a']['median_us']:.1f} us and "
+                  f"{inter['b']['median_us']:.1f} us)")
     if same:
-        print_section("5. pink on the same work, puma_beam_limits (daqp)", same)
+        print_section("6. pink on the same work, puma_beam_limits (daqp)", same)
         print(f"  our step {fmt(ours['puma_beam_limits']['step'])}")
         print(f"  ratio pink same work / our step: "
               f"{same['ratio pink same work / our step']:.2f}x (target at least "
               f"{TARGET_PINK_SAME_VS_OURS}x)")
     if paired:
-        print("\n== 6. the ratios timed interleaved (call by call, the same machine state)")
+        print("\n== 7. the ratios timed interleaved (call by call, the same machine state)")
         for k, v in paired.items():
             print(f"  {k:<34} {v['ratio_median']:.2f}x   (medians {v['a']['median_us']:.1f} "
                   f"us and {v['b']['median_us']:.1f} us)")

@@ -24,6 +24,7 @@ from importlib import import_module as _import_module
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 from typing import Any as _Any
 
+from .collision import CollisionScene, CollisionSettings
 from .errors import (
     ConfigError,
     DualArmError,
@@ -39,6 +40,7 @@ from .errors import (
     SolverNotFoundError,
     SupportLostError,
 )
+from .geometry import Box, Capsule, sphere
 from .kinematics import (
     DHTable,
     RobotModelError,
@@ -112,6 +114,12 @@ __all__ = [
     "urdf_arm",
     # poses
     "pose",
+    # collision geometry
+    "Box",
+    "Capsule",
+    "CollisionScene",
+    "CollisionSettings",
+    "sphere",
     # task
     "CurvedBar",
     "CylinderSurface",

@@ -76,6 +76,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _clearance_line(r: dict[str, Any]) -> str:
+    """Return the console line of ``realised_limits.clearance`` (the smallest distance)."""
+    d = r["min_m"]
+    smallest = ("no pair" if d is None
+                else f"{d * 1e3:.1f} mm ({r['pair']}, sample {r['sample']})")
+    rule = (f"safety distance {r['safety_distance_m'] * 1e3:.3g} mm "
+            f"{'kept' if r['kept'] else 'NOT KEPT'} (allowance {r['allowance_m'] * 1e3:.3g} mm)"
+            if r["enforced"] else "measured only (collision avoidance off)")
+    return (f"    {'clearance':<12} smallest {smallest}; {rule}"
+            + ("; PENETRATION" if r["penetration"] else ""))
+
+
 def print_run_summary(s: dict[str, Any], out: str) -> None:
     """Print the console summary of one run (from its summary.json content)."""
     status = s.get("status", "completed" if s["completed"] else "failed")
@@ -87,7 +99,7 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
         print(f"  outputs: {out}")
         return
     print(f"  path completed: {s['path_completed_pct']:.1f}%; time lost to scaling: "
-          f"{s['time_lost_to_scaling_s']:.3g} s")
+          f"{s['time_lost_to_scaling_s'] + 0.0:.3g} s")
     print(f"  leader tracking error max: {s['leader_pos_err_max_m']:.3g} m, "
           f"{s['leader_rot_err_max_rad']:.3g} rad; closure error max: "
           f"{s['closure_pos_err_max_m']:.3g} m, {s['closure_rot_err_max_rad']:.3g} rad")
@@ -95,7 +107,8 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
               if s["hard_limits"] else "limits not enforced by this solver")
     print(f"  realised motion, worst share of each limit, above 1 is outside ({limits}):")
     for part, r in s["realised_limits"].items():
-        if part == "clearance":  # a collision scene: printed below
+        if part == "clearance":  # a distance, not a share of a limit
+            print(_clearance_line(r))
             continue
         start = r["range_ratio_start"]
         started = (f"; started outside, at {start:.3g}"
@@ -108,13 +121,6 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
                       else f", acceleration {accel:.3g} ({r['worst_acceleration']})")
         print(f"    {part:<12} range {r['range_ratio_max']:.3g} ({r['worst_range']}{started}), "
               f"speed {speed_text}{accel_text}")
-    clearance = s["realised_limits"].get("clearance")
-    if clearance is not None and clearance["min_m"] is not None:
-        verdict = ("penetration" if clearance["penetration"] else
-                   "kept" if clearance["kept"] else "below the safety distance")
-        print(f"  clearance: nearest {clearance['min_m'] * 1e3:.1f} mm ({clearance['pair']}), "
-              f"safety distance {clearance['safety_distance_m'] * 1e3:.0f} mm"
-              f"{'' if clearance['enforced'] else ' (not enforced in this run)'}: {verdict}")
     lead = s.get("grasp_leader_start_m")
     lead_text = (f" (leader's {lead * 1e3:.1f} -> {s['grasp_leader_end_m'] * 1e3:.1f} mm)"
                  if isinstance(lead, float) and lead == lead else "")

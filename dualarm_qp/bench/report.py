@@ -38,6 +38,7 @@ COLUMNS: tuple[str, ...] = (
     "objective_gap_steps",
     "replay_success_rate", "replay_solve_time_median_s", "bare_solve_time_median_s",
     "solve_over_bare", "timed_samples", "wall_time_s", "key", "message", "error",
+    "not_applicable",
 )
 
 
@@ -178,11 +179,18 @@ def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> s
     """Format the rows as a text table (or a Markdown table); times in microseconds.
 
     A job that raised an error shows ``ERROR`` in place of its numbers; every failed
-    job (:func:`~.runner.job_failure`) is listed with its reason under the table.
+    job (:func:`~.runner.job_failure`) is listed with its reason under the table. A job
+    whose solver cannot take the file's limits shows ``n/a`` and is listed as not run.
     """
     cells = [[h for h, _, _ in TABLE]]
     failed = []
+    skipped = []
     for r in rows:
+        if r.get("not_applicable"):
+            skipped.append(f"{r.get('experiment')} / {r.get('solver')}: {r['not_applicable']}")
+            cells.append([str(r.get("experiment")), str(r.get("solver")), "n/a"]
+                         + [""] * (len(TABLE) - 3))
+            continue
         reason = job_failure(r)
         if reason is not None:
             failed.append(f"{r.get('experiment')} / {r.get('solver')}: {reason}")
@@ -192,8 +200,11 @@ def format_table(rows: Sequence[dict[str, Any]], *, markdown: bool = False) -> s
             continue
         cells.append([_fmt(r.get(col), kind) for _, col, kind in TABLE])
     text = render_table(cells, markdown=markdown, left_columns=2)
+    sep = "\n\n" if markdown else "\n"
+    if skipped:
+        text += sep + "\n".join(["Not applicable (not run):",
+                                 *(f"- {f}" if markdown else f"  {f}" for f in skipped)])
     if failed:
-        sep = "\n\n" if markdown else "\n"
         text += sep + "\n".join(["Failed jobs:", *(f"- {f}" if markdown else f"  {f}"
                                                       for f in failed)])
     return text

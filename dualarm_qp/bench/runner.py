@@ -61,7 +61,7 @@ from .._signals import (
 )
 from ..control.controller import ControlOutput, DualArmController
 from ..control.rollout import rollout
-from ..errors import DualArmError, InvalidInputError
+from ..errors import DualArmError, InvalidInputError, PairingError
 from ..experiments.config import load_config
 from ..experiments.options import options_for
 from ..experiments.setup import Experiment, build_experiment
@@ -229,8 +229,12 @@ def job_failure(rec: dict[str, Any]) -> str | None:
 
     A job whose run stopped early after some usable steps has not failed: its success
     rate measures the solver. One that raised a library error (``"error"``), or whose
-    run produced no usable step (nothing to time or compare), has.
+    run produced no usable step (nothing to time or compare), has. A job whose solver
+    cannot take the file's limits (``"not_applicable"``: a limit that gives rows with a
+    solver that takes boxes only) has not failed either: it was not run.
     """
+    if rec.get("not_applicable"):
+        return None
     if rec.get("error"):
         return str(rec["error"])
     if not rec.get("steps_run") or not rec.get("success_rate"):
@@ -598,6 +602,9 @@ def run_bench(
                 if settings.replay and cfg.path not in canonical:
                     canonical[cfg.path] = canonical_steps(cfg, settings)
                 rec = job_fn(cfg, solver, settings, canonical.get(cfg.path))
+            except PairingError as err:  # the file's limits are not this solver's kind
+                rec = {"config": cfg.path, "experiment": cfg.name, "solver": solver,
+                       "not_applicable": str(err)}
             except DualArmError as err:
                 rec = {"config": cfg.path, "experiment": cfg.name, "solver": solver,
                        "error": f"{type(err).__name__}: {err}"}
@@ -667,6 +674,8 @@ def run_bench(
 
 
 def _line(rec: dict[str, Any]) -> str:
+    if rec.get("not_applicable"):
+        return f"{rec['experiment']} / {rec['solver']}: not applicable: {rec['not_applicable']}"
     reason = job_failure(rec)
     if reason is not None:
         return f"{rec['experiment']} / {rec['solver']}: FAILED: {reason}"

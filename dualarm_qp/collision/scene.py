@@ -17,8 +17,9 @@ Pairs (:meth:`CollisionScene.build`):
 * ``obstacle``: the arms' links and the object against every obstacle;
 * ``self``: an arm with more than six joints against itself, links at least
   :data:`SELF_GAP` joints apart;
-* minus the pairs excluded by name, and the pairs that overlap at the start (which no
-  limit could separate; they are reported as excluded, with that reason).
+* minus the pairs excluded by name, the pairs of two bodies no joint moves (an arm's
+  base and an obstacle: their distance never changes), and the pairs that overlap at the
+  start (which no limit could separate); each is reported as excluded, with its reason.
 
 Every body's pose is read from one stack of frames (:meth:`CollisionScene.frames`):
 the leader's link frames, the follower's, the object frame and the world. Distances
@@ -335,6 +336,8 @@ class CollisionScene:
                 pair = Pair(i, j, group, f"{a.name} - {b.name}")
                 if frozenset((a.name, b.name)) in banned:
                     excluded.append((pair.name, "excluded in the set-up"))
+                elif _fixed(a) and _fixed(b):
+                    excluded.append((pair.name, "neither body moves"))
                 else:
                     kept.append(pair)
         scene = cls(bodies, kept, settings, (leader.n + 1, follower.n + 1), excluded)
@@ -396,6 +399,11 @@ def _group(a: Body, b: Body, n_l: int, n_f: int) -> str | None:
         if n > 6 and abs(a.link - b.link) >= SELF_GAP:
             return "self"
     return None
+
+
+def _fixed(body: Body) -> bool:
+    """Whether no joint moves ``body`` (an obstacle, or an arm's base)."""
+    return body.owner == "world" or (body.owner in ("leader", "follower") and body.link == 0)
 
 
 def _bounding_capsule(shape: Capsule | Box) -> tuple[FloatArray, FloatArray, float]:

@@ -9,6 +9,7 @@ posed at full path speed:
   the scale policy slows the path to keep them, and the path cannot be done in time
   or the limits leave too little to correct the errors;
 * **range**: the ranges (within one sample) cut the task scale further;
+* **collision**: collision pairs at their safety distance cut it (named);
 * **workspace edge**: an arm's Jacobian (nearly) loses rank, so the path asks for a
   motion the arm cannot make (its smallest singular value is named);
 * **tolerance**: none of the above: one step of ``dt`` at these speeds leaves an error
@@ -27,6 +28,7 @@ from numpy.typing import NDArray
 from ..solvers._affine import affine_solutions
 from ..solvers._scale import max_task_scale
 from ..step.build import StepBuilder
+from ..step.limits.collision import ROW_PREFIX
 from ..step.state import DualArmState
 
 FloatArray = NDArray[np.float64]
@@ -75,8 +77,15 @@ def explain(builder: StepBuilder, state: DualArmState, *,
     whole = max_task_scale(problem, cap=1.0)
     if (whole.scale is not None and whole.scale < SPEED_SHARE
             and (speeds.scale is None or whole.scale < speeds.scale * (1.0 - 1e-9))):
-        causes.append(f"range ends bind ({_names(whole.blocking)}): the path can go at "
-                      f"{whole.scale:.3g} of its speed at most")
+        pairs = tuple(b[len(ROW_PREFIX):] for b in whole.blocking if b.startswith(ROW_PREFIX))
+        others = tuple(b for b in whole.blocking if not b.startswith(ROW_PREFIX))
+        if pairs:
+            causes.append(f"collision pairs bind ({_names(pairs)}): they keep their safety "
+                          f"distance, and the path can go at {whole.scale:.3g} of its speed "
+                          "at most")
+        if others or not pairs:
+            causes.append(f"range ends bind ({_names(others)}): the path can go at "
+                          f"{whole.scale:.3g} of its speed at most")
     edges = [f"workspace edge: the {arm}'s smallest singular value is {sv:.3g} (below "
              f"{WORKSPACE_EDGE:g}: the path asks for a motion it can hardly make)"
              for arm, sv in zip(("leader", "follower"), build.sigma_min, strict=True)

@@ -164,8 +164,9 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     if rows == 0:
         return LimitReport(0.0, 0.0, math.nan, 0.0, "", "", None)
     finite = np.isfinite(lo) & np.isfinite(hi)
-    mid = np.where(finite, 0.5 * (lo + hi), 0.0)
-    half = np.where(finite, 0.5 * (hi - lo), 1.0)
+    with np.errstate(invalid="ignore"):  # -inf + inf where a variable has no range
+        mid = np.where(finite, 0.5 * (lo + hi), 0.0)
+        half = np.where(finite, 0.5 * (hi - lo), 1.0)
     ratio = np.where(finite, np.abs(x - mid) / np.where(half > 0, half, np.inf), 0.0)
     ratio = np.where(finite & (half <= 0) & (x != mid), np.inf, ratio)
     excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)

@@ -225,8 +225,8 @@ def _checks(runs: dict[str, RunOutcome]) -> dict[str, Any]:
 def _draw(out: Path, runs: dict[str, RunOutcome], exps: dict[str, Experiment]) -> None:
     """Draw ``collisions.png`` from the runs."""
     from .figures import Curve, DisplayUnits
+    from .figures.avoidance import avoidance_figure
     from .figures.canvas import save_png
-    from .figures.clearance import clearance_figure
 
     exp = exps["avoiding"]
     scene = exp.task.scene
@@ -248,7 +248,7 @@ def _draw(out: Path, runs: dict[str, RunOutcome], exps: dict[str, Experiment]) -
     note = ("The nearest clearance is the smallest distance of any checked pair at each "
             "sample, measured from the recorded joints.\nWith avoidance on, no pair "
             "approaches faster than allowed inside d_i, and none comes nearer than d_s.")
-    fig = clearance_figure(
+    fig = avoidance_figure(
         clearances, grasps, safety_distance=scene.settings.safety_distance,
         influence_distance=scene.settings.influence_distance,
         grasp_range=(surface.sigma_min, surface.sigma_max), scale=units.per_m,

@@ -100,6 +100,8 @@ CRITERION_TEXT = {
     "range": "the realised motion left a range",
     "speed": "the realised motion broke a speed limit",
     "interrupted": "the run was interrupted",
+    "collision": "a pair of bodies blocked the task or came closer than the safety distance",
+    "path_collision": "the path D(t) carries the object into an obstacle",
 }
 
 #: What each figure of a run shows (its caption in the report).
@@ -112,11 +114,19 @@ FIGURE_CAPTIONS = {
                     "singular values, and the task scale (below 1: the limits slowed "
                     "the path).",
     "closure.png": "Grasp closure error (Eq. 15) against its tolerance.",
+    "clearance.png": "Smallest distance of each group of pairs against the safety distance "
+                     "d_s (dashed; with collision avoidance on, the run fails below d_s "
+                     "less the allowance, dotted) and the influence distance d_i (pairs "
+                     "closer get a row in the step); the smallest is marked with its pair.",
 }
 
 #: The limit groups of ``realised_limits``, in the order shown, with their names.
 _PARTS = {"leader": "leader arm", "follower": "follower arm", "grasp": "follower grasp",
           "grasp_leader": "leader grasp"}
+
+#: The entries of ``realised_limits`` that are no range and speed of a variable (shown
+#: on their own).
+_NOT_RANGES = ("clearance",)
 
 
 def _figure(path: Path) -> str:
@@ -212,7 +222,8 @@ def limits_table(summary: dict[str, Any]) -> str:
     head = ("<tr><th></th><th colspan=\"2\">range</th><th colspan=\"2\">speed</th></tr>"
             "<tr><th></th><th>worst</th><th>where</th><th>worst</th><th>where</th></tr>")
     rows = []
-    for part, r in sorted(realised.items(), key=lambda kv: list(_PARTS).index(kv[0])
+    ranged = {k: v for k, v in realised.items() if k not in _NOT_RANGES}
+    for part, r in sorted(ranged.items(), key=lambda kv: list(_PARTS).index(kv[0])
                           if kv[0] in _PARTS else len(_PARTS)):
         start = r.get("range_ratio_start")
         started = (f"; started outside, at {100.0 * start:.3g}%"
@@ -231,6 +242,32 @@ def limits_table(summary: dict[str, Any]) -> str:
                "This solver does not enforce the limits: shares above 100% are expected."))
     return (f'<table class="limits">{head}{"".join(rows)}</table>'
             f'<p class="note">{html.escape(note)}</p>')
+
+
+def _mm(value: Any) -> str:
+    """Return a length [m] in millimetres for a person (``n/a`` when missing)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or value != value:
+        return "n/a"
+    return f"{value * 1e3:.4g} mm"
+
+
+def clearance_text(summary: dict[str, Any]) -> str | None:
+    """Return the run's smallest clearance against the safety distance (plain text).
+
+    None when the run had no collision scene (no ``realised_limits.clearance``).
+    """
+    c = (summary.get("realised_limits") or {}).get("clearance")
+    if not isinstance(c, dict):
+        return None
+    if c.get("min_m") is None:
+        return "no pair measured"
+    ds, allowance = c.get("safety_distance_m"), c.get("allowance_m")
+    verdict = ("kept" if c.get("kept") else "NOT kept") + (
+        " (the step kept it)" if c.get("enforced") else
+        " (collision avoidance off: measured only)")
+    return (f"{_mm(c.get('min_m'))}, {c.get('pair', '')} (sample {c.get('sample')}); safety "
+            f"distance {_mm(ds)}, allowance {_mm(allowance)}: {verdict}"
+            + ("; the shapes overlap" if c.get("penetration") else ""))
 
 
 def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]) -> str:
@@ -260,6 +297,10 @@ def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]
              f"{html.escape(status)}</span></h1>", verdict(summary), glance(summary)]
     if summary.get("realised_limits"):
         parts += ["<h2>Limits: the worst realised share of each</h2>", limits_table(summary)]
+    clearance = clearance_text(summary)
+    if clearance is not None:
+        parts += ['<h2>Clearance: the smallest distance between bodies</h2>',
+                  f'<p id="clearance">{html.escape(clearance)}</p>']
     if summary.get("warnings"):
         parts += ["<h2>Warnings</h2>", "<ul>" + "".join(
             f"<li>{html.escape(str(w))}</li>" for w in summary["warnings"]) + "</ul>"]

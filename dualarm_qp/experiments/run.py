@@ -27,7 +27,8 @@ from .setup import Experiment
 
 #: The files a run owns in its output folder (``summary.json`` lists the others written).
 OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
-                "tracking.png", "closure.png", "report.html", "config.yaml", "animation.html")
+                "tracking.png", "closure.png", "clearance.png", "report.html", "config.yaml",
+                "animation.html")
 
 #: What ``summary.json``'s ``status`` says.
 STATUSES = ("completed", "failed", "interrupted")
@@ -288,7 +289,8 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     The earlier run's files go first (:func:`remove_run_outputs`), then
     ``trajectory.csv``, the plots and ``report.html`` are written, each atomically, and
     ``summary.json``
-    comes last, its ``outputs`` listing exactly the other files written. Call it
+    comes last, its ``outputs`` listing exactly the other files written. An error on the
+    way removes what this call wrote (no set without its summary is left). Call it
     inside a :class:`~dualarm_qp._signals.SignalHold` for an all-or-nothing set.
 
     Returns
@@ -298,6 +300,16 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     """
     out.mkdir(parents=True, exist_ok=True)
     remove_run_outputs(out)
+    try:
+        return _write_outputs(out, exp, result, summary, plots=plots, animate=animate)
+    except BaseException:
+        remove_run_outputs(out)  # a set without its summary is no run: leave none
+        raise
+
+
+def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
+                   *, plots: bool, animate: bool) -> list[str]:
+    """Write the files of :func:`write_outputs`, ``summary.json`` last."""
     write_trace_csv(out / "trajectory.csv", result.trace)
     written = ["trajectory.csv"]
     if write_resolved_config(out / "config.yaml", exp.path):

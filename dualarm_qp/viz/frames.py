@@ -5,6 +5,8 @@ A run's ``trajectory.csv`` is read by column name (``t``, ``path_t``, ``ql1..``,
 work. For each sample the world pose of every node of :mod:`.scene` (arm frames, tool,
 object) is computed with the arms' own forward kinematics and packed as float32
 ``[x, y, z, qx, qy, qz, qw]`` (metres, unit quaternion), base64-encoded for the page.
+With a collision scene, each sample also gets its nearest pair closer than the influence
+distance (:mod:`.collision`), measured here rather than in the browser.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from numpy.typing import NDArray
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..task.scene import DualArmTask
+from .collision import NearestPair, nearest_pair
 from .scene import arm_node_poses
 
 FloatArray = NDArray[np.float64]
@@ -154,18 +157,24 @@ def sample_nodes(task: DualArmTask, q_l: Any, q_f: Any, grasp: float,
     """Return the node poses and limit states of one sample (see :func:`frame_payload`).
 
     ``grasp_leader`` [m] places the object when the leader's grasp slides
-    (``task.leader_surface``); it is ignored otherwise.
+    (``task.leader_surface``); it is ignored otherwise. With a collision scene
+    (``task.scene``), ``nearest`` is the nearest pair closer than the influence
+    distance, or None (:func:`~dualarm_qp.viz.collision.nearest_pair`).
     """
     q_l = np.asarray(q_l, dtype=float)
     q_f = np.asarray(q_f, dtype=float)
-    arms = [[pose7(T) for T in arm_node_poses(arm, q)]
-            for arm, q in ((task.leader, q_l), (task.follower, q_f))]
+    poses = [arm_node_poses(arm, q) for arm, q in ((task.leader, q_l), (task.follower, q_f))]
     T_obj = task.object_pose(q_l, float(grasp_leader))
-    return {"arms": arms,
-            "limits": [limit_states(task.leader, q_l).tolist(),
-                       limit_states(task.follower, q_f).tolist()],
-            "object": pose7(T_obj),
-            "grasp_local": [float(x) for x in task.surface.point(float(grasp))]}
+    out: dict[str, Any] = {
+        "arms": [[pose7(T) for T in nodes] for nodes in poses],
+        "limits": [limit_states(task.leader, q_l).tolist(),
+                   limit_states(task.follower, q_f).tolist()],
+        "object": pose7(T_obj),
+        "grasp_local": [float(x) for x in task.surface.point(float(grasp))]}
+    if task.scene is not None:  # the arms' link frames are their nodes but the tool
+        frames = task.scene.frames(poses[0][:-1], poses[1][:-1], T_obj)
+        out["nearest"] = nearest_pair(task.scene, frames)
+    return out
 
 
 def _b64(a: NDArray[Any]) -> str:
@@ -189,7 +198,12 @@ def frame_payload(task: DualArmTask, timeline: Timeline) -> dict[str, Any]:
         into ``status_names``), ``nodes`` (base64 float32, per sample the 7 numbers of
         each leader node, then each follower node, then the object), ``limits`` (base64
         uint8, per sample each leader joint then each follower joint), ``grasp_local``
-        (base64 float32, the grasp point in object coordinates [m]).
+        (base64 float32, the grasp point in object coordinates [m]). With a collision
+        scene (``task.scene``), the nearest pair closer than the influence distance
+        (:func:`~dualarm_qp.viz.collision.nearest_pair`): ``near_pair`` (its index in
+        the scene's pairs, -1 when no pair is that close), ``near_distance`` [m] (None
+        when none) and ``near_points`` (base64 float32, per sample its witness points
+        on the first and the second body [m], NaN when none).
     """
     n_l, n_f = task.leader.n, task.follower.n
     if timeline.q_l.shape[1] != n_l or timeline.q_f.shape[1] != n_f:
@@ -198,6 +212,7 @@ def frame_payload(task: DualArmTask, timeline: Timeline) -> dict[str, Any]:
             f"{timeline.q_f.shape[1]} follower joints, the task's arms {n_l} and {n_f}")
     keep = thin(len(timeline))
     nodes, limits, local = [], [], []
+    nearest: list[NearestPair | None] = []
     lead = timeline.grasp_leader
     for k in keep:
         s = sample_nodes(task, timeline.q_l[k], timeline.q_f[k], timeline.grasp[k],
@@ -205,11 +220,13 @@ def frame_payload(task: DualArmTask, timeline: Timeline) -> dict[str, Any]:
         nodes.append([v for arm in s["arms"] for pose in arm for v in pose] + s["object"])
         limits.append(s["limits"][0] + s["limits"][1])
         local.append(s["grasp_local"])
+        nearest.append(s.get("nearest"))
     names = sorted(set(timeline.status))
     scale = None
     if timeline.scale is not None:
         scale = [round(float(x), 6) if math.isfinite(x) else None
                  for x in timeline.scale[keep]]
+    near = nearest_payload(nearest) if task.scene is not None else {}
     return {
         "t": [round(float(x), 6) for x in timeline.t[keep]],
         "path_t": [round(float(x), 6) for x in timeline.path_t[keep]],
@@ -220,4 +237,16 @@ def frame_payload(task: DualArmTask, timeline: Timeline) -> dict[str, Any]:
         "nodes": _b64(np.array(nodes, dtype="<f4")),
         "limits": _b64(np.array(limits, dtype=np.uint8)),
         "grasp_local": _b64(np.array(local, dtype="<f4")),
+        **near,
     }
+
+
+def nearest_payload(nearest: list[NearestPair | None]) -> dict[str, Any]:
+    """Return the nearest pair of each sample, JSON-ready (see :func:`frame_payload`)."""
+    points = np.full((len(nearest), 6), np.nan)
+    for k, n in enumerate(nearest):
+        if n is not None:
+            points[k] = np.concatenate([n.point_a, n.point_b])
+    return {"near_pair": [-1 if n is None else n.pair for n in nearest],
+            "near_distance": [None if n is None else round(n.distance, 7) for n in nearest],
+            "near_points": _b64(points.astype("<f4"))}

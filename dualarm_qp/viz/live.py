@@ -155,7 +155,8 @@ class LiveView:
                             "scale": [None if scale is None else float(scale)],
                             "status": [str(status)], "nodes": nodes,
                             "limits": s["limits"][0] + s["limits"][1],
-                            "grasp_local": s["grasp_local"]}, separators=(",", ":"))
+                            "grasp_local": s["grasp_local"], **_nearest_event(s)},
+                           separators=(",", ":"))
         with self._cond:
             self._samples.append(event)
             self._cond.notify_all()
@@ -216,3 +217,14 @@ class LiveView:
 def open_live_view(task: DualArmTask, **options: Any) -> LiveView:
     """Open a :class:`LiveView` of ``task`` (the same keywords); close it when done."""
     return LiveView(task, **options)
+
+
+def _nearest_event(sample: dict[str, Any]) -> dict[str, Any]:
+    """Return the nearest pair of a sample as event fields (none without a collision scene)."""
+    if "nearest" not in sample:
+        return {}
+    n = sample["nearest"]
+    if n is None:
+        return {"near_pair": [-1], "near_distance": [None], "near": [None]}
+    return {"near_pair": [n.pair], "near_distance": [n.distance],
+            "near": [[*map(float, n.point_a), *map(float, n.point_b)]]}

@@ -5,7 +5,8 @@ The page inlines MeshCat's viewer bundle (three.js with orbit controls, shipped 
 and samples as JSON. A Content-Security-Policy forbids every request but the live
 view's own event stream, so an animation cannot reach out even by accident. An early
 script records uncaught errors, ``console.error`` calls and blocked requests; the
-page writes them, the number of requests made and the arms' box on screen into
+page writes them, the number of requests made, the arms' box on screen and what it
+shows of a collision scene (obstacles, collision shapes, the nearest pair) into
 ``#dualarm-status`` (read by the browser test).
 """
 
@@ -55,6 +56,11 @@ html, body { margin: 0; height: 100%; overflow: hidden; font: 13px/1.35 system-u
 .legend i.axis { width: 4px; height: 12px; vertical-align: -1px; }
 .dg { display: none !important; }
 #dualarm-errors { display: none; }
+body.collision #view { bottom: 118px; } body.collision #panel { height: 118px; }
+#collision-row[hidden] { display: none; }
+#near-label { position: absolute; pointer-events: none; padding: 1px 5px; border-radius: 3px;
+              background: rgba(255, 255, 255, 0.85); color: #a0005a; font-weight: 600;
+              white-space: nowrap; transform: translate(8px, -50%); }
 """
 
 _BODY = """
@@ -77,7 +83,14 @@ _BODY = """
   <div class="row" id="readout">t <span id="r-t"></span> s | path t <span id="r-path"></span>
     s | grasp <span id="r-grasp"></span> mm | status <span id="r-status"></span> |
     task scale <span id="r-scale"></span> | <span id="r-limits"></span></div>
+  <div class="row" id="collision-row" hidden>
+    <span class="legend">collision:<i id="legend-obstacle"></i>obstacle<i
+    id="legend-nearest"></i>nearest pair within d_i</span>
+    <label title="The capsules and boxes the collision check measures, of the links and the
+    object"><input type="checkbox" id="shapes"> collision shapes</label>
+    <span>| nearest pair <span id="r-clearance"></span></span></div>
 </div>
+<div id="near-label" hidden></div>
 <div id="dualarm-status" hidden></div>
 <pre id="dualarm-errors"></pre>
 """

@@ -1,7 +1,8 @@
 // dualarm_qp 3D view: builds the scene described in #dualarm-data with the three.js of
 // the inlined MeshCat viewer bundle, then replays the recorded samples (a run's
 // animation) or follows samples streamed from Python (the live view, over /events).
-// Page address options: #t=SECONDS shows that instant, paused.
+// Page address options: #t=SECONDS shows that instant, paused; &shapes=1 (or 0) turns the
+// collision shapes on (or off), as their checkbox does.
 (function () {
   "use strict";
   const report = window.__dualarm;
@@ -11,6 +12,10 @@
   const LIMIT_COLOURS = [null, "#ffb000", "#e00000"];  // near, outside (inside: arm colour)
   const $ = (id) => document.getElementById(id);
 
+  if (SCENE.collision) {  // a fourth row in the panel, before the pane is sized
+    document.body.classList.add("collision");
+    $("collision-row").hidden = false;
+  }
   const viewer = new MeshCat.Viewer($("view"));
   const root = new THREE.Group();
   viewer.scene.add(root);  // MeshCat's scene is z-up, like ours
@@ -51,6 +56,7 @@
   });
   function shape(part, mat) {
     let g;
+    if (part.shape === "capsule") return capsule(part, mat);
     if (part.shape === "mesh") {
       if (!meshes[part.mesh]) return null;
       const obj = fixed(new THREE.Mesh(meshes[part.mesh], mat), part.pose);
@@ -65,6 +71,32 @@
       g = new THREE.BoxGeometry(part.size[0], part.size[1], part.size[2]);
     }
     return fixed(new THREE.Mesh(g, mat), part.pose);
+  }
+
+  // A capsule from its two endpoints (a sphere when they coincide): a group along the
+  // axis, an open cylinder between two half-spheres (no overlap: they may be translucent).
+  function capsule(part, mat) {
+    const a = new THREE.Vector3().fromArray(part.a);
+    const axis = new THREE.Vector3().fromArray(part.b).sub(a);
+    const length = axis.length();
+    const r = part.radius;
+    const group = new THREE.Group();
+    if (length < 1e-9) {
+      group.add(new THREE.Mesh(new THREE.SphereGeometry(r, 20, 14), mat));
+      group.position.copy(a);
+      return group;
+    }
+    group.add(new THREE.Mesh(new THREE.CylinderGeometry(r, r, length, 24, 1, true), mat));
+    [1, -1].forEach((side) => {
+      const cap = new THREE.Mesh(
+        new THREE.SphereGeometry(r, 20, 8, 0, 2 * Math.PI, 0, Math.PI / 2), mat);
+      cap.position.y = side * length / 2;
+      if (side < 0) cap.rotation.x = Math.PI;
+      group.add(cap);
+    });
+    group.position.copy(a).addScaledVector(axis, 0.5);
+    group.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), axis.normalize());
+    return group;
   }
 
   // --- the scene ------------------------------------------------------------------
@@ -115,6 +147,53 @@
     new THREE.SphereGeometry(SCENE.object.grasp_radius || 0.018, 24, 16), graspMaterial);
   graspPoint.renderOrder = 3;
   objectNode.add(graspPoint);
+  // The collision scene: obstacles always, the links' and the object's shapes on a
+  // toggle, the nearest pair within the influence distance (a segment, its label).
+  const COLL = SCENE.collision || null;
+  const obstacles = new THREE.Group();
+  root.add(obstacles);
+  const shapeObjects = [];
+  const shapesBox = $("shapes");
+  const nearest = new THREE.Group();
+  let nearestBar = null;
+  if (COLL) {
+    $("legend-obstacle").style.background = COLL.colours.obstacle;
+    $("legend-nearest").style.background = COLL.colours.nearest;
+    const solid = material(COLL.colours.obstacle);
+    COLL.obstacles.forEach((o) => {
+      const obj = shape(o.part, solid);
+      obj.name = o.name;
+      obstacles.add(obj);
+    });
+    const glass = material(COLL.colours.shape);
+    glass.transparent = true;
+    glass.opacity = COLL.shape_opacity;
+    glass.depthWrite = false;
+    const byOwner = {object: [objectNode]};
+    arms.forEach((arm) => { byOwner[arm.spec.name] = arm.nodes; });
+    COLL.shapes.forEach((s) => {
+      const obj = shape(s.part, glass);
+      obj.visible = false;
+      obj.renderOrder = 1;
+      byOwner[s.owner][s.node].add(obj);
+      shapeObjects.push(obj);
+    });
+    shapesBox.addEventListener("change", () => {
+      shapeObjects.forEach((obj) => { obj.visible = shapesBox.checked; });
+      viewer.set_dirty();
+      afterRender(measure);
+    });
+    const mark = material(COLL.colours.nearest);
+    mark.depthTest = false;  // over whatever hides it, as the grasp ball
+    nearestBar = new THREE.Mesh(
+      new THREE.CylinderGeometry(COLL.nearest_radius, COLL.nearest_radius, 1, 12), mark);
+    nearest.add(nearestBar);
+    [0, 1].forEach(() => nearest.add(
+      new THREE.Mesh(new THREE.SphereGeometry(COLL.witness_radius, 16, 10), mark)));
+    nearest.children.forEach((m) => { m.renderOrder = 4; });
+    nearest.visible = false;
+    root.add(nearest);
+  }
   const pathGeometry = new THREE.BufferGeometry().setFromPoints(
     SCENE.path.map((p) => new THREE.Vector3(p[0], p[1], p[2])));
   root.add(new THREE.Line(pathGeometry, new THREE.LineBasicMaterial(
@@ -122,7 +201,7 @@
 
   // --- the samples ----------------------------------------------------------------
   const F = {t: [], path_t: [], grasp: [], scale: [], status: [], nodes: [], limits: [],
-             local: []};
+             local: [], nearPair: [], nearDistance: [], nearPoints: []};
   const perSample = arms.reduce((s, a) => s + 7 * a.nodes.length, 0) + 7;
   const nJoints = arms.reduce((s, a) => s + a.joints.length, 0);
   function bytes(b64) {
@@ -138,6 +217,8 @@
     const limits = d.limits_b64 !== undefined ? bytes(d.limits_b64) : Uint8Array.from(d.limits);
     const local = d.local_b64 !== undefined
       ? new Float32Array(bytes(d.local_b64).buffer) : Float32Array.from(d.grasp_local);
+    const near = d.near_points !== undefined
+      ? new Float32Array(bytes(d.near_points).buffer) : null;
     for (let k = 0; k < count; k++) {
       F.t.push(d.t[k]);
       F.path_t.push(d.path_t[k]);
@@ -147,6 +228,9 @@
       F.nodes.push(nodes.subarray(k * perSample, (k + 1) * perSample));
       F.limits.push(limits.subarray(k * nJoints, (k + 1) * nJoints));
       F.local.push(local.subarray(k * 3, (k + 1) * 3));
+      F.nearPair.push(d.near_pair ? d.near_pair[k] : -1);
+      F.nearDistance.push(d.near_distance ? d.near_distance[k] : null);
+      F.nearPoints.push(near ? near.subarray(k * 6, (k + 1) * 6) : (d.near ? d.near[k] : null));
     }
   }
   if (DATA.frames) {
@@ -194,11 +278,68 @@
     $("r-status").textContent = F.status[k] || "n/a";
     $("r-scale").textContent = fmt(F.scale[k], 3);
     $("r-limits").textContent = flagged.join("; ");
+    if (COLL) showNearest(k);
     viewer.set_dirty();
     afterRender(measure);
   }
+  // The nearest pair of sample k, when it is closer than the influence distance.
+  const UP = new THREE.Vector3(0, 1, 0);
+  function showNearest(k) {
+    const pair = F.nearPair[k];
+    const p = F.nearPoints[k];
+    const on = pair !== undefined && pair >= 0 && p !== null && p !== undefined;
+    nearest.visible = on;
+    const dI = fmt(COLL.influence_distance * 1e3, 0);
+    if (!on) {
+      $("near-label").hidden = true;
+      $("r-clearance").textContent = "none within d_i = " + dI + " mm";
+      return;
+    }
+    const a = new THREE.Vector3(p[0], p[1], p[2]);
+    const b = new THREE.Vector3(p[3], p[4], p[5]);
+    const axis = b.clone().sub(a);
+    const length = axis.length();
+    nearest.children[1].position.copy(a);
+    nearest.children[2].position.copy(b);
+    nearestBar.position.copy(a).addScaledVector(axis, 0.5);
+    nearestBar.scale.set(1, Math.max(length, 1e-6), 1);
+    if (length > 1e-9) nearestBar.quaternion.setFromUnitVectors(UP, axis.normalize());
+    const text = COLL.pairs[pair] + ": " + fmt(F.nearDistance[k] * 1e3, 1) + " mm";
+    $("near-label").textContent = text;
+    $("near-label").hidden = false;
+    $("r-clearance").textContent = text + " (d_i = " + dI + " mm)";
+    placeLabel();
+  }
+  // The label beside the segment's middle, on screen (again whenever the camera moves).
+  function screenOf(obj) {
+    const rect = viewer.renderer.domElement.getBoundingClientRect();
+    root.updateMatrixWorld(true);
+    viewer.camera.updateMatrixWorld(true);
+    const v = obj.getWorldPosition(new THREE.Vector3()).project(viewer.camera);
+    return [rect.left + (v.x + 1) / 2 * rect.width, rect.top + (1 - v.y) / 2 * rect.height];
+  }
+  function placeLabel() {
+    if (!COLL || !nearest.visible) return;
+    const xy = screenOf(nearestBar);
+    $("near-label").style.left = Math.round(xy[0]) + "px";
+    $("near-label").style.top = Math.round(xy[1]) + "px";
+  }
 
   // --- camera ------------------------------------------------------------------------
+  function partBox(part) {  // a shape's box in world coordinates (obstacles: the world)
+    const out = new THREE.Box3();
+    if (part.shape === "capsule") {
+      [part.a, part.b].forEach((c) => out.union(new THREE.Sphere(
+        new THREE.Vector3().fromArray(c), part.radius).getBoundingBox(new THREE.Box3())));
+      return out;
+    }
+    const size = part.size || [0, 0, 0];
+    const m = new THREE.Matrix4().fromArray(part.pose);
+    [-0.5, 0.5].forEach((x) => [-0.5, 0.5].forEach((y) => [-0.5, 0.5].forEach((z) => {
+      out.expandByPoint(new THREE.Vector3(x * size[0], y * size[1], z * size[2]).applyMatrix4(m));
+    })));
+    return out;
+  }
   let floor = null;
   function fitCamera() {
     const box = new THREE.Box3();
@@ -208,6 +349,10 @@
     });
     SCENE.path.forEach((q) => box.expandByPoint(p.set(q[0], q[1], q[2])));
     if (box.isEmpty()) box.expandByPoint(p.set(0, 0, 0));
+    if (COLL && COLL.obstacles.length) {  // the obstacles near the arms and the path
+      const near = box.clone().expandByScalar(0.5);
+      COLL.obstacles.forEach((o) => box.union(partBox(o.part).intersect(near)));
+    }
     const c = box.getCenter(new THREE.Vector3());
     const r = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.5);
     if (floor) root.remove(floor);
@@ -255,6 +400,13 @@
     }));
     st.dataset.axes = [shown, flaggedAxes, total].join(",");
     st.dataset.allAxes = allAxes.checked ? "1" : "0";
+    if (COLL) {
+      st.dataset.obstacles = String(obstacles.children.length);
+      st.dataset.shapes = [shapeObjects.filter((o) => o.visible).length,
+                           shapeObjects.length].join(",");
+      st.dataset.shapesOn = shapesBox.checked ? "1" : "0";
+      st.dataset.near = nearest.visible ? $("near-label").textContent : "";
+    }
     st.dataset.errors = String(report.errors.length);
     $("dualarm-errors").textContent = report.errors.concat(requests).join("\n");
     st.dataset.ready = "1";
@@ -280,6 +432,7 @@
   }
   function tick(now) {
     requestAnimationFrame(tick);
+    placeLabel();  // the camera may have moved
     if (!playing || F.t.length === 0) return;
     if (DATA.live) {
       if (current !== F.t.length - 1) show(F.t.length - 1);
@@ -293,6 +446,8 @@
     if (k !== current) show(k);
   }
   function seekFromHash() {
+    const shapes = /(?:^#|&)shapes=([01])/.exec(location.hash);
+    if (shapes && COLL && shapesBox.checked !== (shapes[1] === "1")) shapesBox.click();
     const m = /(?:^#|&)t=([-0-9.eE+]+)/.exec(location.hash);
     if (!m || F.t.length === 0) return false;
     setPlaying(false);

@@ -18,7 +18,9 @@ colour when the joint nears or leaves its range (drawn over the meshes, so that 
 not hide it; on such an arm the page shows only those of joints near or outside their
 range until asked for all). The object is a bar along the grasp path
 (boxes following the path, or a cylinder for a :class:`~dualarm_qp.task.surfaces.
-CylinderSurface`), with the grasp range as a green strip on the grasp surface.
+CylinderSurface`), with the grasp range as a green strip on the grasp surface. A task
+with a collision scene adds its obstacles and, on a toggle, the collision shapes of the
+links and the object (:mod:`.collision`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from numpy.typing import NDArray
 from ..kinematics.arm import SerialArm
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface
+from .collision import collision_parts
 from .meshes import MeshLibrary, arm_visuals
 
 FloatArray = NDArray[np.float64]
@@ -279,7 +282,9 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
         ``all_joint_axes``: whether the page starts showing the marker of every joint
         (capsule arms: they are the joints of the stick figure) or only of those near
         or outside their range (an arm drawn with meshes: the meshes show the joints,
-        and a rod out of each would hide them); the page has a toggle.
+        and a rod out of each would hide them); the page has a toggle. ``collision``:
+        the obstacles and the collision shapes of a task with a collision scene
+        (:func:`~dualarm_qp.viz.collision.collision_parts`), None without one.
     """
     library = MeshLibrary()
     leader = arm_parts(task.leader, "leader", library)
@@ -290,7 +295,8 @@ def describe_scene(task: DualArmTask, *, t_start: float, t_end: float,
             "all_joint_axes": not (leader["markers_on_top"] or follower["markers_on_top"]),
             "object": object_parts(task.surface, grasps),
             "path": path_points(task, t_start, t_end),
-            "path_colour": COLOURS["path"]}
+            "path_colour": COLOURS["path"],
+            "collision": collision_parts(task.scene)}
 
 
 def _drop_shared_base_parts(leader: dict[str, Any], T_world_leader: FloatArray,

@@ -128,3 +128,28 @@ def test_a_ctrl_c_during_a_job_exits_130_and_the_rerun_resumes(
     monkeypatch.setattr(runner, "run_job", real)
     assert main(args) == 0
     assert "1 of 2 jobs computed" in capsys.readouterr().out
+
+
+def test_a_solver_that_cannot_take_the_files_limits_is_not_applicable(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Collision rows are general inequalities: SNS takes boxes only, so the bench lists
+    # it as not run (exit 0), not as a failed job.
+    import yaml
+
+    raw = yaml.safe_load(open(CONFIG, encoding="utf-8"))
+    raw["collision"] = {"enabled": True}
+    raw["scene"] = {"obstacles": [{"name": "post", "sphere": {"radius": 50},
+                                   "pose": {"position": [2000, 2000, 2000]}}]}
+    cfg = tmp_path / "with_post.yaml"
+    cfg.write_text(yaml.safe_dump(raw), encoding="utf-8")
+    args = ["bench", str(cfg), "--solvers", "nullspace,sns", "--out", str(tmp_path / "b"),
+            "--duration", "0.124", "--quiet", "--no-plots"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "Not applicable (not run):" in out
+    assert "sns: solver 'sns' takes boxes only, and the limit 'collision' gives rows" in out
+    assert "Failed jobs" not in out
+    rows = {r["solver"]: r for r in csv.DictReader(open(tmp_path / "b" / "bench.csv",
+                                                        encoding="utf-8"))}
+    assert rows["sns"]["not_applicable"] and not rows["sns"]["error"]
+    assert float(rows["nullspace"]["success_rate"]) > 0.0  # it ran

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from clearance_check import check_clearance
 from oracle import inv_pose, is_puma, puma_fk
 
 SPEED_RTOL = 1e-6      # |dx|/dt <= v_max * (1 + SPEED_RTOL)
@@ -28,7 +29,8 @@ POSITION_TOL = 1e-3    # leader tracking and grasp closure, metres
 LEADER = [f"ql{i}" for i in range(1, 7)]     # the PUMA 560's columns
 FOLLOWER = [f"qf{i}" for i in range(1, 7)]
 FAILURE_CRITERIA = frozenset({"unreachable", "solver", "closure", "tracking", "singularity",
-                              "stalled", "path_incomplete", "range", "speed", "acceleration"})
+                              "stalled", "path_incomplete", "range", "speed", "acceleration",
+                              "path_collision", "collision"})
 
 
 def read_trajectory(path: str | Path) -> dict[str, np.ndarray]:
@@ -238,14 +240,15 @@ def check_geometry(traj: dict[str, np.ndarray], exp: Any) -> list[str]:
 
 
 def check_completed_run(traj: dict[str, np.ndarray], exp: Any) -> list[str]:
-    """Every rule a completed hard-limit run must keep."""
+    """Every rule a completed hard-limit run must keep (with a collision scene, its
+    recorded clearance too: :func:`clearance_check.check_clearance`)."""
     bad = check_valid(traj)
     if bad:
         return bad
     lim = limits_of(exp)
     return (check_speeds(traj, lim) + check_accelerations(traj, lim)
             + check_ranges(traj, lim) + check_path_complete(traj, lim)
-            + check_geometry(traj, exp))
+            + check_geometry(traj, exp) + check_clearance(traj, exp))
 
 
 def worst_shares(traj: dict[str, np.ndarray], exp: Any) -> dict[str, float]:

@@ -3,7 +3,10 @@
 A completed run must keep every limit in trajectory.csv (speeds by finite differences,
 ranges, path completed, leader tracking and grasp closure by the independent FK oracle);
 a failed run must name a known criterion and leave a valid CSV. The verdict is read from
-summary.json, but the limits are checked from the CSV only. Every hard-limit solver runs
+summary.json, but the limits are checked from the CSV only; a run with a collision scene
+also keeps its recorded clearance (recomputed from the CSV's joints: clearance_check.py),
+and only solvers that take rows run a variant with collision avoidance on. Every
+hard-limit solver runs
 the short variants and the baseline (FULL_MATRIX); the long ones run a representative
 subset (SUBSET). The fast loop (``-m "not slow"``) keeps the cases ``_fast`` selects.
 
@@ -19,6 +22,7 @@ from typing import Any
 
 import pytest
 import yaml
+from clearance_check import check_clearance
 from csv_check import (
     FAILURE_CRITERIA,
     check_completed_run,
@@ -30,7 +34,15 @@ from csv_check import (
     read_trajectory,
     worst_shares,
 )
-from executed_runs import EXACT, HARD_SOLVERS, MUST_COMPLETE, VARIANTS, run
+from executed_runs import (
+    EXACT,
+    HARD_SOLVERS,
+    MUST_COMPLETE,
+    ROW_SOLVERS,
+    VARIANTS,
+    collision_enabled,
+    run,
+)
 
 from dualarm_qp.cli import main
 
@@ -51,7 +63,8 @@ def _fast(variant: str, solver: str) -> bool:
     """In the fast loop: every solver on QUICK, the exact ones on the baseline, each
     policy with ``nullspace``; the other cases take 1-5 s each and are marked slow."""
     return (variant in QUICK or (variant == "puma_beam_limits" and solver in EXACT)
-            or (variant.startswith("puma_beam_tight_limits_") and solver == "nullspace"))
+            or (variant.startswith("puma_beam_tight_limits_") and solver == "nullspace")
+            or (variant == "puma_beam_ball_off" and solver == "nullspace"))
 
 assert HARD_SOLVERS, "no hard-limit solver available"
 
@@ -69,6 +82,8 @@ def _cases() -> list[Any]:
     for variant in VARIANTS:
         solvers = HARD_SOLVERS if variant in FULL_MATRIX else [
             s for s in HARD_SOLVERS if s in SUBSET]
+        if collision_enabled(VARIANTS[variant]()):  # the others refuse (exit 2)
+            solvers = [s for s in solvers if s in ROW_SOLVERS]
         cases += [pytest.param(variant, s, marks=() if _fast(variant, s) else pytest.mark.slow)
                   for s in solvers]
     return cases
@@ -85,8 +100,8 @@ def test_recorded_run_keeps_limits(variant: str, solver: str, tmp_path: Path) ->
         problems = check_completed_run(traj, exp)
     elif refused:  # refused before its first sample: a header and no row
         problems = [] if len(traj["t"]) == 0 else ["rows in a run refused before its start"]
-    else:
-        problems = check_valid(traj)
+    else:  # a failed run's partial record is valid and keeps its clearance too
+        problems = check_valid(traj) or check_clearance(traj, exp)
     failure = summary.get("failure") or {}
     record = {"variant": variant, "solver": solver, "policy": str(exp.policy),
               "completed": completed, "criterion": failure.get("criterion"),

@@ -23,8 +23,8 @@ from sigint import child_default_sigint
 
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
-from dualarm_qp.experiments.figures import Curve, clearance_figure
-from dualarm_qp.experiments.figures.clearance import near_window
+from dualarm_qp.experiments.figures import Curve, avoidance_figure
+from dualarm_qp.experiments.figures.avoidance import near_window
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 PILLAR = CONFIGS / "puma_beam_pillar.yaml"
@@ -126,12 +126,12 @@ def _curve(label, t, value, colour="C0"):
     return Curve(label, np.asarray(t, float), np.asarray(value, float), colour)
 
 
-def test_the_clearance_figure_draws_the_distances_and_zooms_where_runs_come_near():
+def test_the_avoidance_figure_draws_the_distances_and_zooms_where_runs_come_near():
     t = np.linspace(0.0, 10.0, 101)
     near = _curve("near", t, np.maximum(0.5 - 0.05 * t, 0.02))   # within d_i from t = 8
     into = _curve("into", t, 0.5 - 0.06 * t, "C1")                # within d_i from 6.67
     grasp = [_curve("near", t, 0.45 - 0.01 * t), _curve("into", t, np.full(101, 0.45), "C1")]
-    fig = clearance_figure([near, into], grasp, safety_distance=0.02,
+    fig = avoidance_figure([near, into], grasp, safety_distance=0.02,
                            influence_distance=0.1, grasp_range=(0.0, 0.4), scale=1e3,
                            unit="mm", title="test")
     clear, grasp_ax, zoom, _ = fig.axes[:4]
@@ -159,7 +159,7 @@ def test_the_clearance_figure_draws_the_distances_and_zooms_where_runs_come_near
 def test_no_zoom_when_no_run_comes_within_the_influence_distance():
     t = np.linspace(0.0, 1.0, 11)
     far = _curve("far", t, np.full(11, 0.15))
-    fig = clearance_figure([far], [_curve("far", t, np.full(11, 0.3))],
+    fig = avoidance_figure([far], [_curve("far", t, np.full(11, 0.3))],
                            safety_distance=0.02, influence_distance=0.1,
                            grasp_range=(0.0, 0.4), scale=1e3, unit="mm", title="far")
     assert near_window([far], 0.1) is None and len(fig.axes) == 2

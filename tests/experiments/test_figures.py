@@ -148,6 +148,7 @@ def test_the_report_is_self_contained(limits_run):
     assert not external, external
     assert "<script" not in page.lower() and "@import" not in page
     assert "animation.html" not in page  # none in the folder
+    assert "clearance.png" not in page and 'id="clearance"' not in page  # no collision scene
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] in page and summary["status"] in page
 

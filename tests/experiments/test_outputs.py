@@ -171,6 +171,25 @@ def test_summary_is_written_last(tmp_path, monkeypatch, plots):
     assert order == [sorted(set(RUN_FILES if plots else NO_PLOTS_FILES) - {"summary.json"})]
 
 
+def test_an_error_while_writing_leaves_no_half_set(tmp_path, monkeypatch):
+    # A figure that raises after the CSV and the config were written: the run's files
+    # are removed again (a file of the user's stays), and the error propagates.
+    exp = build_experiment(load_config(short_config(tmp_path)))
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("figure failed")
+
+    import dualarm_qp.experiments.figures as figures_module
+
+    monkeypatch.setattr(figures_module, "write_run_figures", broken)
+    with pytest.raises(RuntimeError, match="figure failed"):
+        run_module.run_experiment(exp, out, progress=False, plots=True)
+    assert names(out) == ["notes.txt"]
+
+
 def test_owned_entries_match_only_names_and_their_temporary_files(tmp_path):
     for name in ("summary.json", ".summary.json.k2_9ab0x.json", ".summary.json.bak",
                  "summary.json~", "notes.txt"):

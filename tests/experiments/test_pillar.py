@@ -86,7 +86,7 @@ def test_a_run_with_a_scene_prints_its_clearance_and_draws_its_figures(tmp_path,
     assert main(["run", str(short_pillar(tmp_path, 0.31)), "--out", str(out),
                  "--quiet"]) == 0
     printed = capsys.readouterr().out
-    assert "clearance: nearest" in printed and "(follower.link1 - pillar)" in printed
+    assert "clearance    smallest 263.0 mm (follower.link1 - pillar" in printed
     s = json.loads((out / "summary.json").read_text())
     assert {"joints.png", "grasp.png", "report.html"} <= set(s["outputs"])
     data = RunData.read(out / "trajectory.csv")  # the nearest pair's name is text

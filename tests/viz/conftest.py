@@ -3,6 +3,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import yaml
 
 from dualarm_qp.experiments.config import load_config
 from dualarm_qp.experiments.reproduce import bundled_config
@@ -13,6 +14,11 @@ from dualarm_qp.experiments.setup import build_experiment
 DURATION_S = 1.5
 #: A short run of the UR5 pair (its page holds the arms' meshes).
 UR5_DURATION_S = 1.0
+#: The beam with collision avoidance and a pillar beside the follower (file units, mm):
+#: the follower's link1 starts 42 mm from it, within the influence distance (100 mm).
+PILLAR = {"collision": {"enabled": True},
+          "scene": {"obstacles": [{"name": "pillar", "capsule": {"radius": 50, "length": 1200},
+                                   "pose": {"position": [450, 1230, 0]}}]}}
 
 
 def _experiment():
@@ -22,9 +28,33 @@ def _experiment():
     return exp
 
 
+def pillar_experiment(folder: Path, duration: float = DURATION_S):
+    """The beam of puma_beam_limits.yaml with :data:`PILLAR`, written into ``folder``."""
+    raw = yaml.safe_load(bundled_config("puma_beam_limits.yaml").read_text())
+    raw.update(PILLAR, name="puma_beam_pillar")
+    raw["controller"]["duration"] = duration
+    path = folder / "pillar.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    return build_experiment(load_config(path), str(path))
+
+
 @pytest.fixture(scope="session")
 def beam():
     return _experiment()
+
+
+@pytest.fixture(scope="session")
+def pillar(tmp_path_factory):
+    """The beam with a collision scene: a pillar near the follower."""
+    return pillar_experiment(tmp_path_factory.mktemp("pillar"))
+
+
+@pytest.fixture(scope="session")
+def pillar_run_dir(pillar, tmp_path_factory):
+    """A finished, animated run folder of :func:`pillar`."""
+    out = tmp_path_factory.mktemp("pillarrun")
+    run_experiment(pillar, out, progress=False, plots=False, animate=True)
+    return out
 
 
 @pytest.fixture(scope="session")

@@ -6,6 +6,7 @@ import socket
 import threading
 import urllib.request
 
+import numpy as np
 import pytest
 
 from dualarm_qp.errors import InvalidInputError
@@ -53,3 +54,20 @@ def test_update_needs_joints_of_the_right_size(beam):
         view.close()
     view.close()  # a second close does nothing
     assert not _view_threads()
+
+
+def test_a_live_view_of_a_collision_scene_streams_the_nearest_pair(pillar):
+    """The pillar's task: each update carries the nearest pair within d_i, as a run's page."""
+    import json
+
+    scene = pillar.task.scene
+    with LiveView(pillar.task, open_browser=False) as view:
+        page = urllib.request.urlopen(view.url, timeout=10).read().decode()
+        assert '"obstacles":[{"name":"pillar"' in page
+        view.update(q_l=pillar.initial.q_l, q_f=pillar.initial.q_f, grasp=pillar.initial.sigma)
+        stream = urllib.request.urlopen(view.url + "events", timeout=10)
+        event = json.loads(stream.readline().decode().removeprefix("data: "))
+    (pair,), (distance,), (points,) = event["near_pair"], event["near_distance"], event["near"]
+    assert scene.pair_names[pair] == "follower.link1 - pillar"
+    assert 0.0 < distance < scene.settings.influence_distance
+    assert np.linalg.norm(np.subtract(points[3:], points[:3])) == pytest.approx(distance)

@@ -1,158 +1,108 @@
-"""Several runs' clearance and grasp travel against time: ``dualarm-qp collisions``.
+"""The clearance figure of a run with a collision scene (``clearance.png``).
 
-One figure, two panels over a shared time axis: above, each run's nearest clearance
-(the smallest distance of any checked pair at each sample) against the safety distance
-``d_s`` and the influence distance ``d_i``, with the contact level 0 and penetration
-(below 0) shaded; below, each run's grasp coordinate against the grasp range. Read
-together, they show when a sliding grasp moved to keep the clearance.
+The smallest distance of each group of pairs against time (the ``clearance_*`` columns
+of ``trajectory.csv``: arm against arm, arms against the object, against the obstacles,
+an arm against itself), read against the safety distance ``d_s`` (no pair may come
+closer), ``d_s`` less the allowance for one step's second-order error (a run with
+collision avoidance fails below it) and the influence distance ``d_i`` (pairs closer
+than it get a row in the step). The smallest distance is marked with its pair.
+
+Lengths are shown in the experiment file's unit (mm or m). Far pairs do not matter to
+the limit: the axis stops a few ``d_i`` up, and larger distances are drawn on its top
+edge (the legend says so).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
-
 import numpy as np
 from matplotlib.figure import Figure
 
-from .canvas import limit_lines, new_figure, tick_text
-from .compare import Curve
+from ...collision.settings import CLEARANCE_ALLOWANCE
+from .canvas import LIMIT_COLOUR, limit_lines, new_figure, outside_mask, outside_spans, shade_spans
+from .rundata import PlotLimits, RunData
 
-#: Colour of the penetration band (below a clearance of 0).
-PENETRATION_COLOUR = "C3"
+#: The file name of the figure.
+CLEARANCE_FIGURE = "clearance.png"
 
-#: The clearance axis stops this many influence distances above the safety distance
-#: (pairs farther away give no row; their distance does not matter).
-TOP_BANDS = 2.5
+#: The clearance columns of ``trajectory.csv``, with their names and colours.
+CLEARANCE_COLUMNS = (("clearance_arm_arm", "arm - arm", "C0"),
+                     ("clearance_arm_object", "arm - object", "C2"),
+                     ("clearance_obstacles", "arms and object - obstacles", "C1"),
+                     ("clearance_self", "arm - itself", "C4"))
 
-
-def _clearance_view(curves: Sequence[Curve], d_s: float, d_i: float,
-                    window: tuple[float, float] | None = None) -> tuple[float, float, bool]:
-    """Return the clearance axis (SI) over ``window`` and whether values lie above its top."""
-    parts = []
-    for c in curves:
-        keep = np.isfinite(c.value)
-        if window is not None:
-            keep &= (c.t >= window[0]) & (c.t <= window[1])
-        parts.append(c.value[keep])
-    values = np.concatenate(parts) if any(p.size for p in parts) else np.zeros(1)
-    lo = min(float(values.min()), 0.0)
-    top = d_s + TOP_BANDS * (d_i - d_s)
-    hi = min(max(float(values.max()), d_i), top)
-    pad = 0.06 * (hi - lo)
-    return lo - pad, hi + pad, bool(values.max() > hi + pad)
+#: The axis stops this many influence distances up.
+TOP_PER_INFLUENCE = 3.0
 
 
-def near_window(curves: Sequence[Curve], d_i: float) -> tuple[float, float] | None:
-    """Return the time window [s] in which the runs come near, or None when none does.
-
-    It starts shortly before any run first comes within ``d_i`` and ends with the
-    longest run.
-    """
-    first = [float(c.t[np.argmax(c.value < d_i)]) for c in curves
-             if c.t.size and (c.value < d_i).any()]
-    if not first:
-        return None
-    end = max(float(c.t[-1]) for c in curves if c.t.size)
-    start = min(first)
-    return max(start - 0.1 * (end - start), min(float(c.t[0]) for c in curves if c.t.size)), end
+def has_clearance(data: RunData) -> bool:
+    """Whether the run recorded a clearance (its task had a collision scene)."""
+    return any(data.has(name) for name, _, _ in CLEARANCE_COLUMNS)
 
 
-def _clearance_panel(ax: Any, curves: Sequence[Curve], d_s: float, d_i: float, scale: float,
-                     unit: str, window: tuple[float, float] | None) -> bool:
-    """Draw the clearances, the contact line, the penetration band, d_s and d_i."""
-    for c in curves:
-        ax.plot(c.t, c.value * scale, color=c.colour, lw=1.4, label=c.label)
-    lo, hi, cut = _clearance_view(curves, d_s, d_i, window)
-    band = ax.axhspan(lo * scale, 0.0, color=PENETRATION_COLOUR, alpha=0.12, lw=0,
-                      label="penetration (below 0)")
-    band.set_gid("penetration")
-    ax.axhline(0.0, color="0.35", lw=0.8).set_gid("contact")
-    limit_lines(ax, (d_s,), "safety_distance", scale=scale,
-                label=f"safety distance d_s = {tick_text(d_s * scale)} {unit}")
-    limit_lines(ax, (d_i,), "influence_distance", scale=scale, colour="C7", ls=":",
-                label=f"influence distance d_i = {tick_text(d_i * scale)} {unit}")
-    ax.set_ylim(lo * scale, hi * scale)
-    if window is not None:
-        ax.set_xlim(*window)
-    return cut
-
-
-def clearance_figure(clearances: Sequence[Curve], grasps: Sequence[Curve], *,
-                     safety_distance: float, influence_distance: float,
-                     grasp_range: tuple[float, float], scale: float, unit: str,
-                     title: str, note: str = "") -> Figure:
-    """Draw runs' nearest clearance and grasp coordinate against time.
+def clearance_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Smallest distance of each group of pairs against time, with ``d_s`` and ``d_i``.
 
     Parameters
     ----------
-    clearances : sequence of Curve
-        Each run's nearest clearance [m] (SI), labelled for the legend.
-    grasps : sequence of Curve
-        Each run's grasp coordinate [m], in the same colours.
-    safety_distance, influence_distance : float
-        ``d_s`` and ``d_i`` [m].
-    grasp_range : (float, float)
-        The grasp range [m].
-    scale : float
-        SI to display units (``1e3`` for mm).
-    unit : str
-        The display unit of length (``"mm"``).
+    data : RunData
+        The run's trace, with its ``clearance_*`` columns [m].
+    limits : PlotLimits
+        Its ``clearance`` (``d_s``, ``d_i``) [m] and whether the step kept it.
     title : str
-        Figure title.
-    note : str
-        Small print under the axes.
+        Title prefix.
 
-    Returns
-    -------
-    Figure
-        Axes ``[clearance, grasp]`` over the whole runs, then, when a run comes within
-        ``d_i``, the same two zoomed on the time from then on (:func:`near_window`).
-        The lines of ``d_s``, ``d_i`` and the grasp range carry the gids
-        ``"limit:safety_distance"``, ``"limit:influence_distance"`` and
-        ``"limit:grasp_range"``; the contact line ``"contact"``; the band below it
-        ``"penetration"``.
+    Lines carry gids: ``limit:safety_distance``, ``limit:influence_distance``,
+    ``limit:clearance_allowance`` (only when collision avoidance was on), and
+    ``clearance:<column>`` for each group drawn; samples below ``d_s - allowance`` are
+    shaded (``outside:clearance``).
     """
-    window = near_window(clearances, influence_distance)
-    fig = new_figure(figsize=(11, 7.4) if window is not None else (8, 7.4))
-    grid = fig.add_gridspec(2, 2 if window is not None else 1, height_ratios=(1.5, 1),
-                            width_ratios=(1.7, 1) if window is not None else None)
-    columns = [None] if window is None else [None, window]
-    cut = False
-    axes = []
-    for col, win in enumerate(columns):
-        ax1 = fig.add_subplot(grid[0, col])
-        ax2 = fig.add_subplot(grid[1, col], sharex=ax1)
-        cut |= _clearance_panel(ax1, clearances, safety_distance, influence_distance,
-                                scale, unit, win)
-        for c in grasps:
-            ax2.plot(c.t, c.value * scale, color=c.colour, lw=1.4)
-        limit_lines(ax2, grasp_range, "grasp_range", scale=scale,
-                    label=f"grasp range {tick_text(grasp_range[0] * scale)} to "
-                          f"{tick_text(grasp_range[1] * scale)} {unit}")
-        ax2.set_xlabel("t [s]")
-        if win is not None:
-            ax1.set_title(f"from t = {win[0]:.3g} s, as the runs come within d_i",
-                          fontsize=9)
-        axes += [ax1, ax2]
-    axes[0].set_ylabel(f"nearest clearance [{unit}]", fontsize=9)
-    axes[1].set_ylabel(f"grasp [{unit}]", fontsize=9)
-    handles, labels = axes[0].get_legend_handles_labels()
-    more, more_labels = axes[1].get_legend_handles_labels()
-    fig.legend([*handles, *more], [*labels, *more_labels], loc="upper center",
-               bbox_to_anchor=(0.5, 0.96), ncol=2, fontsize=7, frameon=False)
-    rows = -(-(len(labels) + len(more_labels)) // 2)
-    if cut:
-        top = safety_distance + TOP_BANDS * (influence_distance - safety_distance)
-        note = (note + "\n" if note else "") + (
-            f"The clearance axes stop at {tick_text(top * scale)} {unit}: farther pairs give "
-            "no row.")
-    fig.suptitle(title, fontsize=10)
-    bottom = 0.022 * (note.count("\n") + 2) if note else 0.0
-    fig.tight_layout(rect=(0, bottom, 1, 0.95 - 0.018 * rows))
-    if note:
-        fig.text(0.01, 0.012, note, fontsize=7, color="0.3")
+    fig = new_figure(figsize=(8, 5))
+    ax = fig.subplots()
+    t = data.t
+    per_m, unit = limits.units.per_m, limits.units.length
+    d_s, d_i = limits.clearance if limits.clearance is not None else (np.nan, np.nan)
+    drawn = [(name, label, colour, data.col(name)) for name, label, colour in CLEARANCE_COLUMNS
+             if data.has(name) and np.isfinite(data.col(name)).any()]
+    nearest = (np.min(np.column_stack([v for *_, v in drawn]), axis=1) if drawn
+               else np.full(len(t), np.inf))
+    finite = nearest[np.isfinite(nearest)]
+    reference = d_i if np.isfinite(d_i) else (float(finite.max()) if finite.size else 0.1)
+    top = TOP_PER_INFLUENCE * reference
+    low = min(0.0, float(finite.min()) if finite.size else 0.0)
+    ax.set_ylim((low - 0.05 * top) * per_m, 1.05 * top * per_m)
+    for name, label, colour, values in drawn:
+        line, = ax.plot(t, np.minimum(values, top) * per_m, color=colour, lw=1.2, label=label)
+        line.set_gid(f"clearance:{name}")
+    if np.isfinite(d_i):
+        limit_lines(ax, (d_i,), "influence_distance", scale=per_m, colour="0.45", ls=":",
+                    label=f"d_i = {d_i * per_m:.4g} {unit}: pairs closer get a row")
+    limit_lines(ax, (d_s,), "safety_distance", scale=per_m,
+                label=f"d_s = {d_s * per_m:.4g} {unit}: the safety distance")
+    if limits.clearance_enforced and np.isfinite(d_s):
+        floor = d_s - CLEARANCE_ALLOWANCE
+        limit_lines(ax, (floor,), "clearance_allowance", scale=per_m, ls=":",
+                    label=f"d_s - {CLEARANCE_ALLOWANCE * per_m:.3g} {unit}: the run fails below")
+        shade_spans(ax, outside_spans(t, outside_mask(nearest, floor)), "clearance",
+                    label="below it")
+    if np.isfinite(nearest).any():
+        k = int(np.nanargmin(np.where(np.isfinite(nearest), nearest, np.nan)))
+        pair = str(data.columns["clearance_pair"][k]) if data.has("clearance_pair") else ""
+        ax.plot([t[k]], [nearest[k] * per_m], "o", color=LIMIT_COLOUR, ms=5, gid="clearance:min",
+                label=f"smallest {nearest[k] * per_m:.4g} {unit} at t = {t[k]:.3g} s"
+                      + (f": {pair}" if pair else ""))
+    if any((values > top).any() for *_, values in drawn):
+        ax.plot([], [], color="none",
+                label=f"above {top * per_m:.4g} {unit}: on the top edge")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(f"smallest distance [{unit}]")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
+              frameon=False)
+    state = ("" if limits.clearance_enforced
+             else " (collision avoidance off: measured only)")
+    ax.set_title((title + ": " if title else "") + "clearance of each group of pairs" + state,
+                 fontsize=10)
+    fig.tight_layout()
     return fig
 
 
-__all__ = ["clearance_figure", "near_window"]
+__all__ = ["CLEARANCE_COLUMNS", "CLEARANCE_FIGURE", "clearance_figure", "has_clearance"]

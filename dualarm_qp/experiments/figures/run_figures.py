@@ -11,7 +11,9 @@ can read what was drawn); :func:`write_run_figures` writes them all as PNG files
   against its limit;
 - ``tracking.png``: the leader's tracking error, the smallest singular value of each
   arm's Jacobian and the task scale;
-- ``closure.png``: the grasp closure error (Eq. 15).
+- ``closure.png``: the grasp closure error (Eq. 15);
+- ``clearance.png``, for a run with a collision scene only: the smallest distance of
+  each group of pairs against the safety and influence distances (:mod:`.clearance`).
 
 Angles and lengths are shown in the experiment file's units (deg or rad, mm or m:
 :class:`~.rundata.DisplayUnits`). Speed axes are symmetric-logarithmic, linear inside
@@ -41,12 +43,14 @@ from .canvas import (
     speed_axis,
     tick_text,
 )
+from .clearance import CLEARANCE_FIGURE, clearance_figure, has_clearance
 from .rundata import PlotLimits, RunData, realised_rate
 
 if TYPE_CHECKING:
     from ..setup import Experiment
 
-#: The PNG files of a run, in the order they are written.
+#: The PNG files of every run, in the order they are written (a run with a collision
+#: scene adds :data:`~.clearance.CLEARANCE_FIGURE` after them).
 RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.png")
 
 _ARMS = (("l", "leader"), ("f", "follower"))
@@ -338,6 +342,9 @@ def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None
                       title: str | None = None) -> list[str]:
     """Write the PNG figures of a run (:data:`RUN_FIGURES`) into ``out``.
 
+    A run whose task had a collision scene (its trace has the clearance columns) also
+    gets ``clearance.png``, last.
+
     Parameters
     ----------
     out : Path
@@ -352,7 +359,8 @@ def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None
     Returns
     -------
     list of str
-        The file names written, in :data:`RUN_FIGURES` order (none for an empty run).
+        The file names written, in :data:`RUN_FIGURES` order, then ``clearance.png``
+        (none for an empty run).
     """
     if data is None:
         data = RunData.read(out / "trajectory.csv")
@@ -367,6 +375,9 @@ def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None
     for name in RUN_FIGURES:
         save_png(draw[name](data, limits, tag), out / name)
         written.append(name)
+    if limits.clearance is not None and has_clearance(data):
+        save_png(clearance_figure(data, limits, tag), out / CLEARANCE_FIGURE)
+        written.append(CLEARANCE_FIGURE)
     return written
 
 

@@ -26,8 +26,7 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-#: Columns holding text, not numbers (``clearance_pair``: the nearest pair of a run with a
-#: collision scene).
+#: Columns holding text, not numbers.
 TEXT_COLUMNS = ("status", "leader_status", "clearance_pair")
 
 
@@ -240,6 +239,12 @@ class PlotLimits:
         What the figures show angles and lengths in (default degrees and millimetres).
     acceleration_limits_enforced : bool
         Whether the run's step kept the joints' acceleration limits.
+    clearance : (float, float) or None
+        ``(d_s, d_i)`` [m], the safety and the influence distance, of a task with a
+        collision scene (None without one).
+    clearance_enforced : bool
+        Whether the run's step kept the clearance (collision avoidance enabled; else it
+        was only measured).
     """
 
     leader: ArmLimits
@@ -253,6 +258,8 @@ class PlotLimits:
     leader_grasp_range: tuple[float, float] | None = None
     units: DisplayUnits = DisplayUnits()
     acceleration_limits_enforced: bool = False
+    clearance: tuple[float, float] | None = None
+    clearance_enforced: bool = False
 
     @classmethod
     def from_experiment(cls, exp: Experiment) -> PlotLimits:
@@ -270,6 +277,8 @@ class PlotLimits:
         leader_surface = getattr(task, "leader_surface", None)  # a sliding leader grasp
         leader_range = None if leader_surface is None else (
             float(leader_surface.sigma_min), float(leader_surface.sigma_max))
+        scene = getattr(task, "scene", None)
+        collision = None if scene is None else scene.settings
         return cls(leader=arm(task.leader), follower=arm(task.follower),
                    grasp_range=(float(task.surface.sigma_min), float(task.surface.sigma_max)),
                    grasp_speed_max=speed, speed_limits_enforced=bool(opts.velocity_limits),
@@ -278,7 +287,10 @@ class PlotLimits:
                    singular_value_min=float(exp.limits.singular_value_min),
                    leader_grasp_range=leader_range, units=DisplayUnits.of_file(exp.path),
                    acceleration_limits_enforced=bool(getattr(opts, "acceleration_limits",
-                                                             False)))
+                                                             False)),
+                   clearance=None if collision is None else (
+                       float(collision.safety_distance), float(collision.influence_distance)),
+                   clearance_enforced=collision is not None and bool(collision.enabled))
 
     def arm(self, arm: str) -> ArmLimits:
         """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""

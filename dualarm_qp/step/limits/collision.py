@@ -37,6 +37,9 @@ FloatArray = NDArray[np.float64]
 #: Row names of this limit: ``"clearance <pair>"``.
 ROW_PREFIX = "clearance "
 
+#: A row whose largest entry is below this [m/s per unit rate] moves nothing.
+ZERO_ROW = 1e-12
+
 
 class CollisionLimit:
     """The velocity damper of every pair of a collision scene within ``d_i``.
@@ -95,6 +98,14 @@ class CollisionLimit:
             self._add(G[row], pair.b, prox.point_b[j], n, -1.0, ctx, frames, cache)
             names.append(self._names[int(measured.pairs[j])])
         h = self._gain * (prox.distance[near] - self._d_s)
+        # A pair that no variable moves at this state (a sphere on its joint's axis
+        # against an obstacle) has a zero row: no step changes its distance to first
+        # order, so the row is left out (with h < 0 it would only make the step
+        # infeasible; the recorded clearance still judges the run).
+        moving = np.abs(G).max(axis=1) > ZERO_ROW
+        if not moving.all():
+            G, h = G[moving], h[moving]
+            names = [n for n, m in zip(names, moving.tolist(), strict=True) if m]
         return Constraint(G=G, h=h, row_names=tuple(names))
 
     def _add(self, row: FloatArray, body: int, point: FloatArray, n: FloatArray, sign: float,
