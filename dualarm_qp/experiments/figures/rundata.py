@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 
 #: Columns holding text, not numbers.
-TEXT_COLUMNS = ("status", "leader_status")
+TEXT_COLUMNS = ("status", "leader_status", "clearance_pair")
 
 
 @dataclass(frozen=True)
