@@ -76,6 +76,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _clearance_line(r: dict[str, Any]) -> str:
+    """Return the console line of ``realised_limits.clearance`` (the smallest distance)."""
+    d = r["min_m"]
+    smallest = ("no pair" if d is None
+                else f"{d * 1e3:.1f} mm ({r['pair']}, sample {r['sample']})")
+    rule = (f"safety distance {r['safety_distance_m'] * 1e3:.3g} mm "
+            f"{'kept' if r['kept'] else 'NOT KEPT'} (allowance {r['allowance_m'] * 1e3:.3g} mm)"
+            if r["enforced"] else "measured only (collision avoidance off)")
+    return (f"    {'clearance':<12} smallest {smallest}; {rule}"
+            + ("; PENETRATION" if r["penetration"] else ""))
+
+
 def print_run_summary(s: dict[str, Any], out: str) -> None:
     """Print the console summary of one run (from its summary.json content)."""
     status = s.get("status", "completed" if s["completed"] else "failed")
@@ -95,6 +107,9 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
               if s["hard_limits"] else "limits not enforced by this solver")
     print(f"  realised motion, worst share of each limit, above 1 is outside ({limits}):")
     for part, r in s["realised_limits"].items():
+        if part == "clearance":
+            print(_clearance_line(r))
+            continue
         start = r["range_ratio_start"]
         started = (f"; started outside, at {start:.3g}"
                    if start is not None and start > 1.0 else "")

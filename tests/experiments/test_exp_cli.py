@@ -50,6 +50,27 @@ def test_run_writes_outputs(tmp_path, capsys):
     assert "completed" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("enabled", [False, True])
+def test_run_with_a_collision_scene_prints_the_clearance(tmp_path, capsys, enabled):
+    d = yaml.safe_load((CONFIGS / "puma_beam_limits.yaml").read_text())
+    d["controller"]["duration"] = 0.31
+    d["object"]["shape"] = {"box": {"size": [40, 40, 500]}, "pose": {"position": [0, 0, 250]}}
+    d["collision"] = {"enabled": enabled}
+    config = tmp_path / "scene.yaml"
+    config.write_text(yaml.safe_dump(d))
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out), "--quiet", "--no-plots"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    r = summary["realised_limits"]["clearance"]
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if "clearance" in ln]
+    assert len(lines) == 1
+    assert f"smallest {r['min_m'] * 1e3:.1f} mm ({r['pair']}, sample {r['sample']})" in lines[0]
+    if enabled:
+        assert lines[0].endswith("safety distance 20 mm kept (allowance 1 mm)")
+    else:
+        assert lines[0].endswith("measured only (collision avoidance off)")
+
+
 @pytest.mark.parametrize("solver", ["nullspace", "qp:daqp", "fixed_grasp"])
 def test_run_with_solver_override(tmp_path, solver):
     out = tmp_path / "o"
