@@ -71,7 +71,7 @@ CASES = {
         # 8 bodies per arm; 16 links and the bar against the shelf; links at least three
         # joints apart of each 7-joint arm.
         {"arm_arm": 64, "arm_object": 10, "obstacle": 17, "self": 30},
-        {"clearance_obstacles": 100, "clearance_arm_arm": 20},
+        {"clearance_obstacles": 100, "clearance_arm_arm": 30},
         frozenset({"follower.link4 - shelf", "leader.link5 - shelf",
                    "leader.link7 - follower.link7"}),
         "leader.link4 - shelf", "clearance_obstacles"),
