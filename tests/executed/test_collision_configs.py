@@ -209,6 +209,7 @@ def test_config_penetrates_without_collision_avoidance(name: str, tmp_path: Path
     assert clearance["penetration"] and not clearance["enforced"]
     assert clearance["pair"] == case.deepest
     assert any("penetrates" in w for w in summary["warnings"])
+    assert "; PENETRATION" in capsys.readouterr().out  # the console's clearance line
     if name == "ur5_pair_collision":
         assert traj["grasp"][-1] < 0.06  # the grasp slides on into the leader's hand (m)
     else:
