@@ -78,7 +78,39 @@ def urdf_capsules(file: str | Path, root: str, tip: str, *,
     InvalidInputError
         A collision geometry that cannot be bounded (see
         :func:`~dualarm_qp.geometry.fit.geometry_balls`).
+
+    Notes
+    -----
+    The fit reads the collision meshes and takes about a second for a 7-joint arm; its
+    result is kept for the life of the process, keyed by the file's path, size and
+    modification time, the chain and the package folders (a sweep or a bench builds the
+    same arms many times). Capsules are immutable, so the copies share them.
     """
+    path = Path(file).resolve()
+    try:
+        st = path.stat()
+    except OSError:
+        return _urdf_capsules(file, root, tip, package_dirs=package_dirs)
+    dirs = None if package_dirs is None else tuple(str(p) for p in package_dirs)
+    key = (str(path), st.st_size, st.st_mtime_ns, root, tip, dirs)
+    cached = _FITTED.get(key)
+    if cached is None:
+        cached = _urdf_capsules(file, root, tip, package_dirs=package_dirs)
+        if len(_FITTED) >= _FITTED_MAX:
+            _FITTED.pop(next(iter(_FITTED)))
+        _FITTED[key] = cached
+    return dict(cached)
+
+
+#: Capsules already fitted in this process (:func:`urdf_capsules`), at most
+#: ``_FITTED_MAX`` chains.
+_FITTED: dict[tuple[Any, ...], dict[int, Capsule]] = {}
+_FITTED_MAX = 32
+
+
+def _urdf_capsules(file: str | Path, root: str, tip: str, *,
+                   package_dirs: Any = None) -> dict[int, Capsule]:
+    """Fit the capsules of :func:`urdf_capsules` (uncached)."""
     path = Path(file)
     arm = urdf_arm(path, root, tip)  # checks the file, the frames and the chain
     model = pin.buildModelFromUrdf(str(path))

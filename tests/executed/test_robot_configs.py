@@ -54,6 +54,10 @@ pytestmark = pytest.mark.skipif(
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 ROBOT_CONFIGS = ("ur5_pair_sliding_bar", "panda_pair", "baxter_tray", "both_sliding_bar",
                  "panda_pair_accel")
+#: Configs with collision avoidance (their clearance: test_collision_configs.py); their
+#: runs take a few seconds each, so they are checked in the slow loop.
+COLLISION_CONFIGS = ("ur5_pair_collision", "panda_pair_shelf")
+CASES = [*ROBOT_CONFIGS, *(pytest.param(n, marks=pytest.mark.slow) for n in COLLISION_CONFIGS)]
 #: The runs' tracking and closure tolerances (the configs keep the defaults).
 POSITION_TOL, ANGLE_TOL = 1e-3, 1e-2
 LENGTH = {"m": 1.0, "mm": 1e-3}
@@ -203,7 +207,7 @@ def rows(traj: dict[str, np.ndarray], prefix: str) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the tests
-@pytest.mark.parametrize("name", ROBOT_CONFIGS)
+@pytest.mark.parametrize("name", CASES)
 def test_config_completes_and_records_its_arms(name: str, runs: dict[str, Any]) -> None:
     spec, code, summary, traj = runs["get"](name)
     assert code == 0, summary.get("failure")
@@ -220,7 +224,7 @@ def test_config_completes_and_records_its_arms(name: str, runs: dict[str, Any]) 
         assert record["joint_names"] == chain.names
 
 
-@pytest.mark.parametrize("name", ROBOT_CONFIGS)
+@pytest.mark.parametrize("name", CASES)
 def test_recorded_motion_keeps_every_limit(name: str, runs: dict[str, Any]) -> None:
     spec, _, _, traj = runs["get"](name)
     assert not check_valid(traj)
@@ -277,7 +281,7 @@ def geometry_problems(worst: dict[str, float]) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("name", ROBOT_CONFIGS)
+@pytest.mark.parametrize("name", CASES)
 def test_oracle_tracking_closure_and_table(name: str, runs: dict[str, Any]) -> None:
     """The object on D(path_t), the follower on its grasp, no joint below the bases."""
     spec, _, _, traj = runs["get"](name)
@@ -308,7 +312,7 @@ def travel(x: np.ndarray) -> float:
     return float(np.sum(np.abs(np.diff(x))))
 
 
-@pytest.mark.parametrize("name", ROBOT_CONFIGS)
+@pytest.mark.parametrize("name", CASES)
 def test_config_does_what_its_header_says(name: str, runs: dict[str, Any]) -> None:
     spec, _, _, traj = runs["get"](name)
     lim = independent_limits(spec)

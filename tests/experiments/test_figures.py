@@ -352,6 +352,15 @@ def test_reading_a_file_that_is_not_a_trajectory_fails(tmp_path):
         RunData.read(bad)
 
 
+def test_reading_keeps_the_nearest_pair_as_text(tmp_path):
+    path = tmp_path / "trajectory.csv"
+    path.write_text("t,clearance_arm_arm,clearance_pair\n"
+                    "0,0.25,leader.link5 - follower.link5\n0.01,inf,\n")
+    data = RunData.read(path)
+    assert data.columns["clearance_pair"].tolist() == ["leader.link5 - follower.link5", ""]
+    assert data.columns["clearance_arm_arm"].tolist() == [0.25, np.inf]
+
+
 # --- the reproduction's comparison figures ----------------------------------------------
 
 def test_comparison_figure_zooms_shades_and_draws_both_limits():

@@ -253,3 +253,28 @@ def test_dh_capsules_errors():
         dh_capsules(SerialArm(dh), [0.1, -0.1])
     with pytest.raises(InvalidInputError, match="radii"):
         dh_capsules(SerialArm(dh), [0.1, 0.1, 0.1])
+
+
+@needs_robots
+def test_fitted_capsules_are_kept_per_file_version(tmp_path):
+    import shutil
+
+    from dualarm_qp.geometry import links
+
+    src = example_robot_urdf("ur5")
+    first = urdf_capsules(src, "base_link", "tool0")
+    again = urdf_capsules(src, "base_link", "tool0")
+    assert again is not first and all(again[k] is first[k] for k in first)  # the cache
+    # A copy elsewhere (with its meshes found through the original's folders) is
+    # another file: fitted afresh, to the same capsules.
+    copy = tmp_path / "ur5.urdf"
+    shutil.copy(src, copy)
+    dirs = [str(p) for p in Path(src).resolve().parents]
+    fresh = urdf_capsules(copy, "base_link", "tool0", package_dirs=dirs)
+    assert all(fresh[k] is not first[k] for k in first)
+    assert all(np.allclose(fresh[k].a, first[k].a) for k in first)
+    # Editing the file (its size or time changes) fits it again.
+    copy.write_text(copy.read_text() + "\n")
+    edited = urdf_capsules(copy, "base_link", "tool0", package_dirs=dirs)
+    assert all(edited[k] is not fresh[k] for k in first)
+    assert len(links._FITTED) <= links._FITTED_MAX
