@@ -69,15 +69,14 @@ def test_the_pillar_file_builds_a_scene_with_the_pillar_and_the_beam():
     assert PILLAR_AXIS[0] - PILLAR_RADIUS - (0.4997 + 0.020) > D_S
 
 
-def test_a_run_with_a_scene_prints_its_clearance_and_draws_its_figures(tmp_path, capsys):
+def test_the_pillar_file_runs_from_the_command_line(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["run", str(short_pillar(tmp_path, 0.31)), "--out", str(out),
-                 "--quiet"]) == 0
-    printed = capsys.readouterr().out
-    assert "clearance    smallest 263.0 mm (follower.link1 - pillar" in printed
+    assert main(["run", str(short_pillar(tmp_path, 0.31)), "--out", str(out), "--quiet",
+                 "--no-plots"]) == 0
+    assert "clearance    smallest 263.0 mm (follower.link1 - pillar" in capsys.readouterr().out
     s = json.loads((out / "summary.json").read_text())
-    assert {"joints.png", "grasp.png", "report.html"} <= set(s["outputs"])
-    data = RunData.read(out / "trajectory.csv")  # the nearest pair's name is text
+    assert s["collision"]["enabled"] and "follower.link2 - pillar" in s["collision"]["pairs"]
+    data = RunData.read(out / "trajectory.csv")
     assert set(data.columns["clearance_pair"]) == {"follower.link1 - pillar"}
     np.testing.assert_allclose(np.nanmin(data.col("clearance_obstacles")),
                                s["realised_limits"]["clearance"]["min_m"])
