@@ -18,8 +18,10 @@ Pairs (:meth:`CollisionScene.build`):
 * ``self``: an arm with more than six joints against itself, links at least
   :data:`SELF_GAP` joints apart;
 * minus the pairs excluded by name, the pairs of two bodies no joint moves (an arm's
-  base and an obstacle: their distance never changes), and the pairs that overlap at the
-  start (which no limit could separate); each is reported as excluded, with its reason.
+  base and an obstacle: their distance never changes), and the arm-arm, arm-object and
+  self pairs that overlap at the start (which no limit could separate); each is reported
+  as excluded, with its reason. An obstacle that overlaps an arm or the object at the
+  start is an error (:class:`ObstacleOverlapError`): the scene is wrong.
 
 Every body's pose is read from one stack of frames (:meth:`CollisionScene.frames`):
 the leader's link frames, the follower's, the object frame and the world. Distances
@@ -60,6 +62,20 @@ SELF_GAP = 3
 
 #: Owners of bodies, in the order of the frame stack.
 OWNERS = ("leader", "follower", "object", "world")
+
+
+class ObstacleOverlapError(InvalidInputError):
+    """An obstacle overlaps an arm or the object at the start.
+
+    Attributes
+    ----------
+    obstacle : str
+        The obstacle's name.
+    """
+
+    def __init__(self, message: str, obstacle: str) -> None:
+        super().__init__(message)
+        self.obstacle = obstacle
 
 
 @dataclass(frozen=True)
@@ -368,6 +384,13 @@ class CollisionScene:
                                                 "its grasp point)"))
                     continue
             if prox.distance[i] < 0.0:
+                if pair.group == "obstacle":  # the scene is wrong, not the arms' capsules
+                    obstacle = a if a.owner == "world" else b
+                    raise ObstacleOverlapError(
+                        f"obstacle '{obstacle.name}' overlaps "
+                        f"{(b if obstacle is a else a).name} at the start "
+                        f"({-prox.distance[i] * 1e3:.1f} mm deep): move it or the arms",
+                        obstacle.name)
                 excluded.append((pair.name, f"overlapping at the start "
                                             f"({prox.distance[i] * 1e3:.1f} mm)"))
                 continue
@@ -428,4 +451,4 @@ def _distance_to_point(shape: Capsule | Box, point: FloatArray) -> float:
     return float(np.linalg.norm(np.maximum(np.abs(local) - shape.half_size, 0.0)))
 
 
-__all__ = ["GROUPS", "Body", "CollisionScene", "Measured", "Pair"]
+__all__ = ["GROUPS", "Body", "CollisionScene", "Measured", "ObstacleOverlapError", "Pair"]

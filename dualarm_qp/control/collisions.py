@@ -32,8 +32,10 @@ if TYPE_CHECKING:
     from .controller import DualArmController
     from .rollout import Failure
 
-#: A task scale below this at the failing state counts as stopped by its blocking rows.
-BLOCKED_SCALE = 1e-3
+#: A task scale below this at the failing state counts as stopped by its blocking rows
+#: (the stall rule's share: a run stalls when its path advances by less than 1% of the
+#: time elapsed).
+BLOCKED_SCALE = 0.01
 
 
 def path_collision_of(task: DualArmTask, t0: float, t1: float, dt: float

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..collision.scene import CollisionScene
+from ..collision.scene import CollisionScene, ObstacleOverlapError
 from ..collision.settings import CollisionSettings
 from ..errors import ConfigError, DualArmError
 from ..geometry.shapes import Box, Capsule
@@ -115,6 +115,9 @@ def scene_of(cfg: ExperimentConfig, length: float, angle: float, time: float,
             start=start)
     except ConfigError:
         raise
+    except ObstacleOverlapError as err:
+        index = [o.name for o in cfg.scene.obstacles].index(err.obstacle)
+        raise ConfigError(str(err), path=path, key=f"scene.obstacles.{index}.pose") from None
     except DualArmError as err:
         key = "collision.exclude" if "no body of the scene" in str(err) else "collision"
         raise ConfigError(str(err), path=path, key=key) from None

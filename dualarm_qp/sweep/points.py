@@ -24,6 +24,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,6 +40,9 @@ START_UNREACHABLE = "start_unreachable"
 #: Keys whose ConfigError from ``build_experiment`` means "the start cannot be reached".
 _START_KEYS = tuple(f"{role}.initial.{form}" for role in ("leader", "follower")
                     for form in ("ik_branch", "near", "joints"))
+
+#: The key of an obstacle's pose (its start overlap is a start failure too).
+_OBSTACLE_POSE = re.compile(r"scene\.obstacles\.\d+\.pose")
 
 
 @dataclass(frozen=True)
@@ -173,8 +177,14 @@ def _as_sweep_error(err: ConfigError, spec: SweepSpec, point: Point) -> ConfigEr
 
 
 def is_start_failure(err: ConfigError) -> bool:
-    """Whether a ``build_experiment`` error means the start pose cannot be reached."""
-    return err.key in _START_KEYS
+    """Whether a ``build_experiment`` error means the start pose cannot be reached.
+
+    An arm's start cannot be solved, or an obstacle occupies the arms' start posture
+    (``scene.obstacles.<i>.pose``: it overlaps an arm or the object there).
+    """
+    return err.key in _START_KEYS or bool(
+        err.key and _OBSTACLE_POSE.fullmatch(err.key)
+        and "at the start" in str(err))
 
 
 def check_point(doc: dict[str, Any], spec: SweepSpec, point: Point,

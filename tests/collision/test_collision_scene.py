@@ -8,6 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.collision import CollisionScene, CollisionSettings
+from dualarm_qp.collision.scene import ObstacleOverlapError
 from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.geometry import Box, Capsule, capsule_proximities, proximity, sphere
 from dualarm_qp.kinematics import puma560
@@ -45,27 +46,58 @@ def test_pairs_have_their_groups_and_names():
 
 def test_exclusions_by_name_grasp_clearance_and_start_overlap():
     bar = Box([0.04, 0.04, 0.7], pose([0, 0, 0.35]))
-    leader, follower = _pumas()
+    leader = puma560()
+    follower = puma560().with_base(pose([0.2, 0.0, 0.0]))  # shoulders 0.2 m apart: overlap
     q_l = np.zeros(6)
     q_f = np.zeros(6)
     T_object = leader.fk(q_l)
-    # A ball on the leader's tool point: every leader link near it overlaps at the start.
-    lamp = sphere(0.05, T_object[:3, 3] + np.array([0.0, 0.0, 0.3]))
     scene = CollisionScene.build(
         leader, follower, settings=CollisionSettings(grasp_clearance=0.15),
-        object_shape=bar, obstacles=[("lamp", lamp)],
-        exclude=[("leader.link1", "follower.link1")], start=(q_l, q_f, T_object))
+        object_shape=bar, exclude=[("leader.link6", "follower.link6")],
+        start=(q_l, q_f, T_object))
     why = dict(scene.excluded)
-    assert why["leader.link1 - follower.link1"] == "excluded in the set-up"
+    assert why["leader.link6 - follower.link6"] == "excluded in the set-up"
     assert "the grasping hand" in why["leader.link6 - object"]
+    overlapping = [p for p, reason in why.items() if reason.startswith("overlapping")]
+    assert "leader.link1 - follower.link1" in overlapping
     assert all(p not in scene.pair_names for p in why)
     placed = scene.placed(scene.frames(leader.link_frames(q_l), follower.link_frames(q_f),
                                        T_object))
     bodies = scene.body_names
-    for name, reason in why.items():
-        if reason.startswith("overlapping"):
-            a, b = name.split(" - ")
-            assert proximity(placed[bodies.index(a)], placed[bodies.index(b)]).distance < 0
+    for name in overlapping:
+        a, b = name.split(" - ")
+        assert proximity(placed[bodies.index(a)], placed[bodies.index(b)]).distance < 0
+
+
+def test_an_obstacle_overlapping_the_start_is_an_error():
+    leader, follower = _pumas()
+    q = np.zeros(6)
+    T_object = leader.fk(q)
+    lamp = sphere(0.05, T_object[:3, 3] + np.array([0.0, 0.0, 0.3]))
+    bar = Box([0.04, 0.04, 0.7], pose([0, 0, 0.35]))
+    with pytest.raises(ObstacleOverlapError, match="'lamp' overlaps") as err:
+        CollisionScene.build(leader, follower, settings=CollisionSettings(),
+                             object_shape=bar, obstacles=[("lamp", lamp)],
+                             start=(q, q, T_object))
+    assert err.value.obstacle == "lamp"
+
+
+def test_pairs_of_bodies_no_joint_moves_are_left_out():
+    from dualarm_qp.kinematics import example_robot_arm
+    from dualarm_qp.kinematics.robots import example_robots_dir
+
+    if example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed")
+    ur5 = example_robot_arm("ur5", "base_link", "tool0")
+    other = ur5.with_base(pose([1.0, 0.0, 0.0]))
+    post = Capsule([0.5, 0.0, -1.0], [0.5, 0.0, 1.0], 0.05)
+    scene = CollisionScene.build(ur5, other, settings=CollisionSettings(),
+                                 obstacles=[("post", post)])
+    why = dict(scene.excluded)
+    for pair in ("leader.base - follower.base", "leader.base - post", "follower.base - post"):
+        assert why[pair] == "neither body moves"
+        assert pair not in scene.pair_names
+    assert "leader.link1 - post" in scene.pair_names
 
 
 def test_a_bad_exclude_name_lists_the_bodies():

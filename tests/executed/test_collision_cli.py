@@ -77,6 +77,19 @@ def test_a_bad_exclude_name_is_refused_with_the_valid_bodies(
     assert {"pair": "follower.link2 - pillar", "why": "excluded in the set-up"} in excluded
 
 
+def test_an_obstacle_through_an_arm_at_the_start_is_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # The follower's shoulder stands at (300, 1380, 0) mm: a post there overlaps it.
+    post = {"name": "post", "capsule": {"radius": 50, "length": 1200},
+            "pose": {"position": [300, 1380, 0]}}
+    for enabled in (True, False):  # the scene is wrong whether or not it is avoided
+        code, err, out = _run(tmp_path, with_obstacles(_beam({}), [post], enabled=enabled),
+                              capsys, "--force")
+        assert code == 2, err
+        assert "scene.obstacles.0.pose" in err and "'post' overlaps follower.link1" in err
+        assert not (out / "summary.json").exists()
+
+
 def test_a_dh_arm_without_link_radius_is_refused(tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
     data = _beam({"collision": {"enabled": True}})

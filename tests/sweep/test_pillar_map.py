@@ -45,3 +45,23 @@ def test_the_pillar_map_moves_the_pillar_over_the_floor_plane():
         assert pillar.radius == 0.05 and "object" in scene.body_names
     assert sweep_labels(spec.axes, {"length": "mm"}, spec.labels) == {
         X: "pillar x [mm]", Y: "pillar y [mm]"}
+
+
+def test_a_pillar_through_an_arm_at_the_start_is_a_start_failure():
+    from dualarm_qp.errors import ConfigError
+    from dualarm_qp.sweep.points import is_start_failure
+    from dualarm_qp.sweep.spec import Point
+
+    spec = load_sweep(SWEEP)
+    base = yaml.safe_load((SWEEP.parent / spec.base).read_text())
+    point = Point(0, {X: 300, Y: 1380})  # the follower's shoulder
+    doc = point_document(base, spec, point)
+    try:
+        build_experiment(parse_config(doc, str(SWEEP)), str(SWEEP))
+    except ConfigError as err:
+        assert err.key == "scene.obstacles.0.pose"
+        assert is_start_failure(err)
+    else:
+        raise AssertionError("a pillar through the follower's shoulder was accepted")
+    assert not is_start_failure(ConfigError("size must be positive",
+                                            key="scene.obstacles.0.box"))
