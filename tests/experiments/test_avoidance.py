@@ -82,6 +82,7 @@ def test_each_runs_config_yaml_rebuilds_that_run(compared):
         assert exp.solver_name == solver and exp.task.scene.settings.enabled is enabled
 
 
+@pytest.mark.slow
 def test_a_comparison_replaces_its_own_output_and_keeps_other_files(compared, tmp_path):
     config, _, _ = compared
     out = tmp_path / "out"

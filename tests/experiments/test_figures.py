@@ -451,6 +451,7 @@ def test_speed_ticks_are_round_numbers_in_the_display_unit():
     assert "speed limit \N{PLUS-MINUS SIGN}114.6 deg/s" in legend_texts(fig)
 
 
+@pytest.mark.slow
 def test_run_figures_show_the_files_units():
     data = synthetic()
     for units, per_rad, per_m in ((DisplayUnits("deg", "mm"), DEG, 1e3),

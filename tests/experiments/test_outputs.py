@@ -216,6 +216,7 @@ def test_reproduce_twice_into_the_same_folder(tmp_path, cases, case_plots, capsy
     assert "error" not in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_reproduce_recognises_its_files_without_reproduce_json(tmp_path, cases, case_plots):
     out = tmp_path / "reproduction"
     argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
@@ -226,6 +227,7 @@ def test_reproduce_recognises_its_files_without_reproduce_json(tmp_path, cases, 
     assert not is_reproduction_folder(out)
 
 
+@pytest.mark.slow
 def test_reproduce_refuses_a_foreign_folder_unless_forced(tmp_path, cases, case_plots,
                                                         capsys):
     out = tmp_path / "busy"
@@ -313,6 +315,7 @@ def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, c
     assert "interrupted" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, case_plots, monkeypatch,
                                                     capsys):
     rollout = run_module.rollout

@@ -108,6 +108,7 @@ def test_capsule_box_apart_matches_a_minimisation_along_the_axis(box, a, b, radi
 
 
 # ------------------------------------------------------------------ overlapping: support functions
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(boxes, vec3, vec3, st.floats(0.01, 0.3))
 def test_capsule_box_signed_distance_matches_support_functions(box, a, b, radius):
@@ -125,6 +126,7 @@ def test_capsule_box_signed_distance_matches_support_functions(box, a, b, radius
     check_conventions(p)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(boxes, boxes)
 def test_box_box_signed_distance_matches_support_functions(box_a, box_b):

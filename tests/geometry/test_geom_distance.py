@@ -61,6 +61,7 @@ def rigid_motion(xi, h):
 
 
 # ------------------------------------------------------------------ closed form vs oracle
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None)
 @given(st.lists(segment_pair(), min_size=1, max_size=6))
 def test_segment_distance_matches_the_exact_oracle(pairs):
@@ -90,6 +91,7 @@ def test_the_exact_oracle_agrees_with_dense_sampling():
 
 
 # ------------------------------------------------------------------ conventions
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(segment_pair(), st.floats(0.0, 0.5), st.floats(0.0, 0.5)),
                 min_size=1, max_size=6))

@@ -52,6 +52,7 @@ def clouds(draw):
     return pts, radii
 
 
+@pytest.mark.slow
 @settings(max_examples=80, deadline=None)
 @given(clouds())
 def test_fitted_capsule_contains_every_ball(cloud):
