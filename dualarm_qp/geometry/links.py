@@ -28,7 +28,7 @@ import pinocchio as pin
 from .._validate import as_array
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm, frame_id
-from ..kinematics.robots import RobotModelError, example_robot_urdf, urdf_arm
+from ..kinematics.robots import RobotModelError, example_robot_urdf, frame_below, urdf_arm
 from .fit import fit_capsule, geometry_balls
 from .shapes import Capsule
 
@@ -133,7 +133,7 @@ def _urdf_capsules(file: str | Path, root: str, tip: str, *,
     for obj in geom.geometryObjects:
         movers = [j for j in model.supports[obj.parentJoint] if j in chain]
         if not (movers or (obj.parentJoint == root_joint
-                           and _below(model, obj.parentFrame, root_id))):
+                           and frame_below(model, obj.parentFrame, root_id))):
             continue  # not on the arm: another arm, a head, a torso
         key = chain.index(movers[-1]) + 1 if movers else 0
         frame = data.oMi[movers[-1]] if movers else data.oMf[root_id]
@@ -245,14 +245,3 @@ def arm_capsules(arm: SerialArm, *, radii: Any = None,
         raise InvalidInputError(f"{arm.name}: the chain {root}->{tip} of {file} has joints "
                                 f"{found}, the arm has {arm.joint_names}")
     return urdf_capsules(file, root, tip, package_dirs=package_dirs)
-
-
-def _below(model: Any, frame: int, ancestor: int) -> bool:
-    """Whether frame ``ancestor`` is ``frame`` or lies on its path up to the universe."""
-    seen = set()
-    while frame != ancestor:
-        if frame == 0 or frame in seen:
-            return False
-        seen.add(frame)
-        frame = model.frames[frame].parentFrame
-    return True

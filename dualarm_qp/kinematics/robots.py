@@ -144,7 +144,7 @@ def urdf_arm(
         tip_id = frame_id(full, tip, "tip", label)
     except InvalidInputError as err:
         raise RobotModelError(str(err), "tip") from None
-    if not _below(full, tip_id, root_id):
+    if not frame_below(full, tip_id, root_id):
         raise RobotModelError(f"{label}: tip {tip!r} is not below root {root!r} in the "
                               "robot's tree", "tip")
     root_joint = full.frames[root_id].parentJoint
@@ -175,7 +175,7 @@ def urdf_arm(
     return arm
 
 
-def _below(model: Any, frame: int, ancestor: int) -> bool:
+def frame_below(model: Any, frame: int, ancestor: int) -> bool:
     """Whether frame ``ancestor`` is ``frame`` or lies on its path up to the universe."""
     seen = set()
     while frame != ancestor:
