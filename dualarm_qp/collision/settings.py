@@ -26,8 +26,9 @@ from ..errors import InvalidInputError
 
 #: How far [m] a recorded clearance may fall below the safety distance: the
 #: second-order term of one step, ``d_ddot dt^2 / 2``. 1 mm covers a relative
-#: acceleration of the witness points of 20 m/s^2 at dt = 10 ms (the shipped
-#: configurations reach below 0.1 mm; docs/collisions.md).
+#: acceleration of the witness points of 20 m/s^2 at dt = 10 ms. Measured: the shipped
+#: collision configurations end 0.02 to 0.11 mm above ``d_s``; the deepest undershoot in
+#: the tests is 0.001 mm (a pair held at ``d_s`` until the task is blocked).
 CLEARANCE_ALLOWANCE = 1e-3
 
 
