@@ -47,7 +47,8 @@ class PathCollision:
     @property
     def message(self) -> str:
         """One line for a person."""
-        inside = "runs the object into" if self.distance < 0 else "brings the object within"
+        inside = ("runs the object into" if self.distance < 0
+                  else "brings the object within the safety distance of")
         return (f"the desired path {inside} obstacle '{self.obstacle}' at t = {self.t:.4g} s "
                 f"(distance {self.distance * 1e3:.1f} mm, safety distance "
                 f"{self.safety_distance * 1e3:.1f} mm): no motion of the arms can follow it")

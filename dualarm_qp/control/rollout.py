@@ -498,6 +498,13 @@ def rollout(
     if failure is None and hard:
         failure = _realised_failure(realised, trace, dt)
     clearance = record_clearance(task, trace)
+    if task.scene is not None:
+        overlapping = [pair for pair, why in task.scene.excluded
+                       if why.startswith("overlapping at the start")]
+        if overlapping:
+            warnings.append("collision pairs left out because their shapes overlap at the "
+                            f"start (not checked during the run): {', '.join(overlapping)}; "
+                            "move the arms apart or add the pairs to collision.exclude")
     if clearance is not None:
         if failure is None and clearance.enforced and not clearance.kept:
             failure = clearance_failure(clearance, trace)

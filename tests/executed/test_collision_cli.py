@@ -48,6 +48,38 @@ def _beam(extra: dict, duration: float = 0.31) -> dict:
                   merged({"controller": {"duration": duration}}, extra))
 
 
+@pytest.mark.parametrize("where", ["file", "option"])
+def test_a_boxes_only_solver_with_collision_rows_is_refused_naming_where_it_was_chosen(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], where: str) -> None:
+    """sns takes boxes only: exit 2 naming the file, ``solver.name`` or ``--solver``."""
+    data = _beam({"collision": {"enabled": True}})
+    extra: tuple[str, ...] = ()
+    if where == "file":
+        data["solver"] = {"name": "sns"}
+    else:
+        extra = ("--solver", "sns")
+    got, err, out = _run(tmp_path, data, capsys, *extra)
+    assert got == 2, err
+    assert "case.yaml" in err and "collision" in err and "nullspace" in err
+    assert ("key 'solver.name'" if where == "file" else "--solver sns") in err
+    assert not out.exists() or not (out / "summary.json").exists()
+
+
+def test_pairs_overlapping_at_the_start_are_left_out_with_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Fat leader capsules overlap the follower's: those pairs are named, never silent."""
+    data = _beam({"collision": {"enabled": True},
+                  "leader": {"link_radius": [1400, 100, 80, 60, 50, 40]}})
+    got, err, out = _run(tmp_path, data, capsys)
+    assert got == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    left_out = [e["pair"] for e in summary["collision"]["excluded"]
+                if e["why"].startswith("overlapping at the start")]
+    assert left_out and all(p.startswith("leader.link1 - ") for p in left_out)
+    warning = [w for w in summary["warnings"] if "overlap at the start" in w]
+    assert len(warning) == 1 and all(p in warning[0] for p in left_out)
+
+
 @pytest.mark.parametrize(("xi", "code"), [(2581.0, 2), (2580.0, 0)])
 def test_an_approach_speed_that_crosses_the_band_in_one_step_is_refused(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], xi: float, code: int) -> None:

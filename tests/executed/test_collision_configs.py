@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
+from clearance_check import check_clearance, penetrations, recompute
 from csv_check import check_valid, joint_columns, read_trajectory
 from urdf_oracle import UrdfChain, homogeneous, rpy_matrix
 
@@ -147,6 +148,11 @@ def _run(name: str, out: Path, *, enabled: bool, solver: str | None = None
     return code, summary, read_trajectory(out / "trajectory.csv"), data
 
 
+def _experiment(name: str, out: Path) -> Any:
+    """The experiment as the run in ``out`` ran it (from its own config.yaml)."""
+    return build_experiment(load_config(out / "config.yaml"), str(CONFIGS / f"{name}.yaml"))
+
+
 def _swivel(chain: UrdfChain, base: np.ndarray, q: np.ndarray) -> float:
     """Angle [rad] of the elbow (joint 4) about the shoulder-wrist line, from the plane
     through that line and the vertical."""
@@ -191,6 +197,9 @@ def test_config_keeps_its_clearance(name: str, solver: str | None, tmp_path: Pat
     bound = np.flatnonzero(np.minimum.reduce([traj[c] for c in case.bound]) < d_s + 1e-3)
     assert {traj["clearance_pair"][k] for k in bound} <= case.binding
     assert summary["realised_limits"]["clearance"]["pair"] in case.binding
+    # Every pair recomputed from the CSV's joints with the tests' own kinematics and
+    # distances (not the library's, not coal): the columns agree and d_s is kept.
+    assert check_clearance(traj, _experiment(name, tmp_path / "out")) == []
     if name == "ur5_pair_collision":
         assert traj["grasp"][-1] > 0.12  # the grasp stops short of the leader's hand (m)
     else:
@@ -212,6 +221,8 @@ def test_config_penetrates_without_collision_avoidance(name: str, tmp_path: Path
     assert clearance["pair"] == case.deepest
     assert any("penetrates" in w for w in summary["warnings"])
     assert "; PENETRATION" in capsys.readouterr().out  # the console's clearance line
+    deepest = penetrations(recompute(traj, _experiment(name, tmp_path / "out")))
+    assert any(case.deepest in line for line in deepest), deepest  # found independently
     if name == "ur5_pair_collision":
         assert traj["grasp"][-1] < 0.06  # the grasp slides on into the leader's hand (m)
     else:
