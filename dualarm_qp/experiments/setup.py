@@ -436,8 +436,8 @@ def build_experiment(
         A command-line option the running solver refuses, naming ``--solver-option``.
     PairingError
         A limit that gives rows (of ``limits`` or of the file) with a solver that takes
-        boxes only: the message names the file, where the solver was chosen (the key
-        ``solver.name`` or the ``--solver`` option), the limit and the solvers that can.
+        boxes only: the message names the file (and the key ``solver.name`` when the
+        file chose the solver), the solver, the limit and the solvers that can.
     """
     try:
         exp = _build(cfg, path, solver, solver_options)
@@ -451,8 +451,8 @@ def build_experiment(
             raise ConfigError(str(err), path=path) from None
         raise
     except PairingError as err:
-        where = "key 'solver.name'" if solver is None else f"option --solver {solver}"
-        raise PairingError(f"{path}: {where}: {err}", solver=err.solver, limits=err.limits,
+        where = f"{path}: key 'solver.name': " if solver is None else f"{path}: "
+        raise PairingError(f"{where}{err}", solver=err.solver, limits=err.limits,
                            able=err.able) from None
     except SolverFlagError:
         raise

@@ -69,7 +69,7 @@ def _check_custom_limit(out: str) -> None:
     for name, verdict, gap in rows:
         assert verdict == "completed", name
         assert float(gap) >= 0.0, name  # never past the wall
-    assert re.search(r"^sns\s+refused: solver 'sns' takes boxes only, and the limit 'wall' "
+    assert re.search(r"^sns\s+refused: (\S+: )?solver 'sns' takes boxes only, and the limit 'wall' "
                      r"gives rows; solvers that keep rows: nullspace", out, re.MULTILINE), out
 
 
