@@ -102,6 +102,21 @@ def test_the_symmetric_beam_is_shared_equally_without_moments():
     np.testing.assert_allclose(split.wrenches, [[0, 0, 20, 0, 0, 0]] * 2, atol=1e-12)
 
 
+@pytest.mark.parametrize("c", [0.0, 0.25, 0.5, 0.8, 1.0])
+def test_the_level_beam_of_the_docs(c):
+    """docs/derivation.md: a rigid leader at 0, a slide along the beam at L, mass at c L.
+
+    The follower carries ``M g (2 + c) / 5`` and each hand bends with ``M g L (1 - 2 c) / 5``
+    (worked out by hand from the four unknowns a + b = M g, u + v = L b - c L M g).
+    """
+    L, Mg = 0.8, 10.0
+    split = split_load([rigid_grasp([0, 0, 0]), sliding_grasp([L, 0, 0], [1, 0, 0])],
+                       ObjectLoad(1.0, [c * L, 0, 0], [0, 0, -Mg]), np.eye(4))
+    b, u = Mg * (2 + c) / 5, Mg * L * (1 - 2 * c) / 5
+    np.testing.assert_allclose(split.wrenches, [[0, 0, Mg - b, 0, u, 0], [0, 0, b, 0, u, 0]],
+                               atol=1e-12)
+
+
 @settings(max_examples=40, deadline=None)
 @given(q=quats, p=vec3, rc=vec3, p1=vec3, p2=vec3, s=vec3, k=vec3, z=st.lists(
     st.floats(-1.0, 1.0), min_size=4, max_size=4), mass=st.floats(0.1, 50.0))
