@@ -210,6 +210,12 @@ def wrench_space(grasp: GraspStatics) -> FloatArray:
     return u[:, rank:]
 
 
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Return ``a x b`` of two 3-vectors (``np.cross`` costs more than the product here)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def _transfer(point: FloatArray, about: FloatArray) -> FloatArray:
     """Return the 6x6 map of a wrench about ``point`` to the same wrench about ``about``."""
     r = point - about
@@ -275,7 +281,7 @@ def split_load(hands: Sequence[GraspStatics], load: ObjectLoad, T_world_object: 
     centre = T[:3, :3] @ load.mass_centre + T[:3, 3]
     about = hands[0].point
     weight = load.mass * load.gravity
-    rhs = -np.r_[weight, np.cross(centre - about, weight)]
+    rhs = -np.r_[weight, _cross(centre - about, weight)]
     unscale = np.diag([1.0, 1.0, 1.0, L, L, L])  # [f; m / L] -> [f; m]
     blocks, owners = [], []
     for i, hand in enumerate(hands):
@@ -290,7 +296,12 @@ def split_load(hands: Sequence[GraspStatics], load: ObjectLoad, T_world_object: 
     rows = np.diag([1.0, 1.0, 1.0, 1.0 / L, 1.0 / L, 1.0 / L])  # balance in [N, N m / L]
     G = rows @ np.hstack(blocks) if blocks else np.zeros((6, 0))
     b = rows @ rhs
-    mu = np.linalg.pinv(G, rcond=1e-12) @ b if blocks else np.zeros(0)
+    rank = 0
+    mu = np.zeros(G.shape[1])
+    if blocks:  # the minimum-norm solution, by one SVD (which also gives the rank)
+        u, sv, vt = np.linalg.svd(G, full_matrices=False)
+        rank = int(np.sum(sv > 1e-12 * sv[0])) if sv[0] > 0.0 else 0
+        mu = vt[:rank].T @ ((u[:, :rank].T @ b) / sv[:rank])
     residual = float(np.max(np.abs(G @ mu - b))) / load.weight
     if not residual <= BALANCE_RTOL:
         raise UnbalancedLoadError(
@@ -306,5 +317,4 @@ def split_load(hands: Sequence[GraspStatics], load: ObjectLoad, T_world_object: 
     for i, hand in enumerate(hands):
         if hand.wrench is not None:
             out[i] = hand.wrench
-    rank = int(np.linalg.matrix_rank(G)) if blocks else 0
     return LoadSplit(out, L, G.shape[1] - rank, residual)

@@ -212,3 +212,25 @@ def test_both_slides_across_the_bar_hold_the_load(tmp_path: Path) -> None:
     total = sum(np.column_stack([traj[f"f_{r}_{p}"] for p in ("fx", "fy", "fz")])
                 for r in ("leader", "follower"))
     np.testing.assert_allclose(total, np.broadcast_to(-weight, total.shape), atol=1e-9 * 19.62)
+
+
+def test_samples_the_grasps_cannot_hold_are_nan_and_warned() -> None:
+    """A task built in Python (no start check) whose load the two slides cannot hold."""
+    if example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed")
+    import dataclasses
+
+    from dualarm_qp.control.rollout import rollout
+    from dualarm_qp.experiments import build_experiment, parse_config
+    from dualarm_qp.task.loads import ObjectLoad
+
+    exp = build_experiment(parse_config(_both_sliding({"mass": 2})), "both_sliding_bar")
+    assert exp.task.load is not None
+    along = ObjectLoad(2.0, [0.0, 0.0, 0.3], [9.81, 0.0, 0.0])  # world x: along the bar
+    exp = dataclasses.replace(exp, task=dataclasses.replace(exp.task, load=along))
+    res = rollout(exp.controller(), exp.initial, duration=0.03)
+    n = len(res.trace)
+    assert n > 1
+    assert np.isnan(res.trace.f_leader).all() and np.isnan(res.trace.f_follower).all()
+    assert res.extras["loads"]["unbalanced_samples"] == n
+    assert any("cannot hold the load" in w for w in res.warnings)
