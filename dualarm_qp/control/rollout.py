@@ -33,6 +33,7 @@ from ..solvers._affine import factor
 from ..step.state import DualArmState
 from .collisions import blocked_by_pair, path_collision_of, record_clearance
 from .controller import DualArmController
+from .loads import record_loads
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .trace import Trace, record, record_state
@@ -498,6 +499,9 @@ def rollout(
     if failure is None and hard:
         failure = _realised_failure(realised, trace, dt)
     clearance = record_clearance(task, trace)
+    loads = record_loads(task, trace)  # the wrench each hand applies (a task with a load)
+    if loads is not None and loads.warning():
+        warnings.append(str(loads.warning()))
     if task.scene is not None:
         overlapping = [pair for pair, why in task.scene.excluded
                        if why.startswith("overlapping at the start")]
@@ -520,6 +524,7 @@ def rollout(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
         warnings=warnings, clearance=clearance,
         extras={**({} if task.scene is None else {"collision": task.scene.summary()}),
+                **({} if loads is None else {"loads": loads.as_dict()}),
                 "projection": project, "reresolve_orientation": reresolve_orientation,
                 "projection_failures": projection_failures,
                 "closure_tolerance_m_rad": list(limits.closure),

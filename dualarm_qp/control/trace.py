@@ -39,6 +39,10 @@ class Trace:
     follower's right-hand side [m/s, rad/s]: the velocity-level correction, which the
     step's limits bound. ``support_force`` is the push ``h`` [N] of a supporting
     follower (Case 2) at the row's state (NaN for a grasp, and for a step that raised).
+    ``f_leader`` and ``f_follower`` are the wrench ``[f; m]`` [N, N m] each hand applies
+    to the object (world frame, moment about the hand's grasp point) for a task with a
+    load, computed from the recorded joints once the run is over
+    (:mod:`dualarm_qp.control.loads`; NaN without a load).
 
     ``clearance_*`` are the smallest signed distances [m] of each group of pairs of the
     task's collision scene at the row's state (``inf`` for a group without pairs; NaN
@@ -96,12 +100,15 @@ class Trace:
     clearance_obstacles: FloatArray
     clearance_self: FloatArray
     clearance_pair: list[str]
+    f_leader: FloatArray
+    f_follower: FloatArray
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
         """Arrays for ``rows`` samples, filled with NaN until written."""
         widths = {"q_l": n_l, "ql_dot": n_l, "margin_ql": n_l,
-                  "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f}
+                  "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f, "f_leader": 6,
+                  "f_follower": 6}
         values: dict[str, Any] = {}
         for f in fields(cls):
             if f.name in ("status", "clearance_pair"):

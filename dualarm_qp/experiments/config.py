@@ -225,10 +225,13 @@ class ObjectSpec(Model):
 
     ``contact`` says how the follower holds the object: ``grasp`` (the default, Case 1)
     or ``support`` (Case 2: it only pushes along the surface normal, on the support line
-    that gravity sets, docs/support.md). A support needs ``mass`` [kg], takes
-    ``mass_centre`` (object coordinates, length unit; default the object origin) and
-    ``gravity`` (world frame, length unit / time unit^2; default ``[0, 0, -9.81]`` m/s^2),
-    a ``plane_bar`` surface and a rigid leader grasp. These keys are refused with a grasp.
+    that gravity sets, docs/support.md). ``mass`` [kg] (> 0), ``mass_centre`` (object
+    coordinates, length unit; default the object origin) and ``gravity`` (world frame,
+    length unit / time unit^2, non-zero; default ``[0, 0, -9.81]`` m/s^2) describe the
+    load: with a grasp they are optional (given, the run records the wrench each hand
+    applies, docs/derivation.md "The load each hand carries"; ``mass_centre`` and
+    ``gravity`` need ``mass``); a support needs ``mass``, a ``plane_bar`` surface and a
+    rigid leader grasp.
     """
 
     H1: PoseSpec | None = None
@@ -244,25 +247,25 @@ class ObjectSpec(Model):
 
     @model_validator(mode="after")
     def _contact(self) -> ObjectSpec:
+        if self.mass is not None and not self.mass > 0:
+            raise keyed("mass", f"must be > 0 kg (got {self.mass:g})")
+        if self.gravity is not None and not any(self.gravity):
+            raise keyed("gravity", "must be a non-zero vector")
         if self.contact == "grasp":
-            given = [k for k in ("mass", "mass_centre", "gravity") if getattr(self, k) is not None]
-            if given:
-                raise keyed(given[0], "is only used with 'contact: support' (a grasping "
-                             "follower needs no mass)")
+            given = [k for k in ("mass_centre", "gravity") if getattr(self, k) is not None]
+            if given and self.mass is None:
+                raise keyed(given[0], "describes the load, which needs 'mass' [kg] too "
+                             "(without a mass no load is computed)")
             return self
         if self.mass is None:
             raise keyed("mass", "missing required key: a supporting follower ('contact: "
                          "support') needs the object's mass [kg]")
-        if not self.mass > 0:
-            raise keyed("mass", f"must be > 0 kg (got {self.mass:g})")
         if self.surface.type != "plane_bar":
             raise keyed("surface.type", f"a support ('contact: support') needs a plane_bar "
                          f"surface, got {self.surface.type}")
         if self.leader_surface is not None:
             raise keyed("leader_surface", "a support ('contact: support') needs a rigid "
                          "leader grasp: leave 'leader_surface' out")
-        if self.gravity is not None and not any(self.gravity):
-            raise keyed("gravity", "must be a non-zero vector")
         return self
 
     @model_validator(mode="after")

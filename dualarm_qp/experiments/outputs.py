@@ -121,7 +121,10 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     scene, ``clearance_arm_arm``, ``clearance_arm_object``, ``clearance_obstacles`` (and
     ``clearance_self`` for arms with self-collision pairs) are the smallest signed
     distance [m] of each group of pairs (``inf``: a group without pairs) and
-    ``clearance_pair`` the nearest pair. ``scale`` is the
+    ``clearance_pair`` the nearest pair. With a load (``object.mass``),
+    ``f_leader_fx .. f_leader_mz`` and ``f_follower_fx .. f_follower_mz`` are the
+    wrench each hand applies to the object [N, N m] (world frame, moment about the
+    hand's grasp point; NaN where the grasps cannot hold it). ``scale`` is the
     task scale (:class:`~dualarm_qp.control.trace.Trace`): the share of the path rate
     asked for that the limits allowed, 1 when not slowed, the last row included.
     """
@@ -176,6 +179,10 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         if np.isfinite(trace.clearance_self).any():  # arms with self-collision pairs
             cols["clearance_self"] = trace.clearance_self
         cols["clearance_pair"] = trace.clearance_pair
+    if len(trace) and not np.isnan(trace.f_leader).all():  # a task with a load
+        for role, wrench in (("leader", trace.f_leader), ("follower", trace.f_follower)):
+            for j, part in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
+                cols[f"f_{role}_{part}"] = wrench[:, j]
     return cols
 
 

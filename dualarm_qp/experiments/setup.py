@@ -15,6 +15,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..control.controller import ControlOutput, DualArmController
+from ..control.loads import hand_wrenches
 from ..control.rollout import RunLimits
 from ..errors import ConfigError, DualArmError, PairingError, SolverNotFoundError
 from ..kinematics.arm import DHTable, SerialArm
@@ -38,6 +39,7 @@ from ..step.options import StepOptions
 from ..step.parts import Limit
 from ..step.state import DualArmState
 from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
+from ..task.loads import ObjectLoad, UnbalancedLoadError
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
 from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
@@ -332,6 +334,41 @@ def _surface(s: SurfaceSpec, sc: Scales, key: str) -> GraspSurface:
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
 
 
+def _load(cfg: ExperimentConfig, sc: Scales, path: str) -> ObjectLoad:
+    """Return the object's load in SI (``object.mass`` must be given)."""
+    o = cfg.object
+    mass = _required(o.mass, "object.mass", path)
+    centre = np.zeros(3) if o.mass_centre is None else np.asarray(o.mass_centre) * sc.length
+    gravity = (np.asarray(STANDARD_GRAVITY) if o.gravity is None
+               else np.asarray(o.gravity, dtype=float) * sc.length / sc.time**2)
+    with _at("object.mass", path):
+        return ObjectLoad(mass, centre, gravity)
+
+
+def _check_load(task: DualArmTask, q_l0: FloatArray, sigma0: float, sigma_l0: float,
+                path: str) -> None:
+    """Refuse a load the grasps cannot hold at the start, naming the key to change.
+
+    ``object.gravity`` when the force cannot be balanced (gravity along a direction no
+    grasp carries), ``object.mass_centre`` when only its moment cannot (the mass centre
+    off an axis both grasps turn about).
+    """
+    if task.load is None or task.contact is not None:  # a support is checked by _support
+        return
+    try:
+        hand_wrenches(task, q_l0, sigma0, sigma_l0)
+    except UnbalancedLoadError as err:
+        T_obj = task.object_pose(q_l0, sigma_l0)
+        centre = T_obj[:3, :3].T @ (task.leader.fk(q_l0)[:3, 3] - T_obj[:3, 3])
+        at_grasp = dataclasses.replace(task.load, mass_centre=centre)
+        try:
+            hand_wrenches(dataclasses.replace(task, load=at_grasp), q_l0, sigma0, sigma_l0)
+            key = "object.mass_centre"
+        except UnbalancedLoadError:
+            key = "object.gravity"
+        raise ConfigError(f"at the start {err}", path=path, key=key) from None
+
+
 def _support(cfg: ExperimentConfig, sc: Scales, plane: GraspSurface, H1: FloatArray,
              trajectory: Trajectory, sigma0: float, path: str, notes: dict[str, Any]
              ) -> tuple[SupportContact, GraspSurface]:
@@ -341,11 +378,8 @@ def _support(cfg: ExperimentConfig, sc: Scales, plane: GraspSurface, H1: FloatAr
     along the push at the start, ``object.mass_centre`` when no point of the box holds
     the object with a push, ``object.grasp_initial`` when the start needs a pull.
     """
-    o = cfg.object
-    mass = _required(o.mass, "object.mass", path)
-    centre = np.zeros(3) if o.mass_centre is None else np.asarray(o.mass_centre) * sc.length
-    gravity = (np.asarray(STANDARD_GRAVITY) if o.gravity is None
-               else np.asarray(o.gravity, dtype=float) * sc.length / sc.time**2)
+    load = _load(cfg, sc, path)
+    mass, centre, gravity = load.mass, load.mass_centre, load.gravity
     if not isinstance(plane, PlaneBar):  # the schema allows only a plane_bar
         raise ConfigError("a support needs a plane_bar surface", path=path,
                           key="object.surface.type")
@@ -578,11 +612,13 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     with _at("follower", path):
         follower = follower.with_base(base_f)
         task = DualArmTask(leader, follower, H1, surface, trajectory,
-                           leader_surface=leader_surface, contact=contact)
+                           leader_surface=leader_surface, contact=contact,
+                           load=None if cfg.object.mass is None else _load(cfg, sc, path))
     q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking, sigma_l0)
     if q_f0 is None:
         q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,
                                  sigma_l0)
+    _check_load(task, q_l0, sigma0, sigma_l0, path)
     scene = scene_of(cfg, sc.length, sc.angle, sc.time, task.leader, task.follower,
                      (q_l0, q_f0, task.leader.fk(q_l0) @ task.H1_at(sigma_l0)), dt, path)
     if scene is not None:

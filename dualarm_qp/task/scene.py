@@ -27,6 +27,7 @@ from ..collision.scene import CollisionScene
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from .contact import SupportContact
+from .loads import ObjectLoad
 from .surfaces import GraspSurface
 from .trajectory import Trajectory
 
@@ -62,6 +63,10 @@ class DualArmTask:
         with ``scene.settings.enabled`` the step keeps them apart
         (:mod:`dualarm_qp.step.limits.collision`), otherwise their clearance is only
         measured. None (the default): no geometry.
+    load : ObjectLoad, optional
+        The object's mass, mass centre and gravity: given, a run records the wrench each
+        hand applies (:mod:`dualarm_qp.control.loads`). None (the default): no load is
+        computed. With a support it must agree with ``contact``.
     """
 
     leader: SerialArm
@@ -72,6 +77,7 @@ class DualArmTask:
     leader_surface: GraspSurface | None = None
     contact: SupportContact | None = None
     scene: CollisionScene | None = None
+    load: ObjectLoad | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "H1", as_pose(self.H1, "H1"))
@@ -87,6 +93,16 @@ class DualArmTask:
             if self.leader_surface is not None:
                 raise InvalidInputError("a supporting follower needs a rigid leader grasp "
                                         "(no leader_surface)")
+        if self.load is not None:
+            if not isinstance(self.load, ObjectLoad):
+                raise InvalidInputError("load must be None or an ObjectLoad")
+            c = self.contact
+            if c is not None and not (
+                    c.mass == self.load.mass and np.array_equal(c.mass_centre,
+                                                                self.load.mass_centre)
+                    and np.array_equal(c.gravity, self.load.gravity)):
+                raise InvalidInputError("the load's mass, mass centre and gravity must be "
+                                        "the support's")
         if self.scene is not None:
             if not isinstance(self.scene, CollisionScene):
                 raise InvalidInputError("scene must be None or a CollisionScene")

@@ -11,6 +11,7 @@ the key.
 from __future__ import annotations
 
 import copy
+import csv
 import json
 from pathlib import Path
 from typing import Any
@@ -32,11 +33,78 @@ def _cli(cfg: Path, out: Path) -> int:
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("support") / "out"
     assert _cli(CONFIG, out) == 0
-    summary = json.loads((out / "summary.json").read_text())
-    return read_trajectory(out / "trajectory.csv"), summary
+    return out
+
+
+@pytest.fixture(scope="module")
+def run(run_dir: Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    summary = json.loads((run_dir / "summary.json").read_text())
+    return read_trajectory(run_dir / "trajectory.csv"), summary
+
+
+#: The run as recorded before the hand wrenches were added (data/, see its "about").
+BEFORE = json.loads((Path(__file__).parent / "data" / "support_run_before_loads.json")
+                    .read_text())
+LOAD_COLUMNS = [f"f_{role}_{part}" for role in ("leader", "follower")
+                for part in ("fx", "fy", "fz", "mx", "my", "mz")]
+
+
+def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None:
+    """Every earlier column and summary entry as before; only the wrench columns and
+    summary ``loads`` are new."""
+    with open(run_dir / "trajectory.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    header = rows[0]
+    assert header == BEFORE["header"] + LOAD_COLUMNS
+    assert len(rows) - 1 == BEFORE["samples"]
+    for name, values in BEFORE["columns"].items():
+        now = [rows[1 + k][header.index(name)] for k in BEFORE["rows"]]
+        try:
+            np.testing.assert_allclose(np.array(now, dtype=float),
+                                       np.array(values, dtype=float), rtol=1e-12, atol=1e-15,
+                                       err_msg=name)
+        except ValueError:  # a text column
+            assert now == values, name
+    summary = json.loads((run_dir / "summary.json").read_text())
+    assert set(summary) - set(BEFORE["summary"]) >= {"loads"}
+    for key, value in BEFORE["summary"].items():
+        assert json.dumps(summary[key], sort_keys=True) == json.dumps(value, sort_keys=True) \
+            or summary[key] == pytest.approx(value, rel=1e-12), key
+
+
+def test_support_wrenches_are_the_push_and_the_leader_takes_the_rest(
+        run: tuple[dict[str, np.ndarray], dict[str, Any]]) -> None:
+    """The follower's wrench is the recorded push along the face normal, no moment; the
+    leader's balances the whole weight (its moments included), from the CSV alone."""
+    traj, summary = run
+    spec = yaml.safe_load(CONFIG.read_text())["object"]
+    mass = float(spec["mass"])
+    r_c = np.array(spec["mass_centre"], dtype=float) / 1000.0
+    g_world = np.array(spec["gravity"], dtype=float) / 1000.0
+    q_l = np.column_stack([traj[f"ql{i}"] for i in range(1, 7)])
+    w_l = np.column_stack([traj[c] for c in LOAD_COLUMNS[:6]])
+    w_f = np.column_stack([traj[c] for c in LOAD_COLUMNS[6:]])
+    worst = 0.0
+    for k in range(len(traj["t"])):
+        T_obj = puma_fk(q_l[k])
+        a = T_obj[:3, 0]                                    # the face normal: object x
+        np.testing.assert_allclose(w_f[k], np.r_[traj["support_force"][k] * a, 0, 0, 0],
+                                   rtol=0, atol=1e-9 * mass * 9.81)
+        p1, p2 = T_obj[:3, 3], (T_obj @ [0.0, 0.0, traj["grasp"][k], 1.0])[:3]
+        centre = (T_obj @ np.r_[r_c, 1.0])[:3]
+        weight = mass * g_world
+        force = w_l[k, :3] + w_f[k, :3] + weight
+        moment = (w_l[k, 3:] + w_f[k, 3:] + np.cross(p2 - p1, w_f[k, :3])
+                  + np.cross(centre - p1, weight))
+        worst = max(worst, float(np.abs(np.r_[force, moment]).max()))
+    assert worst < 1e-9 * mass * 9.81
+    assert summary["loads"]["internal_dimensions"] == 0
+    # With gravity along object x (the beam does not turn) the leader needs no moment:
+    # the paper's assumption (a), which the support line is built to satisfy.
+    assert np.abs(w_l[:, 3:]).max() < 1e-3  # [N m]; gravity off x is below 3e-5 m/s^2
 
 
 def test_support_config_runs_and_completes(run: tuple[dict[str, np.ndarray], dict[str, Any]]
@@ -125,7 +193,9 @@ BAD = {
     "no_mass": (_with({}, drop=("mass",)), "object.mass"),
     "zero_mass": (_with({"mass": 0}), "object.mass"),
     "unknown_contact": (_with({"contact": "glue"}), "object.contact"),
-    "mass_with_grasp": (_with({"contact": "grasp"}), "object.mass"),
+    "negative_mass": (_with({"mass": -4}), "object.mass"),
+    "centre_without_mass": (_with({"contact": "grasp"}, drop=("mass",)), "object.mass_centre"),
+    "centre_two_numbers": (_with({"mass_centre": [0, 250]}), "object.mass_centre"),
     "curved_surface": (_with({"surface": {"type": "curved_bar", "radius": 800,
                                           "grasp_range": [-200, 200]}}),
                        "object.surface.type"),
