@@ -66,6 +66,9 @@ class LoopReport:
         was skipped).
     step_time : ndarray, shape (steps,)
         Wall time of each ``controller.step`` call [s].
+    cpu_time : ndarray, shape (steps,)
+        CPU time of the loop's thread during each step [s] (below ``step_time``: the
+        process was not running for the difference, other work had the core).
     late_start : ndarray, shape (steps,)
         How long after its tick each step started [s] (the loop wakes a little late).
     finish : ndarray, shape (steps,)
@@ -89,6 +92,7 @@ class LoopReport:
     stopped: int
     ran: np.ndarray
     step_time: np.ndarray
+    cpu_time: np.ndarray
     late_start: np.ndarray
     finish: np.ndarray
     split: np.ndarray
@@ -146,6 +150,7 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
     n = len(controller.names)
     # Everything recorded goes into arrays allocated before the loop starts.
     step_time, late_start, finish = np.zeros(ticks), np.zeros(ticks), np.zeros(ticks)
+    cpu_time = np.zeros(ticks)
     split, slowed, rates = np.zeros((ticks, 4)), np.zeros(ticks, bool), np.zeros((ticks, n))
     ran = np.zeros(ticks, bool)
     passes = stopped = 0
@@ -157,10 +162,10 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
     while k < ticks:
         due = t0 + k * PERIOD
         wait_until(due)
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.thread_time()
         scale_max = min(1.0, (path_end - state.t) / dt)  # never ask past the path's end
         out = controller.step(state, scale_max=scale_max)
-        end = time.perf_counter()
+        end, cpu_time[k] = time.perf_counter(), time.thread_time() - cpu
         # The command is ready: the rest of the tick is the simulated plant's.
         step_time[k], late_start[k], finish[k] = end - start, start - due, end - due
         tm = out.times
@@ -189,37 +194,30 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
                 break
     wall = time.perf_counter() - t0
     return LoopReport(seconds, wall, ticks, passes, stopped, ran, step_time[ran],
-                      late_start[ran], finish[ran], split[ran], slowed[ran], rates,
+                      cpu_time[ran], late_start[ran], finish[ran], split[ran], slowed[ran], rates,
                       tuple(controller.names))
 
 
 def why(report: LoopReport) -> str:
-    """One line: where the time of the missed ticks went, against the ticks on time."""
-    missed = report.late
-    if not missed.any():
-        return "why: no tick missed"
+    """Return one line: where the time of the late steps went, against those on time."""
+    late = report.late
+    if not late.any():
+        return "why: no step was late"
 
-    def means(sel: np.ndarray) -> tuple[np.ndarray, float, float]:
-        parts = report.split[sel].mean(axis=0)
-        outside = float((report.step_time[sel] - report.split[sel].sum(axis=1)).mean())
-        return parts, outside, float(report.late_start[sel].mean())
+    def us(values: np.ndarray, sel: np.ndarray) -> float:
+        return float(values[sel].mean() * 1e6)
 
-    parts, outside, late = means(missed)
-    on_time = ~missed
-    slowed_share = report.slowed[missed].mean()
-    text = ", ".join(f"{p} {v * 1e6:.0f}" for p, v in zip(PARTS, parts, strict=True))
-    line = (f"why: a late step took on average {text} us, "
-            f"{outside * 1e6:.0f} us outside the step's split, and started "
-            f"{late * 1e6:.0f} us after its tick")
-    if on_time.any():
-        ok_parts, ok_outside, _ = means(on_time)
-        worst = int(np.argmax(parts - ok_parts))
-        line += (f"; against the steps on time its {PARTS[worst]} costs "
-                 f"{(parts[worst] - ok_parts[worst]) * 1e6:.0f} us more")
-        if outside - ok_outside > parts[worst] - ok_parts[worst]:
-            line += (f" and time outside the step (the process preempted, garbage "
-                     f"collection) {(outside - ok_outside) * 1e6:.0f} us more")
-    line += f"; {slowed_share:.0%} of the late steps are steps the scale policy slowed"
+    wall, cpu = us(report.step_time, late), us(report.cpu_time, late)
+    parts = ", ".join(f"{p} {us(report.split[:, i], late):.0f}"
+                      for i, p in enumerate(PARTS))
+    line = (f"why: a late step took {wall:.0f} us on average, {cpu:.0f} us of it on the "
+            f"CPU ({wall - cpu:.0f} us the process waited while other work had the core); "
+            f"its split: {parts} us; it started {us(report.late_start, late):.0f} us after "
+            f"its tick")
+    if (~late).any():
+        line += (f"; a step on time took {us(report.step_time, ~late):.0f} us "
+                 f"(solve {us(report.split[:, 2], ~late):.0f} us)")
+    line += f"; {report.slowed[late].mean():.0%} of the late steps were slowed by the scale policy"
     return line
 
 
