@@ -65,11 +65,13 @@ class SchedulerLost(DualArmError):
 
 
 def batch_size(todo: int, workers: int) -> int:
-    """Return the points per task.
+    """Return the points per task when ``todo`` points are left.
 
     About :data:`BATCHES_PER_WORKER` tasks per worker, at most :data:`MAX_BATCH` points
     each: a task costs the scheduler about a millisecond, a point's rollout a tenth of a
-    second or more.
+    second or more. Asked again at every batch, with the points left: the batches shrink
+    towards the end of a sweep, down to one point, so that no worker waits long for
+    the last batch of another.
     """
     return max(1, min(MAX_BATCH, math.ceil(todo / (BATCHES_PER_WORKER * max(1, workers)))))
 
@@ -195,7 +197,7 @@ class Driver:
                     if remote.client is None and any(t.start_failure is None for t in queue):
                         remote.open(sum(t.start_failure is None for t in queue))
                     while queue and remote.has_room():
-                        batch = self._take(queue, remote.size, others)
+                        batch = self._take(queue, remote.batch_for(len(queue)), others)
                         self.store_records([run_point(t) for t in batch
                                             if t.start_failure is not None])
                         remote.submit([t for t in batch if t.start_failure is None])
@@ -234,6 +236,7 @@ class _Remote:
         self.client: Any = None
         self.pending: dict[Any, list[PointTask]] = {}
         self.size = driver.batch or 1
+        self.workers = 1
         self._room = 1
         self._finished: Any = None
         self._resent: dict[tuple[str, ...], int] = {}
@@ -247,10 +250,20 @@ class _Remote:
         self.stack.enter_context(quiet_dask_logs())
         self.client = self.stack.enter_context(open_client(workers=drv.workers,
                                                            scheduler=drv.scheduler))
-        workers = worker_count(self.client)
-        self.size = drv.batch or batch_size(points, workers)
+        workers = self.workers = worker_count(self.client)
+        self.size = drv.batch or batch_size(points, workers)  # the largest batch
         self._room = max(1, min(IN_FLIGHT_PER_WORKER * workers, claims_cap() // self.size))
         self._finished = as_completed([], loop=self.client.loop)
+
+    def batch_for(self, left: int) -> int:
+        """Return the points of the next batch with ``left`` points in the queue.
+
+        The size given (``--batch``), or :func:`batch_size` of the points left, never
+        more than the first batch (the claims held stay within their cap).
+        """
+        if self.driver.batch or self.client is None:
+            return self.size
+        return min(self.size, batch_size(left, self.workers))
 
     def has_room(self) -> bool:
         """Whether another batch may be taken now.
