@@ -8,15 +8,16 @@ Euler), so path time advances with the ticks. The task is configs/panda_pair.yam
 nullspace solver with the scale policy) sampled at 1 ms instead of the file's 10 ms.
 
 The path lasts 3 s. When it ends the pair starts it again from its initial state, at
-rest (the controller's warm start is forgotten), so a 60 s run is 20 passes and holds
-every kind of step the task has: the start, full-speed steps, and the steps the scale
-policy slows (all joints reach their speed limits on this path).
+rest (the controller's warm start is forgotten), so a 60 s run is about 20 passes and
+holds every kind of step the task has: the start, full-speed steps, and the steps the
+scale policy slows (all joints reach their speed limits on this path).
 
 Timing (``time.perf_counter``): tick k is due at ``t0 + k ms``; the loop sleeps, then
-spins, until it is due. A tick misses when its step finishes after its deadline
-``t0 + (k + 1) ms``. A step that runs late delays the next one, which starts at once
-(there is no skipping: the grid stays fixed and a late tick eats into the next). The
-plant integrates every tick's command, late or not.
+spins, until it is due. A step must finish by the next tick, its deadline. A step that
+finishes later is a miss, and so is every tick it overran: no new step starts for
+those (the arms keep the late command through them, and the plant integrates it); the
+next step starts at the next tick. The miss rate is the share of the ticks that got
+no new command on time.
 
 Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a short
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
@@ -177,6 +178,8 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
             state = exp.initial
             controller.reset()
             k += 1
+            while k < ticks and t0 + k * PERIOD < end:  # overran: the arms stand still
+                k += 1
             continue
         x = controller.layout.join(out.ql_dot, out.qf_dot, out.m, out.m_leader)
         # The ticks whose period began before this step finished get no step of their
