@@ -17,7 +17,13 @@ from numpy.typing import NDArray
 from ..control.controller import ControlOutput, DualArmController
 from ..control.loads import hand_wrenches
 from ..control.rollout import RunLimits
-from ..errors import ConfigError, DualArmError, PairingError, SolverNotFoundError
+from ..errors import (
+    ConfigError,
+    DualArmError,
+    InvalidInputError,
+    PairingError,
+    SolverNotFoundError,
+)
 from ..kinematics.arm import DHTable, SerialArm
 from ..kinematics.ik import ik_dls
 from ..kinematics.puma560 import puma560
@@ -433,6 +439,7 @@ def build_experiment(
     solver: str | None = None,
     solver_options: SolverOptions | None = None,
     limits: Sequence[Limit] = (),
+    dt: float | None = None,
 ) -> Experiment:
     """Build the task, initial state and controller settings of an experiment.
 
@@ -452,6 +459,10 @@ def build_experiment(
         Limits of the user's added to the step (:mod:`dualarm_qp.step.parts`), checked
         against the solver here (a limit that gives rows needs a solver that takes
         rows).
+    dt : float, optional
+        Sampling interval [s] instead of the file's ``controller.dt`` (e.g. 1e-3 for a
+        1 kHz loop). The gains and the range-centring horizon the file leaves to their
+        default (``1/dt``, ``dt``) follow it.
 
     Notes
     -----
@@ -467,14 +478,18 @@ def build_experiment(
         an IK branch that does not exist, a follower base that does not close the grasp,
         an option the file's solver refuses, ...), naming the file and key.
     InvalidInputError
-        A command-line option the running solver refuses, naming ``--solver-option``.
+        A command-line option the running solver refuses, naming ``--solver-option``;
+        a ``dt`` that is not a finite number of at least 1e-6 s.
     PairingError
         A limit that gives rows (of ``limits`` or of the file) with a solver that takes
         boxes only: the message names the file (and the key ``solver.name`` when the
         file chose the solver), the solver, the limit and the solvers that can.
     """
+    if dt is not None and not (math.isfinite(dt) and dt >= MIN_DT_S):
+        raise InvalidInputError(f"dt must be a sampling interval of at least {MIN_DT_S:g} s, "
+                                f"got {dt!r}")
     try:
-        exp = _build(cfg, path, solver, solver_options)
+        exp = _build(cfg, path, solver, solver_options, dt)
         if limits:
             exp.limits_extra = tuple(limits)
         check_pairing(solver_info(exp.solver_name),
@@ -534,12 +549,12 @@ def _solver_options(cfg: ExperimentConfig, path: str, solver: str | None,
 
 
 def _build(cfg: ExperimentConfig, path: str, solver: str | None,
-           cli_options: SolverOptions | None) -> Experiment:
+           cli_options: SolverOptions | None, dt_s: float | None = None) -> Experiment:
     solver_options = _solver_options(cfg, path, solver, cli_options)
     sc = Scales(LENGTH_SCALE[cfg.units.length], ANGLE_SCALE[cfg.units.angle],
                 TIME_SCALE[cfg.units.time])
     c = cfg.controller
-    dt, duration = c.dt * sc.time, c.duration * sc.time
+    dt, duration = c.dt * sc.time if dt_s is None else float(dt_s), c.duration * sc.time
     if dt < MIN_DT_S:
         raise ConfigError(f"dt is {dt:.3g} s; the shortest sampling interval is "
                           f"{MIN_DT_S:g} s", path=path, key="controller.dt")

@@ -15,7 +15,6 @@ Python loader package is not needed. Nothing is downloaded.
 from __future__ import annotations
 
 import contextlib
-import importlib.metadata
 import os
 import sys
 import tempfile
@@ -188,6 +187,8 @@ def frame_below(model: Any, frame: int, ancestor: int) -> bool:
 
 def example_robots_dir() -> Path | None:
     """Return the ``robots`` folder of the installed example-robot-data, or None."""
+    import importlib.metadata  # here: it takes longer to import than the rest of the module
+
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:

@@ -46,7 +46,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import qpsolvers
 import scipy.sparse as sp
 
 from ..errors import InvalidInputError
@@ -273,6 +272,7 @@ class QPSolver:
 
     def _qpsolvers(self, problem: StepProblem) -> _native.BackendAnswer:
         """One call through ``qpsolvers.solve_problem`` (the backends without a native path)."""
+        import qpsolvers
         c = problem.center
         P: np.ndarray | sp.csc_matrix = (_native.cost_matrix(problem.weights)
                                          if self.backend.normalise_cost
@@ -658,6 +658,18 @@ def _status_text(extras: dict[str, Any]) -> str:
     return ""
 
 
+def _installed(solver: str) -> bool:
+    """Whether qpsolvers can import the backend ``solver``.
+
+    qpsolvers imports every installed backend when it is imported (a tenth of a second
+    or more): it is imported when a solver's availability is first asked, or a
+    ``qp:*`` solver runs, not with this module.
+    """
+    import qpsolvers
+
+    return solver in qpsolvers.available_solvers
+
+
 def _register_all() -> None:
     """One registry entry per backend; available when qpsolvers can import it."""
     for key, backend in BACKENDS.items():
@@ -666,7 +678,7 @@ def _register_all() -> None:
 
         register(f"qp:{key}", factory,
                  description=f"QP of Eq. 37 through qpsolvers/{backend.solver}",
-                 available=backend.solver in qpsolvers.available_solvers,
+                 available=functools.partial(_installed, backend.solver),
                  extra=backend.extra, hard_bounds=True,
                  aliases=(f"qp:{backend.solver}",) if backend.solver != key else ())
 

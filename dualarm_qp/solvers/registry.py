@@ -31,7 +31,8 @@ class SolverInfo:
     description : str
         One line for ``dualarm-qp solvers``.
     available : bool
-        Whether the solver can run on this machine.
+        Whether the solver can run on this machine (asked of its backend the first time
+        it is read: ``register`` may give a function).
     extra : str or None
         The pip extra of dualarm-qp that installs what the solver needs.
     hard_bounds : bool
@@ -45,12 +46,21 @@ class SolverInfo:
 
     name: str
     description: str
-    available: bool
+    _available: bool | Callable[[], bool]
     extra: str | None
     hard_bounds: bool
     factory: Callable[..., StepSolver]
     takes_rows: bool = True
     dense_cost: bool = True
+
+    @property
+    def available(self) -> bool:
+        """Whether the solver can run on this machine (see the class docstring)."""
+        found = self._available
+        if not isinstance(found, bool):
+            found = bool(found())
+            object.__setattr__(self, "_available", found)
+        return found
 
     def refusal(self, row_limits: Iterable[str] = (), dense_cost: bool = False) -> str | None:
         """Why this solver cannot take a step with these parts, or None if it can.
@@ -183,7 +193,7 @@ def register(
     factory: Callable[..., StepSolver],
     *,
     description: str,
-    available: bool = True,
+    available: bool | Callable[[], bool] = True,
     extra: str | None = None,
     hard_bounds: bool = True,
     takes_rows: bool = True,
@@ -193,7 +203,9 @@ def register(
     """Add a solver to the registry (one line per solver module).
 
     ``aliases`` are other names :func:`get_solver` accepts for it (e.g. ``"qp:proxqp"``
-    for ``"qp:proxsuite"``); they are not listed separately.
+    for ``"qp:proxsuite"``); they are not listed separately. ``available`` may be a
+    function, called the first time the entry's availability is read (a backend that
+    is slow to import is then imported only by a command that asks about it).
     """
     _REGISTRY[name] = SolverInfo(name, description, available, extra, hard_bounds, factory,
                                  takes_rows, dense_cost)

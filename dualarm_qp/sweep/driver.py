@@ -30,7 +30,7 @@ from typing import Any
 from .._signals import SignalHold
 from ..errors import DualArmError
 from .claims import PointStore, claims_cap
-from .cluster import open_client, quiet_dask_logs, worker_count
+from .cluster import StartingCluster, open_client, quiet_dask_logs, worker_count
 from .points import PointTask
 from .table import build_rows, write_table
 from .worker import run_batch, run_point
@@ -65,11 +65,13 @@ class SchedulerLost(DualArmError):
 
 
 def batch_size(todo: int, workers: int) -> int:
-    """Return the points per task.
+    """Return the points per task when ``todo`` points are left.
 
     About :data:`BATCHES_PER_WORKER` tasks per worker, at most :data:`MAX_BATCH` points
     each: a task costs the scheduler about a millisecond, a point's rollout a tenth of a
-    second or more.
+    second or more. Asked again at every batch, with the points left: the batches shrink
+    towards the end of a sweep, down to one point, so that no worker waits long for
+    the last batch of another.
     """
     return max(1, min(MAX_BATCH, math.ceil(todo / (BATCHES_PER_WORKER * max(1, workers)))))
 
@@ -89,14 +91,18 @@ class Driver:
         Where and how to run (see :class:`~.runner.SweepSettings`).
     log : callable, optional
         Receives a line when the sweep waits for another one on the same folder.
+    started : StartingCluster, optional
+        The embedded cluster, started while the points were checked: the sweep takes
+        it when it needs a cluster (the caller closes it if it was not taken).
     """
 
     def __init__(self, tasks: list[PointTask], swept: Sequence[str], out: Path, *,
                  workers: int | None = None, scheduler: str | None = None,
-                 batch: int | None = None, log: Callable[[str], None] | None = None
-                 ) -> None:
+                 batch: int | None = None, log: Callable[[str], None] | None = None,
+                 started: StartingCluster | None = None) -> None:
         self.tasks, self.swept, self.out = tasks, list(swept), out
         self.workers, self.scheduler, self.batch = workers, scheduler, batch
+        self.started = started
         self.log = log
         self.store = PointStore(out)
         self.keys = {t.key for t in tasks}
@@ -195,7 +201,7 @@ class Driver:
                     if remote.client is None and any(t.start_failure is None for t in queue):
                         remote.open(sum(t.start_failure is None for t in queue))
                     while queue and remote.has_room():
-                        batch = self._take(queue, remote.size, others)
+                        batch = self._take(queue, remote.batch_for(len(queue)), others)
                         self.store_records([run_point(t) for t in batch
                                             if t.start_failure is not None])
                         remote.submit([t for t in batch if t.start_failure is None])
@@ -234,6 +240,7 @@ class _Remote:
         self.client: Any = None
         self.pending: dict[Any, list[PointTask]] = {}
         self.size = driver.batch or 1
+        self.workers = 1
         self._room = 1
         self._finished: Any = None
         self._resent: dict[tuple[str, ...], int] = {}
@@ -246,11 +253,22 @@ class _Remote:
         drv = self.driver
         self.stack.enter_context(quiet_dask_logs())
         self.client = self.stack.enter_context(open_client(workers=drv.workers,
-                                                           scheduler=drv.scheduler))
-        workers = worker_count(self.client)
-        self.size = drv.batch or batch_size(points, workers)
+                                                           scheduler=drv.scheduler,
+                                                           started=drv.started))
+        workers = self.workers = worker_count(self.client)
+        self.size = drv.batch or batch_size(points, workers)  # the largest batch
         self._room = max(1, min(IN_FLIGHT_PER_WORKER * workers, claims_cap() // self.size))
         self._finished = as_completed([], loop=self.client.loop)
+
+    def batch_for(self, left: int) -> int:
+        """Return the points of the next batch with ``left`` points in the queue.
+
+        The size given (``--batch``), or :func:`batch_size` of the points left, never
+        more than the first batch (the claims held stay within their cap).
+        """
+        if self.driver.batch or self.client is None:
+            return self.size
+        return min(self.size, batch_size(left, self.workers))
 
     def has_room(self) -> bool:
         """Whether another batch may be taken now.

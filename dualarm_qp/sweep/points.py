@@ -25,6 +25,7 @@ import copy
 import hashlib
 import json
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -224,7 +225,8 @@ def check_point(doc: dict[str, Any], spec: SweepSpec, point: Point,
     return None
 
 
-def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
+def prepare_points(spec: SweepSpec, code: str,
+                   expanded: Callable[[list[str]], None] | None = None) -> list[PointTask]:
     """Expand the sweep and check every point (see the module docstring).
 
     Parameters
@@ -233,6 +235,9 @@ def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
         The sweep.
     code : str
         Code digest of the package (part of each point's key).
+    expanded : callable, optional
+        Called with every point's key once the points are expanded, before they are
+        checked (the driver starts its cluster meanwhile when some are not stored).
 
     Raises
     ------
@@ -250,16 +255,21 @@ def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
     if not isinstance(base, dict):
         raise ConfigError("the base experiment file must be a mapping of keys",
                           path=str(spec.base))
+    points = []
+    for point in expand(spec):
+        doc = point_document(base, spec, point)
+        points.append((point, doc, point_key(doc, spec.repeat, code)))
+    if expanded is not None:
+        expanded([key for _, _, key in points])
     tasks = []
     checked: set[str] = set()
     first_failure: tuple[Point, str] | None = None
-    for point in expand(spec):
-        doc = point_document(base, spec, point)
+    for point, doc, key in points:
         failure = check_point(doc, spec, point, checked)
         if failure is not None and first_failure is None:
             first_failure = (point, failure)
-        tasks.append(PointTask(point.index, point_key(doc, spec.repeat, code), point.values,
-                               doc, str(spec.base), spec.repeat, failure))
+        tasks.append(PointTask(point.index, key, point.values, doc, str(spec.base),
+                               spec.repeat, failure))
     if first_failure is not None and all(t.start_failure for t in tasks):
         point, failure = first_failure
         raise ConfigError(f"no point can start; the first, {json.dumps(point.values)}: "

@@ -20,7 +20,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def _run(name: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, str(EXAMPLES / name)], cwd=cwd,
+    return subprocess.run([sys.executable, str(EXAMPLES / name), *ARGS.get(name, [])], cwd=cwd,
                           capture_output=True, text=True, check=False, timeout=120)
 
 
@@ -73,14 +73,24 @@ def _check_custom_limit(out: str) -> None:
                      r"gives rows; solvers that keep rows: nullspace", out, re.MULTILINE), out
 
 
+def _check_realtime_loop(out: str) -> None:
+    assert "ticks: 1000 (" in out  # --seconds 1
+    misses = _number(r"\nmisses: (\d+) ", out)
+    assert 0 <= misses <= 1000
+    assert "miss rate: " in out and "\nwhy: " in out
+
+
 CHECKS = {
     "custom_limit.py": _check_custom_limit,
     "own_control_loop.py": _check_own_control_loop,
     "task_in_python.py": _check_task_in_python,
     "urdf_robot_pair.py": _check_urdf_robot_pair,
     "compare_solvers.py": _check_compare_solvers,
+    "realtime_loop.py": _check_realtime_loop,
 }
-NEEDS_ROBOTS = {"urdf_robot_pair.py"}
+NEEDS_ROBOTS = {"urdf_robot_pair.py", "realtime_loop.py"}
+#: Command-line arguments of an example (the loop runs 60 s by default).
+ARGS = {"realtime_loop.py": ["--seconds", "1"]}
 
 
 def test_every_example_is_checked_and_none_is_collected_as_a_test():

@@ -95,6 +95,10 @@ def test_import_is_light_and_lazy_names_load_on_first_use():
         from dualarm_qp.control import DualArmController as home
         assert DualArmController is home
         assert get_solver("nullspace").name == "nullspace"
+        # qpsolvers (it imports every QP backend) loads only for a qp:* solver, or when
+        # the solvers' availability is listed.
+        assert "qpsolvers" not in sys.modules, "get_solver('nullspace')"
+        assert get_solver("qp:daqp").name == "qp:daqp"
         assert "qpsolvers" in sys.modules
         print("ok")
     """)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from dualarm_qp.errors import ConfigError
+from dualarm_qp.errors import ConfigError, InvalidInputError
 from dualarm_qp.experiments import build_experiment, load_config, parse_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -373,3 +373,20 @@ def test_yaml_booleans_are_only_true_and_false(tmp_path):
         load_config(path)
     path.write_text(text.replace("velocity_limits: true", "velocity_limits: false"))
     assert load_config(path).controller.velocity_limits is False
+
+
+def test_dt_argument_replaces_the_files_sampling_interval():
+    """``build_experiment(..., dt=)`` (a 1 kHz loop on a file sampled at 31 ms)."""
+    cfg = load_config(PAPER)  # dt 31 ms, gains given, no centring horizon
+    exp = build_experiment(cfg, str(PAPER), dt=1e-3)
+    assert exp.options.dt == 1e-3
+    assert exp.options.centre_horizon == 1e-3  # its default, dt, follows it
+    assert exp.options.correction_gain == pytest.approx(1 / 0.031)  # the file's gain stays
+    assert exp.duration == pytest.approx(15.5)  # the path is the file's
+    assert build_experiment(cfg, str(PAPER)).options.dt == pytest.approx(0.031)
+
+
+@pytest.mark.parametrize("dt", [0.0, -1e-3, 1e-9, math.nan, math.inf])
+def test_a_bad_dt_argument_is_refused(dt):
+    with pytest.raises(InvalidInputError, match="dt must be a sampling interval"):
+        build_experiment(load_config(PAPER), str(PAPER), dt=dt)

@@ -16,6 +16,7 @@ from dualarm_qp.solvers import (
     get_solver,
     list_solvers,
     register,
+    solver_info,
 )
 from dualarm_qp.solvers import registry as registry_module
 
@@ -53,6 +54,32 @@ def test_unavailable_solver_names_its_pip_extra(monkeypatch: pytest.MonkeyPatch)
         get_solver("qp:fake")
     assert "pip install 'dualarm-qp[fakebackend]'" in str(info.value)
     assert info.value.extra == "fakebackend"
+
+
+def test_availability_given_as_a_function_is_asked_once_and_only_when_read(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(registry_module, "_REGISTRY", dict(registry_module._REGISTRY))
+    asked: list[str] = []
+
+    def probe(name: str, answer: bool):
+        return lambda: asked.append(name) or answer
+
+    register("qp:lazy_yes", lambda **_: get_solver("nullspace"), description="lazy",
+             available=probe("yes", True))
+    register("qp:lazy_no", lambda **_: get_solver("nullspace"), description="lazy",
+             available=probe("no", False), extra="fakebackend")
+    assert get_solver("nullspace").name == "nullspace"
+    assert asked == []  # another solver's entry does not ask
+    assert solver_info("qp:lazy_yes").available
+    assert asked == ["yes"]
+    names = available_solvers()
+    assert "qp:lazy_yes" in names and "qp:lazy_no" not in names
+    assert sorted(asked) == ["no", "yes"]
+    available_solvers()
+    solver_info("qp:lazy_yes")
+    assert sorted(asked) == ["no", "yes"]  # each answer is kept
+    with pytest.raises(SolverNotFoundError):
+        get_solver("qp:lazy_no")
 
 
 def test_proxqp_alias() -> None:
