@@ -10,7 +10,7 @@ on them, for
   ``--every``-th step kept.
 
 Whoever changes the solver's implementation (not its algorithm) must reproduce these
-answers: ``tests/solvers/test_recorded_answers.py`` compares against them.
+answers: ``tests/solvers/test_recorded_answers.py`` reads the file back and compares.
 
     python benchmarks/record_exact.py            # writes the committed file
     python benchmarks/record_exact.py --out /tmp/answers.npz --every 5
@@ -94,32 +94,6 @@ def pack(problems: list[StepProblem], source: list[str]) -> dict[str, np.ndarray
     packed["source"] = np.array(source)
     packed["meta"] = np.array(json.dumps(meta))
     return packed
-
-
-def unpack(path: str | Path) -> list[dict[str, Any]]:
-    """Read a file written by :func:`pack`: one dict per instance (problem and answers)."""
-    with np.load(Path(path), allow_pickle=False) as z:
-        d = {k: z[k] for k in z.files}
-    meta = json.loads(str(d["meta"]))
-    offsets = {k: 0 for k in ARRAYS}
-    x_off = 0
-    cases = []
-    for i, m in enumerate(meta):
-        fields: dict[str, Any] = {}
-        for k in ARRAYS:
-            shape = tuple(int(s) for s in d[k + "_shape"][i][:int(d[k + "_ndim"][i])])
-            size = int(np.prod(shape))
-            fields[k] = d[k][offsets[k]:offsets[k] + size].reshape(shape)
-            offsets[k] += size
-        n = fields["A"].shape[1]
-        problem = StepProblem(**fields, n_grasp=m["n_grasp"],
-                              **{k: tuple(v) for k, v in m["strings"].items()})
-        cases.append({"problem": problem, "x": d["x"][x_off:x_off + n],
-                      "status": str(d["status"][i]), "verdict": str(d["verdict"][i]),
-                      "nullity": int(d["nullity"][i]), "source": str(d["source"][i]),
-                      "conflicts": tuple(m["conflicts"])})
-        x_off += n
-    return cases
 
 
 def main() -> None:
