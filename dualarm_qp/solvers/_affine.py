@@ -1,7 +1,7 @@
 """Geometry of the step's equality ``A x = b`` (private).
 
 The tools every solver, the certificate and the policies share, computed by the
-compiled kernel (:mod:`._compiled`; this module maps its arrays to typed results):
+compiled kernel (:mod:`dualarm_qp._compiled`; this module maps its arrays to typed results):
 
 * :func:`factor`, the one truncated SVD that takes every rank decision;
 * :func:`affine_solutions` writes every solution of ``A x = b`` as ``x0 + N t``;
@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._compiled import kernel
 
 FloatArray = NDArray[np.float64]
 

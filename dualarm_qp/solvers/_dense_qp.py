@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._compiled import kernel
+from .._compiled import kernel
 
 FloatArray = NDArray[np.float64]
 

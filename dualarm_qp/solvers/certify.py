@@ -45,9 +45,9 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
 from ._affine import cost_arrays, problem_factor
-from ._compiled import kernel
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
 FloatArray = NDArray[np.float64]

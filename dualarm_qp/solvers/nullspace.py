@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
 from ._affine import Factor, cost_arrays
-from ._compiled import kernel
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register

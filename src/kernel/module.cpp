@@ -12,6 +12,7 @@
 #include "linalg.hpp"
 #include "nnls.hpp"
 #include "nullspace.hpp"
+#include "rows.hpp"
 
 #ifndef DQK_SOURCE_HASH
 #error "DQK_SOURCE_HASH must be defined by the build (CMakeLists.txt)"
@@ -57,6 +58,15 @@ NB_MODULE(_kernel, m) {
         return nb::make_tuple(*x0, f.U, f.sigma, f.V, f.N);
       },
       "A"_a, "b"_a, "(x0, U, sigma, V, N) of A x = b, or None if inconsistent.");
+
+  m.def(
+      "inequalities",
+      [](const Vec& lower, const Vec& upper, const Mat& G, const Vec& h) {
+        const dqk::Rows r = dqk::inequalities(lower, upper, G, h);
+        return nb::make_tuple(r.C, r.e, r.kind, r.index);
+      },
+      "lower"_a, "upper"_a, "G"_a, "h"_a,
+      "Every finite limit as unit-norm rows: (C, e, kind, index).");
 
   m.def(
       "least_distance",

@@ -12,16 +12,16 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from ..errors import KernelError
+from .errors import KernelError
 
 #: What to run when the kernel is missing or stale.
 REBUILD = "run `pip install -e .` (or `pip install .`) in the project folder again"
 
 #: The kernel's sources, when the package runs from a source tree.
-SOURCES = Path(__file__).resolve().parents[2] / "src" / "kernel"
+SOURCES = Path(__file__).resolve().parents[1] / "src" / "kernel"
 
 try:
-    from .. import _kernel as kernel
+    from . import _kernel as kernel
 except ImportError as err:  # pragma: no cover - depends on the installation
     raise KernelError(
         f"the compiled kernel dualarm_qp._kernel cannot be imported ({err}); "
