@@ -68,7 +68,7 @@ def _daqp(problem: StepProblem) -> np.ndarray | None:
         problem.upper, solver="daqp")
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=80, deadline=None)
 @given(seed=seeds, d=st.sampled_from([0, 1, 2, 3, 5]), dense=st.booleans())
 def test_exact_solver_agrees_with_daqp(seed: int, d: int, dense: bool) -> None:
     problem = _step(seed, d, dense, infeasible=False)
@@ -111,7 +111,7 @@ def test_rank_decision_under_perturbation(seed: int, exponent: float) -> None:
     assert np.abs(f.N.T @ f.N - np.eye(f.nullity)).max(initial=0.0) <= 1e-12
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(seed=seeds, m=st.integers(1, 12), n=st.integers(1, 8))
 def test_nnls_agrees_with_scipy(seed: int, m: int, n: int) -> None:
     rng = np.random.default_rng(seed)
