@@ -9,8 +9,10 @@ on them, for
   both grasps sliding, a pair of Pandas, collision rows, a wrist singularity), every
   ``--every``-th step kept.
 
-Whoever changes the solver's implementation (not its algorithm) must reproduce these
-answers: ``tests/solvers/test_recorded_answers.py`` reads the file back and compares.
+The committed file was written by the Python implementation of the solver and the
+certificate, before they moved to the compiled kernel (``src/kernel``). Whoever changes
+the implementation (not the algorithm) must reproduce these answers:
+``tests/solvers/test_recorded_answers.py`` reads the file back and compares.
 
     python benchmarks/record_exact.py            # writes the committed file
     python benchmarks/record_exact.py --out /tmp/answers.npz --every 5

@@ -21,7 +21,8 @@ def least_distance(N: ArrayLike, x0: ArrayLike, w_diag: ArrayLike, w_full: Array
                    root_full: ArrayLike, center: ArrayLike) -> _F: ...
 def solve_nullspace(A: ArrayLike, b: ArrayLike, C: ArrayLike, e: ArrayLike,
                     w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
-                    center: ArrayLike, feas_tol: float, max_iter: int
+                    center: ArrayLike, feas_tol: float, max_iter: int,
+                    factor: tuple[_F, _F, _F, _F] | None
                     ) -> tuple[int, _F, list[int], int, int, tuple[_F, _F, _F, _F]]: ...
 def dense_qp(R: ArrayLike, t_free: ArrayLike, M: ArrayLike, f: ArrayLike, feas_tol: float,
              max_iter: int) -> tuple[int, _F, list[int], list[float], int, int]: ...

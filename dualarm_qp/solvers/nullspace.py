@@ -78,10 +78,13 @@ class NullspaceSolver:
             return empty
         ineq = problem.inequalities()
         w_diag, w_full, root_full = cost_arrays(problem)
+        known = problem._cache.get("factor")  # e.g. of the unscaled step: the same A
         code, x, rows, nullity, iterations, factor = kernel.solve_nullspace(
             problem.A, problem.b, ineq.C, ineq.e, w_diag, w_full, root_full,
-            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter)
-        problem._cache.setdefault("factor", Factor(*factor))  # shared with the certificate
+            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter,
+            None if known is None else (known.U, known.sigma, known.V, known.N))
+        if known is None:  # shared with the certificate
+            problem._cache["factor"] = Factor(*factor)
         if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",

@@ -84,17 +84,27 @@ NB_MODULE(_kernel, m) {
       "solve_nullspace",
       [](const Mat& A, const Vec& b, const Mat& C, const Vec& e, const Vec& w_diag,
          const Mat& w_full, const Mat& root_full, const Vec& center, double feas_tol,
-         Index max_iter) {
-        const dqk::Factor f = dqk::factor(A);
+         Index max_iter, nb::object known) {
+        // The problem's factor when it is already known (the same computation, so the
+        // same arrays), else computed here.
+        dqk::Factor f;
+        if (known.is_none()) {
+          f = dqk::factor(A);
+        } else {
+          const nb::tuple t = nb::cast<nb::tuple>(known);
+          f = factor_from(nb::cast<Mat>(t[0]), nb::cast<Vec>(t[1]), nb::cast<Mat>(t[2]),
+                          nb::cast<Mat>(t[3]));
+        }
         const dqk::Cost cost(w_diag, w_full, root_full, center);
         const dqk::StepAnswer s =
             dqk::solve_nullspace(A, b, f, C, e, cost, feas_tol, max_iter);
         return nb::make_tuple(static_cast<int>(s.code), s.x, s.conflicts, s.nullity,
-                              s.iterations, factor_tuple(f));
+                              s.iterations, known.is_none() ? factor_tuple(f) : known);
       },
       "A"_a, "b"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a,
-      "feas_tol"_a, "max_iter"_a,
-      "The exact step: (code, x, conflicts, nullity, iterations, factor).");
+      "feas_tol"_a, "max_iter"_a, "factor"_a.none(),
+      "The exact step: (code, x, conflicts, nullity, iterations, factor); factor, when "
+      "given, is (U, sigma, V, N) of A.");
 
   m.def(
       "dense_qp",

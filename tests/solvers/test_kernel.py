@@ -157,3 +157,20 @@ def test_a_missing_kernel_says_how_to_build_it() -> None:
                          env=env, check=True, timeout=60).stdout
     assert out.startswith("KernelError True")
     assert "pip install -e ." in out
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=seeds, d=st.sampled_from([1, 2, 3]), scale=st.floats(0.1, 0.9))
+def test_a_known_factor_gives_the_same_answer(seed: int, d: int, scale: float) -> None:
+    """A scaled step reuses the factor of its unscaled one: the answer is bit for bit the
+    one computed from scratch."""
+    problem = _step(seed, d, False, infeasible=False)
+    solver = NullspaceSolver()
+    solver.solve(problem)  # caches the factor of A
+    reused = solver.solve(problem.scaled(scale))
+    fresh = solver.solve(StepProblem(A=problem.A, b=scale * problem.b,
+                                     weights=problem.weights, center=problem.center,
+                                     lower=problem.lower, upper=problem.upper,
+                                     G=problem.G, h=problem.h))
+    assert reused.status is fresh.status
+    assert np.array_equal(reused.x, fresh.x)
