@@ -18,6 +18,10 @@ double max_abs(const Vec& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; 
 
 Residuals residuals(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
                     const Mat& G, const Vec& h, const Vec& x) {
+  if (!x.allFinite()) {  // as numpy: a residual of a non-finite x is not a number
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
   Residuals r{0.0, 0.0, 0.0};
   if (A.rows()) r.eq = (A * x - b).cwiseAbs().maxCoeff();
   for (Index i = 0; i < x.size(); ++i) {

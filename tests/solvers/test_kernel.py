@@ -27,7 +27,7 @@ from dualarm_qp._compiled import SOURCES, check_fresh, kernel, source_hash
 from dualarm_qp.errors import KernelError
 from dualarm_qp.solvers import Status
 from dualarm_qp.solvers._affine import RANK_RTOL, factor
-from dualarm_qp.solvers.certify import certify
+from dualarm_qp.solvers.certify import certify, residuals
 from dualarm_qp.solvers.nullspace import NullspaceSolver
 from dualarm_qp.step.problem import StepProblem
 
@@ -174,3 +174,12 @@ def test_a_known_factor_gives_the_same_answer(seed: int, d: int, scale: float) -
                                      G=problem.G, h=problem.h))
     assert reused.status is fresh.status
     assert np.array_equal(reused.x, fresh.x)
+
+
+def test_residuals_of_a_non_finite_x_are_not_numbers() -> None:
+    problem = _step(3, 1, False, infeasible=False)
+    x = np.zeros(problem.n)
+    x[0] = np.nan
+    eq, viol = residuals(problem, x)
+    assert np.isnan(eq) and np.isnan(viol)
+    assert residuals(problem, np.zeros(problem.n))[0] == float(np.abs(problem.b).max())
