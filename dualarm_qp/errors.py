@@ -116,6 +116,10 @@ class IKError(KinematicsError):
         super().__init__(message)
 
 
+class KernelError(DualArmError, ImportError):
+    """The compiled kernel (``dualarm_qp._kernel``) is missing or built from other sources."""
+
+
 class SolverError(DualArmError):
     """A step solver failed in a way that is not an ordinary infeasible step."""
 

@@ -1,6 +1,7 @@
 """Geometry of the step's equality ``A x = b`` (private).
 
-The tools every solver, the certificate and the policies share:
+The tools every solver, the certificate and the policies share, computed by the
+compiled kernel (:mod:`dualarm_qp._compiled`; this module maps its arrays to typed results):
 
 * :func:`factor`, the one truncated SVD that takes every rank decision;
 * :func:`affine_solutions` writes every solution of ``A x = b`` as ``x0 + N t``;
@@ -22,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import lapack
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
 
 FloatArray = NDArray[np.float64]
@@ -38,13 +39,13 @@ FloatArray = NDArray[np.float64]
 #: called full rank only if no direction of ``x`` is amplified by more than 1e9 / ||A||
 #: into ``x0``. The same number decides when a null direction "does not move" a
 #: variable (a component ``|z_i| <= RANK_RTOL * max |z|`` of a unit null vector is zero).
-RANK_RTOL = 1e-9
+RANK_RTOL: float = kernel.RANK_RTOL  # 1e-9, defined in src/kernel/constants.hpp
 
 #: Relative residual above which ``A x = b`` is called inconsistent (rank-deficient ``A``
 #: and ``b`` outside its numerical range): ``max |A x0 - b| > CONSISTENCY_TOL *
 #: max(1, max |b|, sigma_1 max |x0|)`` for the minimum-norm ``x0`` (dimensionless; the
 #: same size as :data:`RANK_RTOL`, whose truncation it must tolerate).
-CONSISTENCY_TOL = 1e-9
+CONSISTENCY_TOL: float = kernel.CONSISTENCY_TOL  # 1e-9
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,6 +94,10 @@ class Factor:
 def factor(A: FloatArray) -> Factor:
     """Singular value decomposition of ``A`` truncated at :data:`RANK_RTOL`.
 
+    Computed by the kernel (Eigen's two-sided Jacobi SVD with a column-pivoting QR
+    preconditioner: accurate to rounding in every singular value, no convergence
+    failure to fall back from).
+
     Parameters
     ----------
     A : ndarray, shape (m, n)
@@ -103,17 +108,8 @@ def factor(A: FloatArray) -> Factor:
     Factor
         Range, kept singular values, row space and null space of ``A``.
     """
-    m, n = A.shape
-    if m == 0 or n == 0:
-        return Factor(np.zeros((m, 0)), np.zeros(0), np.zeros((n, 0)), np.eye(n))
-    # LAPACK dgesvd directly: a third cheaper than np.linalg.svd at 6 x 7. Its info is
-    # only a convergence flag (never a rank decision); np.linalg.svd raises on failure.
-    U, sv, Vt, info = lapack.dgesvd(A, compute_uv=1, full_matrices=1)
-    if info != 0:
-        U, sv, Vt = np.linalg.svd(A, full_matrices=True)
-    cut = RANK_RTOL * float(sv[0])
-    rank = sum(1 for s in sv.tolist() if s > cut)  # sv[0] = 0: rank 0
-    return Factor(U[:, :rank], sv[:rank], Vt[:rank].T, Vt[rank:].T.copy())
+    U, sigma, V, N = kernel.factor(A)
+    return Factor(U, sigma, V, N)
 
 
 def moves(z: FloatArray) -> NDArray[np.bool_]:
@@ -125,41 +121,45 @@ def moves(z: FloatArray) -> NDArray[np.bool_]:
     return np.abs(z) > RANK_RTOL * float(np.abs(z).max(initial=0.0))
 
 
-def least_distance(N: FloatArray, x0: FloatArray, root: FloatArray, c: FloatArray
-                   ) -> FloatArray:
-    """Minimiser of ``|R (x - c)|^2`` over ``x = x0 + N t``.
+def least_distance(problem: StepProblem, N: FloatArray, x0: FloatArray) -> FloatArray:
+    """Minimiser of Eq. 37, ``|R (x - c)|^2``, over ``x = x0 + N t``.
 
-    ``N`` has orthonormal columns and ``R`` is invertible, so ``R N`` has full column
-    rank (for a diagonal cost its singular values lie in ``[min sqrt(w), max sqrt(w)]``):
-    no rank decision, one Householder QR solve of ``min |R (x0 + N t - c)|`` (not the
-    normal equations, whose condition is the square of that, up to 1e9 with a sliding
-    weight of 1e9).
+    ``N`` has orthonormal columns and ``R`` (``W = R^T R``) is invertible, so ``R N``
+    has full column rank (for a diagonal cost its singular values lie in
+    ``[min sqrt(w), max sqrt(w)]``): no rank decision, one Householder QR solve of
+    ``min |R (x0 + N t - c)|`` (not the normal equations, whose condition is the square
+    of that, up to 1e9 with a sliding weight of 1e9). The exact solver's unconstrained
+    minimiser is the same computation, in the kernel.
 
     Parameters
     ----------
+    problem : StepProblem
+        Supplies the cost ``W`` and the centre ``c`` (units of ``x``).
     N : ndarray, shape (n, d)
         Orthonormal null-space basis (``d = 0`` returns ``x0``).
     x0 : ndarray, shape (n,)
         A point of the affine set (units of ``x``).
-    root : ndarray, shape (n,) or (n, n)
-        ``R``: the square roots of a diagonal cost's weights, or a full cost's upper
-        Cholesky factor (:meth:`StepProblem.cost_root`).
-    c : ndarray, shape (n,)
-        Centre (units of ``x``).
     """
-    if not N.shape[1]:
-        return x0
-    RN = root[:, None] * N if root.ndim == 1 else root @ N
-    r = root * (c - x0) if root.ndim == 1 else root @ (c - x0)
-    Q, R = np.linalg.qr(RN)
-    t = np.linalg.solve(R, Q.T @ r)
-    return np.asarray(x0 + N @ t, dtype=np.float64)
+    w_diag, w_full, root_full = cost_arrays(problem)
+    return np.asarray(kernel.least_distance(N, x0, w_diag, w_full, root_full,
+                                            problem.center))
 
 
-def cost_root(problem: StepProblem) -> FloatArray:
-    """``R`` of :func:`least_distance` for ``problem``: ``sqrt(w)`` or the Cholesky factor."""
+def cost_arrays(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Return the cost as the kernel takes it: ``(w, empty, empty)`` or ``(empty, W, R)``.
+
+    A diagonal cost is its weights (the kernel takes their square roots); a full one is
+    ``W`` with its upper Cholesky factor ``R`` (:meth:`StepProblem.cost_root`, which
+    raises on a matrix that is not positive definite).
+    """
     w = problem.weights
-    return np.sqrt(w) if w.ndim == 1 else problem.cost_root()
+    if w.ndim == 1:
+        return w, _EMPTY_MATRIX, _EMPTY_MATRIX
+    return _EMPTY_VECTOR, w, problem.cost_root()
+
+
+_EMPTY_VECTOR = np.zeros(0)
+_EMPTY_MATRIX = np.zeros((0, 0))
 
 
 def least_distance_eq(problem: StepProblem, E: FloatArray, r: FloatArray
@@ -189,7 +189,7 @@ def least_distance_eq(problem: StepProblem, E: FloatArray, r: FloatArray
         The minimum-norm ``lam`` with ``W (x - c) = E^T lam``.
     """
     f = factor(E)
-    x = least_distance(f.N, f.solve(r), cost_root(problem), problem.center)
+    x = least_distance(problem, f.N, f.solve(r))
     return x, f.solve_transposed(problem.gradient(x))
 
 
@@ -228,13 +228,16 @@ class AffineSet:
         return int(self.N.shape[1])
 
 
-def affine_solutions(A: FloatArray, b: FloatArray, f: Factor | None = None
-                     ) -> AffineSet | None:
+def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
     """Parametrise the solutions of ``A x = b`` as ``x0 + N t``.
 
     One truncated SVD (:func:`factor`): the rank is the number of singular values above
     ``RANK_RTOL * sigma_1``, ``x0`` is the minimum-norm solution and ``N`` the trailing
-    right singular vectors. About 30 us for the 12 x 13 step of the PUMA pair.
+    right singular vectors. When ``A`` is rank-deficient, ``x0`` must solve ``A x = b``
+    to :data:`CONSISTENCY_TOL` (backward error): ``max |A x0 - b| <= CONSISTENCY_TOL *
+    max(1, max |b|, sigma_1 max |x0|)``, the rank decision may leave ``RANK_RTOL *
+    sigma_1 |x|`` of ``b`` unmatched, which is scaled by the size of ``A x``. The exact
+    solver takes the same decision in the kernel.
 
     Parameters
     ----------
@@ -242,32 +245,15 @@ def affine_solutions(A: FloatArray, b: FloatArray, f: Factor | None = None
         Equality matrix (units of ``b`` per unit of ``x``).
     b : ndarray, shape (m,)
         Right-hand side [m/s; rad/s].
-    f : Factor, optional
-        ``factor(A)`` when already computed (:func:`problem_factor`).
 
     Returns
     -------
     AffineSet or None
-        None when ``A x = b`` has no solution: ``max |A x0 - b|`` exceeds
-        ``CONSISTENCY_TOL * max(1, max |b|)`` (``A`` rank-deficient, ``b`` outside its
+        None when ``A x = b`` has no solution (``A`` rank-deficient, ``b`` outside its
         numerical range).
     """
-    if f is None:
-        f = factor(A)
-    x0 = f.solve(b)
-    # Full row rank: every b is in the range, the residual is rounding only.
-    if f.rank < A.shape[0] and not _consistent(A, b, f, x0):
+    out = kernel.affine(A, b)
+    if out is None:
         return None
-    return AffineSet(x0, f.N, f)
-
-
-def _consistent(A: FloatArray, b: FloatArray, f: Factor, x0: FloatArray) -> bool:
-    """Whether ``x0`` solves ``A x = b`` to :data:`CONSISTENCY_TOL` (backward error).
-
-    The residual is measured against ``max(1, max |b|, sigma_1 max |x0|)``: the rank
-    decision may leave ``RANK_RTOL * sigma_1 |x|`` of ``b`` unmatched, which is scaled
-    by the size of ``A x``, not only by that of ``b``.
-    """
-    scale = max(1.0, float(np.abs(b).max()),
-                float(f.sigma[0]) * float(np.abs(x0).max()) if f.rank else 0.0)
-    return float(np.abs(A @ x0 - b).max()) <= CONSISTENCY_TOL * scale
+    x0, U, sigma, V, N = out
+    return AffineSet(x0, N, Factor(U, sigma, V, N))

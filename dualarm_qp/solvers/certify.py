@@ -30,6 +30,10 @@ on the null space ``Z`` of ``A`` (rank at :data:`~._affine.RANK_RTOL`). Non-nega
 least squares finds a valid multiplier vector whenever one exists, also on degenerate
 vertices where the minimum-norm multipliers have the wrong sign (see
 :func:`kkt_holds`).
+
+The residuals and the KKT test are computed by the compiled kernel
+(``src/kernel/certify.cpp``, with a Lawson-Hanson non-negative least squares); the
+decisions below stay here.
 """
 
 from __future__ import annotations
@@ -40,34 +44,39 @@ from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import nnls
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import factor, problem_factor
+from ._affine import cost_arrays, problem_factor
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
 FloatArray = NDArray[np.float64]
 
 #: Distance (units of ``x``, rows unit-norm) within which a bound or row is active.
-ACTIVE_TOL = 1e-9
+ACTIVE_TOL: float = kernel.ACTIVE_TOL  # 1e-9, defined in src/kernel/constants.hpp
 
 #: How far (relative to ``max(1, |x|)``, units of ``x``) a claimed optimum may lie from
 #: the exact minimiser on its active set, and how long the Newton step to stationarity
 #: may be.
-STEP_RTOL = 1e-8
+STEP_RTOL: float = kernel.STEP_RTOL  # 1e-8
 
 #: Rounding allowance of the stationarity check: a thousand ulps of the gradient's
 #: largest term ``w_i (x_i - c_i)`` (with a sliding weight of 1e9 one ulp of the
 #: sliding speed is already 1e-7 of gradient).
-ROUNDING = 1e3 * float(np.finfo(np.float64).eps)
+ROUNDING: float = kernel.ROUNDING  # 1e3 * machine epsilon
 
 
 def residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float]:
     """``(max |A x - b|, largest violation of a box or a unit-norm row)`` of ``x``."""
-    eq = float(np.abs(problem.A @ x - problem.b).max(initial=0.0))
-    box = float(max(0.0, float(np.max(problem.lower - x, initial=0.0)),
-                    float(np.max(x - problem.upper, initial=0.0))))
-    return eq, max(box, problem.row_violation(x))
+    eq, box, rows = _residuals(problem, x)
+    return eq, max(box, rows)
+
+
+def _residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float, float]:
+    """``max |A x - b|``, the largest box violation and :meth:`StepProblem.row_violation`."""
+    eq, box, rows = kernel.residuals(problem.A, problem.b, problem.lower, problem.upper,
+                                     problem.G, problem.h, x)
+    return float(eq), float(box), float(rows)
 
 
 def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
@@ -109,11 +118,7 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
                        active_lower=zeros, active_upper=zeros, verified_with=tol,
                        build_time=problem.build_time,
                        message=message or "solver returned a non-finite or misshaped x")
-    eq = float(np.abs(problem.A @ x - problem.b).max(initial=0.0))
-    gap_lo = problem.lower - x
-    gap_up = x - problem.upper
-    box = float(max(0.0, float(gap_lo.max(initial=0.0)), float(gap_up.max(initial=0.0))))
-    rows = problem.row_violation(x)
+    eq, box, rows = _residuals(problem, x)
     if status.usable:
         limit = equality_limit(problem, tol)
         if status is not Status.RELAXED and status is not Status.ESCAPING and eq > limit:
@@ -126,8 +131,8 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
-    active_lo = gap_lo >= -ACTIVE_TOL
-    active_up = gap_up >= -ACTIVE_TOL
+    active_lo = problem.lower - x >= -ACTIVE_TOL
+    active_up = x - problem.upper >= -ACTIVE_TOL
     active_rows: tuple[str, ...] = ()
     if problem.p:
         ineq = problem.inequalities()
@@ -187,66 +192,11 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
         Include the boxes and rows (False: the minimiser over ``A x = b`` alone).
     """
     f = problem_factor(problem)
-    Z = f.N
-    d = Z.shape[1]
-    x0 = f.solve(problem.b)  # the minimum-norm solution of the equality
-    C_act = _NO_ROWS
-    e_act = _NO_RHS
-    if bounds:
-        ineq = problem.inequalities()
-        active = ineq.C @ x - ineq.e >= -ACTIVE_TOL * np.maximum(1.0, np.abs(ineq.e))
-        if active.any():
-            C_act, e_act = ineq.C[active], ineq.e[active]
-    # Eq. 37 as |R (x - c)|^2: R = diag(sqrt(w)) (a vector) or the Cholesky factor.
-    root = problem.cost_root() if not problem.diagonal_cost else np.sqrt(problem.weights)
-    RZ = root[:, None] * Z if root.ndim == 1 else root @ Z
-    dc = problem.center - x0
-    r0 = root * dc if root.ndim == 1 else root @ dc
-    # x* = x0 + Z t*: the minimiser of Eq. 37 on A x = b with the active limits held, in
-    # the null-space coordinates t (d of them): min |RZ t - r0| subject to M t = g_act.
-    if d == 0:
-        t_star = np.zeros(0)
-    elif C_act.shape[0]:
-        M = C_act @ Z
-        fm = factor(M)
-        t_star = fm.solve(e_act - C_act @ x0)
-        if fm.nullity:
-            RN = RZ @ fm.N
-            u = np.linalg.lstsq(RN, r0 - RZ @ t_star, rcond=None)[0]
-            t_star = t_star + fm.N @ u
-    else:
-        Q, Rt = np.linalg.qr(RZ)
-        t_star = np.linalg.solve(Rt, Q.T @ r0)
-    x_star = x0 + Z @ t_star
-    if not np.isfinite(x_star).all():
-        return False
-    grad = problem.gradient(x_star)
-    H = RZ.T @ RZ
-    if d == 0:
-        lam_min = 1.0
-    elif d == 1:
-        lam_min = float(H[0, 0])
-    else:
-        lam_min = float(np.linalg.eigvalsh(H)[0])
-    tol = (STEP_RTOL * max(1.0, float(np.abs(x).max(initial=0.0)))
-           + ROUNDING * float(np.abs(grad).max(initial=0.0)) / max(lam_min, 1e-300))
-    if float(np.abs(x - x_star).max(initial=0.0)) > tol:
-        return False
-    if d == 0:
-        return True
-    g = Z.T @ grad
-    if C_act.shape[0]:
-        Mz = Z.T @ C_act.T  # the projected normals of the active limits
-        L = np.linalg.cholesky(H)
-        mu, _ = nnls(np.linalg.solve(L, Mz), -np.linalg.solve(L, g),
-                     maxiter=50 * (Mz.shape[1] + 1))
-        g = g + Mz @ mu
-    step = Z @ np.linalg.solve(H, g)  # the Newton step that would make x* stationary
-    return float(np.abs(step).max(initial=0.0)) <= tol
-
-
-_NO_ROWS = np.zeros((0, 0))
-_NO_RHS = np.zeros(0)
+    ineq = problem.inequalities()
+    w_diag, w_full, root_full = cost_arrays(problem)
+    return bool(kernel.kkt_holds(problem.A, problem.b, f.U, f.sigma, f.V, f.N, ineq.C,
+                                 ineq.e, w_diag, w_full, root_full, problem.center, x,
+                                 bounds))
 
 
 __all__ = ["ACTIVE_TOL", "certify", "equality_limit", "kkt_holds", "residuals"]

@@ -20,6 +20,9 @@ A row whose normal does not move along the null space (``|C_i N| <= RANK_RTOL``)
 condition on ``x0`` alone: met within ``feasibility_tol`` or the step is infeasible.
 
 The answer is a claim (OPTIMAL or INFEASIBLE); :func:`~.certify.certify` checks it.
+
+The whole method is one call into the compiled kernel (``src/kernel/nullspace.cpp``);
+:meth:`NullspaceSolver.solve` gathers the arrays and names the conflicting rows.
 """
 
 from __future__ import annotations
@@ -30,9 +33,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import RANK_RTOL, affine_solutions, cost_root, problem_factor
-from ._dense_qp import solve_dense_qp
+from ._affine import Factor, cost_arrays
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register
@@ -73,49 +76,28 @@ class NullspaceSolver:
         empty = empty_box_failure(problem, self.name)
         if empty is not None:
             return empty
-        aff = affine_solutions(problem.A, problem.b, problem_factor(problem))
-        if aff is None:
+        ineq = problem.inequalities()
+        w_diag, w_full, root_full = cost_arrays(problem)
+        known = problem._cache.get("factor")  # e.g. of the unscaled step: the same A
+        code, x, rows, nullity, iterations, factor = kernel.solve_nullspace(
+            problem.A, problem.b, ineq.C, ineq.e, w_diag, w_full, root_full,
+            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter,
+            None if known is None else (known.U, known.sigma, known.V, known.N))
+        if known is None:  # shared with the certificate
+            problem._cache["factor"] = Factor(*factor)
+        if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",
                           time.perf_counter() - start, conflicts=())
-        ineq = problem.inequalities()
-        x0, N = aff.x0, aff.N
-        M = ineq.C @ N
-        f = ineq.e - ineq.C @ x0
-        tol = self.feasibility_tol
-        moving = np.abs(M).max(axis=1, initial=0.0) > RANK_RTOL
-        fixed_broken = np.flatnonzero(~moving & (f < -tol))
-        extras: dict[str, Any] = {"nullity": aff.nullity}
-        if fixed_broken.size:
-            return self._infeasible(problem, [int(i) for i in fixed_broken], start, extras)
-        d = aff.nullity
-        if d == 0:
-            return StepSolution(x=x0, status=Status.OPTIMAL, solver=self.name,
-                                solve_time=time.perf_counter() - start, extras=extras)
-        R = cost_root(problem)
-        RN = R[:, None] * N if R.ndim == 1 else R @ N
-        r = R * (problem.center - x0) if R.ndim == 1 else R @ (problem.center - x0)
-        Q, Rt = np.linalg.qr(RN)
-        t_free = np.linalg.solve(Rt, Q.T @ r)
-        rows = np.flatnonzero(moving)
-        if d == 1:
-            t, conflict = _interval(M[rows, 0], f[rows], float(t_free[0]), tol)
-            if conflict is not None:
-                return self._infeasible(problem, [int(rows[i]) for i in conflict],
-                                        start, extras)
-            x = x0 + N[:, 0] * t
-        else:
-            out = solve_dense_qp(Rt, t_free, M[rows], f[rows], feas_tol=tol,
-                                 max_iter=self.max_iter)
-            extras["iterations"] = out.iterations
-            if out.status == "max_iter":
-                return failed(problem, Status.ERROR, self.name,
-                              f"active set did not converge in {out.iterations - 1} "
-                              "additions and drops", time.perf_counter() - start, **extras)
-            if out.status == "infeasible":
-                involved = [int(rows[i]) for i in (*out.active.tolist(), out.blocking)]
-                return self._infeasible(problem, involved, start, extras)
-            x = x0 + N @ out.t
+        extras: dict[str, Any] = {"nullity": nullity}
+        if iterations >= 0:
+            extras["iterations"] = iterations
+        if code == _INFEASIBLE:
+            return self._infeasible(problem, rows, start, extras)
+        if code == _MAX_ITER:
+            return failed(problem, Status.ERROR, self.name,
+                          f"active set did not converge in {iterations - 1} "
+                          "additions and drops", time.perf_counter() - start, **extras)
         return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
                             solve_time=time.perf_counter() - start, extras=extras)
 
@@ -128,31 +110,8 @@ class NullspaceSolver:
                       conflicts=conflicts, **extras)
 
 
-def _interval(c: FloatArray, f: FloatArray, t_free: float, tol: float
-              ) -> tuple[float, tuple[int, int] | None]:
-    """Clamp ``t_free`` to ``{t : c_i t <= f_i}``; ``(t, None)`` or ``(0, conflicting rows)``.
-
-    Every ``c_i`` is nonzero (rows that do not move were checked before). An interval
-    empty by at most ``tol`` (in units of ``x``: the rows are unit norm and the null
-    direction has unit length) is rounding: its midpoint is returned.
-    """
-    ratio = f / c
-    up = c > 0.0
-    hi_rows = np.flatnonzero(up)
-    lo_rows = np.flatnonzero(~up)
-    t_hi, t_lo = np.inf, -np.inf
-    i_hi = i_lo = -1
-    if hi_rows.size:
-        j = int(np.argmin(ratio[hi_rows]))
-        i_hi, t_hi = int(hi_rows[j]), float(ratio[hi_rows[j]])
-    if lo_rows.size:
-        j = int(np.argmax(ratio[lo_rows]))
-        i_lo, t_lo = int(lo_rows[j]), float(ratio[lo_rows[j]])
-    if t_lo > t_hi:
-        if t_lo - t_hi > 2.0 * tol:
-            return 0.0, (i_lo, i_hi)
-        return 0.5 * (t_lo + t_hi), None
-    return min(max(t_free, t_lo), t_hi), None
+#: The kernel's answer codes (src/kernel/nullspace.hpp); 0 is OPTIMAL.
+_INFEASIBLE, _INCONSISTENT, _MAX_ITER = 1, 2, 3
 
 
 register("nullspace", NullspaceSolver,

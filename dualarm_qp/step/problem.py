@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
 if TYPE_CHECKING:
@@ -300,27 +301,8 @@ class StepProblem:
         cached = self._cache.get("ineq")
         if cached is not None:
             return cached
-        n = self.n
-        up = np.flatnonzero(np.isfinite(self.upper))
-        lo = np.flatnonzero(np.isfinite(self.lower))
-        G, h = self.G, self.h
-        rows = np.flatnonzero(np.isfinite(h))
-        k_up, k_lo = up.size, lo.size
-        C = np.zeros((k_up + k_lo + rows.size, n))
-        C[np.arange(k_up), up] = 1.0
-        C[k_up + np.arange(k_lo), lo] = -1.0
-        e = np.empty(C.shape[0])
-        e[:k_up] = self.upper[up]
-        e[k_up:k_up + k_lo] = -self.lower[lo]
-        if rows.size:
-            norms = np.linalg.norm(G[rows], axis=1)
-            safe = np.where(norms > 0.0, norms, 1.0)
-            C[k_up + k_lo:] = G[rows] / safe[:, None]
-            e[k_up + k_lo:] = h[rows] / safe
-        kind = np.zeros(C.shape[0], dtype=np.int8)
-        kind[:k_up] = 1
-        kind[k_up:k_up + k_lo] = -1
-        index = np.concatenate([up, lo, rows]).astype(np.intp)
+        # Built by the compiled kernel (src/kernel/rows.cpp), which the exact solver uses.
+        C, e, kind, index = kernel.inequalities(self.lower, self.upper, self.G, self.h)
         out = Inequalities(C, e, kind, index, self)
         self._cache["ineq"] = out
         return out

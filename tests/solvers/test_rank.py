@@ -318,7 +318,9 @@ def test_square_step_outside_the_box(seed: int) -> None:
     k = int(np.argmin(ratios))
     reach = max_task_scale(problem)
     assert reach.scale is not None
-    assert abs(reach.scale - ratios[k]) <= 1e-14 * ratios[k]
+    # Rounding of two factorisations (the SVD here, LU above) of a matrix of condition
+    # up to ~100: 1e-13 relative.
+    assert abs(reach.scale - ratios[k]) <= 1e-13 * ratios[k]
     assert reach.blocking == (f"{problem.names[k]} {'upper' if x[k] > 0 else 'lower'}",)
     lp = lp_max_scale(problem)
     assert lp is not None

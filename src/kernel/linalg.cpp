@@ -1,0 +1,106 @@
+#include "linalg.hpp"
+
+#include <cmath>
+
+#include "constants.hpp"
+
+namespace dqk {
+
+Vec Factor::solve(const Vec& b) const {
+  Vec y = U.transpose() * b;
+  y.array() /= sigma.array();
+  return V * y;
+}
+
+Vec Factor::solve_transposed(const Vec& g) const {
+  Vec y = V.transpose() * g;
+  y.array() /= sigma.array();
+  return U * y;
+}
+
+Factor factor(const Mat& A) {
+  const Index m = A.rows(), n = A.cols();
+  Factor f;
+  if (m == 0 || n == 0) {
+    f.U = Mat::Zero(m, 0);
+    f.sigma = Vec::Zero(0);
+    f.V = Mat::Zero(n, 0);
+    f.N = Mat::Identity(n, n);
+    return f;
+  }
+  Eigen::JacobiSVD<Mat, Eigen::ColPivHouseholderQRPreconditioner> svd(
+      A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Vec& sv = svd.singularValues();
+  const double cut = RANK_RTOL * sv(0);
+  Index rank = 0;
+  for (Index i = 0; i < sv.size(); ++i) {
+    if (sv(i) > cut) ++rank;
+  }
+  f.U = svd.matrixU().leftCols(rank);
+  f.sigma = sv.head(rank);
+  f.V = svd.matrixV().leftCols(rank);
+  f.N = svd.matrixV().rightCols(n - rank);
+  return f;
+}
+
+std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Factor& f) {
+  Vec x0 = f.solve(b);
+  if (f.rank() < A.rows()) {
+    double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
+    if (f.rank() > 0 && x0.size() > 0) {
+      scale = std::max(scale, f.sigma(0) * x0.cwiseAbs().maxCoeff());
+    }
+    const double res = (A * x0 - b).cwiseAbs().maxCoeff();
+    if (!(res <= CONSISTENCY_TOL * scale)) return std::nullopt;
+  }
+  return x0;
+}
+
+Cost::Cost(const Vec& weights_diag, const Mat& weights_full, const Mat& root_full,
+           const Vec& c)
+    : diagonal(weights_full.size() == 0), center(c) {
+  if (diagonal) {
+    w = weights_diag;
+    root_diag = w.array().sqrt();
+  } else {
+    W = weights_full;
+    R = root_full;
+  }
+}
+
+Mat Cost::root_times(const Mat& M) const {
+  if (diagonal) return root_diag.asDiagonal() * M;
+  return R * M;
+}
+
+Vec Cost::root_times(const Vec& v) const {
+  if (diagonal) return root_diag.cwiseProduct(v);
+  return R * v;
+}
+
+Vec Cost::gradient(const Vec& x) const {
+  const Vec d = x - center;
+  if (diagonal) return w.cwiseProduct(d);
+  return W * d;
+}
+
+Mat upper_solve(const Mat& R, const Mat& B) {
+  for (Index i = 0; i < R.rows(); ++i) {
+    if (R(i, i) == 0.0) {
+      return R.completeOrthogonalDecomposition().solve(B);
+    }
+  }
+  return R.triangularView<Eigen::Upper>().solve(B);
+}
+
+Vec qr_lstsq(const Mat& M, const Vec& r, Mat* R_out) {
+  Eigen::HouseholderQR<Mat> qr(M);
+  const Index d = M.cols();
+  Mat R = qr.matrixQR().topRows(d).triangularView<Eigen::Upper>();
+  Vec qtr = qr.householderQ().transpose() * r;
+  Vec t = upper_solve(R, qtr.head(d));
+  if (R_out != nullptr) *R_out = R;
+  return t;
+}
+
+}  // namespace dqk
