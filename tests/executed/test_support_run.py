@@ -54,7 +54,9 @@ LOAD_COLUMNS = [f"f_{role}_{part}" for role in ("leader", "follower")
 
 def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None:
     """Every earlier column and summary entry as before; only the wrench columns and
-    summary ``loads`` are new."""
+    summary ``loads`` are new. The record was made with the Python-era exact solver: the
+    compiled one agrees with it to 1e-12 per step (its null-space basis comes from
+    another SVD), hence the tolerances."""
     with open(run_dir / "trajectory.csv", newline="") as fh:
         rows = list(csv.reader(fh))
     header = rows[0]
@@ -64,7 +66,7 @@ def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None
         now = [rows[1 + k][header.index(name)] for k in BEFORE["rows"]]
         try:
             np.testing.assert_allclose(np.array(now, dtype=float),
-                                       np.array(values, dtype=float), rtol=1e-12, atol=1e-15,
+                                       np.array(values, dtype=float), rtol=1e-9, atol=1e-12,
                                        err_msg=name)
         except ValueError:  # a text column
             assert now == values, name
@@ -72,7 +74,7 @@ def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None
     assert set(summary) - set(BEFORE["summary"]) >= {"loads"}
     for key, value in BEFORE["summary"].items():
         assert json.dumps(summary[key], sort_keys=True) == json.dumps(value, sort_keys=True) \
-            or summary[key] == pytest.approx(value, rel=1e-12), key
+            or summary[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
 
 
 def test_support_wrenches_are_the_push_and_the_leader_takes_the_rest(
