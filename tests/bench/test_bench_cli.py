@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 import signal
 from pathlib import Path
 
@@ -147,7 +148,8 @@ def test_a_solver_that_cannot_take_the_files_limits_is_not_applicable(
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "Not applicable (not run):" in out
-    assert "sns: solver 'sns' takes boxes only, and the limit 'collision' gives rows" in out
+    assert re.search(r"sns: \S*with_post\.yaml: solver 'sns' takes boxes only, and the "
+                     r"limit 'collision' gives rows", out), out
     assert "Failed jobs" not in out
     rows = {r["solver"]: r for r in csv.DictReader(open(tmp_path / "b" / "bench.csv",
                                                         encoding="utf-8"))}
