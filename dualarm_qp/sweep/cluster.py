@@ -14,16 +14,10 @@ signal that comes meanwhile is held (:class:`~dualarm_qp._signals.SignalHold`) a
 on once the cluster is up, or closed (a second or so). A cluster interrupted half-started
 cannot be closed (Dask's exit hook then fails with a traceback), and one interrupted
 half-closed is closed again by that hook, which waits 10 s for it.
-
-The embedded cluster can be started in a background thread (:class:`StartingCluster`)
-while the driver checks the points: signals reach the main thread only, so the start
-is never cut short there either; whoever started it closes it. Its workers import the
-library as they start (:data:`PRELOAD`), not with their first batch.
 """
 
 from __future__ import annotations
 
-import concurrent.futures
 import contextlib
 import logging
 import os
@@ -36,10 +30,6 @@ from ..errors import InvalidInputError
 
 #: Seconds to wait for an existing scheduler to answer, and for its first worker.
 CONNECT_TIMEOUT_S = 15.0
-
-#: Modules an embedded cluster's workers import as they start (what a point runs).
-PRELOAD = ("dualarm_qp.sweep.worker", "dualarm_qp.experiments.run",
-           "dualarm_qp.experiments.setup", "dualarm_qp.bench.runner")
 
 
 def default_workers() -> int:
@@ -97,44 +87,8 @@ def _connect(address: str) -> Any:
     return client
 
 
-class StartingCluster:
-    """An embedded cluster started in a background thread; :meth:`take` it or :meth:`close` it.
-
-    Parameters
-    ----------
-    workers : int, optional
-        Worker processes (default: :func:`default_workers`).
-    """
-
-    def __init__(self, workers: int | None = None) -> None:
-        self.workers = workers or default_workers()
-        pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="sweep-cluster")
-        self._future = pool.submit(_local_cluster, self.workers)
-        pool.shutdown(wait=False)
-        self.taken = False
-
-    def take(self) -> Any:
-        """Return the cluster once it is up (raises what its start raised)."""
-        self.taken = True
-        return self._future.result()
-
-    def close(self) -> None:
-        """Close the cluster, once it is up, unless it was taken (then its taker does)."""
-        if self.taken:
-            return
-        self.taken = True
-        with SignalHold():  # closed whole, then stopped
-            try:
-                cluster = self._future.result()
-            except Exception:  # it did not start: nothing to close
-                return
-            with contextlib.suppress(Exception):
-                cluster.close(timeout=10)
-
-
 @contextlib.contextmanager
-def open_client(*, workers: int | None = None, scheduler: str | None = None,
-                started: StartingCluster | None = None) -> Iterator[Any]:
+def open_client(*, workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
     """Yield a :class:`distributed.Client` for the sweep; close what was opened.
 
     Parameters
@@ -143,8 +97,6 @@ def open_client(*, workers: int | None = None, scheduler: str | None = None,
         Worker processes of the embedded cluster (default: :func:`default_workers`).
     scheduler : str, optional
         Address of an existing scheduler (``tcp://host:port``); no cluster is started.
-    started : StartingCluster, optional
-        The embedded cluster, already starting (then ``workers`` is its own).
 
     Raises
     ------
@@ -165,8 +117,7 @@ def open_client(*, workers: int | None = None, scheduler: str | None = None,
             client = _connect(scheduler)
         else:
             with SignalHold():  # started whole (see the module docstring), then stopped
-                cluster = (_local_cluster(workers or default_workers()) if started is None
-                           else started.take())
+                cluster = _local_cluster(workers or default_workers())
                 client = Client(cluster, set_as_default=False)
         yield client
     finally:
@@ -183,8 +134,7 @@ def _local_cluster(workers: int) -> Any:
     with warnings.catch_warnings():  # "port 8787 in use": no dashboard is needed
         warnings.filterwarnings("ignore", message="Port .* is already in use")
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                            dashboard_address=None, silence_logs=logging.CRITICAL,
-                            preload=list(PRELOAD))
+                            dashboard_address=None, silence_logs=logging.CRITICAL)
 
 
 def worker_count(client: Any) -> int:

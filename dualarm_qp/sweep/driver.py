@@ -30,7 +30,7 @@ from typing import Any
 from .._signals import SignalHold
 from ..errors import DualArmError
 from .claims import PointStore, claims_cap
-from .cluster import StartingCluster, open_client, quiet_dask_logs, worker_count
+from .cluster import open_client, quiet_dask_logs, worker_count
 from .points import PointTask
 from .table import build_rows, write_table
 from .worker import run_batch, run_point
@@ -91,18 +91,14 @@ class Driver:
         Where and how to run (see :class:`~.runner.SweepSettings`).
     log : callable, optional
         Receives a line when the sweep waits for another one on the same folder.
-    started : StartingCluster, optional
-        The embedded cluster, started while the points were checked: the sweep takes
-        it when it needs a cluster (the caller closes it if it was not taken).
     """
 
     def __init__(self, tasks: list[PointTask], swept: Sequence[str], out: Path, *,
                  workers: int | None = None, scheduler: str | None = None,
-                 batch: int | None = None, log: Callable[[str], None] | None = None,
-                 started: StartingCluster | None = None) -> None:
+                 batch: int | None = None, log: Callable[[str], None] | None = None
+                 ) -> None:
         self.tasks, self.swept, self.out = tasks, list(swept), out
         self.workers, self.scheduler, self.batch = workers, scheduler, batch
-        self.started = started
         self.log = log
         self.store = PointStore(out)
         self.keys = {t.key for t in tasks}
@@ -253,8 +249,7 @@ class _Remote:
         drv = self.driver
         self.stack.enter_context(quiet_dask_logs())
         self.client = self.stack.enter_context(open_client(workers=drv.workers,
-                                                           scheduler=drv.scheduler,
-                                                           started=drv.started))
+                                                           scheduler=drv.scheduler))
         workers = self.workers = worker_count(self.client)
         self.size = drv.batch or batch_size(points, workers)  # the largest batch
         self._room = max(1, min(IN_FLIGHT_PER_WORKER * workers, claims_cap() // self.size))

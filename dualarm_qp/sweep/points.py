@@ -25,7 +25,6 @@ import copy
 import hashlib
 import json
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -225,8 +224,7 @@ def check_point(doc: dict[str, Any], spec: SweepSpec, point: Point,
     return None
 
 
-def prepare_points(spec: SweepSpec, code: str,
-                   expanded: Callable[[list[str]], None] | None = None) -> list[PointTask]:
+def prepare_points(spec: SweepSpec, code: str) -> list[PointTask]:
     """Expand the sweep and check every point (see the module docstring).
 
     Parameters
@@ -235,9 +233,6 @@ def prepare_points(spec: SweepSpec, code: str,
         The sweep.
     code : str
         Code digest of the package (part of each point's key).
-    expanded : callable, optional
-        Called with every point's key once the points are expanded, before they are
-        checked (the driver starts its cluster meanwhile when some are not stored).
 
     Raises
     ------
@@ -255,21 +250,16 @@ def prepare_points(spec: SweepSpec, code: str,
     if not isinstance(base, dict):
         raise ConfigError("the base experiment file must be a mapping of keys",
                           path=str(spec.base))
-    points = []
-    for point in expand(spec):
-        doc = point_document(base, spec, point)
-        points.append((point, doc, point_key(doc, spec.repeat, code)))
-    if expanded is not None:
-        expanded([key for _, _, key in points])
     tasks = []
     checked: set[str] = set()
     first_failure: tuple[Point, str] | None = None
-    for point, doc, key in points:
+    for point in expand(spec):
+        doc = point_document(base, spec, point)
         failure = check_point(doc, spec, point, checked)
         if failure is not None and first_failure is None:
             first_failure = (point, failure)
-        tasks.append(PointTask(point.index, key, point.values, doc, str(spec.base),
-                               spec.repeat, failure))
+        tasks.append(PointTask(point.index, point_key(doc, spec.repeat, code), point.values,
+                               doc, str(spec.base), spec.repeat, failure))
     if first_failure is not None and all(t.start_failure for t in tasks):
         point, failure = first_failure
         raise ConfigError(f"no point can start; the first, {json.dumps(point.values)}: "

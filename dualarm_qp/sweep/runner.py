@@ -31,8 +31,7 @@ from typing import Any
 from .._io import write_json
 from .._signals import InterruptHandlers, signal_name
 from ..errors import InvalidInputError
-from .claims import STORE_FILE, PointStore
-from .cluster import StartingCluster
+from .claims import STORE_FILE
 from .driver import Driver, SchedulerLost
 from .labels import file_units, sweep_labels
 from .points import PointTask, prepare_points
@@ -175,29 +174,11 @@ def run_sweep(
     settings = settings or SweepSettings()
     code = code_digest()
     folder = Path(out)
-    starting: list[StartingCluster] = []
-
-    def start_cluster(keys: list[str]) -> None:
-        """Start the embedded cluster while the points are checked, if any is to run."""
-        if settings.scheduler is None and not set(keys) <= set(PointStore(folder).read_new()):
-            starting.append(StartingCluster(settings.workers))
-
-    try:
-        tasks = prepare_points(spec, code, start_cluster)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_json(folder / META_FILE, _meta(spec, tasks, code))
-        drv = Driver(tasks, spec.swept_keys, folder, workers=settings.workers,
-                     scheduler=settings.scheduler, batch=settings.batch, log=log,
-                     started=starting[0] if starting else None)
-        return _drive(drv, spec, tasks, folder, code, settings, log)
-    finally:
-        for cluster in starting:  # not needed after all (bad input, every point stored)
-            cluster.close()
-
-
-def _drive(drv: Driver, spec: SweepSpec, tasks: list[PointTask], folder: Path, code: str,
-           settings: SweepSettings, log: Callable[[str], None] | None) -> SweepResult:
-    """Compute the points not stored and write the table (the rest of :func:`run_sweep`)."""
+    tasks = prepare_points(spec, code)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(folder / META_FILE, _meta(spec, tasks, code))
+    drv = Driver(tasks, spec.swept_keys, folder, workers=settings.workers,
+                 scheduler=settings.scheduler, batch=settings.batch, log=log)
     todo = drv.todo()
     if log is not None:
         log(f"sweep {spec.name}: {len(tasks)} points, {len(tasks) - len(todo)} stored in "
