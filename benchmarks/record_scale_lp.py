@@ -73,7 +73,7 @@ def main() -> None:
         done=np.array([f is not None for f in found]),
         ok=np.array([bool(f[0]) if f else False for f in found]),
         t=np.concatenate([f[1] if f else np.full(c[0].shape[1], np.nan)
-                          for f, c in zip(found, calls)]),
+                          for f, c in zip(found, calls, strict=True)]),
         s=np.array([f[2] if f else np.nan for f in found]),
         rows=np.array([",".join(map(str, f[3])) if f else "" for f in found]),
         source=np.array(source))

@@ -12,6 +12,8 @@ ACTIVE_TOL: float
 STEP_RTOL: float
 ROUNDING: float
 TIE_RTOL: float
+PRICE_TOL: float
+PIVOT_TOL: float
 
 def factor(A: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
 def affine(A: ArrayLike, b: ArrayLike) -> tuple[_F, _F, _F, _F, _F] | None: ...
@@ -33,4 +35,5 @@ def kkt_holds(A: ArrayLike, b: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: Arr
               N: ArrayLike, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
-
+def scale_lp(M: ArrayLike, a: ArrayLike, g: ArrayLike, s_lo: float, s_hi: float
+             ) -> tuple[int, _F, float, list[int]]: ...

@@ -19,7 +19,8 @@ artificial columns held at zero). A revised primal simplex on it with Bland's ru
 cannot cycle, so it is finite and exact up to the rounding of its
 ``(d + 1) x (d + 1)`` basis solves. Its simplex multipliers are ``(t, s)`` itself; a
 dual ray (no blocking row) proves that no ``(t, s)`` exists. No scipy LP, no time
-limit.
+limit. The simplex runs in the compiled kernel (``src/kernel/scale_lp.cpp``); this module
+reduces the step to the LP and maps the answer back.
 
 When ``A`` is rank-deficient (at :data:`~._affine.RANK_RTOL`) and ``direction`` has a
 part outside its range, only the one ``s`` that cancels that part can be feasible
@@ -34,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..step.problem import StepProblem
 from ._affine import CONSISTENCY_TOL, problem_factor
 
@@ -45,11 +47,13 @@ FloatArray = NDArray[np.float64]
 #: verification tolerance.
 FEASIBLE_SCALE_TOL = 1e-9
 
-#: Reduced costs (primal slacks) above ``-PRICE_TOL (1 + |g_j|)`` count as met.
-PRICE_TOL = 1e-12
+#: Reduced costs (primal slacks) above ``-PRICE_TOL (1 + |g_j|)`` count as met
+#: (1e-12, defined in ``src/kernel/constants.hpp``).
+PRICE_TOL: float = kernel.PRICE_TOL
 
-#: Pivot elements below this share of the column's largest entry are never pivoted on.
-PIVOT_TOL = 1e-11
+#: Pivot elements below this share of the column's largest entry are never pivoted on
+#: (1e-11, defined in ``src/kernel/constants.hpp``).
+PIVOT_TOL: float = kernel.PIVOT_TOL
 
 
 @dataclass(frozen=True)
@@ -154,52 +158,19 @@ def _lp(M: FloatArray, a: FloatArray, g: FloatArray, s_lo: float, s_hi: float
         ) -> tuple[bool, FloatArray, float, list[int]] | None:
     """Maximise ``s`` s.t. ``M t + a s <= g``, ``s_lo <= s <= s_hi`` (see the module docs).
 
-    Returns ``(feasible, t, s, rows)``: at the optimum, the rows of the final basis
-    (the active rows that hold ``s``); when infeasible, the rows of the dual ray. None
-    when the iteration limit is reached (never seen; reported, not guessed).
+    Solved in the compiled kernel (``src/kernel/scale_lp.cpp``). Returns ``(feasible,
+    t, s, rows)``: at the optimum, the rows of the final basis (the active rows that
+    hold ``s``); when infeasible, the rows of the dual ray. None when the iteration
+    limit is reached (never seen; reported, not guessed).
     """
-    k, d = M.shape
-    # Columns: 0..k-1 the rows, k the cap (s <= s_hi), k+1 the floor (-s <= -s_lo),
-    # then d artificial columns (held at zero).
-    E = np.zeros((d + 1, k + 2 + d))
-    E[:d, :k] = M.T
-    E[d, :k] = a
-    E[d, k], E[d, k + 1] = 1.0, -1.0
-    E[:d, k + 2:] = np.eye(d)
-    cost = np.concatenate([g, [s_hi, -s_lo], np.zeros(d)])
-    real = k + 2
-    basis = [*range(k + 2, k + 2 + d), k]  # artificials, then the cap
-    y = np.zeros(d + 1)
-    y[d] = 1.0
-    slack_tol = PRICE_TOL * (1.0 + np.abs(cost[:real]))
-    for _ in range(50 * (k + d + 2)):
-        B = E[:, basis]
-        pi = np.linalg.solve(B.T, cost[basis])  # simplex multipliers = (t, s)
-        reduced = cost[:real] - E[:, :real].T @ pi
-        reduced[[j for j in basis if j < real]] = 0.0
-        entering = np.flatnonzero(reduced < -slack_tol)
-        if entering.size == 0:
-            rows = [j for j in basis if j < k]
-            return True, pi[:d], float(pi[d]), rows
-        q = int(entering[0])  # Bland: the smallest index enters
-        w = np.linalg.solve(B, E[:, q])
-        tiny = PIVOT_TOL * max(1.0, float(np.abs(w).max()))
-        leave, best = -1, np.inf
-        for pos, j in enumerate(basis):
-            if j >= real:  # an artificial, held at zero: any nonzero pivot blocks
-                ratio = 0.0 if abs(w[pos]) > tiny else np.inf
-            else:
-                ratio = max(y[pos], 0.0) / w[pos] if w[pos] > tiny else np.inf
-            # Bland: the smallest ratio leaves, the smallest index among ties.
-            if ratio < best or (ratio == best < np.inf and j < basis[leave]):
-                leave, best = pos, ratio
-        if leave < 0:  # a dual ray: no (t, s) meets every row
-            rows = [q] + [j for pos, j in enumerate(basis) if j < k and w[pos] < -tiny]
-            return False, np.zeros(d), 0.0, [j for j in rows if j < k]
-        y = y - best * w
-        y[leave] = best
-        basis[leave] = q
-    return None
+    status, t, s, rows = kernel.scale_lp(M, a, g, s_lo, s_hi)
+    if status == _LP_LIMIT:
+        return None
+    return status == _LP_OPTIMAL, t, float(s), [int(j) for j in rows]
+
+
+#: The kernel's status codes of the LP.
+_LP_OPTIMAL, _LP_INFEASIBLE, _LP_LIMIT = 0, 1, 2
 
 
 __all__ = ["FEASIBLE_SCALE_TOL", "TaskScale", "max_scale", "max_task_scale"]

@@ -13,6 +13,7 @@
 #include "nnls.hpp"
 #include "nullspace.hpp"
 #include "rows.hpp"
+#include "scale_lp.hpp"
 
 #ifndef DQK_SOURCE_HASH
 #error "DQK_SOURCE_HASH must be defined by the build (CMakeLists.txt)"
@@ -45,6 +46,8 @@ NB_MODULE(_kernel, m) {
   m.attr("STEP_RTOL") = dqk::STEP_RTOL;
   m.attr("ROUNDING") = dqk::ROUNDING;
   m.attr("TIE_RTOL") = dqk::TIE_RTOL;
+  m.attr("PRICE_TOL") = dqk::PRICE_TOL;
+  m.attr("PIVOT_TOL") = dqk::PIVOT_TOL;
 
   m.def("factor", [](const Mat& A) { return factor_tuple(dqk::factor(A)); }, "A"_a,
         "Truncated SVD of A: (U, sigma, V, N).");
@@ -146,4 +149,15 @@ NB_MODULE(_kernel, m) {
       "A"_a, "b"_a, "U"_a, "sigma"_a, "V"_a, "N"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a,
       "root_full"_a, "center"_a, "x"_a, "bounds"_a,
       "Whether x is the step's minimiser (the KKT test of certify).");
+
+  m.def(
+      "scale_lp",
+      [](const Mat& M, const Vec& a, const Vec& g, double s_lo, double s_hi) {
+        const dqk::ScaleLPResult r = dqk::scale_lp(M, a, g, s_lo, s_hi);
+        return nb::make_tuple(static_cast<int>(r.status), r.t, r.s, r.rows);
+      },
+      "M"_a, "a"_a, "g"_a, "s_lo"_a, "s_hi"_a,
+      "Largest s with M t + a s <= g, s_lo <= s <= s_hi: (status, t, s, rows); status 0 "
+      "optimal (rows: the final basis), 1 infeasible (rows: the dual ray), 2 iteration "
+      "limit.");
 }
