@@ -43,10 +43,9 @@ import sys
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InvalidInputError
 from ..step.problem import StepProblem
@@ -56,6 +55,9 @@ from ._scale import max_task_scale
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import SolverOptionError, check_tolerance, register
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 
 @dataclass(frozen=True)
@@ -283,6 +285,8 @@ class QPSolver:
         if problem.p:
             G, h = _native.shifted_rows(problem)
         if self.backend.sparse:
+            import scipy.sparse as sp  # with a sparse backend only (0.2 s to import)
+
             P, A = sp.csc_matrix(P), sp.csc_matrix(A)
             G = None if G is None else sp.csc_matrix(G)
         qp = qpsolvers.Problem(P, np.zeros(problem.n), G=G, h=h, A=A,
