@@ -20,7 +20,8 @@ DATA = Path(__file__).parent / "data" / "scale_lp_answers.npz"
 
 
 def _cases() -> list[tuple[object, ...]]:
-    d = np.load(DATA)
+    with np.load(DATA) as f:  # each item of an NpzFile decompresses again: read once
+        d = {k: f[k] for k in f.files}
     out, m_at, v_at, t_at = [], 0, 0, 0
     for i, (k, n) in enumerate(d["M_shape"]):
         M = d["M"][m_at:m_at + k * n].reshape(k, n)
