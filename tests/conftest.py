@@ -21,3 +21,21 @@ def _sigint_state(request: pytest.FixtureRequest) -> Iterator[None]:
         return
     with python_sigint():
         yield
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """One clear message, not a collection error per file, when the package is missing.
+
+    The tests need the project installed with its test extras (the README's test
+    command makes ``.venv`` for it); a stale compiled kernel is reported the same way.
+    """
+    import importlib
+
+    try:  # the package first: it asks NumPy's BLAS for one thread before NumPy loads
+        for name in ("dualarm_qp", "pinocchio"):
+            importlib.import_module(name)
+    except ImportError as err:
+        raise pytest.UsageError(
+            f"the tests cannot import what they test ({err}). Install the project and "
+            "run its pytest: python3 -m venv .venv && .venv/bin/pip install -e \".[dev]\" "
+            "&& .venv/bin/pytest -n 2") from None

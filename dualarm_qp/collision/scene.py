@@ -64,6 +64,9 @@ SELF_GAP = 3
 OWNERS = ("leader", "follower", "object", "world")
 
 
+#: The reason recorded for a pair left out because it overlaps at the start.
+OVERLAPPING_AT_START = "overlapping at the start"
+
 class ObstacleOverlapError(InvalidInputError):
     """An obstacle overlaps an arm or the object at the start.
 
@@ -391,11 +394,15 @@ class CollisionScene:
                         f"{(b if obstacle is a else a).name} at the start "
                         f"({-prox.distance[i] * 1e3:.1f} mm deep): move it or the arms",
                         obstacle.name)
-                excluded.append((pair.name, f"overlapping at the start "
+                excluded.append((pair.name, f"{OVERLAPPING_AT_START} "
                                             f"({prox.distance[i] * 1e3:.1f} mm)"))
                 continue
             kept.append(pair)
         return CollisionScene(self.bodies, kept, self.settings, self.n_frames, excluded)
+
+    def overlapping_at_start(self) -> list[str]:
+        """Names of the pairs left out because their shapes overlap at the start."""
+        return [pair for pair, why in self.excluded if why.startswith(OVERLAPPING_AT_START)]
 
     def subset(self, pairs: Sequence[int]) -> CollisionScene:
         """Return the scene with only the given pairs (indices into :attr:`pairs`)."""

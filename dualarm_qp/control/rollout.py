@@ -503,8 +503,7 @@ def rollout(
     if loads is not None and loads.warning():
         warnings.append(str(loads.warning()))
     if task.scene is not None:
-        overlapping = [pair for pair, why in task.scene.excluded
-                       if why.startswith("overlapping at the start")]
+        overlapping = task.scene.overlapping_at_start()
         if overlapping:
             warnings.append("collision pairs left out because their shapes overlap at the "
                             f"start (not checked during the run): {', '.join(overlapping)}; "

@@ -112,15 +112,6 @@ def factor(A: FloatArray) -> Factor:
     return Factor(U, sigma, V, N)
 
 
-def moves(z: FloatArray) -> NDArray[np.bool_]:
-    """Components of a null direction ``z`` that move their variable.
-
-    ``|z_i| <= RANK_RTOL * max |z|`` counts as zero: setting it to zero perturbs ``A z``
-    by at most ``RANK_RTOL * max |z| * ||a_i||``, the backward error of the rank decision.
-    """
-    return np.abs(z) > RANK_RTOL * float(np.abs(z).max(initial=0.0))
-
-
 def least_distance(problem: StepProblem, N: FloatArray, x0: FloatArray) -> FloatArray:
     """Minimiser of Eq. 37, ``|R (x - c)|^2``, over ``x = x0 + N t``.
 
