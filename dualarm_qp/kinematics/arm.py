@@ -339,6 +339,27 @@ class SerialArm:
         new._place(self._base, self._tool)
         return new
 
+    def set_link_inertias(self, inertias: Any) -> None:
+        """Give link ``i`` (the body joint ``i`` moves) its mass, centre and inertia.
+
+        ``inertias[i - 1]`` is a ``pinocchio.Inertia`` in the frame of joint ``i`` of
+        :attr:`model` (for a DH arm: DH frame ``i - 1`` turned by ``q_i`` about its z).
+        Written into the model (and kept by :meth:`with_base` / :meth:`with_limits`
+        copies), where dynamics and statics read it.
+
+        Raises
+        ------
+        InvalidInputError
+            Not one ``pinocchio.Inertia`` per joint.
+        """
+        items = list(inertias)
+        if len(items) != self.n or not all(isinstance(i, pin.Inertia) for i in items):
+            raise InvalidInputError(f"{self.name}: give one pinocchio.Inertia per joint "
+                                    f"({self.n})")
+        for j, inertia in enumerate(items, start=1):
+            self._template.inertias[j] = inertia
+            self._model.inertias[j] = inertia
+
     def check_q(self, q: Any, name: str = "q") -> FloatArray:
         """Return ``q`` as a finite (n,) float array or raise a clear error.
 
