@@ -88,6 +88,18 @@ def _clearance_line(r: dict[str, Any]) -> str:
             + ("; PENETRATION" if r["penetration"] else ""))
 
 
+def _torque_line(r: dict[str, Any]) -> str:
+    """Return the console line of ``realised_limits.torque`` (the largest share of a limit)."""
+    ratio = r["ratio_max"]
+    worst = ("no limit known" if ratio is None or ratio != ratio
+             else f"{ratio:.3g} ({r['worst_joint']}, {r['torque_at_worst_N_m']:.4g} N m, "
+                  f"sample {r['worst_sample']})")
+    rule = (f"limits {'kept' if r['kept'] else 'NOT KEPT'} (allowance "
+            f"{100 * r['allowance_rtol']:g}%)" if r["enforced"]
+            else "measured only (torque limits off)")
+    return f"    {'torque':<12} {worst}; {rule}"
+
+
 def print_run_summary(s: dict[str, Any], out: str) -> None:
     """Print the console summary of one run (from its summary.json content)."""
     status = s.get("status", "completed" if s["completed"] else "failed")
@@ -109,6 +121,9 @@ def print_run_summary(s: dict[str, Any], out: str) -> None:
     for part, r in s["realised_limits"].items():
         if part == "clearance":  # a distance, not a share of a limit
             print(_clearance_line(r))
+            continue
+        if part == "torque":  # joint torques, not positions
+            print(_torque_line(r))
             continue
         start = r["range_ratio_start"]
         started = (f"; started outside, at {start:.3g}"

@@ -36,6 +36,7 @@ from .controller import DualArmController
 from .loads import record_loads
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
+from .torques import TorqueReport, record_torques, torque_at_start
 from .trace import Trace, record, record_state
 
 FloatArray = NDArray[np.float64]
@@ -43,7 +44,7 @@ FloatArray = NDArray[np.float64]
 #: Criteria a run can fail on (``Failure.criterion``).
 CRITERIA = ("unreachable", "path_collision", "solver", "support", "closure", "tracking",
             "singularity", "stalled", "path_incomplete",
-            "range", "speed", "acceleration", "collision", "interrupted")
+            "range", "speed", "acceleration", "collision", "torque", "interrupted")
 
 #: Criteria whose failure message names its cause (:mod:`.diagnosis`).
 EXPLAINED = ("closure", "tracking", "stalled", "path_incomplete")
@@ -160,6 +161,9 @@ class RolloutResult:
         Further settings to report.
     clearance : ClearanceReport or None
         The recorded motion's smallest clearance (a task with a collision scene).
+    torque : TorqueReport or None
+        The recorded motion's joint torques against their limits (a task with a load,
+        or torque limits).
     """
 
     trace: Trace
@@ -173,6 +177,7 @@ class RolloutResult:
     warnings: list[str] = field(default_factory=list)
     extras: dict[str, Any] = field(default_factory=dict)
     clearance: ClearanceReport | None = None
+    torque: TorqueReport | None = None
 
     @property
     def completed(self) -> bool:
@@ -270,6 +275,8 @@ class RolloutResult:
         }
         if self.clearance is not None:
             out["realised_limits"]["clearance"] = self.clearance.as_dict()
+        if self.torque is not None:
+            out["realised_limits"]["torque"] = self.torque.as_dict()
         out.update(self.extras)
         return out
 
@@ -397,6 +404,15 @@ def rollout(
                 _realised(controller, tr.truncate(0), dt, v_start), hard,
                 extras={"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint,
                                         "t_s": miss.t}})
+        heavy = torque_at_start(controller, DualArmState(path_start, q_l, q_f, sigma, sigma_l))
+        if heavy is not None:
+            return RolloutResult(
+                tr.truncate(0), Failure("torque", 0, path_start, heavy.torque, heavy.limit,
+                                        f"before the run: {heavy.message}"),
+                controller.solver.name, dt, path_start, path_end,
+                _realised(controller, tr.truncate(0), dt, v_start), hard,
+                extras={"torque_at_start": {"joint": heavy.joint, "torque_N_m": heavy.torque,
+                                            "limit_N_m": heavy.limit}})
         blocked = path_collision_of(task, path_start, path_end, dt)
         if blocked is not None:
             return RolloutResult(
@@ -500,6 +516,7 @@ def rollout(
         failure = _realised_failure(realised, trace, dt)
     clearance = record_clearance(task, trace)
     loads = record_loads(task, trace)  # the wrench each hand applies (a task with a load)
+    torque = record_torques(controller, trace)  # each joint's torque (a load or limits)
     if loads is not None and loads.warning():
         warnings.append(str(loads.warning()))
     if task.scene is not None:
@@ -515,13 +532,15 @@ def rollout(
             warnings.append(f"the recorded motion penetrates: {clearance.pair} at "
                             f"{clearance.minimum * 1e3:.1f} mm (sample {clearance.sample}; "
                             "collision avoidance is off)")
+    if torque is not None and failure is None and torque.enforced and not torque.kept:
+        failure = torque_failure(torque, trace)
     if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
         failure = blocked_by_pair(controller, trace, failure)
     if failure is not None and failure.criterion in EXPLAINED and len(trace):
         failure = _explained(controller, trace, failure)
     return RolloutResult(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
-        warnings=warnings, clearance=clearance,
+        warnings=warnings, clearance=clearance, torque=torque,
         extras={**({} if task.scene is None else {"collision": task.scene.summary()}),
                 **({} if loads is None else {"loads": loads.as_dict()}),
                 "projection": project, "reresolve_orientation": reresolve_orientation,
@@ -645,6 +664,21 @@ def clearance_failure(report: ClearanceReport, trace: Trace) -> Failure:
                    f"{trace.clearance_pair[k]} to {d * 1e3:.2f} mm, below the safety "
                    f"distance {report.safety_distance * 1e3:.1f} mm less the allowance "
                    f"{report.allowance * 1e3:.1f} mm")
+
+
+def torque_failure(report: TorqueReport, trace: Trace) -> Failure:
+    """Return the failure of a run whose recorded torque went beyond its limit and allowance."""
+    k = report.breach_sample
+    t = float(trace.t[k])
+    tau = np.r_[trace.tau_leader[k], trace.tau_follower[k]]
+    n_l = trace.tau_leader.shape[1]
+    names = [f"ql{i + 1}" for i in range(n_l)] + [f"qf{i + 1}"
+                                                   for i in range(trace.tau_follower.shape[1])]
+    j = names.index(report.breach_joint)
+    return Failure("torque", k, t, float(tau[j]), math.nan,
+                   f"step {k} at t = {t:.4f} s: the recorded motion needs "
+                   f"{tau[j]:.4g} N m at joint {report.breach_joint}, beyond its limit and "
+                   f"the allowance of {100 * report.allowance_rtol:g}%")
 
 
 def _realised_failure(realised: dict[str, LimitReport], trace: Trace, dt: float

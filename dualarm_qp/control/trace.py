@@ -42,7 +42,10 @@ class Trace:
     ``f_leader`` and ``f_follower`` are the wrench ``[f; m]`` [N, N m] each hand applies
     to the object (world frame, moment about the hand's grasp point) for a task with a
     load, computed from the recorded joints once the run is over
-    (:mod:`dualarm_qp.control.loads`; NaN without a load).
+    (:mod:`dualarm_qp.control.loads`; NaN without a load). ``tau_leader`` and
+    ``tau_follower`` are each arm's quasi-static joint torques [N m] (its links' weight and
+    its hand's share of the load), likewise computed after the run for a task with a
+    load or torque limits (:mod:`dualarm_qp.control.torques`; NaN otherwise).
 
     ``clearance_*`` are the smallest signed distances [m] of each group of pairs of the
     task's collision scene at the row's state (``inf`` for a group without pairs; NaN
@@ -102,13 +105,15 @@ class Trace:
     clearance_pair: list[str]
     f_leader: FloatArray
     f_follower: FloatArray
+    tau_leader: FloatArray
+    tau_follower: FloatArray
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
         """Arrays for ``rows`` samples, filled with NaN until written."""
         widths = {"q_l": n_l, "ql_dot": n_l, "margin_ql": n_l,
                   "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f, "f_leader": 6,
-                  "f_follower": 6}
+                  "f_follower": 6, "tau_leader": n_l, "tau_follower": n_f}
         values: dict[str, Any] = {}
         for f in fields(cls):
             if f.name in ("status", "clearance_pair"):

@@ -153,6 +153,7 @@ class ArmSpec(Model):
     q_max: list[LimitNum] | None = None
     qd_max: list[LimitNum] | None = None
     qdd_max: list[LimitNum] | None = None
+    tau_max: list[LimitNum] | None = None
     link_radius: Annotated[list[Num], Field(min_length=1, max_length=64)] | None = None
     initial: InitialSpec
 
@@ -359,6 +360,9 @@ class ControllerSpec(Model):
     ``singular_value_min`` (default 1e-3, SI) and ``singularity_action`` (warn, stop
     or ignore) say what a Jacobian near a singularity does; ``duration_cap`` (time
     unit, default twice ``duration``) is how long a slowed task may run.
+    ``torque_limits`` keeps every joint's quasi-static torque (its arm's weight and its
+    hand's share of ``object.mass``) within its arm's ``tau_max`` (N m, whatever the
+    units; default a URDF's ``effort``; a DH arm or preset must give it).
     ``acceleration_limits`` keeps every joint within its arm's ``qdd_max`` and every
     grasp within ``grasp_acc_max`` (length unit / time unit^2); ``initial_rates`` says
     how the run starts: ``rest`` (the default) or ``path`` (already moving as the first
@@ -371,6 +375,7 @@ class ControllerSpec(Model):
     velocity_limits: Flag = True
     grasp_speed_max: Num | None = None
     acceleration_limits: Flag = False
+    torque_limits: Flag = False
     grasp_acc_max: Num | None = None
     initial_rates: Literal["rest", "path"] = "rest"
     correction_gain: Num | None = None

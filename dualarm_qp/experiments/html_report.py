@@ -126,7 +126,7 @@ _PARTS = {"leader": "leader arm", "follower": "follower arm", "grasp": "follower
 
 #: The entries of ``realised_limits`` that are no range and speed of a variable (shown
 #: on their own).
-_NOT_RANGES = ("clearance",)
+_NOT_RANGES = ("clearance", "torque")
 
 
 def _figure(path: Path) -> str:

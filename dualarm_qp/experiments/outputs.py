@@ -124,7 +124,9 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     ``clearance_pair`` the nearest pair. With a load (``object.mass``),
     ``f_leader_fx .. f_leader_mz`` and ``f_follower_fx .. f_follower_mz`` are the
     wrench each hand applies to the object [N, N m] (world frame, moment about the
-    hand's grasp point; NaN where the grasps cannot hold it). ``scale`` is the
+    hand's grasp point; NaN where the grasps cannot hold it). With a load or torque
+    limits, ``tau_leader_1 ..`` and ``tau_follower_1 ..`` are each joint's quasi-static
+    torque [N m] (the arm's weight and its hand's share of the load). ``scale`` is the
     task scale (:class:`~dualarm_qp.control.trace.Trace`): the share of the path rate
     asked for that the limits allowed, 1 when not slowed, the last row included.
     """
@@ -183,6 +185,10 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         for role, wrench in (("leader", trace.f_leader), ("follower", trace.f_follower)):
             for j, part in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
                 cols[f"f_{role}_{part}"] = wrench[:, j]
+    if len(trace) and not np.isnan(trace.tau_leader).all():  # joint torques recorded
+        for role, tau in (("leader", trace.tau_leader), ("follower", trace.tau_follower)):
+            for j in range(tau.shape[1]):
+                cols[f"tau_{role}_{j + 1}"] = tau[:, j]
     return cols
 
 

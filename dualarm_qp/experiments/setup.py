@@ -48,6 +48,7 @@ from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.loads import ObjectLoad, UnbalancedLoadError
 from ..task.scene import DualArmTask
 from ..task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
+from ..task.torques import torque_limits_of
 from ..task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
 from .config import (
     ANGLE_SCALE,
@@ -230,7 +231,7 @@ def _vec(values: list[float] | None, scale: float, n: int, key: str, path: str) 
         raise ConfigError(f"needs {n} values, got {len(values)}", path=path, key=key)
     arr = np.asarray(values, dtype=float) * scale
     if not np.isfinite(arr).all() and not key.endswith(("q_min", "q_max", "qd_max",
-                                                        "qdd_max")):
+                                                        "qdd_max", "tau_max")):
         raise ConfigError("values must be finite numbers", path=path, key=key)
     if np.isnan(arr).any():
         raise ConfigError("values must not be NaN", path=path, key=key)
@@ -288,6 +289,27 @@ def _arm(spec: ArmSpec, sc: Scales, role: str, base: FloatArray | None, path: st
             raise ConfigError(f"joint {i + 1}: {what} limit must be > 0, got "
                               f"{values[i] / unit:g}", path=path, key=f"{role}.{key}")
     return arm.with_limits(q_min, q_max, qd_max, qdd_max)
+
+
+def _tau_max(spec: ArmSpec, arm: SerialArm, role: str, on: bool, path: str
+             ) -> FloatArray | None:
+    """Return the arm's ``tau_max`` [N m] as given (checked), or None for the default.
+
+    With ``controller.torque_limits`` on, an arm without ``tau_max`` must have a URDF
+    ``effort`` (the default); a DH arm or preset has none.
+    """
+    key = f"{role}.tau_max"
+    given = _vec(spec.tau_max, 1.0, arm.n, key, path)
+    if given is not None:
+        bad = np.flatnonzero(~(given > 0.0))
+        if bad.size:
+            j = int(bad[0])
+            raise ConfigError(f"joint {j + 1}: a torque limit must be > 0 N m (.inf: no "
+                              f"limit), got {given[j]:g}", path=path, key=key)
+    if on:
+        with _at(key, path):
+            torque_limits_of(arm, given, role)
+    return given
 
 
 def _robot_arm(spec: ArmSpec, role: str, base: FloatArray | None, tool: FloatArray | None,
@@ -639,6 +661,9 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     if scene is not None:
         task = dataclasses.replace(task, scene=scene)
 
+    tau_max = {role: _tau_max(getattr(cfg, role), arm, role, c.torque_limits, path)
+               for role, arm in (("leader", task.leader), ("follower", task.follower))}
+
     weights = np.asarray(c.weights.joints, dtype=float)
     if weights.size not in (1, follower.n):
         raise ConfigError(f"needs one weight or {follower.n} (one per follower joint), got "
@@ -659,6 +684,9 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
             grasp_speed_max=math.inf if c.grasp_speed_max is None
             else c.grasp_speed_max * sc.length / sc.time,
             acceleration_limits=c.acceleration_limits,
+            torque_limits=c.torque_limits,
+            leader_tau_max=tau_max["leader"],
+            follower_tau_max=tau_max["follower"],
             grasp_acc_max=math.inf if c.grasp_acc_max is None
             else c.grasp_acc_max * sc.length / sc.time**2,
             correction_gain=None if c.correction_gain is None else c.correction_gain / sc.time,

@@ -48,7 +48,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-
 import pinocchio as pin
 
 from .arm import DHTable, SerialArm

@@ -56,6 +56,13 @@ class StepOptions:
         stays possible (:mod:`dualarm_qp.step.limits.acceleration`). Default False.
     grasp_acc_max : float
         Limit on every grasp's sliding acceleration [m/s^2]; ``inf`` for none.
+    torque_limits : bool
+        Keep every joint's quasi-static torque (its arm's weight and its hand's share
+        of the load) within its limit, linearised over the sample
+        (:mod:`dualarm_qp.step.limits.torque`). Default False.
+    leader_tau_max, follower_tau_max : ndarray, shape (n,), optional
+        Joint torque limits [N m] (``inf``: none); default the arm's model's ``effort``
+        (a URDF's), which a DH arm does not have.
     """
 
     dt: float
@@ -71,6 +78,9 @@ class StepOptions:
     acceleration_limits: bool = False
     grasp_acc_max: float = float("inf")
     leader_gain: float | None = None
+    torque_limits: bool = False
+    leader_tau_max: FloatArray | None = None
+    follower_tau_max: FloatArray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):

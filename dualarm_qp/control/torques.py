@@ -1,0 +1,200 @@
+"""The joint torques of a run: before it, along it (recorded), and what they decide.
+
+* before the first sample, :func:`torque_at_start` asks whether the arms can hold the
+  load at the start at all: a joint beyond its limit there fails the run on criterion
+  ``"torque"`` before it moves (its rows could only ask the torque back in one sample);
+* after the last, :func:`record_torques` computes every recorded sample's quasi-static
+  joint torques (:mod:`dualarm_qp.task.torques`) into the trace's ``tau_leader`` and
+  ``tau_follower`` and reports the largest use of each limit. With torque limits on, a
+  run completes only if every recorded torque stays within ``tau_max + allowance``.
+
+The **allowance** is :data:`TORQUE_RTOL` of each joint's limit. The step keeps the
+torques of the next sample to first order; the rest is second order in the step,
+``dt^2 x^T (d^2 tau / dy^2) x / 2``: at 0.01 s and 1 rad/s with curvatures of tens of
+N m/rad^2 that is a few mN m, well within 0.1% of a limit of tens of N m.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidInputError, SupportLostError
+from ..step.state import DualArmState
+from ..task.loads import UnbalancedLoadError
+from ..task.torques import LoadTorques, torque_limits_of
+from .trace import Trace
+
+if TYPE_CHECKING:
+    from .controller import DualArmController
+
+FloatArray = NDArray[np.float64]
+
+#: Allowance on a recorded torque, relative to the joint's limit (see the module docstring).
+TORQUE_RTOL = 1e-3
+
+__all__ = ["TORQUE_RTOL", "TorqueReport", "joint_torque_limits", "record_torques",
+           "torque_at_start"]
+
+
+def joint_torque_limits(controller: DualArmController) -> FloatArray:
+    """Both arms' joint torque limits [N m], the leader's first (``inf`` where none is known).
+
+    The configured ``tau_max`` or the arm's ``effort``; with torque limits off an arm
+    without either is reported against no limit.
+    """
+    task, opts = controller.task, controller.options
+    out = []
+    for arm, given, role in ((task.leader, opts.leader_tau_max, "leader"),
+                             (task.follower, opts.follower_tau_max, "follower")):
+        try:
+            out.append(torque_limits_of(arm, given, role))
+        except InvalidInputError:
+            if opts.torque_limits:
+                raise
+            out.append(np.full(arm.n, np.inf))
+    return np.concatenate(out)
+
+
+@dataclass(frozen=True)
+class TorqueReport:
+    """The recorded run's joint torques against their limits (``realised_limits.torque``).
+
+    Attributes
+    ----------
+    ratio : float
+        ``max |tau| / tau_max`` over samples and limited joints (NaN: no limit known).
+    joint : str
+        The joint that reached it (``"qf2"``).
+    sample : int
+        Where.
+    peak : float
+        Its torque there [N m].
+    limit : float
+        Its limit [N m].
+    allowance_rtol : float
+        :data:`TORQUE_RTOL`.
+    enforced : bool
+        Whether the step kept torque limits.
+    breach_sample : int
+        The first sample with a torque beyond ``tau_max (1 + allowance)`` (-1: none).
+    breach_joint : str
+        Its joint ("" for none).
+    unbalanced : int
+        Samples where the grasps could not hold the load (torques NaN).
+    """
+
+    ratio: float
+    joint: str
+    sample: int
+    peak: float
+    limit: float
+    allowance_rtol: float
+    enforced: bool
+    breach_sample: int
+    breach_joint: str
+    unbalanced: int
+
+    @property
+    def kept(self) -> bool:
+        """Whether every recorded torque stays within its limit and the allowance."""
+        return self.breach_sample < 0
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-ready."""
+        return {"ratio_max": self.ratio, "worst_joint": self.joint,
+                "worst_sample": self.sample, "torque_at_worst_N_m": self.peak,
+                "limit_at_worst_N_m": self.limit, "allowance_rtol": self.allowance_rtol,
+                "enforced": self.enforced, "kept": self.kept,
+                "first_breach_sample": self.breach_sample if self.breach_sample >= 0 else None,
+                "first_breach_joint": self.breach_joint or None,
+                "unbalanced_samples": self.unbalanced,
+                "model": "quasi-static: g(q) + J^T w, the arms' link inertias and the "
+                         "hands' shares of the load (minimum-norm split)"}
+
+
+def _names(controller: DualArmController) -> list[str]:
+    lay = controller.layout
+    return list(lay.names[:lay.n_l + lay.n_f])
+
+
+def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport | None:
+    """Compute every recorded sample's joint torques into ``trace``; the report.
+
+    Only for a task with a load or a run with torque limits (None otherwise: the trace
+    keeps NaN).
+    """
+    task, opts = controller.task, controller.options
+    if task.load is None and not opts.torque_limits:
+        return None
+    statics = LoadTorques(task)
+    n_l = task.leader.n
+    n = len(trace)
+    tau = np.full((n, n_l + task.follower.n), np.nan)
+    sliding_leader = task.leader_surface is not None
+    unbalanced = 0
+    for k in range(n):
+        sigma_l = float(trace.grasp_leader[k]) if sliding_leader else 0.0
+        try:
+            tau[k] = statics.torques(trace.q_l[k], trace.q_f[k], float(trace.grasp[k]),
+                                     sigma_l)
+        except (UnbalancedLoadError, SupportLostError):
+            unbalanced += 1
+    trace.tau_leader[:] = tau[:, :n_l]
+    trace.tau_follower[:] = tau[:, n_l:]
+    limit = joint_torque_limits(controller)
+    names = _names(controller)
+    limited = np.isfinite(limit)
+    ratio, joint, sample, peak, lim = math.nan, "", -1, math.nan, math.nan
+    breach, breach_joint = -1, ""
+    if limited.any() and n and np.isfinite(tau).any():
+        r = np.where(limited, np.abs(tau) / np.where(limited, limit, 1.0), 0.0)
+        r = np.where(np.isnan(r), -np.inf, r)
+        flat = int(np.argmax(r))
+        k, j = divmod(flat, r.shape[1])
+        ratio, joint, sample = float(r[k, j]), names[j], k
+        peak, lim = float(tau[k, j]), float(limit[j])
+        over = np.argwhere(r > 1.0 + TORQUE_RTOL)
+        if over.size:
+            breach, breach_joint = int(over[0, 0]), names[int(over[0, 1])]
+    return TorqueReport(ratio, joint, sample, peak, lim, TORQUE_RTOL, opts.torque_limits,
+                        breach, breach_joint, unbalanced)
+
+
+@dataclass(frozen=True)
+class TorqueAtStart:
+    """A joint beyond its torque limit at the start."""
+
+    joint: str
+    torque: float
+    limit: float
+
+    @property
+    def message(self) -> str:
+        """One line for a person."""
+        return (f"joint {self.joint} needs {self.torque:.4g} N m to hold the arm and its "
+                f"share of the load at the start, beyond its limit of {self.limit:.4g} N m "
+                f"({abs(self.torque) / self.limit:.3g}x): a lighter load, another start or "
+                "a stronger arm (tau_max)")
+
+
+def torque_at_start(controller: DualArmController, state: DualArmState
+                    ) -> TorqueAtStart | None:
+    """Return the worst joint beyond its limit at ``state`` (None: all within, or limits off)."""
+    if not controller.options.torque_limits:
+        return None
+    limit = joint_torque_limits(controller)
+    if not controller.hard_bounds:  # the leader's own limits are not imposed
+        limit[:controller.layout.n_l] = np.inf
+    tau = LoadTorques(controller.task).torques(state.q_l, state.q_f, state.sigma,
+                                               state.sigma_leader)
+    with np.errstate(invalid="ignore"):
+        r = np.abs(tau) / limit
+    j = int(np.argmax(r))
+    if not r[j] > 1.0:
+        return None
+    return TorqueAtStart(_names(controller)[j], float(tau[j]), float(limit[j]))

@@ -1,0 +1,90 @@
+"""Quasi-static joint torque limits: the torques of the next sample, linearised, in a box.
+
+Each arm's joints hold the arm and its hand's share of the load (:mod:`dualarm_qp.task.torques`):
+``tau(y)``, ``y`` the positions the decision variables are rates of (both arms' joints,
+the grasp coordinates). Over one sample ``y`` moves by ``dt x``, so to first order
+
+    -tau_max <= tau(y) + dt D x <= tau_max,     D = d tau / d y,
+
+two rows per joint with a finite ``tau_max``:
+``dt D x <= tau_max - tau`` and ``-dt D x <= tau_max + tau``. ``D`` includes the load
+split's change as the leader's joints turn the object and as a grasp slides (the wrench a
+hand carries depends on where the grasps are), so a sliding grasp can relieve a joint.
+The rows hold the next sample's torques to first order; the second-order rest is what
+the realised check allows (:mod:`dualarm_qp.control.torques`).
+
+A joint already beyond its limit (a start beyond it is refused before the run) gets a row
+that asks its torque back within the limit in one sample.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...task.torques import LoadTorques, torque_limits_of
+from ..context import StepContext
+from ..layout import Layout
+from ..parts import Constraint
+from .registry import LimitSetup, register_limit
+
+FloatArray = NDArray[np.float64]
+
+#: Row names of this limit: ``"torque <joint> max"`` / ``"torque <joint> min"``.
+ROW_PREFIX = "torque "
+
+
+class TorqueLimit:
+    """``|tau + dt D x| <= tau_max`` for every joint with a finite limit.
+
+    Parameters
+    ----------
+    torques : LoadTorques
+        Both arms' statics (their inertias, the load).
+    tau_max : ndarray, shape (n_l + n_f,)
+        Torque limit of every joint, the leader's first [N m] (``inf``: none).
+    layout : Layout
+        The slices of the decision vector.
+    """
+
+    name = "torque"
+    gives_rows = True
+
+    def __init__(self, torques: LoadTorques, tau_max: FloatArray, layout: Layout) -> None:
+        self.torques = torques
+        self.tau_max = np.asarray(tau_max, dtype=np.float64)
+        self.layout = layout
+        self._rows = np.flatnonzero(np.isfinite(self.tau_max))
+        names = layout.names
+        joints = [names[j] for j in self._rows.tolist()]
+        self.row_names = (tuple(f"{ROW_PREFIX}{j} max" for j in joints)
+                          + tuple(f"{ROW_PREFIX}{j} min" for j in joints))
+
+    def constraint(self, ctx: StepContext) -> Constraint:
+        """Return the two rows of every limited joint at this state."""
+        s = ctx.state
+        st = self.torques.linearised(s.q_l, s.q_f, s.sigma, s.sigma_leader)
+        rows = self._rows
+        if rows.size == 0:
+            return Constraint()
+        D = ctx.dt * st.D[rows]
+        tau, lim = st.tau[rows], self.tau_max[rows]
+        return Constraint(G=np.vstack([D, -D]), h=np.r_[lim - tau, lim + tau],
+                          row_names=self.row_names)
+
+
+def _torque(setup: LimitSetup) -> TorqueLimit | None:
+    opts = setup.options
+    if not opts.torque_limits:
+        return None
+    task, lay = setup.task, setup.layout
+    tau_max = np.full(lay.n_l + lay.n_f, np.inf)
+    if setup.leader_bounds:
+        tau_max[lay.leader] = torque_limits_of(task.leader, opts.leader_tau_max, "leader")
+    tau_max[lay.follower] = torque_limits_of(task.follower, opts.follower_tau_max, "follower")
+    return TorqueLimit(LoadTorques(task), tau_max, lay)
+
+
+register_limit("torque", _torque)
+
+__all__ = ["ROW_PREFIX", "TorqueLimit"]

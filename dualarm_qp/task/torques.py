@@ -1,0 +1,378 @@
+"""Quasi-static joint torques of both arms holding the carried object, and their derivatives.
+
+Each arm holds itself and its hand's share of the load still (the plan's accelerations
+are not counted). With ``w = [f; m]`` the wrench the hand applies to the object (world
+frame, moment about the hand's grasp point, :mod:`dualarm_qp.task.loads`), the object
+pushes back on the hand with ``-w``, and the joint torques that hold the arm are
+
+    tau(q, w) = g(q) + J(q)^T w,
+
+``g`` the generalised gravity of the arm's links (their inertias are the arm's Pinocchio
+model's: a URDF's ``inertial`` tags, the PUMA 560's published parameters) and ``J`` the
+Jacobian of the tool point, world axes ``[v; omega]``.
+
+The wrench depends on where the object is and where the grasps are: the leader's joints
+``q_l`` place the object, the grasp coordinates ``sigma`` (and ``sigma_l``) place the
+follower's contact point (and the object in the leader's hand). So
+
+    tau_l = tau(q_l, w_l(q_l, sigma, sigma_l)),   tau_f = tau(q_f, w_f(q_l, sigma, sigma_l)),
+
+and the derivative of the torques over the decision vector's variables (both arms'
+joints, the grasps) has three parts: the arm's own ``d tau / d q`` at a fixed world
+wrench (Pinocchio's static torque derivatives, with fixed *world* forces instead of
+Pinocchio's fixed *local* ones, see :meth:`ArmStatics.linearised`), and ``J^T d w / d y``
+for ``y`` the leader's joints and the grasps (central differences of the load split).
+``docs/derivation.md`` ("Joint torques") derives it; the tests check every part against
+finite differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from ..errors import InvalidInputError
+from ..kinematics.arm import SerialArm
+from .loads import FALLBACK_LENGTH, GraspStatics, hand_statics, hand_wrenches
+from .scene import DualArmTask
+
+FloatArray = NDArray[np.float64]
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+#: Step [rad or m] of the central differences of the load split over the grasps (and,
+#: for a support, over the leader's joints too); the split is smooth.
+SPLIT_STEP = 1e-6
+
+#: A balance matrix ``M P M^T`` with a reciprocal condition number below this is
+#: treated as singular (the differences of the full split are used instead).
+RCOND_MIN = 1e-10
+
+__all__ = ["RCOND_MIN", "SPLIT_STEP", "ArmStatics", "LoadTorques", "TorqueState",
+           "split_operator", "torque_limits_of"]
+
+#: A model's effort limit at or above this [N m] means none (Pinocchio's default).
+_NO_EFFORT = 1e30
+
+
+def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> FloatArray:
+    """Return an arm's joint torque limits [N m]: ``given``, else its model's ``effort``.
+
+    A URDF's ``effort`` (``model.effortLimit``) is the default; a DH arm (the PUMA 560
+    preset included) states none, so its limits must be given.
+
+    Raises
+    ------
+    InvalidInputError
+        No limit given and none in the model, a limit of the wrong length, or one that
+        is not > 0 (``inf``: that joint is not limited).
+    """
+    if given is None:
+        effort = np.array(arm.model.effortLimit, dtype=np.float64)[:arm.n]
+        if effort.shape != (arm.n,) or not ((effort > 0.0) & (effort < _NO_EFFORT)).all():
+            raise InvalidInputError(
+                f"{role}: torque limits are on but the arm's model states no joint torque "
+                "limits (a URDF's effort); give tau_max [N m] for this arm")
+        return effort
+    tau = np.asarray(given, dtype=np.float64)
+    if tau.shape != (arm.n,):
+        raise InvalidInputError(f"{role}: tau_max needs {arm.n} values, got {tau.size}")
+    bad = np.flatnonzero(~(tau > 0.0))
+    if bad.size:
+        j = int(bad[0])
+        raise InvalidInputError(f"{role}: joint {j + 1}: tau_max must be > 0 N m "
+                                f"(inf: no limit), got {tau[j]:g}")
+    return tau
+
+
+class ArmStatics:
+    """One arm's quasi-static joint torques ``g(q) + J(q)^T w`` with Pinocchio.
+
+    Works on its own copy of the arm's model (with ``gravity`` set) and its own data, so
+    it never disturbs the arm's kinematics.
+
+    Parameters
+    ----------
+    arm : SerialArm
+        The arm (its model's inertias are the links').
+    gravity : array_like, shape (3,)
+        Gravity [m/s^2], world frame.
+    """
+
+    def __init__(self, arm: SerialArm, gravity: FloatArray) -> None:
+        model = pin.Model(arm.model)
+        model.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
+        self.model = model
+        self.data = model.createData()
+        self.n = arm.n
+        self.frame = arm.tool_frame_id
+        self.joint = int(model.frames[self.frame].parentJoint)
+        self._fext = pin.StdVec_Force()
+        for _ in range(model.njoints):
+            self._fext.append(pin.Force.Zero())
+
+    def _set_wrench(self, q: FloatArray, wrench: FloatArray) -> None:
+        """Put ``-wrench`` (on the hand, about the tool point, world axes) on the last body."""
+        model, data = self.model, self.data
+        pin.forwardKinematics(model, data, q)
+        p = pin.updateFramePlacement(model, data, self.frame).translation
+        f, m = -wrench[:3], -wrench[3:]
+        at_origin = pin.Force(f, m + _skew(p) @ f)  # about the world origin
+        self._fext[self.joint] = data.oMi[self.joint].actInv(at_origin)
+
+    def torque(self, q: FloatArray, wrench: FloatArray) -> FloatArray:
+        """Joint torques [N m] that hold the arm at ``q`` with the hand applying ``wrench``.
+
+        Parameters
+        ----------
+        q : ndarray, shape (n,)
+            Joints [rad].
+        wrench : ndarray, shape (6,)
+            ``[f; m]`` the hand applies to the object [N, N m], world frame, moment about
+            the tool point.
+        """
+        self._set_wrench(q, wrench)
+        return np.array(pin.computeStaticTorque(self.model, self.data, q, self._fext))
+
+    def linearised(self, q: FloatArray, wrench: FloatArray
+                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Torques, their derivative over ``q`` at a fixed world wrench, and the Jacobian.
+
+        Pinocchio's ``computeStaticTorqueDerivatives`` holds the external force fixed in
+        the body; here it is fixed in the world (the load's wrench does not turn with
+        the hand). With ``F = -w`` on the body, ``J^T F`` differs by the turn of ``F``
+        with the body: column ``j`` gains ``-J^T [omega_j x f; omega_j x m]``
+        (``omega_j`` the world axis of joint ``j``).
+
+        Returns
+        -------
+        tau : ndarray, shape (n,)
+            [N m].
+        dtau_dq : ndarray, shape (n, n)
+            [N m / rad].
+        J : ndarray, shape (6, n)
+            Tool-point Jacobian, world axes ``[v; omega]``.
+        """
+        model, data = self.model, self.data
+        self._set_wrench(q, wrench)
+        tau = np.array(pin.computeStaticTorque(model, data, q, self._fext))
+        dtau = np.array(pin.computeStaticTorqueDerivatives(model, data, q, self._fext))
+        pin.computeJointJacobians(model, data, q)
+        J = np.array(pin.getFrameJacobian(model, data, self.frame, _LWA)).reshape(6, self.n)
+        omega = J[3:]
+        # omega_j x f = -f x omega_j
+        turned = -np.vstack([_skew(wrench[:3]) @ omega, _skew(wrench[3:]) @ omega])
+        dtau -= J.T @ turned
+        return tau, dtau, J
+
+
+@dataclass(frozen=True)
+class TorqueState:
+    """Both arms' torques at one state and their derivative over the decision variables.
+
+    Attributes
+    ----------
+    tau : ndarray, shape (n_l + n_f,)
+        The leader's joint torques, then the follower's [N m].
+    D : ndarray, shape (n_l + n_f, n_l + n_f + n_grasp)
+        ``d tau / d (q_l, q_f, sigma[, sigma_l])`` [N m / rad, N m / m], columns in the
+        decision vector's order.
+    wrenches : ndarray, shape (2, 6)
+        The leader's and the follower's wrench on the object [N, N m].
+    """
+
+    tau: FloatArray
+    D: FloatArray
+    wrenches: FloatArray
+
+
+class LoadTorques:
+    """Joint torques of both arms of a task holding its load (none: their own weight only).
+
+    Parameters
+    ----------
+    task : DualArmTask
+        Arms (their inertias), object and load. Without a load the arms hold only
+        themselves, under their models' gravity.
+    """
+
+    def __init__(self, task: DualArmTask) -> None:
+        self.task = task
+        load = task.load
+        g_l = (np.array(task.leader.model.gravity.linear) if load is None else load.gravity)
+        g_f = (np.array(task.follower.model.gravity.linear) if load is None
+               else load.gravity)
+        self.leader = ArmStatics(task.leader, g_l)
+        self.follower = ArmStatics(task.follower, g_f)
+        self.n_l = task.leader.n
+        self.n_f = task.follower.n
+        self.n_grasp = 1 if task.leader_surface is None else 2
+
+    def wrenches(self, q_l: FloatArray, sigma: float, sigma_l: float = 0.0) -> FloatArray:
+        """Return the leader's and the follower's wrench on the object (2, 6) [N, N m].
+
+        Zero without a load.
+
+        Raises
+        ------
+        UnbalancedLoadError, SupportLostError
+            The grasps cannot hold the load here.
+        """
+        if self.task.load is None:
+            return np.zeros((2, 6))
+        return hand_wrenches(self.task, q_l, sigma, sigma_l).wrenches
+
+    def torques(self, q_l: FloatArray, q_f: FloatArray, sigma: float, sigma_l: float = 0.0
+                ) -> FloatArray:
+        """Both arms' joint torques, the leader's first (n_l + n_f,) [N m]."""
+        w = self.wrenches(q_l, sigma, sigma_l)
+        return np.r_[self.leader.torque(q_l, w[0]), self.follower.torque(q_f, w[1])]
+
+    def linearised(self, q_l: FloatArray, q_f: FloatArray, sigma: float,
+                   sigma_l: float = 0.0) -> TorqueState:
+        """Both arms' torques and their derivative over the decision variables.
+
+        Raises
+        ------
+        UnbalancedLoadError, SupportLostError
+            The grasps cannot hold the load here (or at a neighbouring state of the
+            differences).
+        """
+        n_l, n_f, n_g = self.n_l, self.n_f, self.n_grasp
+        load = self.task.load
+        K = None
+        w = None
+        if load is not None and self.task.contact is None:
+            hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
+            K = split_operator(hands, T_obj[:3, :3] @ load.mass_centre + T_obj[:3, 3],
+                               load.mass)
+            if K is not None:
+                w = (K @ load.gravity).reshape(2, 6)
+        if w is None:
+            w = self.wrenches(q_l, sigma, sigma_l)
+        tau_l, dl, J_l = self.leader.linearised(q_l, w[0])
+        tau_f, df, J_f = self.follower.linearised(q_f, w[1])
+        D = np.zeros((n_l + n_f, n_l + n_f + n_g))
+        D[:n_l, :n_l] = dl
+        D[n_l:, n_l:n_l + n_f] = df
+        if self.task.load is not None:
+            dw = self._split_derivative(q_l, sigma, sigma_l, w, J_l[3:], K)
+            D[:n_l, :n_l] += J_l.T @ dw[0]
+            D[n_l:, :n_l] += J_f.T @ dw[1]
+            D[:n_l, n_l + n_f:] += J_l.T @ dw[2]
+            D[n_l:, n_l + n_f:] += J_f.T @ dw[3]
+        return TorqueState(np.r_[tau_l, tau_f], D, w)
+
+    def _split_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float,
+                          w: FloatArray, omega: FloatArray, K: FloatArray | None
+                          ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """``d w / d q_l`` and ``d w / d sigma`` of both hands (6, n_l) x2, (6, n_grasp) x2.
+
+        The leader's joints move the object, both grasp points and every direction
+        rigidly, with the tool's angular velocity ``omega_j`` per joint; gravity stays.
+        Turning everything *and* gravity by ``R`` turns the split by ``R``, and the
+        split is linear in gravity (``w = K g``, :func:`split_operator`), so
+        ``d w / d q_j = omega_j x w - K (omega_j x g)`` (cross products on the force and
+        on the moment). The grasp coordinates move the contact point along its path:
+        central differences of the split. A support (its push depends on the
+        orientation) or a singular balance: central differences of the whole split.
+        """
+        task = self.task
+        load = task.load
+        assert load is not None
+        n_l, n_g = self.n_l, self.n_grasp
+        h = SPLIT_STEP
+        if K is None:
+            y = np.r_[q_l, sigma, sigma_l][:n_l + n_g]
+            cols = []
+            for k in range(n_l + n_g):
+                up, down = y.copy(), y.copy()
+                up[k] += h
+                down[k] -= h
+                cols.append((self._split(up) - self._split(down)) / (2.0 * h))
+            dw = np.stack(cols, axis=-1)  # (2, 6, n_l + n_g)
+            return dw[0, :, :n_l], dw[1, :, :n_l], dw[0, :, n_l:], dw[1, :, n_l:]
+        g = load.gravity
+        turned_g = -_skew(g) @ omega  # (3, n_l): omega_j x g
+        dq = []
+        for i in range(2):
+            rot = -np.vstack([_skew(w[i, :3]) @ omega, _skew(w[i, 3:]) @ omega])
+            dq.append(rot - K[6 * i:6 * i + 6] @ turned_g)
+        ds = np.zeros((2, 6, n_g))
+        for k in range(n_g):
+            at = [sigma, sigma_l]
+            at[k] += h
+            up = self._fast_split(q_l, at[0], at[1])
+            at[k] -= 2.0 * h
+            down = self._fast_split(q_l, at[0], at[1])
+            ds[:, :, k] = (up - down) / (2.0 * h)
+        return dq[0], dq[1], ds[0], ds[1]
+
+    def _fast_split(self, q_l: FloatArray, sigma: float, sigma_l: float) -> FloatArray:
+        """Return the split by :func:`split_operator` (the full split if that is singular)."""
+        load = self.task.load
+        assert load is not None
+        hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
+        K = split_operator(hands, T_obj[:3, :3] @ load.mass_centre + T_obj[:3, 3], load.mass)
+        if K is None:
+            return self.wrenches(q_l, sigma, sigma_l)
+        return (K @ load.gravity).reshape(2, 6)
+
+    def _split(self, y: FloatArray) -> FloatArray:
+        n_l = self.n_l
+        sigma_l = float(y[n_l + 1]) if self.n_grasp == 2 else 0.0
+        return self.wrenches(y[:n_l], float(y[n_l]), sigma_l)
+
+
+def _skew(r: FloatArray) -> FloatArray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
+                   ) -> FloatArray | None:
+    """Return the minimum-norm split as a linear map of gravity, ``w = K g`` (6 n_hands, 3).
+
+    The rule of :func:`~dualarm_qp.task.loads.split_load`, written with projectors:
+    in scaled coordinates ``u_i = U^-1 w_i`` (``U = diag(1, 1, 1, L, L, L)``) hand ``i``'s
+    wrenches are those orthogonal to ``U T_i`` (``T_i`` its free twists), with projector
+    ``P_i``; the balance is ``M u = b`` (``M_i = S A_i U``, ``A_i`` the transfer to the
+    first hand's point, ``S = U^-1``), and the least ``|u|`` is
+    ``u = P M^T (M P M^T)^-1 b``. ``b`` is linear in gravity. Returns None when a hand
+    has a prescribed wrench or ``M P M^T`` is singular (use the full split there).
+
+    Parameters
+    ----------
+    hands : list of GraspStatics
+        The hands (world frame), the leader's first.
+    centre : ndarray, shape (3,)
+        The mass centre [m], world frame.
+    mass : float
+        [kg].
+    """
+    if any(hand.wrench is not None for hand in hands):
+        return None
+    about = hands[0].point
+    gap = float(np.linalg.norm(hands[0].point - hands[1].point)) if len(hands) > 1 else 0.0
+    L = gap if gap > 1e-9 else FALLBACK_LENGTH
+    u = np.array([1.0, 1.0, 1.0, L, L, L])
+    blocks = []
+    for hand in hands:
+        M_i = np.eye(6)
+        M_i[3:, :3] = _skew(hand.point - about)
+        M_i = (M_i * u) / u[:, None]  # S A_i U
+        T = hand.free * u[:, None]  # U T_i
+        if T.shape[1]:  # M_i P_i, P_i = I - T (T^T T)^-1 T^T
+            M_i = M_i - (M_i @ T) @ np.linalg.solve(T.T @ T, T.T)
+        blocks.append(M_i)
+    MP = np.hstack(blocks)  # M P;  M P M^T = (M P)(M P)^T
+    N = MP @ MP.T
+    eig = np.linalg.eigvalsh(N)
+    if not eig[0] > RCOND_MIN * eig[-1]:
+        return None
+    # b = S (-mass [g; (c - about) x g])
+    B = -mass * np.vstack([np.eye(3), _skew(centre - about)]) / u[:, None]
+    scaled = MP.T @ np.linalg.solve(N, B)  # u per unit g, (6 n_hands, 3)
+    return scaled * np.tile(u, len(hands))[:, None]
