@@ -58,8 +58,11 @@ def refine(problem: StepProblem, x: FloatArray) -> FloatArray | None:
     slack = np.maximum(1.0, np.abs(e))
     gap = C @ x - e
     pinned = problem.upper - problem.lower <= 1e-12 * np.maximum(1.0, np.abs(problem.lower))
-    # Both sides of a pinned box are held (they are one equality).
-    pinned_rows = (ineq.kind != 0) & pinned[ineq.index]
+    # Both sides of a pinned box are held (they are one equality). A general row's
+    # index is a row of G, not a variable: only boxes are looked up.
+    boxes = ineq.kind != 0
+    pinned_rows = np.zeros(boxes.shape, dtype=bool)
+    pinned_rows[boxes] = pinned[ineq.index[boxes]]
     tried: set[bytes] = set()
     for rel in ACTIVE_GUESSES:
         held = (gap >= -rel * slack) | pinned_rows
