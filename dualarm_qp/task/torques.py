@@ -47,8 +47,8 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 #: for a support, over the leader's joints too); the split is smooth.
 SPLIT_STEP = 1e-6
 
-#: A balance matrix ``M P M^T`` with a reciprocal condition number below this is
-#: treated as singular (the differences of the full split are used instead).
+#: Eigenvalues of the balance matrix ``M P M^T`` below this share of its largest are
+#: treated as zero (:func:`split_operator`).
 RCOND_MIN = 1e-10
 
 __all__ = ["RCOND_MIN", "SPLIT_STEP", "ArmStatics", "LoadTorques", "TorqueState",
@@ -278,7 +278,7 @@ class LoadTorques:
         ``d w / d q_j = omega_j x w - K (omega_j x g)`` (cross products on the force and
         on the moment). The grasp coordinates move the contact point along its path:
         central differences of the split. A support (its push depends on the
-        orientation) or a singular balance: central differences of the whole split.
+        orientation): central differences of the whole split.
         """
         task = self.task
         load = task.load
@@ -312,7 +312,7 @@ class LoadTorques:
         return dq[0], dq[1], ds[0], ds[1]
 
     def _fast_split(self, q_l: FloatArray, sigma: float, sigma_l: float) -> FloatArray:
-        """Return the split by :func:`split_operator` (the full split if that is singular)."""
+        """Return the split by :func:`split_operator` (which exists for every grasp)."""
         load = self.task.load
         assert load is not None
         hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
@@ -340,8 +340,12 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
     wrenches are those orthogonal to ``U T_i`` (``T_i`` its free twists), with projector
     ``P_i``; the balance is ``M u = b`` (``M_i = S A_i U``, ``A_i`` the transfer to the
     first hand's point, ``S = U^-1``), and the least ``|u|`` is
-    ``u = P M^T (M P M^T)^-1 b``. ``b`` is linear in gravity. Returns None when a hand
-    has a prescribed wrench or ``M P M^T`` is singular (use the full split there).
+    ``u = P M^T (M P M^T)^-1 b``. ``b`` is linear in gravity. Where the hands span fewer
+    than the 6 balance directions (two slides along one axis: ``M P M^T`` singular, its
+    eigenvalues below :data:`RCOND_MIN` of the largest left out) the inverse is the
+    pseudo-inverse: the same least-norm split wherever the load can be held (and the
+    least-squares one next to it, which only differences read). Returns None when a hand
+    has a prescribed wrench (a support: use the full split).
 
     Parameters
     ----------
@@ -369,10 +373,13 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
         blocks.append(M_i)
     MP = np.hstack(blocks)  # M P;  M P M^T = (M P)(M P)^T
     N = MP @ MP.T
-    eig = np.linalg.eigvalsh(N)
-    if not eig[0] > RCOND_MIN * eig[-1]:
-        return None
     # b = S (-mass [g; (c - about) x g])
     B = -mass * np.vstack([np.eye(3), _skew(centre - about)]) / u[:, None]
-    scaled = MP.T @ np.linalg.solve(N, B)  # u per unit g, (6 n_hands, 3)
+    eig, V = np.linalg.eigh(N)
+    if eig[0] > RCOND_MIN * eig[-1]:
+        scaled = MP.T @ np.linalg.solve(N, B)  # u per unit g, (6 n_hands, 3)
+    else:  # fewer than 6 balance directions (two slides along one axis): least squares
+        keep = eig > RCOND_MIN * eig[-1]
+        Vk = V[:, keep]
+        scaled = MP.T @ (Vk @ ((Vk.T @ B) / eig[keep][:, None]))
     return scaled * np.tile(u, len(hands))[:, None]

@@ -1,0 +1,150 @@
+"""Quasi-static joint torques and their derivatives, checked against finite differences.
+
+Every Jacobian here is compared with central differences of the function it
+differentiates: the arm's ``d tau / d q`` at a fixed world wrench, and the whole
+``d tau / d (q_l, q_f, sigma[, sigma_l])`` with the load split recomputed at every
+neighbouring state (the split over the leader's joints by the rotation identity, over
+the grasps by differences of the projector form, and for a support by differences of
+the full split).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.experiments import build_experiment, parse_config
+from dualarm_qp.kinematics.puma560 import puma560
+from dualarm_qp.kinematics.robots import example_robot_arm, example_robots_dir
+from dualarm_qp.task.loads import hand_statics, split_load
+from dualarm_qp.task.torques import ArmStatics, LoadTorques, split_operator, torque_limits_of
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+
+#: Configs with a load added (name: mass [kg], mass centre [mm]); the UR5 ones need
+#: example-robot-data.
+CASES = {"puma_beam_limits": (6.0, [0.0, 0.0, 250.0]),
+         "ur5_pair_sliding_bar": (8.0, [0.0, 0.0, 350.0]),
+         "both_sliding_bar": (4.0, [0.0, 0.0, 400.0]),
+         "puma_beam_support": (None, None)}
+
+
+def _experiment(name: str) -> Any:
+    if name.startswith(("ur5", "both")) and example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed")
+    data = yaml.safe_load((CONFIGS / f"{name}.yaml").read_text())
+    mass, centre = CASES[name]
+    if mass is not None:
+        data["object"].update(mass=mass, mass_centre=centre)
+    return build_experiment(parse_config(data), name)
+
+
+def _central(f: Any, y: np.ndarray, h: float = 1e-6) -> np.ndarray:
+    cols = []
+    for e in np.eye(y.size):
+        cols.append((f(y + h * e) - f(y - h * e)) / (2.0 * h))
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize("which", ["puma", "ur5"])
+def test_arm_derivative_at_a_fixed_world_wrench(which: str) -> None:
+    if which == "ur5":
+        if example_robots_dir() is None:
+            pytest.skip("example-robot-data is not installed")
+        arm = example_robot_arm("ur5", "base_link", "tool0")
+    else:
+        arm = puma560(base=pin.SE3(pin.rpy.rpyToMatrix(0.2, -0.1, 0.4),
+                                   np.array([0.1, 0.2, 0.3])).homogeneous)
+    statics = ArmStatics(arm, np.array([0.0, 0.0, -9.81]))
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q = rng.uniform(-2.0, 2.0, arm.n)
+        w = rng.normal(0.0, 20.0, 6)
+        tau, dtau, J = statics.linearised(q, w)
+        np.testing.assert_allclose(tau, statics.torque(q, w), atol=1e-12)
+        fd = _central(lambda x, w=w: statics.torque(x, w), q)
+        assert np.abs(dtau - fd).max() < 1e-6 * max(1.0, np.abs(fd).max())
+        # tau = g + J^T w: the wrench's part is J^T w at the tool point.
+        g = statics.torque(q, np.zeros(6))
+        np.testing.assert_allclose(tau - g, J.T @ w, atol=1e-10)
+        np.testing.assert_allclose(J, arm.jacobian(q), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_whole_derivative_matches_finite_differences(name: str) -> None:
+    exp = _experiment(name)
+    torques = LoadTorques(exp.task)
+    s = exp.initial
+    n_l, n_f, n_g = exp.task.leader.n, exp.task.follower.n, torques.n_grasp
+    rng = np.random.default_rng(11)
+    for trial in range(1 if name == "both_sliding_bar" else 3):
+        q_l = s.q_l + (0.0 if trial == 0 else rng.normal(0.0, 0.03, n_l))
+        q_f = s.q_f + (0.0 if trial == 0 else rng.normal(0.0, 0.03, n_f))
+        y = np.r_[q_l, q_f, s.sigma, s.sigma_leader][:n_l + n_f + n_g]
+
+        def tau(y: np.ndarray) -> np.ndarray:
+            sigma_l = float(y[n_l + n_f + 1]) if n_g == 2 else 0.0
+            q_l, q_f, sigma = y[:n_l], y[n_l:n_l + n_f], float(y[n_l + n_f])
+            if name != "both_sliding_bar":
+                return torques.torques(q_l, q_f, sigma, sigma_l)
+            # Two slides along one axis hold the bar only level: next to it the split
+            # is the least-squares one (the full split refuses the tilt).
+            hands, T = hand_statics(exp.task, q_l, sigma, sigma_l)
+            load = exp.task.load
+            K = split_operator(hands, T[:3, :3] @ load.mass_centre + T[:3, 3], load.mass)
+            w = (K @ load.gravity).reshape(2, 6)
+            return np.r_[torques.leader.torque(q_l, w[0]), torques.follower.torque(q_f, w[1])]
+
+        st = torques.linearised(q_l, q_f, s.sigma, s.sigma_leader)
+        np.testing.assert_allclose(st.tau, tau(y), atol=1e-9)
+        fd = _central(tau, y)
+        scale = max(1.0, float(np.abs(fd).max()))
+        assert np.abs(st.D - fd).max() < 1e-6 * scale, (name, np.abs(st.D - fd).max())
+        # The grasp columns are not zero: where the grasp is moves the load.
+        assert np.abs(fd[:, n_l + n_f:]).max() > 1e-3
+
+
+@pytest.mark.parametrize("name", ["ur5_pair_sliding_bar", "both_sliding_bar",
+                                  "puma_beam_limits"])
+def test_split_operator_is_the_minimum_norm_split(name: str) -> None:
+    exp = _experiment(name)
+    task, s, load = exp.task, exp.initial, exp.task.load
+    hands, T = hand_statics(task, s.q_l, s.sigma, s.sigma_leader)
+    K = split_operator(hands, T[:3, :3] @ load.mass_centre + T[:3, 3], load.mass)
+    assert K is not None
+    np.testing.assert_allclose((K @ load.gravity).reshape(2, 6),
+                               split_load(hands, load, T).wrenches, atol=1e-9)
+
+
+def test_a_support_has_no_operator() -> None:
+    exp = _experiment("puma_beam_support")
+    task, s = exp.task, exp.initial
+    hands, T = hand_statics(task, s.q_l, s.sigma)
+    assert split_operator(hands, T[:3, 3], 1.0) is None
+
+
+def test_torque_limits_default_to_the_urdf_effort() -> None:
+    if example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed")
+    arm = example_robot_arm("ur5", "base_link", "tool0")
+    np.testing.assert_array_equal(torque_limits_of(arm, None, "leader"),
+                                  [150, 150, 150, 28, 28, 28])
+    given = np.array([1.0, 2.0, 3.0, 4.0, 5.0, np.inf])
+    np.testing.assert_array_equal(torque_limits_of(arm, given, "leader"), given)
+
+
+@pytest.mark.parametrize("given, match", [
+    (None, "states no joint torque limits"),
+    (np.ones(5), "needs 6 values"),
+    (np.array([1.0, 1.0, 0.0, 1.0, 1.0, 1.0]), "joint 3"),
+    (np.array([1.0, np.nan, 1.0, 1.0, 1.0, 1.0]), "joint 2"),
+])
+def test_torque_limits_refused(given: Any, match: str) -> None:
+    with pytest.raises(InvalidInputError, match=match):
+        torque_limits_of(puma560(), given, "leader")
