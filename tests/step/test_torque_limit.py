@@ -1,0 +1,108 @@
+"""The torque limit's rows: ``|tau + dt D x| <= tau_max``, stacked only when asked for."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dualarm_qp.cli import main
+from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.experiments import build_experiment, parse_config
+from dualarm_qp.step.build import StepBuilder
+from dualarm_qp.step.limits.torque import ROW_PREFIX, TorqueLimit
+from dualarm_qp.task.torques import LoadTorques
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+
+
+def _puma(**controller: object) -> dict:
+    data = yaml.safe_load((CONFIGS / "puma_beam_limits.yaml").read_text())
+    data["object"].update(mass=6.0, mass_centre=[0.0, 0.0, 250.0])
+    data["controller"].update(controller)
+    return data
+
+
+def _experiment(tau_max: list[float] | None = None, **controller: object):
+    data = _puma(**controller)
+    if tau_max is not None:
+        data["leader"]["tau_max"] = tau_max
+        data["follower"]["tau_max"] = tau_max
+    return build_experiment(parse_config(data), "puma_beam_limits")
+
+
+def test_rows_are_the_linearised_torques() -> None:
+    limits = [200.0, 80.0, 60.0, np.inf, 15.0, 10.0]
+    exp = _experiment(limits, torque_limits=True)
+    builder = StepBuilder(exp.task, exp.options)
+    assert "torque" in builder.row_limits
+    build = builder.build(exp.initial)
+    p = build.problem
+    rows = [i for i, name in enumerate(p.row_names) if name.startswith(ROW_PREFIX)]
+    # Five limited joints per arm, two rows each.
+    assert len(rows) == 20
+    assert p.row_names[rows[0]] == "torque ql1 max" and p.row_names[rows[-1]] == "torque qf6 min"
+    s = exp.initial
+    st = LoadTorques(exp.task).linearised(s.q_l, s.q_f, s.sigma)
+    lim = np.r_[limits, limits]
+    keep = np.isfinite(lim)
+    G, h = p.G[rows], p.h[rows]
+    dt = exp.options.dt
+    np.testing.assert_allclose(G[:10], dt * st.D[keep], atol=1e-12)
+    np.testing.assert_allclose(G[10:], -dt * st.D[keep], atol=1e-12)
+    np.testing.assert_allclose(h[:10], lim[keep] - st.tau[keep], atol=1e-12)
+    np.testing.assert_allclose(h[10:], lim[keep] + st.tau[keep], atol=1e-12)
+    # The rows predict the next sample's torques to first order: the rest is second
+    # order in the step (a quarter for half the rates) and a few mN m here.
+    rest = []
+    for x in (np.linspace(-0.3, 0.3, p.n), np.linspace(-0.15, 0.15, p.n)):
+        y = np.r_[s.q_l, s.q_f, s.sigma] + dt * x
+        t1 = LoadTorques(exp.task).torques(y[:6], y[6:12], float(y[12]))
+        rest.append(np.abs(t1 - (st.tau + dt * st.D @ x)).max())
+    assert rest[0] < 5e-3 and rest[1] < 0.3 * rest[0], rest
+
+
+def test_no_rows_when_off_and_no_leader_rows_without_leader_limits() -> None:
+    exp = _experiment([100.0] * 6)
+    assert "torque" not in StepBuilder(exp.task, exp.options).row_limits
+    on = dataclasses.replace(exp.options, torque_limits=True)
+    limit = next(lim for lim in StepBuilder(exp.task, on, leader_bounds=False).limits
+                 if isinstance(lim, TorqueLimit))
+    assert all(" qf" in name for name in limit.row_names)
+
+
+def test_a_binding_row_is_met_with_equality() -> None:
+    """A limit just below the start's torque: the step's answer lies on its row."""
+    exp = _experiment(None, torque_limits=False)
+    s = exp.initial
+    tau = LoadTorques(exp.task).torques(s.q_l, s.q_f, s.sigma)
+    limits = np.full(12, np.inf)
+    limits[7] = abs(tau[7]) + 0.01  # the follower's shoulder: 10 mN m of room
+    opts = dataclasses.replace(exp.options, torque_limits=True,
+                               leader_tau_max=limits[:6], follower_tau_max=limits[6:])
+    exp = dataclasses.replace(exp, options=opts)
+    controller = exp.controller()
+    out = controller.step(s)
+    p = out.build.problem
+    names = p.row_names
+    gap = p.G @ out.solution.x - p.h
+    side = "max" if tau[7] > 0 else "min"
+    j = names.index(f"torque qf2 {side}")
+    assert gap.max() <= 1e-7
+    assert gap[j] > -1e-6  # active
+
+
+def test_a_dh_arm_must_state_its_limits(tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    cfg = tmp_path / "puma.yaml"
+    cfg.write_text(yaml.safe_dump(_puma(torque_limits=True)))
+    code = main(["run", str(cfg), "--out", str(tmp_path / "out"), "--no-plots", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "leader.tau_max" in err and "puma.yaml" in err
+    with pytest.raises(InvalidInputError, match="give tau_max"):
+        StepBuilder(_experiment().task, dataclasses.replace(_experiment().options,
+                                                            torque_limits=True))
