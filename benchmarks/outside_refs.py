@@ -24,11 +24,16 @@ One run measures, side by side (median and p99 of wall-clock time per call):
    daqp; its velocity is compared with our answer on rollout states, and its time with
    ours (target: pink-on-the-same-work at least 2x our step).
 
+7. (the two ratios again, timed interleaved.)
+8. **The step with torque rows** on ``configs/ur5_pair_heavy_bar.yaml``: the torque
+   limit's ``constraint`` alone (both arms' statics, their derivatives, 24 rows), the
+   whole step with torque limits on, and the same states with them off.
+
 pink and Pinocchio's benchmark-only companions are installed by the ``bench`` extra:
 ``pip install "dualarm-qp[bench]"``; the UR5 needs the ``robots`` extra
 (example-robot-data). Without pink only our numbers (2 to 4) are measured.
 
-    python benchmarks/outside_refs.py [--samples 2000] [--json out.json]
+    python benchmarks/outside_refs.py [--samples 2000] [--json out.json] [--only torque]
 
 It is a benchmark, not a test: it asserts nothing about speed. The machine may be
 shared: medians are reported, with the load average before and after the run.
@@ -252,6 +257,40 @@ def collision_step(name: str, samples: int, pink_step: Callable[[int], Any] | No
         res["interleaved / pink ur5 daqp step"] = interleaved(ours, pink_step,
                                                               min(samples, 1000))
     return res
+
+
+def torque_step(name: str, samples: int) -> dict[str, Any] | None:
+    """The torque rows' cost on ``name``'s rollout states: the limit alone, the step on/off.
+
+    Returns None when the config is missing or keeps no torque limits.
+    """
+    if not (CONFIGS / f"{name}.yaml").exists():
+        return None
+    exp = experiment(name)
+    if not exp.options.torque_limits:
+        return None
+    states, info = record_states(exp)
+    ctrl = exp.controller()
+    limit = next(lim for lim in ctrl.builder.limits if lim.name == "torque")
+    contexts = [ctrl.builder.context(state)[0] for state, _ in states]
+    active = 0
+    for state, scale_max in states:
+        out = ctrl.step(state, scale_max=scale_max)
+        p = out.build.problem
+        rows = [i for i, r in enumerate(p.row_names) if r.startswith("torque ")]
+        active += bool(rows) and bool((p.G[rows] @ out.solution.x - p.h[rows] > -1e-6).any())
+    with_rows = time_controller(exp, states, samples)
+    off = dataclasses.replace(exp, options=dataclasses.replace(exp.options,
+                                                               torque_limits=False))
+    without = time_controller(off, states, samples)
+    return {"states": len(states), "steps with an active torque row": active,
+            "rows per step": 2 * (len(ctrl.names) - ctrl.layout.n_grasp),
+            "torque limit constraint(ctx) alone": timeit(
+                lambda i: limit.constraint(contexts[i % len(contexts)]), samples),
+            "step with torque rows": with_rows["step"],
+            "  assembly (the rows are built here)": with_rows["assembly"],
+            "  solve": with_rows["solve"],
+            "step without them (same states)": without["step"], "rollout": info}
 
 
 # --------------------------------------------------------------------------------------
@@ -592,11 +631,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--compare", type=int, default=200,
                     help="rollout states on which pink's velocity is compared with ours")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--only", choices=["torque"], default=None,
+                    help="measure one section only")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")  # qpsolvers' sparse-conversion notices for osqp
     logging.getLogger().setLevel(logging.ERROR)  # pink's out-of-limit notices
     n = args.samples
     out: dict[str, Any] = {"machine_before": machine_info(), "samples": n}
+    if args.only == "torque":
+        res = torque_step("ur5_pair_heavy_bar", n)
+        out["torque_step"] = res
+        print_torque(res)
+        if args.json:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(out, indent=2) + "\n")
+        return 0
     try:
         import pink
         import pinocchio as pin
@@ -674,6 +723,9 @@ def main(argv: list[str] | None = None) -> int:
         paired["pink same work / our step"] = interleaved(same_step, our_step, n)
     out["interleaved"] = paired
 
+    # 8. The step with torque rows.
+    out["torque_step"] = torque_step("ur5_pair_heavy_bar", n)
+
     out["targets"] = {
         "our step / pink ur5 daqp step, at most": TARGET_STEP_VS_PINK_UR5,
         "rollout steps/s, at least": TARGET_ROLLOUT_STEPS_PER_S,
@@ -730,10 +782,21 @@ def main(argv: list[str] | None = None) -> int:
         for k, v in paired.items():
             print(f"  {k:<34} {v['ratio_median']:.2f}x   (medians {v['a']['median_us']:.1f} "
                   f"us and {v['b']['median_us']:.1f} us)")
+    print_torque(out["torque_step"])
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(out, indent=2) + "\n")
     return 0
+
+
+def print_torque(res: dict[str, Any] | None) -> None:
+    """Print section 8 (nothing when the config keeps no torque limits)."""
+    if res is None:
+        return
+    rows = {k: v for k, v in res.items() if isinstance(v, dict) and "median_us" in v}
+    print_section(f"8. our step with torque rows, ur5_pair_heavy_bar ({res['states']} rollout "
+                  f"states, {res['rows per step']} rows per step, a torque row active on "
+                  f"{res['steps with an active torque row']} steps)", rows)
 
 
 if __name__ == "__main__":
