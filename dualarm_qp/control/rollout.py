@@ -36,7 +36,7 @@ from .controller import DualArmController
 from .loads import record_loads
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
-from .torques import TorqueReport, record_torques, torque_at_start
+from .torques import TorqueReport, blocked_by_torque, record_torques, torque_at_start
 from .trace import Trace, record, record_state
 
 FloatArray = NDArray[np.float64]
@@ -536,6 +536,8 @@ def rollout(
         failure = torque_failure(torque, trace)
     if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
         failure = blocked_by_pair(controller, trace, failure)
+    if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
+        failure = blocked_by_torque(controller, trace, failure)
     if failure is not None and failure.criterion in EXPLAINED and len(trace):
         failure = _explained(controller, trace, failure)
     return RolloutResult(

@@ -3,6 +3,10 @@
 * before the first sample, :func:`torque_at_start` asks whether the arms can hold the
   load at the start at all: a joint beyond its limit there fails the run on criterion
   ``"torque"`` before it moves (its rows could only ask the torque back in one sample);
+* a run that stalled, ran out of time or found no step is re-read by
+  :func:`blocked_by_torque`: when a torque row is what stops the task at the failing
+  state (the load is beyond the arms there), the failure becomes criterion
+  ``"torque"``, naming the joint and its torque;
 * after the last, :func:`record_torques` computes every recorded sample's quasi-static
   joint torques (:mod:`dualarm_qp.task.torques`) into the trace's ``tau_leader`` and
   ``tau_follower`` and reports the largest use of each limit. With torque limits on, a
@@ -16,6 +20,7 @@ N m/rad^2 that is a few mN m, well within 0.1% of a limit of tens of N m.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -23,7 +28,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError, SupportLostError
+from ..errors import DualArmError, InvalidInputError, SupportLostError
+from ..solvers._scale import max_task_scale
+from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
 from ..task.loads import UnbalancedLoadError
 from ..task.torques import LoadTorques, torque_limits_of
@@ -31,14 +38,19 @@ from .trace import Trace
 
 if TYPE_CHECKING:
     from .controller import DualArmController
+    from .rollout import Failure
 
 FloatArray = NDArray[np.float64]
 
 #: Allowance on a recorded torque, relative to the joint's limit (see the module docstring).
 TORQUE_RTOL = 1e-3
 
-__all__ = ["TORQUE_RTOL", "TorqueReport", "joint_torque_limits", "record_torques",
-           "torque_at_start"]
+#: A task scale below this at the failing state counts as stopped by its blocking rows
+#: (as for collision rows).
+BLOCKED_SCALE = 0.01
+
+__all__ = ["BLOCKED_SCALE", "TORQUE_RTOL", "TorqueReport", "blocked_by_torque",
+           "joint_torque_limits", "record_torques", "torque_at_start"]
 
 
 def joint_torque_limits(controller: DualArmController) -> FloatArray:
@@ -198,3 +210,42 @@ def torque_at_start(controller: DualArmController, state: DualArmState
     if not r[j] > 1.0:
         return None
     return TorqueAtStart(_names(controller)[j], float(tau[j]), float(limit[j]))
+
+
+def blocked_by_torque(controller: DualArmController, trace: Trace, failure: Failure
+                      ) -> Failure:
+    """Return ``failure`` as criterion ``"torque"`` when a torque row stops the task.
+
+    The failure's sample is posed again: when its largest feasible task scale is below
+    :data:`BLOCKED_SCALE` and torque rows block it, the message names the joints and
+    their torques there. Otherwise ``failure`` is returned unchanged.
+    """
+    if not controller.options.torque_limits or not len(trace):
+        return failure
+    k = min(failure.sample, len(trace) - 1)
+    sigma_l = float(trace.grasp_leader[k])
+    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
+                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    try:
+        problem = controller.builder.build(state).problem
+        tau = LoadTorques(controller.task).torques(state.q_l, state.q_f, state.sigma,
+                                                   state.sigma_leader)
+    except DualArmError:
+        return failure
+    whole = max_task_scale(problem, cap=1.0)
+    if whole.scale is not None and whole.scale >= BLOCKED_SCALE:
+        return failure
+    joints = list(dict.fromkeys(label[len(ROW_PREFIX):].split()[0] for label in whole.blocking
+                                if label.startswith(ROW_PREFIX)))
+    if not joints:
+        return failure
+    names = _names(controller)
+    limit = joint_torque_limits(controller)
+    parts = [f"{j} at {tau[names.index(j)]:.4g} N m (limit {limit[names.index(j)]:.4g})"
+             for j in joints]
+    worst = max(joints, key=lambda j: abs(tau[names.index(j)]) / limit[names.index(j)])
+    i = names.index(worst)
+    return dataclasses.replace(
+        failure, criterion="torque", amount=float(tau[i]), limit=float(limit[i]),
+        message=f"{failure.message}; blocked by a joint torque limit: joint "
+                f"{', '.join(parts)} stops the path (the load is beyond the arm there)")

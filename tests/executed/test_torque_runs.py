@@ -245,3 +245,23 @@ def test_bad_torque_keys_exit_2_naming_the_key(case: str, tmp_path: Path,
     assert code == 2, err
     assert key in err and f"{NAME}.yaml" in err, err
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_a_load_beyond_the_arm_on_the_way_fails_on_torque(tmp_path: Path) -> None:
+    """The grasp cannot slide far enough (its range ends at 520 mm) to hold the
+    shoulder at 60 N m: the path stops there, criterion torque, naming the joint, and the
+    recorded torques still keep the limit."""
+    data = _data()
+    data["follower"]["tau_max"] = [150, 60, 150, 28, 28, 28]
+    data["object"]["surface"]["r_max"] = [0, 0, 520]
+    code, out = _run(data, tmp_path)
+    assert code == 1
+    summary = json.loads((out / "summary.json").read_text())
+    failure = summary["failure"]
+    assert failure["criterion"] == "torque", failure
+    assert "joint qf2 at" in failure["message"]
+    traj = read_trajectory(out / "trajectory.csv")
+    limit = _limits(data)
+    assert (np.abs(oracle_torques(traj, data)) / limit).max() <= 1.0 + RTOL
+    assert traj["grasp"].max() == pytest.approx(0.52, abs=1e-6)
