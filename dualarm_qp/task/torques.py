@@ -36,22 +36,26 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
-from .loads import FALLBACK_LENGTH, GraspStatics, hand_statics, hand_wrenches
+from .loads import FALLBACK_LENGTH, GraspStatics, hand_statics, hand_wrenches, sliding_grasp
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
-#: Step [rad or m] of the central differences of the load split over the grasps (and,
-#: for a support, over the leader's joints too); the split is smooth.
+#: Step [rad or m] of the central differences of the whole load split (a support: its
+#: push depends on the orientation); the split is smooth.
 SPLIT_STEP = 1e-6
+
+#: Step [m] of the forward differences of the split over a grasp coordinate (the
+#: truncation error is this times the split's second derivative, below 1e-7 relative).
+GRASP_STEP = 1e-7
 
 #: Eigenvalues of the balance matrix ``M P M^T`` below this share of its largest are
 #: treated as zero (:func:`split_operator`).
 RCOND_MIN = 1e-10
 
-__all__ = ["RCOND_MIN", "SPLIT_STEP", "ArmStatics", "LoadTorques", "TorqueState",
+__all__ = ["GRASP_STEP", "RCOND_MIN", "SPLIT_STEP", "ArmStatics", "LoadTorques", "TorqueState",
            "split_operator", "torque_limits_of"]
 
 #: A model's effort limit at or above this [N m] means none (Pinocchio's default).
@@ -245,8 +249,10 @@ class LoadTorques:
         load = self.task.load
         K = None
         w = None
+        at: tuple[list[GraspStatics], FloatArray] | None = None
         if load is not None and self.task.contact is None:
-            hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
+            at = hand_statics(self.task, q_l, sigma, sigma_l)
+            hands, T_obj = at
             K = split_operator(hands, T_obj[:3, :3] @ load.mass_centre + T_obj[:3, 3],
                                load.mass)
             if K is not None:
@@ -259,7 +265,7 @@ class LoadTorques:
         D[:n_l, :n_l] = dl
         D[n_l:, n_l:n_l + n_f] = df
         if self.task.load is not None:
-            dw = self._split_derivative(q_l, sigma, sigma_l, w, J_l[3:], K)
+            dw = self._split_derivative(q_l, sigma, sigma_l, w, J_l[3:], K, at)
             D[:n_l, :n_l] += J_l.T @ dw[0]
             D[n_l:, :n_l] += J_f.T @ dw[1]
             D[:n_l, n_l + n_f:] += J_l.T @ dw[2]
@@ -267,7 +273,8 @@ class LoadTorques:
         return TorqueState(np.r_[tau_l, tau_f], D, w)
 
     def _split_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float,
-                          w: FloatArray, omega: FloatArray, K: FloatArray | None
+                          w: FloatArray, omega: FloatArray, K: FloatArray | None,
+                          at: tuple[list[GraspStatics], FloatArray] | None
                           ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """``d w / d q_l`` and ``d w / d sigma`` of both hands (6, n_l) x2, (6, n_grasp) x2.
 
@@ -277,8 +284,9 @@ class LoadTorques:
         split is linear in gravity (``w = K g``, :func:`split_operator`), so
         ``d w / d q_j = omega_j x w - K (omega_j x g)`` (cross products on the force and
         on the moment). The grasp coordinates move the contact point along its path:
-        central differences of the split. A support (its push depends on the
-        orientation): central differences of the whole split.
+        forward differences of the split over :data:`GRASP_STEP` (the follower's grasp
+        moves only the follower's hand: the rest of the set-up is kept). A support (its
+        push depends on the orientation): central differences of the whole split.
         """
         task = self.task
         load = task.load
@@ -302,13 +310,19 @@ class LoadTorques:
             rot = -np.vstack([_skew(w[i, :3]) @ omega, _skew(w[i, 3:]) @ omega])
             dq.append(rot - K[6 * i:6 * i + 6] @ turned_g)
         ds = np.zeros((2, 6, n_g))
-        for k in range(n_g):
-            at = [sigma, sigma_l]
-            at[k] += h
-            up = self._fast_split(q_l, at[0], at[1])
-            at[k] -= 2.0 * h
-            down = self._fast_split(q_l, at[0], at[1])
-            ds[:, :, k] = (up - down) / (2.0 * h)
+        assert at is not None and load is not None
+        hands, T_obj = at
+        R, p = T_obj[:3, :3], T_obj[:3, 3]
+        surf = task.surface
+        g_step = GRASP_STEP
+        s1 = sigma + g_step
+        moved = [hands[0], sliding_grasp(R @ surf.point(s1) + p, R @ surf.tangent(s1),
+                                         R @ surf.angular_rate(s1))]
+        K1 = split_operator(moved, R @ load.mass_centre + p, load.mass)
+        assert K1 is not None  # no support here
+        ds[:, :, 0] = ((K1 @ g).reshape(2, 6) - w) / g_step
+        if n_g == 2:
+            ds[:, :, 1] = (self._fast_split(q_l, sigma, sigma_l + g_step) - w) / g_step
         return dq[0], dq[1], ds[0], ds[1]
 
     def _fast_split(self, q_l: FloatArray, sigma: float, sigma_l: float) -> FloatArray:
@@ -364,9 +378,8 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
     u = np.array([1.0, 1.0, 1.0, L, L, L])
     blocks = []
     for hand in hands:
-        M_i = np.eye(6)
-        M_i[3:, :3] = _skew(hand.point - about)
-        M_i = (M_i * u) / u[:, None]  # S A_i U
+        M_i = np.eye(6)  # S A_i U = [I 0; [p_i - about]x / L  I]
+        M_i[3:, :3] = _skew((hand.point - about) / L)
         T = hand.free * u[:, None]  # U T_i
         if T.shape[1]:  # M_i P_i, P_i = I - T (T^T T)^-1 T^T
             M_i = M_i - (M_i @ T) @ np.linalg.solve(T.T @ T, T.T)
