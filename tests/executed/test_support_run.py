@@ -53,14 +53,16 @@ LOAD_COLUMNS = [f"f_{role}_{part}" for role in ("leader", "follower")
 
 
 def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None:
-    """Every earlier column and summary entry as before; only the wrench columns and
-    summary ``loads`` are new. The record was made with the Python-era exact solver: the
+    """Every earlier column and summary entry as before; only the wrench and torque columns,
+    summary ``loads`` and ``realised_limits.torque`` are new. The record was made with the Python-era exact solver: the
     compiled one agrees with it to 1e-12 per step (its null-space basis comes from
     another SVD), hence the tolerances."""
     with open(run_dir / "trajectory.csv", newline="") as fh:
         rows = list(csv.reader(fh))
     header = rows[0]
-    assert header == BEFORE["header"] + LOAD_COLUMNS
+    # Joint torques were added after the wrenches (a task with a load records them).
+    torques = [f"tau_{role}_{i}" for role in ("leader", "follower") for i in range(1, 7)]
+    assert header == BEFORE["header"] + LOAD_COLUMNS + torques
     assert len(rows) - 1 == BEFORE["samples"]
     for name, values in BEFORE["columns"].items():
         now = [rows[1 + k][header.index(name)] for k in BEFORE["rows"]]
@@ -72,6 +74,7 @@ def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None
             assert now == values, name
     summary = json.loads((run_dir / "summary.json").read_text())
     assert set(summary) - set(BEFORE["summary"]) >= {"loads"}
+    summary["realised_limits"].pop("torque")  # added with the joint torques
     for key, value in BEFORE["summary"].items():
         assert json.dumps(summary[key], sort_keys=True) == json.dumps(value, sort_keys=True) \
             or summary[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
