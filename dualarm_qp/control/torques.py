@@ -28,11 +28,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import DualArmError, InvalidInputError, SupportLostError
+from ..errors import DualArmError, InvalidInputError
 from ..solvers._scale import max_task_scale
 from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
-from ..task.loads import UnbalancedLoadError
 from ..task.torques import LoadTorques, torque_limits_of
 from .trace import Trace
 
@@ -138,7 +137,8 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
     """Compute every recorded sample's joint torques into ``trace``; the report.
 
     Only for a task with a load or a run with torque limits (None otherwise: the trace
-    keeps NaN).
+    keeps NaN). The hands' wrenches are read from the trace: call
+    :func:`~dualarm_qp.control.loads.record_loads` first.
     """
     task, opts = controller.task, controller.options
     if task.load is None and not opts.torque_limits:
@@ -147,15 +147,17 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
     n_l = task.leader.n
     n = len(trace)
     tau = np.full((n, n_l + task.follower.n), np.nan)
-    sliding_leader = task.leader_surface is not None
     unbalanced = 0
+    # The hands' wrenches are the trace's (record_loads wrote them): the same split.
+    no_load = np.zeros(6)
     for k in range(n):
-        sigma_l = float(trace.grasp_leader[k]) if sliding_leader else 0.0
-        try:
-            tau[k] = statics.torques(trace.q_l[k], trace.q_f[k], float(trace.grasp[k]),
-                                     sigma_l)
-        except (UnbalancedLoadError, SupportLostError):
-            unbalanced += 1
+        w_l, w_f = ((no_load, no_load) if task.load is None
+                    else (trace.f_leader[k], trace.f_follower[k]))
+        if not (np.isfinite(w_l).all() and np.isfinite(w_f).all()):
+            unbalanced += 1  # the grasps cannot hold the load here
+            continue
+        tau[k, :n_l] = statics.leader.torque(trace.q_l[k], w_l)
+        tau[k, n_l:] = statics.follower.torque(trace.q_f[k], w_f)
     trace.tau_leader[:] = tau[:, :n_l]
     trace.tau_follower[:] = tau[:, n_l:]
     limit = joint_torque_limits(controller)
