@@ -53,10 +53,10 @@ LOAD_COLUMNS = [f"f_{role}_{part}" for role in ("leader", "follower")
 
 
 def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None:
-    """Every earlier column and summary entry as before; only the wrench and torque columns,
-    summary ``loads`` and ``realised_limits.torque`` are new. The record was made with the Python-era exact solver: the
-    compiled one agrees with it to 1e-12 per step (its null-space basis comes from
-    another SVD), hence the tolerances."""
+    """Every earlier column and summary entry as before; only the wrench and torque
+    columns, summary ``loads`` and ``realised_limits.torque`` are new. The record was
+    made with the Python-era exact solver: the compiled one agrees with it to 1e-12 per
+    step (its null-space basis comes from another SVD), hence the tolerances."""
     with open(run_dir / "trajectory.csv", newline="") as fh:
         rows = list(csv.reader(fh))
     header = rows[0]
