@@ -204,8 +204,11 @@ def torque_at_start(controller: DualArmController, state: DualArmState
     limit = joint_torque_limits(controller)
     if not controller.hard_bounds:  # the leader's own limits are not imposed
         limit[:controller.layout.n_l] = np.inf
-    tau = LoadTorques(controller.task).torques(state.q_l, state.q_f, state.sigma,
-                                               state.sigma_leader)
+    try:
+        tau = LoadTorques(controller.task).torques(state.q_l, state.q_f, state.sigma,
+                                                   state.sigma_leader)
+    except DualArmError:  # the grasps cannot hold the load here: the first step says so
+        return None
     with np.errstate(invalid="ignore"):
         r = np.abs(tau) / limit
     j = int(np.argmax(r))
