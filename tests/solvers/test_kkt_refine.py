@@ -119,3 +119,20 @@ def test_zero_width_box_and_larger_null_space_are_certified() -> None:
     got = refine(q, x_star[:7].copy())
     assert got is not None and got[2] == x_star[2]
     assert _rel(got, exact.solve(q).x) <= 1e-12
+
+
+def test_more_rows_than_variables_with_a_pinned_box() -> None:
+    """A general row's index is a row of G: with more rows than variables (24 torque rows
+    on 13 variables) and a pinned box, the refinement must not look rows up as boxes."""
+    n, p = 3, 7
+    rng = np.random.default_rng(2)
+    G = rng.normal(size=(p, n))
+    lower = np.array([-1.0, 0.25, -1.0])
+    upper = np.array([1.0, 0.25, 1.0])  # x1 pinned
+    problem = StepProblem(np.array([[1.0, 1.0, 1.0]]), np.array([0.5]), np.ones(n),
+                          np.zeros(n), lower, upper, G=G, h=np.full(p, 10.0))
+    x = get_solver("nullspace").solve(problem).x
+    assert x is not None
+    out = refine(problem, x + 1e-9)
+    assert out is not None
+    np.testing.assert_allclose(out, x, atol=1e-9)
