@@ -32,6 +32,7 @@ CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 CASES = {"puma_beam_limits": (6.0, [0.0, 0.0, 250.0]),
          "ur5_pair_sliding_bar": (8.0, [0.0, 0.0, 350.0]),
          "both_sliding_bar": (4.0, [0.0, 0.0, 400.0]),
+         "curved_bar_waypoints": (5.0, [0.0, 0.0, 200.0]),
          "puma_beam_support": (None, None)}
 
 
