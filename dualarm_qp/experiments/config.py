@@ -28,7 +28,7 @@ from pydantic import (
 )
 
 from ..errors import ConfigError
-from ..physics.settings import PhysicsSpec
+from .config_physics import PhysicsSpec
 from .config_scene import CollisionSpec, SceneSpec, ShapeSpec
 from .config_types import (
     MAX_MAGNITUDE,

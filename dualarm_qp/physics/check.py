@@ -72,6 +72,7 @@ class PhysicsRun:
     notes: list[str]
     limits: dict[str, FloatArray]
     result: RolloutResult | None = None
+    worst: tuple[float, str, float] = (0.0, "", 0.0)
 
     def summary(self) -> dict[str, Any]:
         """Peaks of the run (JSON-ready, SI)."""
@@ -93,6 +94,7 @@ class PhysicsRun:
             "weld_error_max_m": max(peak("weld_leader"), peak("weld_follower")),
             "support_gap_max_m": peak("gap"),
             "torque_ratio_max": peak("torque_ratio_peak"),
+            "torque_ratio_worst": {"joint": self.worst[1], "t_s": self.worst[2]},
             "torque_max_N_m": {"leader": np.max(np.abs(torque[:, :len(self.limits["leader"])]),
                                                 axis=0).tolist(),
                                "follower": np.max(np.abs(torque[:, len(self.limits["leader"]):]),
@@ -130,7 +132,7 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
         plant.replay_step(np.r_[q_l[k], q_f[kf]], np.r_[q_l[k + 1], q_f[kf1]], h,
                           float(path_t[k + 1]), float(grasp[kf1]))
     return PhysicsRun("replay", plant.arrays(), time.perf_counter() - t0, plant.notes,
-                      plant.limits)
+                      plant.limits, worst=_worst(plant))
 
 
 def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | None = None
@@ -141,7 +143,16 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
     result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
                      plant=plant, stop_on_interrupt=True)
     return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
-                      plant.limits, result)
+                      plant.limits, result, _worst(plant))
+
+
+def _worst(plant: MujocoPlant) -> tuple[float, str, float]:
+    """The plant's largest torque ratio, with the joint's name (``leader.<joint>``) and time."""
+    ratio, j, t = plant.worst
+    names = [f"{role}.{n}" for role, arm in (("leader", plant.task.leader),
+                                              ("follower", plant.task.follower))
+             for n in arm.joint_names]
+    return ratio, (names[j] if j >= 0 else ""), t
 
 
 def verdict(closed: PhysicsRun, baseline: PhysicsRun, settings: PhysicsSettings

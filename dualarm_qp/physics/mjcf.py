@@ -186,7 +186,8 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
         frame = model.frames[arm.link_frame_ids[key]]
         by_joint.setdefault(int(frame.parentJoint), []).append(
             (shape, frame.placement.homogeneous, key))
-    base = "".join(_geom(s, T, f"{role}_base_{k}", 'contype="1" conaffinity="1"')
+    moving = _contact_bits(settings, obstacle=False)
+    base = "".join(_geom(s, T, f"{role}_base_{k}", moving)
                    for s, T, k in by_joint.get(0, []))
     joints = tuple(f"{role}_{name}" for name in arm.joint_names)
     bodies = [f"{role}_link{j}" for j in range(1, model.njoints)]
@@ -208,7 +209,7 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
             fallback.append(bodies[j - 1])
         density = settings.link_density if not has_inertia else 0.0
         lines += [_geom(s, T, f"{role}_link{k}",
-                        f'contype="1" conaffinity="1" density="{density!r}"')
+                        f'{moving} density="{density!r}"')
                   for s, T, k in geoms]
         if j == model.njoints - 1:
             tool = model.frames[arm.tool_frame_id].placement
@@ -260,7 +261,7 @@ def _object_shape(task: DualArmTask) -> tuple[Capsule | Box, bool]:
             if b.owner == "object":
                 return b.shape, True
     s = task.surface
-    ends = [np.asarray(s.r_min, dtype=float), np.asarray(s.r_max, dtype=float)]
+    ends = [np.asarray(s.point(s.sigma_min)), np.asarray(s.point(s.sigma_max))]
     hand = np.asarray(task.H1_inv[:3, 3] if task.leader_surface is None
                       else task.leader_surface.point(task.leader_surface.sigma_min))
     far = max(ends, key=lambda e: float(np.linalg.norm(e - hand)))
@@ -327,7 +328,8 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
     obstacles = []
     if task.scene is not None:
         obstacles = [_geom(b.shape, np.eye(4), f"obstacle_{b.name}",
-                           'contype="1" conaffinity="1"') for b in task.scene.obstacles]
+                           _contact_bits(settings, obstacle=True))
+                     for b in task.scene.obstacles]
     points = {"leader": "leader_tool" if task.leader_surface is None else "lgrasp_point",
               "follower": "fgrasp_point"}
     solref = f'solref="{_f(SOLREF)}"'
@@ -341,7 +343,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
     excludes = [f'<exclude body1="object" body2="{b}"/>'
                 for role in ("leader", "follower") for b in
                 [*bodies[role][-WRIST_BODIES:], f"{role}_tool"]]
-    object_geom = _geom(shape, np.eye(4), "object", 'contype="1" conaffinity="1"')
+    object_geom = _geom(shape, np.eye(4), "object", _contact_bits(settings, obstacle=False))
     xml = "\n".join([
         '<mujoco model="dualarm_task">',
         '<compiler angle="radian" inertiafromgeom="auto" autolimits="false"/>',
@@ -370,6 +372,19 @@ def _pose_vec(T: FloatArray) -> FloatArray:
     M = pin.SE3(np.asarray(T, dtype=float))
     q = pin.Quaternion(M.rotation).coeffs()
     return np.r_[M.translation, q[3], q[0], q[1], q[2]]
+
+
+def _contact_bits(settings: PhysicsSettings, *, obstacle: bool) -> str:
+    """Return the ``contype``/``conaffinity`` of a geom under ``settings.contacts``.
+
+    MuJoCo lets two geoms touch when ``contype`` of one meets ``conaffinity`` of the
+    other: under ``obstacles`` the moving geoms have (1, 0) and the obstacles (0, 1).
+    """
+    if settings.contacts == "none":
+        return 'contype="0" conaffinity="0"'
+    if settings.contacts == "all":
+        return 'contype="1" conaffinity="1"'
+    return 'contype="0" conaffinity="1"' if obstacle else 'contype="1" conaffinity="0"'
 
 
 def _actuators(joints: dict[str, tuple[str, ...]], settings: PhysicsSettings) -> list[str]:

@@ -5,7 +5,8 @@ puts it at the run's start and then, for each controller sample of ``dt``:
 
 * drives every arm joint with a **servo** for ``n = ceil(dt / 1 ms)`` substeps of ``dt /
   n``: a ``position`` servo is ``kp (q_ref - q) + kv (qd_ref - qd)`` with ``q_ref`` the
-  commanded rates integrated from the start (``qd_ref`` the rates: feed-forward); a
+  commanded rates integrated from the start (``qd_ref`` the rates: feed-forward, ramped
+  over the sample from the previous command, so that a new command steps no torque); a
   ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add the arm's own gravity and
   Coriolis torques (MuJoCo's bias forces of the arm joints): what the servo corrects is
   the load the object puts on the hand, and the dynamics;
@@ -16,9 +17,12 @@ puts it at the run's start and then, for each controller sample of ``dt``:
   :attr:`MujocoPlant.log`;
 * hands the controller the measured state, or the previous sample's with ``delay``.
 
-Contacts: every link, the object and the obstacles collide, except the object with the
-last :data:`~dualarm_qp.physics.mjcf.WRIST_BODIES` bodies of each arm (the grasping
-wrists) and the pairs that overlap at the start (listed in :attr:`MujocoPlant.notes`).
+Contacts (:attr:`PhysicsSettings.contacts
+<dualarm_qp.physics.settings.PhysicsSettings.contacts>`): by default the links and the
+object touch the obstacles only; with ``all`` they also touch each other, except the
+object and the last :data:`~dualarm_qp.physics.mjcf.WRIST_BODIES` bodies of each arm (the
+grasping wrists). Pairs that overlap at the start are left out (listed in
+:attr:`MujocoPlant.notes`).
 """
 
 from __future__ import annotations
@@ -46,6 +50,10 @@ LOG_COLUMNS = {
     "internal": "N", "support": "N", "slip": "m",
     "weld_leader": "m", "weld_follower": "m", "gap": "m", "torque_ratio_peak": "1",
 }
+
+
+#: How long the start is held before the first sample [s] (:meth:`MujocoPlant.reset`).
+SETTLE = 0.5
 
 
 class PhysicsError(DualArmError):
@@ -146,7 +154,11 @@ class MujocoPlant:
         self._mj.mj_forward(m, d)
 
     def reset(self, state: DualArmState, dt: float) -> None:
-        """Compile the model, leave out the contact pairs that overlap at ``state``, place it."""
+        """Compile the model, leave out the pairs that overlap at ``state``, place it, settle.
+
+        The joints are then as the servos hold them under the object's load
+        (:meth:`_settle`), a little off ``state``: the first measured state.
+        """
         xml = self.physics.xml
         self._compile(xml)
         self._place(state)
@@ -165,13 +177,29 @@ class MujocoPlant:
         self.substeps = max(1, math.ceil(dt / SUBSTEP - 1e-9))
         self.model.opt.timestep = dt / self.substeps
         self.q_ref = np.r_[state.q_l, state.q_f].astype(float)
-        self._servo(np.zeros(self.q_ref.size))  # holding still: the start's forces
-        self._mj.mj_forward(self.model, self.data)
+        self._rates = np.zeros(self.q_ref.size)
+        #: The largest torque ratio, the joint (index over both arms) and the time [s].
+        self.worst: tuple[float, int, float] = (0.0, -1, 0.0)
+        self._settle()
         self.t = 0.0
         self.log = {k: [] for k in LOG_COLUMNS}
         self.log.update(w_leader=[], w_follower=[], torque=[], sigma=[])
         self._measured = self._measure(state.t)
         self._record(state.t, state.sigma, 0.0)
+
+    def _settle(self) -> None:
+        """Hold the start for :data:`SETTLE` s, so that the run starts from rest under load.
+
+        The object is put into its grasps with no force on it; holding the joints while
+        the servos take up its weight keeps that start-up out of the run's record. The
+        object's free joint is left where the welds put it.
+        """
+        rest = np.zeros(self.q_ref.size)
+        for _ in range(math.ceil(SETTLE / self.model.opt.timestep)):
+            self._servo(rest)
+            self._mj.mj_step(self.model, self.data)
+        self._servo(rest)
+        self._mj.mj_forward(self.model, self.data)
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None) -> float:
@@ -188,14 +216,18 @@ class MujocoPlant:
         h = m.opt.timestep
         dofs = self._arm_dofs
         peak_tau = 0.0
-        for _ in range(self.substeps):
+        start, n = self._rates, self.substeps
+        for i in range(n):
             self.q_ref = self.q_ref + h * rates
-            self._servo(rates)
+            self._servo(start + (i + 1) / n * (rates - start))
             mj.mj_step(m, d)
             if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
                 raise PhysicsError(f"the simulation diverged at t = {self.t:.4f} s")
-            tau = d.qfrc_actuator[dofs] + d.qfrc_applied[dofs]
-            peak_tau = max(peak_tau, float(np.max(np.abs(tau) / self._tau_max, initial=0.0)))
+            ratio = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs]) / self._tau_max
+            if ratio.size and float(ratio.max()) > peak_tau:
+                peak_tau = float(ratio.max())
+                self.worst = max(self.worst, (peak_tau, int(np.argmax(ratio)), self.t))
+        self._rates = np.asarray(rates, dtype=float).copy()
         self.t += dt
         return peak_tau
 
@@ -303,4 +335,4 @@ class MujocoPlant:
         return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
 
 
-__all__ = ["LOG_COLUMNS", "MujocoPlant", "PhysicsError", "torque_limits"]
+__all__ = ["LOG_COLUMNS", "SETTLE", "MujocoPlant", "PhysicsError", "torque_limits"]

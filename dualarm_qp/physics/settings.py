@@ -8,6 +8,8 @@
       kv: 300                  # N m s/rad, velocity gain
       armature: 0.2            # kg m^2, rotor inertia added to every arm joint
       delay: false             # closed loop: the controller sees the previous sample
+      contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
+                               # all (also arm-arm, arm-object) or none
       object_mass: 3           # kg, when the object states no mass
       link_density: 1000       # kg/m^3, links whose model has no inertia
       deviation_max: 10        # length unit: the object off D(t) -> dropped
@@ -25,13 +27,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
 
-from ..experiments.config_types import Flag, Model, Num, keyed, scalar_to_list
+from ..experiments.config_physics import PhysicsSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -39,66 +40,13 @@ FloatArray = NDArray[np.float64]
 #: or ``velocity`` (damping about the commanded rate only).
 SERVOS = ("position", "velocity")
 
+#: Which contacts are simulated: ``obstacles`` (the arms' links and the object against
+#: the obstacles; arm-arm and arm-object clearance is the collision module's, measured on
+#: the same conservative capsules), ``all`` (every pair but those excluded) or ``none``.
+CONTACTS = ("obstacles", "all", "none")
+
 #: MuJoCo's time step [s]: the controller's ``dt`` is cut into substeps of at most this.
 SUBSTEP = 1e-3
-
-NumList = Annotated[list[Num], Field(min_length=1)]
-
-
-class TorqueLimitSpec(Model):
-    """Joint torque limits [N m] per arm: one number for every joint, or one per joint."""
-
-    leader: NumList | None = None
-    follower: NumList | None = None
-
-    @model_validator(mode="before")
-    @classmethod
-    def _lists(cls, data: Any) -> Any:
-        if isinstance(data, dict):
-            return {k: (scalar_to_list(v) if v is not None else v) for k, v in data.items()}
-        return data
-
-    @model_validator(mode="after")
-    def _positive(self) -> TorqueLimitSpec:
-        for role in ("leader", "follower"):
-            values = getattr(self, role)
-            if values is not None and not all(v > 0 for v in values):
-                raise keyed(role, "torque limits must be > 0 N m")
-        return self
-
-
-class PhysicsSpec(Model):
-    """The ``physics:`` section, as written (lengths in the file's length unit)."""
-
-    servo: Literal["position", "velocity"] = "position"
-    kp: Num = 20000.0
-    kv: Num = 300.0
-    armature: Num = 0.2
-    delay: Flag = False
-    object_mass: Num = 3.0
-    link_density: Num = 1000.0
-    deviation_max: Num | None = None
-    slip_max: Num | None = None
-    squeeze_max: Num = 20.0
-    torque_ratio_max: Num = 1.0
-    tau_max: TorqueLimitSpec = Field(default_factory=TorqueLimitSpec)
-
-    @model_validator(mode="after")
-    def _ranges(self) -> PhysicsSpec:
-        for key in ("kv", "object_mass", "link_density", "squeeze_max", "torque_ratio_max"):
-            if not getattr(self, key) > 0:
-                raise keyed(key, f"must be > 0 (got {getattr(self, key):g})")
-        for key in ("kp", "armature"):
-            if getattr(self, key) < 0:
-                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
-        if self.servo == "position" and not self.kp > 0:
-            raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
-        for key in ("deviation_max", "slip_max"):
-            value = getattr(self, key)
-            if value is not None and not value > 0:
-                raise keyed(key, f"must be > 0 (got {value:g})")
-        return self
-
 
 @dataclass(frozen=True)
 class PhysicsSettings:
@@ -116,6 +64,8 @@ class PhysicsSettings:
         Rotor inertia added to every arm joint [kg m^2].
     delay : bool
         Closed loop: the controller is handed the measurement of the previous sample.
+    contacts : {"obstacles", "all", "none"}
+        Which contacts are simulated (:data:`CONTACTS`).
     object_mass : float
         Mass of an object whose file states none [kg].
     link_density : float
@@ -140,6 +90,7 @@ class PhysicsSettings:
     kv: float = 300.0
     armature: float = 0.2
     delay: bool = False
+    contacts: str = "obstacles"
     object_mass: float = 3.0
     link_density: float = 1000.0
     deviation_max: float = 0.01
@@ -151,6 +102,8 @@ class PhysicsSettings:
     def __post_init__(self) -> None:
         if self.servo not in SERVOS:
             raise ValueError(f"servo must be one of {SERVOS}, got {self.servo!r}")
+        if self.contacts not in CONTACTS:
+            raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
         for key in ("kv", "object_mass", "link_density", "deviation_max", "slip_max",
                     "squeeze_max", "torque_ratio_max"):
             value = float(getattr(self, key))
@@ -167,7 +120,7 @@ class PhysicsSettings:
                       else np.asarray(getattr(spec.tau_max, role), dtype=float))
                for role in ("leader", "follower")}
         return cls(servo=spec.servo, kp=spec.kp, kv=spec.kv, armature=spec.armature,
-                   delay=spec.delay, object_mass=spec.object_mass,
+                   delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
                    link_density=spec.link_density,
                    deviation_max=length(spec.deviation_max, 0.01),
                    slip_max=length(spec.slip_max, 0.005), squeeze_max=spec.squeeze_max,
@@ -177,10 +130,11 @@ class PhysicsSettings:
         """JSON-ready, SI."""
         return {"servo": self.servo, "kp_N_m_rad": self.kp, "kv_N_m_s_rad": self.kv,
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
+                "contacts": self.contacts,
                 "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
                 "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
                 "torque_ratio_max": self.torque_ratio_max,
                 "link_density_kg_m3": self.link_density}
 
 
-__all__ = ["SERVOS", "SUBSTEP", "PhysicsSettings", "PhysicsSpec", "TorqueLimitSpec"]
+__all__ = ["CONTACTS", "SERVOS", "SUBSTEP", "PhysicsSettings"]
