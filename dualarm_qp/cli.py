@@ -162,6 +162,9 @@ def _cmd_physics(args: argparse.Namespace) -> int:
     p = check_run(args.run_dir, delay=True if args.delay else None)
     for name in ("replay", "closed_loop"):
         r = p[name]
+        if r is None:
+            print(f"  {name:<12} none (the run recorded fewer than two samples)")
+            continue
         print(f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
               f"internal force {r['internal_force_max_N']:.3g} N, follower support "
               f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "

@@ -42,7 +42,7 @@ class PhysicsSpec(Model):
     """The ``physics:`` section, as written (lengths in the file's length unit)."""
 
     servo: Literal["position", "velocity"] = "position"
-    kp: Num = 20000.0
+    kp: Num = 100000.0
     kv: Num = 300.0
     armature: Num = 0.2
     delay: Flag = False

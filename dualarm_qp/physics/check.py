@@ -15,6 +15,10 @@ The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 ``dropped``
     the object left ``D(t)`` by more than ``deviation_max``, or a support came off the
     object by more than ``slip_max``;
+``stopped``
+    the closed loop did not carry the task to its end: the controller stopped it (a
+    tracking or closure error of the measured state beyond the run's tolerances, a step
+    it could not solve; the message says which);
 ``slipped``
     a grasp moved by more than ``slip_max`` from where it was commanded (the sliding
     coordinate against the controller's, or a weld's own error);
@@ -44,7 +48,7 @@ from .settings import PhysicsSettings
 FloatArray = NDArray[np.float64]
 
 #: The verdicts, worst first.
-STATUSES = ("dropped", "slipped", "torque", "squeezed", "ok")
+STATUSES = ("dropped", "stopped", "slipped", "torque", "squeezed", "ok")
 
 
 @dataclass
@@ -147,7 +151,7 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
 
 
 def _worst(plant: MujocoPlant) -> tuple[float, str, float]:
-    """The plant's largest torque ratio, with the joint's name (``leader.<joint>``) and time."""
+    """Return the largest torque ratio, its joint (``leader.<joint>``) and its time [s]."""
     ratio, j, t = plant.worst
     names = [f"{role}.{n}" for role, arm in (("leader", plant.task.leader),
                                               ("follower", plant.task.follower))
@@ -155,11 +159,18 @@ def _worst(plant: MujocoPlant) -> tuple[float, str, float]:
     return ratio, (names[j] if j >= 0 else ""), t
 
 
-def verdict(closed: PhysicsRun, baseline: PhysicsRun, settings: PhysicsSettings
+def verdict(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSettings
             ) -> tuple[str, list[str]]:
-    """Return the status (:data:`STATUSES`) of the closed loop and every reason found."""
-    c, b = closed.summary(), baseline.summary()
+    """Return the status (:data:`STATUSES`) of the closed loop and every reason found.
+
+    Without a baseline (a run that recorded fewer than two samples) the squeeze is
+    judged against zero.
+    """
+    c = closed.summary()
+    base_internal = 0.0 if baseline is None else baseline.summary()["internal_force_max_N"]
     reasons: list[tuple[str, str]] = []
+    if closed.result is not None and not closed.result.completed:
+        reasons.append(("stopped", f"the closed loop stopped: {closed.result.message}"))
     if c["deviation_pos_max_m"] > settings.deviation_max:
         reasons.append(("dropped", f"the object left D(t) by "
                         f"{c['deviation_pos_max_m'] * 1e3:.2f} mm (deviation_max "
@@ -174,7 +185,7 @@ def verdict(closed: PhysicsRun, baseline: PhysicsRun, settings: PhysicsSettings
     if c["torque_ratio_max"] > settings.torque_ratio_max:
         reasons.append(("torque", f"a joint torque reached {c['torque_ratio_max']:.3g} of "
                         f"its limit (torque_ratio_max {settings.torque_ratio_max:g})"))
-    excess = c["internal_force_max_N"] - b["internal_force_max_N"]
+    excess = c["internal_force_max_N"] - base_internal
     if excess > settings.squeeze_max:
         reasons.append(("squeezed", f"the internal force peaked at "
                         f"{c['internal_force_max_N']:.1f} N, {excess:.1f} N above the rigid "
@@ -185,14 +196,16 @@ def verdict(closed: PhysicsRun, baseline: PhysicsRun, settings: PhysicsSettings
     return worst, [text for _, text in reasons]
 
 
-def physics_summary(closed: PhysicsRun, baseline: PhysicsRun, settings: PhysicsSettings
-                    ) -> dict[str, Any]:
-    """Return the ``physics`` section of ``summary.json``."""
+def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
+                    settings: PhysicsSettings) -> dict[str, Any]:
+    """Return the ``physics`` section of ``summary.json`` (``replay`` None without one)."""
     status, reasons = verdict(closed, baseline, settings)
-    c, b = closed.summary(), baseline.summary()
+    c = closed.summary()
+    b = None if baseline is None else baseline.summary()
     return {
         "status": status, "reasons": reasons,
-        "internal_force_excess_N": c["internal_force_max_N"] - b["internal_force_max_N"],
+        "internal_force_excess_N": c["internal_force_max_N"] - (
+            0.0 if b is None else b["internal_force_max_N"]),
         "settings": settings.as_dict(),
         "torque_limits_N_m": {k: [float(x) if np.isfinite(x) else None for x in v]
                               for k, v in closed.limits.items()},

@@ -2,8 +2,9 @@
 
 The run's ``config.yaml`` rebuilds its task and its ``physics:`` settings; its
 ``trajectory.csv`` gives the recorded joints. The rigid replay and the closed loop run
-(:mod:`.check`); then ``physics.png`` is drawn, and ``report.html`` and ``summary.json``
-(key ``physics``) are rewritten, ``summary.json`` last, with SIGINT and SIGTERM held.
+(:mod:`.check`; a run that recorded fewer than two samples has no replay); then
+``physics.png`` is drawn, and ``report.html`` and ``summary.json`` (key ``physics``) are
+rewritten, ``summary.json`` last, with SIGINT and SIGTERM held.
 Nothing is written before both simulations are done; an error while writing puts the
 earlier ``report.html`` back and removes ``physics.png``, so the folder is as before.
 """
@@ -73,15 +74,16 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
         raise InvalidInputError(f"cannot rebuild the task of {run}: {err}") from None
     settings = PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0)
     data = RunData.read(run / "trajectory.csv")
-    if len(data) < 2:
-        raise InvalidInputError(f"{run}: the run recorded {len(data)} sample(s); the check "
-                                "needs at least two")
-    base = replay(exp, settings, data.col("t"), data.joints("l"), data.joints("f"),
-                  data.col("path_t"), data.col("grasp"),
-                  data.col("grasp_leader") if data.has("grasp_leader") else None)
+    base = None  # a run that stopped before its second sample has nothing to replay
+    if len(data) >= 2:
+        base = replay(exp, settings, data.col("t"), data.joints("l"), data.joints("f"),
+                      data.col("path_t"), data.col("grasp"),
+                      data.col("grasp_leader") if data.has("grasp_leader") else None)
     loop = closed_loop(exp, settings, delay=delay)
     physics = physics_summary(loop, base, settings)
-    _write(run, summary, physics, {"replay": base.log, "closed_loop": loop.log})
+    logs = {"closed_loop": loop.log} if base is None else {"replay": base.log,
+                                                           "closed_loop": loop.log}
+    _write(run, summary, physics, logs)
     return physics
 
 

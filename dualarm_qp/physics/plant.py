@@ -7,9 +7,11 @@ puts it at the run's start and then, for each controller sample of ``dt``:
   n``: a ``position`` servo is ``kp (q_ref - q) + kv (qd_ref - qd)`` with ``q_ref`` the
   commanded rates integrated from the start (``qd_ref`` the rates: feed-forward, ramped
   over the sample from the previous command, so that a new command steps no torque); a
-  ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add the arm's own gravity and
-  Coriolis torques (MuJoCo's bias forces of the arm joints): what the servo corrects is
-  the load the object puts on the hand, and the dynamics;
+  ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add two feed-forward torques:
+  the arm's own gravity and Coriolis torques (MuJoCo's bias forces of the arm joints),
+  and the torques that hold the hand's quasi-static share of the load (the minimum-norm
+  split of :mod:`dualarm_qp.control.loads`, at the sample's measured state), so that
+  what the servo corrects is the dynamics and what the split does not foresee;
 * measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
   chain joint), the object's pose, each hand's wrench on the object and its internal
   part (:mod:`.measure`), the joint torques (their peak share of the limits over the
@@ -27,6 +29,7 @@ grasping wrists). Pairs that overlap at the start are left out (listed in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -34,9 +37,16 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..errors import DualArmError
+from ..control.loads import hand_wrenches
+from ..errors import DualArmError, SupportLostError
 from ..step.state import Command, DualArmState
-from ..task.loads import rigid_grasp, sliding_grasp, support_push
+from ..task.loads import (
+    ObjectLoad,
+    UnbalancedLoadError,
+    rigid_grasp,
+    sliding_grasp,
+    support_push,
+)
 from ..task.scene import DualArmTask
 from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
@@ -108,6 +118,10 @@ class MujocoPlant:
         self.notes: list[str] = list(self.physics.notes)
         self.limits = torque_limits(task, settings)
         self._mj = _mujoco()
+        pm = self.physics
+        self._load_task = task if task.load is not None else dataclasses.replace(
+            task, load=ObjectLoad(pm.mass, pm.mass_centre, pm.gravity))
+        self._ff = np.zeros(task.leader.n + task.follower.n)
         self.log: dict[str, list[Any]] = {}
         self.substeps = 1
 
@@ -195,6 +209,7 @@ class MujocoPlant:
         object's free joint is left where the welds put it.
         """
         rest = np.zeros(self.q_ref.size)
+        self._feedforward(self._measure(0.0))
         for _ in range(math.ceil(SETTLE / self.model.opt.timestep)):
             self._servo(rest)
             self._mj.mj_step(self.model, self.data)
@@ -231,6 +246,26 @@ class MujocoPlant:
         self.t += dt
         return peak_tau
 
+    def _feedforward(self, state: DualArmState) -> None:
+        """Set the load feed-forward: the torques that hold each hand's share of the load.
+
+        The share is the quasi-static split of :func:`dualarm_qp.control.loads.hand_wrenches`
+        at the measured state (zero where the grasps cannot hold the load), and the torque
+        ``J^T w`` with ``J`` the hand's Jacobian at its grasp point.
+        """
+        task = self._load_task
+        try:
+            split = hand_wrenches(task, state.q_l, state.sigma, state.sigma_leader).wrenches
+        except (UnbalancedLoadError, SupportLostError):
+            self._ff = np.zeros(self._arm_dofs.size)
+            return
+        parts = []
+        for arm, q, w in ((task.leader, state.q_l, split[0]), (task.follower, state.q_f,
+                                                              split[1])):
+            _, J = arm.fk_jacobian(q)
+            parts.append(J.T @ w)
+        self._ff = np.concatenate(parts)
+
     def _servo(self, rates: FloatArray) -> None:
         """Set the servos' references and the arms' bias feed-forward."""
         d = self.data
@@ -238,11 +273,12 @@ class MujocoPlant:
             d.ctrl[0::2], d.ctrl[1::2] = self.q_ref, rates
         else:
             d.ctrl[:] = rates
-        d.qfrc_applied[self._arm_dofs] = d.qfrc_bias[self._arm_dofs]
+        d.qfrc_applied[self._arm_dofs] = d.qfrc_bias[self._arm_dofs] + self._ff
 
     def advance(self, state: DualArmState, command: Command, dt: float) -> DualArmState:
         """Apply the command's rates for ``dt``; return the measured state (see the module)."""
         rates = np.r_[command.ql_dot, command.qf_dot]
+        self._feedforward(self._measured)
         peak_tau = self.drive(rates, dt)
         tau = state.t + dt * command.scale
         previous = self._measured
@@ -258,6 +294,7 @@ class MujocoPlant:
         ``tau`` is the sample's path time [s], ``sigma_ref`` the recorded grasp [m].
         """
         rates = (np.asarray(q_to, dtype=float) - q_from) / dt
+        self._feedforward(self._measure(tau))
         peak_tau = self.drive(rates, dt, q_ref=q_from)
         self._measured = self._measure(tau)
         self._record(tau, sigma_ref, peak_tau)

@@ -56,7 +56,7 @@ def write_physics_figure(path: Path, runs: dict[str, dict[str, Any]],
                     transform=ax.transAxes, ha="center", va="center")
             limit = None
         if key == "internal":
-            base = physics["replay"]["internal_force_max_N"]
+            base = (physics["replay"] or {}).get("internal_force_max_N", 0.0)
             limit = base + s["squeeze_max_N"]
         if limit is not None:
             ax.axhline(limit, color="C3", ls="--", lw=0.8, gid=f"limit:{key}")
@@ -85,7 +85,7 @@ def physics_html(physics: dict[str, Any]) -> str:
                        ("torque_ratio_max", "torque / limit, max"),
                        ("slip_max_m", "grasp slip, max [m]"),
                        ("wall_time_s", "wall time [s]")):
-        cells = "".join(f'<td class="num">{_num(physics.get(run, {}).get(key))}</td>'
+        cells = "".join(f'<td class="num">{_num((physics.get(run) or {}).get(key))}</td>'
                         for run in ("replay", "closed_loop"))
         rows.append(f"<tr><th>{html.escape(label)}</th>{cells}</tr>")
     parts.append("<table><tr><th></th><th>rigid replay</th><th>closed loop</th></tr>"

@@ -4,7 +4,7 @@
 
     physics:
       servo: position          # position (PD on the integrated command) or velocity
-      kp: 20000                # N m/rad, position gain (SI whatever the file's units)
+      kp: 100000               # N m/rad, position gain (SI whatever the file's units)
       kv: 300                  # N m s/rad, velocity gain
       armature: 0.2            # kg m^2, rotor inertia added to every arm joint
       delay: false             # closed loop: the controller sees the previous sample
@@ -86,7 +86,7 @@ class PhysicsSettings:
     """
 
     servo: str = "position"
-    kp: float = 20000.0
+    kp: float = 100000.0
     kv: float = 300.0
     armature: float = 0.2
     delay: bool = False
