@@ -62,13 +62,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     controller = exp.controller()  # fail early (exit 2) on an unknown or missing solver
     plant = None
     if args.plant == "mujoco":  # docs/physics.md
-        from .experiments.config import load_config as _load
+        from .physics.command import settings_of
         from .physics.plant import MujocoPlant
-        from .physics.settings import PhysicsSettings
 
-        cfg = _load(args.config)
-        plant = MujocoPlant(exp.task, PhysicsSettings.from_spec(
-            cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0))
+        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)))
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)

@@ -1,7 +1,8 @@
 """The ``physics:`` section of an experiment file, as written (docs/physics.md).
 
 The settings in SI units are :class:`~dualarm_qp.physics.settings.PhysicsSettings`.
-Lengths (``deviation_max``, ``slip_max``) are in the file's length unit; gains, masses,
+Lengths (``deviation_max``, ``slip_max``) are in the file's length unit and
+``rotation_max`` in its angle unit; gains, masses,
 densities, forces and torques are SI whatever the file's units.
 """
 
@@ -50,6 +51,7 @@ class PhysicsSpec(Model):
     object_mass: Num = 3.0
     link_density: Num = 1000.0
     deviation_max: Num | None = None
+    rotation_max: Num | None = None
     slip_max: Num | None = None
     squeeze_max: Num = 20.0
     torque_ratio_max: Num = 1.0
@@ -65,7 +67,7 @@ class PhysicsSpec(Model):
                 raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
         if self.servo == "position" and not self.kp > 0:
             raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
-        for key in ("deviation_max", "slip_max"):
+        for key in ("deviation_max", "rotation_max", "slip_max"):
             value = getattr(self, key)
             if value is not None and not value > 0:
                 raise keyed(key, f"must be > 0 (got {value:g})")

@@ -13,8 +13,8 @@
 The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 
 ``dropped``
-    the object left ``D(t)`` by more than ``deviation_max``, or a support came off the
-    object by more than ``slip_max``;
+    the object left ``D(t)`` by more than ``deviation_max`` or turned off it by more
+    than ``rotation_max``, or a support came off the object by more than ``slip_max``;
 ``stopped``
     the closed loop did not carry the task to its end: the controller stopped it (a
     tracking or closure error of the measured state beyond the run's tolerances, a step
@@ -32,6 +32,7 @@ The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -39,7 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..control.rollout import RolloutResult, rollout
+from ..control.rollout import RolloutResult, RunLimits, rollout
 from ..experiments.setup import Experiment
 from ..step.state import DualArmState
 from .plant import MujocoPlant
@@ -141,13 +142,33 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
 
 def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | None = None
                 ) -> PhysicsRun:
-    """Run the controller against MuJoCo (the run starts at rest)."""
+    """Run the controller against MuJoCo (the run starts at rest).
+
+    The run's tracking and closure tolerances are widened to the check's thresholds
+    (:func:`closed_loop_limits`): the controller goes on while the verdict's thresholds
+    hold, and the verdict judges the run.
+    """
     t0 = time.perf_counter()
     plant = MujocoPlant(exp.task, settings, delay=delay)
-    result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
-                     plant=plant, stop_on_interrupt=True)
+    result = rollout(exp.controller(), exp.initial, duration=exp.duration,
+                     limits=closed_loop_limits(exp.limits, settings), plant=plant,
+                     stop_on_interrupt=True)
     return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
                       plant.limits, result, _worst(plant))
+
+
+def closed_loop_limits(limits: RunLimits, settings: PhysicsSettings) -> RunLimits:
+    """Return the run's limits with tolerances no tighter than the check's thresholds.
+
+    Tracking: ``(deviation_max, rotation_max)``; closure: ``(slip_max, rotation_max)``
+    (each the larger of the run's and the threshold).
+    """
+    return dataclasses.replace(
+        limits,
+        tracking=(max(limits.tracking[0], settings.deviation_max),
+                  max(limits.tracking[1], settings.rotation_max)),
+        closure=(max(limits.closure[0], settings.slip_max),
+                 max(limits.closure[1], settings.rotation_max)))
 
 
 def _worst(plant: MujocoPlant) -> tuple[float, str, float]:
@@ -175,6 +196,10 @@ def verdict(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSe
         reasons.append(("dropped", f"the object left D(t) by "
                         f"{c['deviation_pos_max_m'] * 1e3:.2f} mm (deviation_max "
                         f"{settings.deviation_max * 1e3:g} mm)"))
+    if c["deviation_rot_max_rad"] > settings.rotation_max:
+        reasons.append(("dropped", f"the object turned off D(t) by "
+                        f"{c['deviation_rot_max_rad']:.3g} rad (rotation_max "
+                        f"{settings.rotation_max:g} rad)"))
     if c["support_gap_max_m"] > settings.slip_max:
         reasons.append(("dropped", f"the support came off the object by "
                         f"{c['support_gap_max_m'] * 1e3:.2f} mm"))
@@ -214,4 +239,5 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
     }
 
 
-__all__ = ["STATUSES", "PhysicsRun", "closed_loop", "physics_summary", "replay", "verdict"]
+__all__ = ["STATUSES", "PhysicsRun", "closed_loop", "closed_loop_limits", "physics_summary",
+           "replay", "verdict"]

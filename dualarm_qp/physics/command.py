@@ -11,15 +11,17 @@ earlier ``report.html`` back and removes ``physics.png``, so the folder is as be
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 from pathlib import Path
 from typing import Any
 
-from .._io import write_json, write_text
+from .._io import atomic_write_with, write_json, write_text
 from .._signals import SignalHold
 from ..errors import DualArmError, InvalidInputError
 from ..experiments.animate import run_config
-from ..experiments.config import load_config
+from ..experiments.config import ExperimentConfig, load_config
 from ..experiments.figures.rundata import RunData
 from ..experiments.html_report import REPORT_FILE, render_run_report
 from ..experiments.setup import build_experiment
@@ -40,6 +42,12 @@ def _summary(run: Path) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise InvalidInputError(f"{path}: not a run summary (a JSON object expected)")
     return data
+
+
+def settings_of(cfg: ExperimentConfig) -> PhysicsSettings:
+    """Return the physics settings of an experiment file (SI)."""
+    return PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0,
+                                     math.pi / 180.0 if cfg.units.angle == "deg" else 1.0)
 
 
 def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:
@@ -72,14 +80,16 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
         exp = build_experiment(cfg, str(config))
     except DualArmError as err:
         raise InvalidInputError(f"cannot rebuild the task of {run}: {err}") from None
-    settings = PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0)
+    settings = settings_of(cfg)
+    if delay is not None:
+        settings = dataclasses.replace(settings, delay=delay)
     data = RunData.read(run / "trajectory.csv")
     base = None  # a run that stopped before its second sample has nothing to replay
     if len(data) >= 2:
         base = replay(exp, settings, data.col("t"), data.joints("l"), data.joints("f"),
                       data.col("path_t"), data.col("grasp"),
                       data.col("grasp_leader") if data.has("grasp_leader") else None)
-    loop = closed_loop(exp, settings, delay=delay)
+    loop = closed_loop(exp, settings)
     physics = physics_summary(loop, base, settings)
     logs = {"closed_loop": loop.log} if base is None else {"replay": base.log,
                                                            "closed_loop": loop.log}
@@ -91,7 +101,7 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
            logs: dict[str, Any]) -> None:
     """Write the figure, the report and the summary; on an error, leave the folder as it was."""
     report = run / REPORT_FILE
-    old_report = report.read_text(encoding="utf-8") if report.is_file() else None
+    old_report = report.read_bytes() if report.is_file() else None
     figure = run / PHYSICS_FIGURE
     had_figure = figure.is_file()
     outputs = [str(o) for o in summary.get("outputs", []) if o != "summary.json"]
@@ -109,10 +119,16 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
             write_json(run / "summary.json", new)
         except BaseException:
             if old_report is not None:
-                write_text(report, old_report)
+                atomic_write_with(report, lambda tmp: _put(tmp, old_report))
+            else:
+                report.unlink(missing_ok=True)
             if not had_figure:
                 figure.unlink(missing_ok=True)
             raise
 
 
-__all__ = ["check_run"]
+def _put(path: str, data: bytes) -> None:
+    Path(path).write_bytes(data)
+
+
+__all__ = ["check_run", "settings_of"]

@@ -97,6 +97,9 @@ class PhysicsModel:
         Index of each hand's weld among the model's equalities.
     mass, mass_centre
         The object's mass [kg] and mass centre [m, object frame].
+    carried : float
+        What the hands carry [kg]: the object and the bodies of its grasp chains
+        (:data:`CHAIN_MASS` each).
     gravity : ndarray, shape (3,)
         [m/s^2], world.
     notes : list of str
@@ -113,6 +116,7 @@ class PhysicsModel:
     mass: float
     mass_centre: FloatArray
     gravity: FloatArray
+    carried: float = 0.0
     notes: list[str] = field(default_factory=list)
 
 
@@ -325,6 +329,9 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
     if task.leader_surface is not None:
         xml, grasps["leader"] = _chain("lgrasp", task.leader_surface)
         chains.append(xml)
+    chain_mass = 2 * CHAIN_MASS * len(chains)
+    notes.append(f"the grasp chains' bodies ride on the object: the hands carry "
+                 f"{mass + chain_mass:g} kg ({chain_mass:g} kg of chain)")
     obstacles = []
     if task.scene is not None:
         obstacles = [_geom(b.shape, np.eye(4), f"obstacle_{b.name}",
@@ -365,7 +372,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
         tools={"leader": "leader_tool", "follower": "follower_tool"}, points=points,
         welds={"leader": 0, "follower": 1}, mass=float(mass),
         mass_centre=np.asarray(centre, dtype=float), gravity=np.asarray(gravity, float),
-        notes=notes)
+        carried=float(mass + chain_mass), notes=notes)
 
 
 def _pose_vec(T: FloatArray) -> FloatArray:

@@ -13,6 +13,7 @@
       object_mass: 3           # kg, when the object states no mass
       link_density: 1000       # kg/m^3, links whose model has no inertia
       deviation_max: 10        # length unit: the object off D(t) -> dropped
+      rotation_max: 0.05       # angle unit (here rad): the object turned off D(t) -> dropped
       slip_max: 5              # length unit: a grasp off its commanded place -> slipped
       squeeze_max: 20          # N: internal force above the rigid replay's -> squeezed
       torque_ratio_max: 1.0    # share of the joint torque limit -> torque
@@ -73,6 +74,9 @@ class PhysicsSettings:
     deviation_max : float
         Largest deviation of the object from ``D(t)`` before the verdict is
         ``dropped`` [m] (default 10 mm).
+    rotation_max : float
+        Largest rotation of the object off ``D(t)`` before the verdict is ``dropped``
+        [rad] (default 0.05 rad, about 3 deg).
     slip_max : float
         Largest slip of a grasp before the verdict is ``slipped`` [m] (default 5 mm).
     squeeze_max : float
@@ -94,6 +98,7 @@ class PhysicsSettings:
     object_mass: float = 3.0
     link_density: float = 1000.0
     deviation_max: float = 0.01
+    rotation_max: float = 0.05
     slip_max: float = 0.005
     squeeze_max: float = 20.0
     torque_ratio_max: float = 1.0
@@ -104,15 +109,17 @@ class PhysicsSettings:
             raise ValueError(f"servo must be one of {SERVOS}, got {self.servo!r}")
         if self.contacts not in CONTACTS:
             raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
-        for key in ("kv", "object_mass", "link_density", "deviation_max", "slip_max",
+        for key in ("kv", "object_mass", "link_density", "deviation_max", "rotation_max",
+                    "slip_max",
                     "squeeze_max", "torque_ratio_max"):
             value = float(getattr(self, key))
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{key} must be a finite number > 0, got {value}")
 
     @classmethod
-    def from_spec(cls, spec: PhysicsSpec, length_scale: float) -> PhysicsSettings:
-        """Convert the file's section (``length_scale`` [m per file unit])."""
+    def from_spec(cls, spec: PhysicsSpec, length_scale: float, angle_scale: float = 1.0
+                  ) -> PhysicsSettings:
+        """Convert the file's section (``length_scale`` [m], ``angle_scale`` [rad] per unit)."""
         def length(value: float | None, default: float) -> float:
             return default if value is None else value * length_scale
 
@@ -123,6 +130,8 @@ class PhysicsSettings:
                    delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
                    link_density=spec.link_density,
                    deviation_max=length(spec.deviation_max, 0.01),
+                   rotation_max=(0.05 if spec.rotation_max is None
+                                 else spec.rotation_max * angle_scale),
                    slip_max=length(spec.slip_max, 0.005), squeeze_max=spec.squeeze_max,
                    torque_ratio_max=spec.torque_ratio_max, tau_max=tau)
 
@@ -132,6 +141,7 @@ class PhysicsSettings:
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
                 "contacts": self.contacts,
                 "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
+                "rotation_max_rad": self.rotation_max,
                 "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
                 "torque_ratio_max": self.torque_ratio_max,
                 "link_density_kg_m3": self.link_density}
