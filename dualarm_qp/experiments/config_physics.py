@@ -45,7 +45,7 @@ class PhysicsSpec(Model):
     servo: Literal["position", "velocity"] = "position"
     kp: Num = 100000.0
     kv: Num = 300.0
-    armature: Num = 0.2
+    armature: Num = 0.05
     delay: Flag = False
     contacts: Literal["obstacles", "all", "none"] = "obstacles"
     object_mass: Num = 3.0

@@ -6,7 +6,7 @@
       servo: position          # position (PD on the integrated command) or velocity
       kp: 100000               # N m/rad, position gain (SI whatever the file's units)
       kv: 300                  # N m s/rad, velocity gain
-      armature: 0.2            # kg m^2, rotor inertia added to every arm joint
+      armature: 0.05           # kg m^2, rotor inertia added to every arm joint
       delay: false             # closed loop: the controller sees the previous sample
       contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
                                # all (also arm-arm, arm-object) or none
@@ -92,7 +92,7 @@ class PhysicsSettings:
     servo: str = "position"
     kp: float = 100000.0
     kv: float = 300.0
-    armature: float = 0.2
+    armature: float = 0.05
     delay: bool = False
     contacts: str = "obstacles"
     object_mass: float = 3.0

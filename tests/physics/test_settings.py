@@ -27,7 +27,7 @@ def _with_physics(physics: object) -> dict:
 
 def test_defaults_are_documented_values():
     s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
-    assert (s.servo, s.kp, s.kv, s.armature, s.delay) == ("position", 1e5, 300.0, 0.2, False)
+    assert (s.servo, s.kp, s.kv, s.armature, s.delay) == ("position", 1e5, 300.0, 0.05, False)
     assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
         0.01, 0.005, 20.0, 1.0)
 
