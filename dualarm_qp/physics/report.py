@@ -90,6 +90,15 @@ def physics_html(physics: dict[str, Any]) -> str:
         rows.append(f"<tr><th>{html.escape(label)}</th>{cells}</tr>")
     parts.append("<table><tr><th></th><th>rigid replay</th><th>closed loop</th></tr>"
                  + "".join(rows) + "</table>")
+    worst = (physics.get("closed_loop") or {}).get("torque_ratio_worst") or {}
+    if worst.get("joint"):
+        parts.append(f'<p class="note">Largest torque share in the closed loop: '
+                     f'{html.escape(str(worst["joint"]))} at t = {_num(worst.get("t_s"))} '
+                     "s.</p>")
+    notes = physics.get("model_notes") or []
+    if notes:
+        parts.append('<p class="note">Model: ' + html.escape("; ".join(map(str, notes)))
+                     + ".</p>")
     return "\n".join(parts)
 
 
