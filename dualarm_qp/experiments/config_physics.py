@@ -43,6 +43,7 @@ class PhysicsSpec(Model):
     """The ``physics:`` section, as written (lengths in the file's length unit)."""
 
     servo: Literal["position", "velocity"] = "position"
+    reference: Literal["measured", "integrated"] = "measured"
     kp: Num = 100000.0
     kv: Num = 300.0
     armature: Num = 0.05

@@ -5,8 +5,10 @@ puts it at the run's start and then, for each controller sample of ``dt``:
 
 * drives every arm joint with a **servo** for ``n = ceil(dt / 1 ms)`` substeps of ``dt /
   n``: a ``position`` servo is ``kp (q_ref - q) + kv (qd_ref - qd)`` with ``q_ref`` the
-  commanded rates integrated from the start (``qd_ref`` the rates: feed-forward, ramped
-  over the sample from the previous command, so that a new command steps no torque); a
+  commanded rates integrated from the joints measured at the sample's start
+  (``reference: measured``) or from the start of the run (``integrated``); ``qd_ref``
+  is the rates (feed-forward, ramped over the sample from the previous command, so
+  that a new command steps no torque); a
   ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add two feed-forward torques:
   the arm's own gravity and Coriolis torques (MuJoCo's bias forces of the arm joints),
   and the torques that hold the hand's quasi-static share of the load (the minimum-norm
@@ -279,7 +281,9 @@ class MujocoPlant:
         """Apply the command's rates for ``dt``; return the measured state (see the module)."""
         rates = np.r_[command.ql_dot, command.qf_dot]
         self._feedforward(self._measured)
-        peak_tau = self.drive(rates, dt)
+        start = (np.r_[self._measured.q_l, self._measured.q_f]
+                 if self.settings.reference == "measured" else None)
+        peak_tau = self.drive(rates, dt, q_ref=start)
         tau = state.t + dt * command.scale
         previous = self._measured
         self._measured = self._measure(tau)

@@ -3,7 +3,9 @@
 ::
 
     physics:
-      servo: position          # position (PD on the integrated command) or velocity
+      servo: position          # position (PD about the commanded motion) or velocity
+      reference: measured      # the position reference starts each sample at the
+                               # measured joints (measured) or integrates (integrated)
       kp: 100000               # N m/rad, position gain (SI whatever the file's units)
       kv: 300                  # N m s/rad, velocity gain
       armature: 0.05           # kg m^2, rotor inertia added to every arm joint
@@ -41,6 +43,10 @@ FloatArray = NDArray[np.float64]
 #: or ``velocity`` (damping about the commanded rate only).
 SERVOS = ("position", "velocity")
 
+#: Where a closed-loop sample's position reference starts: at the measured joints, or
+#: where the last sample's ended (the commands integrated since the start).
+REFERENCES = ("measured", "integrated")
+
 #: Which contacts are simulated: ``obstacles`` (the arms' links and the object against
 #: the obstacles; arm-arm and arm-object clearance is the collision module's, measured on
 #: the same conservative capsules), ``all`` (every pair but those excluded) or ``none``.
@@ -57,6 +63,10 @@ class PhysicsSettings:
     ----------
     servo : {"position", "velocity"}
         Joint servo kind (:data:`SERVOS`).
+    reference : {"measured", "integrated"}
+        Closed loop, position servo: each sample's position reference starts at the
+        joints measured then (``measured``) or goes on from the last sample's
+        (``integrated``: the commands integrated since the start).
     kp : float
         Position gain [N m/rad] (position servo only).
     kv : float
@@ -90,6 +100,7 @@ class PhysicsSettings:
     """
 
     servo: str = "position"
+    reference: str = "measured"
     kp: float = 100000.0
     kv: float = 300.0
     armature: float = 0.05
@@ -107,6 +118,8 @@ class PhysicsSettings:
     def __post_init__(self) -> None:
         if self.servo not in SERVOS:
             raise ValueError(f"servo must be one of {SERVOS}, got {self.servo!r}")
+        if self.reference not in REFERENCES:
+            raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
         if self.contacts not in CONTACTS:
             raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
         for key in ("kv", "object_mass", "link_density", "deviation_max", "rotation_max",
@@ -126,7 +139,8 @@ class PhysicsSettings:
         tau = {role: (None if getattr(spec.tau_max, role) is None
                       else np.asarray(getattr(spec.tau_max, role), dtype=float))
                for role in ("leader", "follower")}
-        return cls(servo=spec.servo, kp=spec.kp, kv=spec.kv, armature=spec.armature,
+        return cls(servo=spec.servo, reference=spec.reference, kp=spec.kp, kv=spec.kv,
+                   armature=spec.armature,
                    delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
                    link_density=spec.link_density,
                    deviation_max=length(spec.deviation_max, 0.01),
@@ -137,7 +151,8 @@ class PhysicsSettings:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, SI."""
-        return {"servo": self.servo, "kp_N_m_rad": self.kp, "kv_N_m_s_rad": self.kv,
+        return {"servo": self.servo, "reference": self.reference, "kp_N_m_rad": self.kp,
+                "kv_N_m_s_rad": self.kv,
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
                 "contacts": self.contacts,
                 "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
@@ -147,4 +162,4 @@ class PhysicsSettings:
                 "link_density_kg_m3": self.link_density}
 
 
-__all__ = ["CONTACTS", "SERVOS", "SUBSTEP", "PhysicsSettings"]
+__all__ = ["CONTACTS", "REFERENCES", "SERVOS", "SUBSTEP", "PhysicsSettings"]

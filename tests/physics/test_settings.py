@@ -27,7 +27,8 @@ def _with_physics(physics: object) -> dict:
 
 def test_defaults_are_documented_values():
     s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
-    assert (s.servo, s.kp, s.kv, s.armature, s.delay) == ("position", 1e5, 300.0, 0.05, False)
+    assert (s.servo, s.reference, s.kp, s.kv, s.armature, s.delay) == (
+        "position", "measured", 1e5, 300.0, 0.05, False)
     assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
         0.01, 0.005, 20.0, 1.0)
 
@@ -46,6 +47,7 @@ def test_lengths_follow_the_file_units_and_gains_stay_si():
 
 @pytest.mark.parametrize(("physics", "key", "words"), [
     ({"servo": "torque"}, "physics.servo", "position, velocity"),
+    ({"reference": "planned"}, "physics.reference", "measured, integrated"),
     ({"kv": 0}, "physics.kv", "> 0"),
     ({"squeeze_max": -1}, "physics.squeeze_max", "> 0"),
     ({"servo": "position", "kp": 0}, "physics.kp", "kp > 0"),
