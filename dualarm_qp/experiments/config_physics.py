@@ -2,7 +2,7 @@
 
 The settings in SI units are :class:`~dualarm_qp.physics.settings.PhysicsSettings`.
 Lengths (``deviation_max``, ``slip_max``) are in the file's length unit and
-``rotation_max`` in its angle unit; gains, masses,
+``rotation_max`` in its angle unit, ``reference_time`` in its time unit; gains, masses,
 densities, forces and torques are SI whatever the file's units.
 """
 
@@ -44,6 +44,7 @@ class PhysicsSpec(Model):
 
     servo: Literal["position", "velocity"] = "position"
     reference: Literal["measured", "integrated"] = "measured"
+    reference_time: Num | None = None
     kp: Num = 100000.0
     kv: Num = 300.0
     armature: Num = 0.05
@@ -68,7 +69,7 @@ class PhysicsSpec(Model):
                 raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
         if self.servo == "position" and not self.kp > 0:
             raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
-        for key in ("deviation_max", "rotation_max", "slip_max"):
+        for key in ("reference_time", "deviation_max", "rotation_max", "slip_max"):
             value = getattr(self, key)
             if value is not None and not value > 0:
                 raise keyed(key, f"must be > 0 (got {value:g})")

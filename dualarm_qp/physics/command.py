@@ -47,7 +47,8 @@ def _summary(run: Path) -> dict[str, Any]:
 def settings_of(cfg: ExperimentConfig) -> PhysicsSettings:
     """Return the physics settings of an experiment file (SI)."""
     return PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0,
-                                     math.pi / 180.0 if cfg.units.angle == "deg" else 1.0)
+                                     math.pi / 180.0 if cfg.units.angle == "deg" else 1.0,
+                                     1e-3 if cfg.units.time == "ms" else 1.0)
 
 
 def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:

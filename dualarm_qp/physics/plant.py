@@ -5,8 +5,8 @@ puts it at the run's start and then, for each controller sample of ``dt``:
 
 * drives every arm joint with a **servo** for ``n = ceil(dt / 1 ms)`` substeps of ``dt /
   n``: a ``position`` servo is ``kp (q_ref - q) + kv (qd_ref - qd)`` with ``q_ref`` the
-  commanded rates integrated from the joints measured at the sample's start
-  (``reference: measured``) or from the start of the run (``integrated``); ``qd_ref``
+  commanded rates integrated, and pulled towards the measured joints with the time
+  constant ``reference_time`` (``reference: measured``) or not (``integrated``); ``qd_ref``
   is the rates (feed-forward, ramped over the sample from the previous command, so
   that a new command steps no torque); a
   ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add two feed-forward torques:
@@ -141,6 +141,7 @@ class MujocoPlant:
         self._dadr = {role: np.array([m.jnt_dofadr[m.joint(n).id] for n in names])
                       for role, names in self.physics.joints.items()}
         self._arm_dofs = np.r_[self._dadr["leader"], self._dadr["follower"]]
+        self._arm_q = np.r_[self._qadr["leader"], self._qadr["follower"]]
         self._obj = m.body("object").id
         self._obj_q = m.jnt_qposadr[m.joint("object_free").id]
         self._obj_dof = m.jnt_dofadr[m.joint("object_free").id]
@@ -219,13 +220,16 @@ class MujocoPlant:
         self._mj.mj_forward(self.model, self.data)
 
     # -- stepping ---------------------------------------------------------------------
-    def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None) -> float:
+    def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
+              leak: bool = False) -> float:
         """Servo the arms at ``rates`` [rad/s] for ``dt``; return the peak torque ratio.
 
         The ratio is |torque| / limit, the largest of every joint's over the substeps.
 
         ``q_ref`` resets the position reference first (a replay sets it to each recorded
-        sample); otherwise it goes on from where the last call left it.
+        sample); otherwise it goes on from where the last call left it. With ``leak``
+        the reference is also pulled towards the measured joints with the time constant
+        ``settings.reference_time``.
         """
         mj, m, d = self._mj, self.model, self.data
         if q_ref is not None:
@@ -234,8 +238,10 @@ class MujocoPlant:
         dofs = self._arm_dofs
         peak_tau = 0.0
         start, n = self._rates, self.substeps
+        pull = h / self.settings.reference_time if leak else 0.0
+        qadr = self._arm_q
         for i in range(n):
-            self.q_ref = self.q_ref + h * rates
+            self.q_ref = self.q_ref + h * rates + pull * (d.qpos[qadr] - self.q_ref)
             self._servo(start + (i + 1) / n * (rates - start))
             mj.mj_step(m, d)
             if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
@@ -281,9 +287,7 @@ class MujocoPlant:
         """Apply the command's rates for ``dt``; return the measured state (see the module)."""
         rates = np.r_[command.ql_dot, command.qf_dot]
         self._feedforward(self._measured)
-        start = (np.r_[self._measured.q_l, self._measured.q_f]
-                 if self.settings.reference == "measured" else None)
-        peak_tau = self.drive(rates, dt, q_ref=start)
+        peak_tau = self.drive(rates, dt, leak=self.settings.reference == "measured")
         tau = state.t + dt * command.scale
         previous = self._measured
         self._measured = self._measure(tau)

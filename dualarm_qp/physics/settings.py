@@ -4,8 +4,9 @@
 
     physics:
       servo: position          # position (PD about the commanded motion) or velocity
-      reference: measured      # the position reference starts each sample at the
-                               # measured joints (measured) or integrates (integrated)
+      reference: measured      # the position reference leaks towards the measured
+                               # joints (measured) or only integrates (integrated)
+      reference_time: 0.03     # time unit: the leak's time constant
       kp: 100000               # N m/rad, position gain (SI whatever the file's units)
       kv: 300                  # N m s/rad, velocity gain
       armature: 0.05           # kg m^2, rotor inertia added to every arm joint
@@ -43,8 +44,8 @@ FloatArray = NDArray[np.float64]
 #: or ``velocity`` (damping about the commanded rate only).
 SERVOS = ("position", "velocity")
 
-#: Where a closed-loop sample's position reference starts: at the measured joints, or
-#: where the last sample's ended (the commands integrated since the start).
+#: The closed loop's position reference: pulled towards the measured joints, or the
+#: commands integrated since the start only.
 REFERENCES = ("measured", "integrated")
 
 #: Which contacts are simulated: ``obstacles`` (the arms' links and the object against
@@ -64,9 +65,11 @@ class PhysicsSettings:
     servo : {"position", "velocity"}
         Joint servo kind (:data:`SERVOS`).
     reference : {"measured", "integrated"}
-        Closed loop, position servo: each sample's position reference starts at the
-        joints measured then (``measured``) or goes on from the last sample's
+        Closed loop, position servo: the position reference integrates the commanded
+        rates and is pulled towards the measured joints (``measured``) or not
         (``integrated``: the commands integrated since the start).
+    reference_time : float
+        Time constant of that pull [s] (default 0.03 s).
     kp : float
         Position gain [N m/rad] (position servo only).
     kv : float
@@ -101,6 +104,7 @@ class PhysicsSettings:
 
     servo: str = "position"
     reference: str = "measured"
+    reference_time: float = 0.03
     kp: float = 100000.0
     kv: float = 300.0
     armature: float = 0.05
@@ -122,7 +126,8 @@ class PhysicsSettings:
             raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
         if self.contacts not in CONTACTS:
             raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
-        for key in ("kv", "object_mass", "link_density", "deviation_max", "rotation_max",
+        for key in ("kv", "reference_time", "object_mass", "link_density", "deviation_max",
+                    "rotation_max",
                     "slip_max",
                     "squeeze_max", "torque_ratio_max"):
             value = float(getattr(self, key))
@@ -130,16 +135,22 @@ class PhysicsSettings:
                 raise ValueError(f"{key} must be a finite number > 0, got {value}")
 
     @classmethod
-    def from_spec(cls, spec: PhysicsSpec, length_scale: float, angle_scale: float = 1.0
-                  ) -> PhysicsSettings:
-        """Convert the file's section (``length_scale`` [m], ``angle_scale`` [rad] per unit)."""
+    def from_spec(cls, spec: PhysicsSpec, length_scale: float, angle_scale: float = 1.0,
+                  time_scale: float = 1.0) -> PhysicsSettings:
+        """Convert the file's section to SI.
+
+        ``length_scale`` [m], ``angle_scale`` [rad] and ``time_scale`` [s] per file unit.
+        """
         def length(value: float | None, default: float) -> float:
             return default if value is None else value * length_scale
 
         tau = {role: (None if getattr(spec.tau_max, role) is None
                       else np.asarray(getattr(spec.tau_max, role), dtype=float))
                for role in ("leader", "follower")}
-        return cls(servo=spec.servo, reference=spec.reference, kp=spec.kp, kv=spec.kv,
+        return cls(servo=spec.servo, reference=spec.reference,
+                   reference_time=(0.03 if spec.reference_time is None
+                                   else spec.reference_time * time_scale),
+                   kp=spec.kp, kv=spec.kv,
                    armature=spec.armature,
                    delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
                    link_density=spec.link_density,
@@ -151,7 +162,8 @@ class PhysicsSettings:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, SI."""
-        return {"servo": self.servo, "reference": self.reference, "kp_N_m_rad": self.kp,
+        return {"servo": self.servo, "reference": self.reference,
+                "reference_time_s": self.reference_time, "kp_N_m_rad": self.kp,
                 "kv_N_m_s_rad": self.kv,
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
                 "contacts": self.contacts,

@@ -27,18 +27,20 @@ def _with_physics(physics: object) -> dict:
 
 def test_defaults_are_documented_values():
     s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
-    assert (s.servo, s.reference, s.kp, s.kv, s.armature, s.delay) == (
-        "position", "measured", 1e5, 300.0, 0.05, False)
+    assert (s.servo, s.reference, s.reference_time, s.kp, s.kv, s.armature, s.delay) == (
+        "position", "measured", 0.03, 1e5, 300.0, 0.05, False)
     assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
         0.01, 0.005, 20.0, 1.0)
 
 
 def test_lengths_follow_the_file_units_and_gains_stay_si():
     cfg = parse_config(_with_physics({"deviation_max": 4, "slip_max": 2, "kp": 5000,
+                                      "rotation_max": 3, "reference_time": 0.5,
                                       "tau_max": {"leader": 80, "follower": [1, 2, 3, 4, 5, 6]}}),
                        "beam.yaml")
-    s = PhysicsSettings.from_spec(cfg.physics, 1e-3)  # the beam file is in mm
+    s = PhysicsSettings.from_spec(cfg.physics, 1e-3, np.pi / 180, 1e-3)  # mm, deg, ms
     assert s.deviation_max == pytest.approx(0.004) and s.slip_max == pytest.approx(0.002)
+    assert s.rotation_max == pytest.approx(np.radians(3)) and s.reference_time == 5e-4
     assert s.kp == 5000
     assert s.tau_max is not None
     np.testing.assert_array_equal(s.tau_max["leader"], [80.0])
@@ -48,6 +50,7 @@ def test_lengths_follow_the_file_units_and_gains_stay_si():
 @pytest.mark.parametrize(("physics", "key", "words"), [
     ({"servo": "torque"}, "physics.servo", "position, velocity"),
     ({"reference": "planned"}, "physics.reference", "measured, integrated"),
+    ({"reference_time": 0}, "physics.reference_time", "> 0"),
     ({"kv": 0}, "physics.kv", "> 0"),
     ({"squeeze_max": -1}, "physics.squeeze_max", "> 0"),
     ({"servo": "position", "kp": 0}, "physics.kp", "kp > 0"),
