@@ -79,3 +79,14 @@ def test_the_package_and_a_config_load_without_mujoco():
             f"load_config({str(BEAM)!r}); "
             "assert 'mujoco' not in sys.modules, 'mujoco imported'")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_without_mujoco_the_plant_says_how_to_install_it(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    path = tmp_path / "beam.yaml"
+    path.write_text(yaml.safe_dump(yaml.safe_load(BEAM.read_text())))
+    code = main(["run", str(path), "--out", str(tmp_path / "o"), "--quiet", "--plant",
+                 "mujoco"])
+    err = capsys.readouterr().err
+    assert code == 2 and 'pip install "dualarm-qp[physics]"' in err
+    assert not (tmp_path / "o" / "summary.json").exists()
