@@ -1,6 +1,7 @@
 """Command-line interface of ``dualarm-qp``.
 
-Commands: run, animate, reproduce, collisions, bench, sweep, sweep-report, solvers.
+Commands: run, animate, physics, reproduce, collisions, bench, sweep, sweep-report,
+solvers.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
 input (configuration, arguments, missing solver, an output folder in use), 130
@@ -59,13 +60,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
                            solver_options=solver_options)
     check_solver_options(solver_options, used=[exp.solver_name])
     controller = exp.controller()  # fail early (exit 2) on an unknown or missing solver
+    plant = None
+    if args.plant == "mujoco":  # docs/physics.md
+        from .physics.command import settings_of
+        from .physics.plant import MujocoPlant
+
+        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)))
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
     out = _output_folder(out)
     outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                              plots=not args.no_plots, animate=args.animate,
-                             controller=controller)
+                             controller=controller, plant=plant)
     print_run_summary(outcome.summary, str(out))
     if outcome.interrupted:
         _err(f"{outcome.summary['message']}; the samples done are written")
@@ -158,6 +165,25 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
     path = animate_run(args.run_dir, args.out)
     print(f"animation: {path} (open it in a web browser; it needs no server or network)")
+    return EXIT_OK
+
+
+def _cmd_physics(args: argparse.Namespace) -> int:
+    from .physics.command import check_run
+
+    p = check_run(args.run_dir, delay=True if args.delay else None)
+    for name in ("replay", "closed_loop"):
+        r = p[name]
+        if r is None:
+            print(f"  {name:<12} none (the run recorded fewer than two samples)")
+            continue
+        print(f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
+              f"internal force {r['internal_force_max_N']:.3g} N, follower support "
+              f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
+              f"slip {r['slip_max_m'] * 1e3:.3g} mm, torque/limit {r['torque_ratio_max']:.3g} "
+              f"({r['wall_time_s']:.1f} s)")
+    print(f"physics.status: {p['status']}" + "".join(f"\n  {w}" for w in p["reasons"]))
+    print(f"  outputs: {args.run_dir}/ (physics.png, report.html, summary.json)")
     return EXIT_OK
 
 
@@ -376,6 +402,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--animate", action="store_true",
                    help="also write animation.html, a 3D animation of the run that opens "
                         "offline in a web browser")
+    r.add_argument("--plant", choices=("model", "mujoco"), default="model",
+                   help="what the commands drive: the model itself (default) or a MuJoCo "
+                        "simulation with joint servos (needs the [physics] extra; "
+                        "docs/physics.md)")
     r.set_defaults(func=_cmd_run)
 
     a = sub.add_parser("animate", help="write the 3D animation (animation.html) of a "
@@ -387,6 +417,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="file to write (default RUN_DIR/animation.html, then listed in the "
                         "run's summary.json)")
     a.set_defaults(func=_cmd_animate)
+
+    ph = sub.add_parser("physics", help="check a finished run in MuJoCo: rigid replay and "
+                                        "closed loop, with a verdict (docs/physics.md)")
+    ph.add_argument("run_dir", type=Path, metavar="RUN_DIR",
+                    help="output folder of 'dualarm-qp run'")
+    ph.add_argument("--delay", action="store_true",
+                    help="closed loop one sample late (overrides the file's physics.delay)")
+    ph.set_defaults(func=_cmd_physics)
 
     rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases and the "
                         "same task with hard limits, draw Figs. 5-6")

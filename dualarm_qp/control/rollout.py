@@ -34,6 +34,7 @@ from ..step.state import DualArmState
 from .collisions import blocked_by_pair, path_collision_of, record_clearance
 from .controller import DualArmController
 from .loads import record_loads
+from .plant import Plant
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .torques import TorqueReport, blocked_by_torque, record_torques, torque_at_start
@@ -293,6 +294,7 @@ def rollout(
     stop_on_interrupt: bool = False,
     preflight: bool = True,
     initial_rates: FloatArray | None = None,
+    plant: Plant | None = None,
 ) -> RolloutResult:
     """Run ``controller`` from ``initial`` along ``duration`` seconds of path.
 
@@ -344,6 +346,11 @@ def rollout(
         The rates the pair moves at when the run starts [rad/s, m/s], in the
         controller's decision order (:attr:`DualArmController.layout`); default zero (the
         run starts at rest). Acceleration limits and their realised check start from it.
+    plant : Plant, optional
+        What the commands drive (:mod:`.plant`): each sample's state is then the one the
+        plant measured (default: the command integrated exactly). With a plant the
+        position-level corrections are off by default (they would move a state that is
+        measured, not commanded).
 
     Returns
     -------
@@ -370,9 +377,10 @@ def rollout(
     curved = bool(getattr(surface, "curved", False)) or float(
         np.linalg.norm(surface.angular_rate(float(initial.sigma)))) > 0.0
     if reresolve_orientation is None:
-        reresolve_orientation = not hard and curved and not controller.options.exact_orientation
+        reresolve_orientation = (not hard and curved and plant is None
+                                 and not controller.options.exact_orientation)
     if project is None:
-        project = not hard
+        project = not hard and plant is None
     if hard and (project or reresolve_orientation):
         raise InvalidInputError(
             f"solver '{controller.solver.name}' keeps hard limits: the position-level "
@@ -393,6 +401,8 @@ def rollout(
     corr = (0.0, 0.0)
     controller.reset(initial_rates)
     v_start = controller.applied
+    if plant is not None:
+        plant.reset(DualArmState(path_start, q_l, q_f, sigma, sigma_l), dt)
     if preflight:
         miss = unreachable_waypoint(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
                                     path_end, within_ranges=hard)
@@ -478,7 +488,7 @@ def rollout(
                          _time_lost(t_wall - path_start, tau - path_start, dt))
             if at_end or k == max_rows - 1:
                 break
-            nxt = state.advanced(out, dt)
+            nxt = state.advanced(out, dt) if plant is None else plant.advance(state, out, dt)
             tau, q_l, q_f, sigma, sigma_l = (nxt.t, nxt.q_l, nxt.q_f, nxt.sigma,
                                              nxt.sigma_leader)
             t_wall = t_wall + dt
@@ -514,6 +524,9 @@ def rollout(
             f"(the duration cap; the task was slowed)")
     if failure is None and hard:
         failure = _realised_failure(realised, trace, dt)
+        if failure is not None and plant is not None:  # measured, not commanded: tell
+            warnings.append(f"the measured motion left a limit: {failure.message}")
+            failure = None
     clearance = record_clearance(task, trace)
     loads = record_loads(task, trace)  # the wrench each hand applies (a task with a load)
     torque = record_torques(controller, trace)  # each joint's torque (a load or limits)

@@ -28,6 +28,7 @@ from pydantic import (
 )
 
 from ..errors import ConfigError
+from .config_physics import PhysicsSpec
 from .config_scene import CollisionSpec, SceneSpec, ShapeSpec
 from .config_types import (
     MAX_MAGNITUDE,
@@ -480,6 +481,7 @@ class ExperimentConfig(Model):
     solver: SolverSpec = Field(default_factory=SolverSpec)
     scene: SceneSpec = Field(default_factory=SceneSpec)
     collision: CollisionSpec = Field(default_factory=CollisionSpec)
+    physics: PhysicsSpec = Field(default_factory=PhysicsSpec)  # docs/physics.md
 
     @field_validator("name")
     @classmethod

@@ -118,6 +118,8 @@ FIGURE_CAPTIONS = {
                      "d_s (dashed; with collision avoidance on, the run fails below d_s "
                      "less the allowance, dotted) and the influence distance d_i (pairs "
                      "closer get a row in the step); the smallest is marked with its pair.",
+    "physics.png": "Physics check (MuJoCo): rigid replay and closed loop against the "
+                   "thresholds (docs/physics.md).",
 }
 
 #: The limit groups of ``realised_limits``, in the order shown, with their names.
@@ -301,6 +303,10 @@ def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]
     if clearance is not None:
         parts += ['<h2>Clearance: the smallest distance between bodies</h2>',
                   f'<p id="clearance">{html.escape(clearance)}</p>']
+    if isinstance(summary.get("physics"), dict):  # dualarm-qp physics RUN_DIR
+        from ..physics.report import physics_html
+
+        parts.append(physics_html(summary["physics"]))
     if summary.get("warnings"):
         parts += ["<h2>Warnings</h2>", "<ul>" + "".join(
             f"<li>{html.escape(str(w))}</li>" for w in summary["warnings"]) + "</ul>"]

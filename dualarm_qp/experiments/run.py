@@ -21,6 +21,7 @@ from typing import Any
 from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
 from ..control.controller import DualArmController
+from ..control.plant import Plant
 from ..control.rollout import RolloutResult, rollout
 from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
@@ -111,6 +112,7 @@ def run_experiment(
     plots: bool = True,
     animate: bool = False,
     controller: DualArmController | None = None,
+    plant: Plant | None = None,
 ) -> RunOutcome:
     """Roll the experiment out and write its outputs.
 
@@ -130,6 +132,9 @@ def run_experiment(
     controller : DualArmController, optional
         The controller to run, already built by ``exp.controller()`` (default: built
         here).
+    plant : Plant, optional
+        What the commands drive (``--plant mujoco``:
+        :class:`~dualarm_qp.physics.plant.MujocoPlant`); default: the model itself.
 
     Returns
     -------
@@ -141,7 +146,7 @@ def run_experiment(
         are written is raised once they all are.
     """
     outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots,
-                                  animate=animate, controller=controller)
+                                  animate=animate, controller=controller, plant=plant)
     hold.deliver()
     return outcome
 
@@ -154,6 +159,7 @@ def run_and_write(
     plots: bool = True,
     animate: bool = False,
     controller: DualArmController | None = None,
+    plant: Plant | None = None,
 ) -> tuple[RunOutcome, SignalHold]:
     """Do what :func:`run_experiment` does, but hand back a signal held while writing.
 
@@ -177,7 +183,8 @@ def run_and_write(
     try:
         result = rollout(controller, exp.initial, duration=exp.duration, project=exp.project,
                          initial_rates=exp.start_rates(),
-                         limits=exp.limits, progress=update, stop_on_interrupt=True)
+                         limits=exp.limits, progress=update, stop_on_interrupt=True,
+                         plant=plant)
     except BaseException:
         if bar is not None:
             bar.close()
@@ -187,6 +194,8 @@ def run_and_write(
         if bar is not None:
             bar.close()
         summary = make_summary(exp, result, wall)
+        if plant is not None:
+            summary["plant"] = type(plant).__name__
         out = None
         if out_dir is not None:
             out = Path(out_dir)

@@ -1,0 +1,80 @@
+"""The ``physics:`` section of an experiment file, as written (docs/physics.md).
+
+The settings in SI units are :class:`~dualarm_qp.physics.settings.PhysicsSettings`.
+Lengths (``deviation_max``, ``slip_max``) are in the file's length unit and
+``rotation_max`` in its angle unit, ``reference_time`` in its time unit; gains, masses,
+densities, forces and torques are SI whatever the file's units.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, model_validator
+
+from .config_types import Flag, Model, Num, keyed, scalar_to_list
+
+NumList = Annotated[list[Num], Field(min_length=1)]
+
+
+class TorqueLimitSpec(Model):
+    """Joint torque limits [N m] per arm: one number for every joint, or one per joint."""
+
+    leader: NumList | None = None
+    follower: NumList | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _lists(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            return {k: (scalar_to_list(v) if v is not None else v) for k, v in data.items()}
+        return data
+
+    @model_validator(mode="after")
+    def _positive(self) -> TorqueLimitSpec:
+        for role in ("leader", "follower"):
+            values = getattr(self, role)
+            if values is not None and not all(v > 0 for v in values):
+                raise keyed(role, "torque limits must be > 0 N m")
+        return self
+
+
+class PhysicsSpec(Model):
+    """The ``physics:`` section, as written (lengths in the file's length unit)."""
+
+    servo: Literal["position", "velocity"] = "position"
+    reference: Literal["measured", "integrated"] = "measured"
+    reference_time: Num | None = None
+    kp: Num = 100000.0
+    kv: Num = 300.0
+    armature: Num = 0.05
+    delay: Flag = False
+    contacts: Literal["obstacles", "all", "none"] = "obstacles"
+    object_mass: Num = 3.0
+    link_density: Num = 1000.0
+    deviation_max: Num | None = None
+    rotation_max: Num | None = None
+    slip_max: Num | None = None
+    squeeze_max: Num = 20.0
+    torque_ratio_max: Num = 1.0
+    tau_max: TorqueLimitSpec = Field(default_factory=TorqueLimitSpec)
+
+    @model_validator(mode="after")
+    def _ranges(self) -> PhysicsSpec:
+        for key in ("kv", "object_mass", "link_density", "squeeze_max", "torque_ratio_max"):
+            if not getattr(self, key) > 0:
+                raise keyed(key, f"must be > 0 (got {getattr(self, key):g})")
+        for key in ("kp", "armature"):
+            if getattr(self, key) < 0:
+                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
+        if self.servo == "position" and not self.kp > 0:
+            raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
+        for key in ("reference_time", "deviation_max", "rotation_max", "slip_max"):
+            value = getattr(self, key)
+            if value is not None and not value > 0:
+                raise keyed(key, f"must be > 0 (got {value:g})")
+        return self
+
+
+
+__all__ = ["PhysicsSpec", "TorqueLimitSpec"]

@@ -1,0 +1,135 @@
+"""``dualarm-qp physics RUN_DIR``: check a finished run in MuJoCo, add it to its outputs.
+
+The run's ``config.yaml`` rebuilds its task and its ``physics:`` settings; its
+``trajectory.csv`` gives the recorded joints. The rigid replay and the closed loop run
+(:mod:`.check`; a run that recorded fewer than two samples has no replay); then
+``physics.png`` is drawn, and ``report.html`` and ``summary.json`` (key ``physics``) are
+rewritten, ``summary.json`` last, with SIGINT and SIGTERM held.
+Nothing is written before both simulations are done; an error while writing puts the
+earlier ``report.html`` back and removes ``physics.png``, so the folder is as before.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from .._io import atomic_write_with, write_json, write_text
+from .._signals import SignalHold
+from ..errors import DualArmError, InvalidInputError
+from ..experiments.animate import run_config
+from ..experiments.config import ExperimentConfig, load_config
+from ..experiments.figures.rundata import RunData
+from ..experiments.html_report import REPORT_FILE, render_run_report
+from ..experiments.setup import build_experiment
+from .check import closed_loop, physics_summary, replay
+from .report import PHYSICS_FIGURE, write_physics_figure
+from .settings import PhysicsSettings
+
+
+def _summary(run: Path) -> dict[str, Any]:
+    path = run / "summary.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InvalidInputError(f"{path}: not found; RUN_DIR must be a folder written by "
+                                "'dualarm-qp run'") from None
+    except (OSError, ValueError) as err:
+        raise InvalidInputError(f"{path}: cannot read it: {err}") from None
+    if not isinstance(data, dict):
+        raise InvalidInputError(f"{path}: not a run summary (a JSON object expected)")
+    return data
+
+
+def settings_of(cfg: ExperimentConfig) -> PhysicsSettings:
+    """Return the physics settings of an experiment file (SI)."""
+    return PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0,
+                                     math.pi / 180.0 if cfg.units.angle == "deg" else 1.0,
+                                     1e-3 if cfg.units.time == "ms" else 1.0)
+
+
+def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:
+    """Check the run in ``run_dir`` in MuJoCo; return the ``physics`` section written.
+
+    Parameters
+    ----------
+    run_dir : path
+        A folder written by ``dualarm-qp run`` (``summary.json``, ``trajectory.csv``,
+        ``config.yaml``).
+    delay : bool, optional
+        Override the file's ``physics.delay`` (closed loop one sample late).
+
+    Raises
+    ------
+    InvalidInputError
+        Not a run folder, or its files cannot give the task.
+    ConfigError
+        A bad ``physics:`` section.
+    PhysicsError
+        MuJoCo is missing, refused the model, or the simulation diverged.
+    """
+    run = Path(run_dir)
+    if not run.is_dir():
+        raise InvalidInputError(f"{run}: not a folder (RUN_DIR is the output folder of a run)")
+    summary = _summary(run)
+    config = run_config(run, summary)
+    cfg = load_config(config)
+    try:
+        exp = build_experiment(cfg, str(config))
+    except DualArmError as err:
+        raise InvalidInputError(f"cannot rebuild the task of {run}: {err}") from None
+    settings = settings_of(cfg)
+    if delay is not None:
+        settings = dataclasses.replace(settings, delay=delay)
+    data = RunData.read(run / "trajectory.csv")
+    base = None  # a run that stopped before its second sample has nothing to replay
+    if len(data) >= 2:
+        base = replay(exp, settings, data.col("t"), data.joints("l"), data.joints("f"),
+                      data.col("path_t"), data.col("grasp"),
+                      data.col("grasp_leader") if data.has("grasp_leader") else None)
+    loop = closed_loop(exp, settings)
+    physics = physics_summary(loop, base, settings)
+    logs = {"closed_loop": loop.log} if base is None else {"replay": base.log,
+                                                           "closed_loop": loop.log}
+    _write(run, summary, physics, logs)
+    return physics
+
+
+def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
+           logs: dict[str, Any]) -> None:
+    """Write the figure, the report and the summary; on an error, leave the folder as it was."""
+    report = run / REPORT_FILE
+    old_report = report.read_bytes() if report.is_file() else None
+    figure = run / PHYSICS_FIGURE
+    had_figure = figure.is_file()
+    outputs = [str(o) for o in summary.get("outputs", []) if o != "summary.json"]
+    new = dict(summary, physics=physics)
+    with SignalHold():
+        try:
+            write_physics_figure(figure, logs, physics)
+            if PHYSICS_FIGURE not in outputs:
+                outputs.append(PHYSICS_FIGURE)
+            if REPORT_FILE not in outputs:
+                outputs.append(REPORT_FILE)
+            new["outputs"] = outputs
+            pngs = [o for o in outputs if o.endswith(".png")]
+            write_text(report, render_run_report(run, new, pngs))
+            write_json(run / "summary.json", new)
+        except BaseException:
+            if old_report is not None:
+                atomic_write_with(report, lambda tmp: _put(tmp, old_report))
+            else:
+                report.unlink(missing_ok=True)
+            if not had_figure:
+                figure.unlink(missing_ok=True)
+            raise
+
+
+def _put(path: str, data: bytes) -> None:
+    Path(path).write_bytes(data)
+
+
+__all__ = ["check_run", "settings_of"]

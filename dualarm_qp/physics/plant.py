@@ -1,0 +1,383 @@
+"""The task in MuJoCo as a plant: joint servos at 1 ms substeps, and what it measures.
+
+:class:`MujocoPlant` compiles the model of :func:`~dualarm_qp.physics.mjcf.build_mjcf`,
+puts it at the run's start and then, for each controller sample of ``dt``:
+
+* drives every arm joint with a **servo** for ``n = ceil(dt / 1 ms)`` substeps of ``dt /
+  n``: a ``position`` servo is ``kp (q_ref - q) + kv (qd_ref - qd)`` with ``q_ref`` the
+  commanded rates integrated, and pulled towards the measured joints with the time
+  constant ``reference_time`` (``reference: measured``) or not (``integrated``); ``qd_ref``
+  is the rates (feed-forward, ramped over the sample from the previous command, so
+  that a new command steps no torque); a
+  ``velocity`` servo is ``kv (qd_ref - qd)`` only. Both add two feed-forward torques:
+  the arm's own gravity and Coriolis torques (MuJoCo's bias forces of the arm joints),
+  and the torques that hold the hand's quasi-static share of the load (the minimum-norm
+  split of :mod:`dualarm_qp.control.loads`, at the sample's measured state), so that
+  what the servo corrects is the dynamics and what the split does not foresee;
+* measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
+  chain joint), the object's pose, each hand's wrench on the object and its internal
+  part (:mod:`.measure`), the joint torques (their peak share of the limits over the
+  substeps), the welds' errors and a support's gap, into
+  :attr:`MujocoPlant.log`;
+* hands the controller the measured state, or the previous sample's with ``delay``.
+
+Contacts (:attr:`PhysicsSettings.contacts
+<dualarm_qp.physics.settings.PhysicsSettings.contacts>`): by default the links and the
+object touch the obstacles only; with ``all`` they also touch each other, except the
+object and the last :data:`~dualarm_qp.physics.mjcf.WRIST_BODIES` bodies of each arm (the
+grasping wrists). Pairs that overlap at the start are left out (listed in
+:attr:`MujocoPlant.notes`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from ..control.loads import hand_wrenches
+from ..errors import DualArmError, SupportLostError
+from ..step.state import Command, DualArmState
+from ..task.loads import (
+    ObjectLoad,
+    UnbalancedLoadError,
+    rigid_grasp,
+    sliding_grasp,
+    support_push,
+)
+from ..task.scene import DualArmTask
+from .measure import internal_force, space_of, weld_wrench
+from .mjcf import PhysicsModel, build_mjcf
+from .settings import SUBSTEP, PhysicsSettings
+
+FloatArray = NDArray[np.float64]
+
+#: The columns of :attr:`MujocoPlant.log` (one row per controller sample), with units.
+LOG_COLUMNS = {
+    "t": "s", "tau": "s", "deviation_pos": "m", "deviation_rot": "rad",
+    "internal": "N", "support": "N", "slip": "m",
+    "weld_leader": "m", "weld_follower": "m", "gap": "m", "torque_ratio_peak": "1",
+}
+
+
+#: How long the start is held before the first sample [s] (:meth:`MujocoPlant.reset`).
+SETTLE = 0.5
+
+
+class PhysicsError(DualArmError):
+    """The simulation cannot be built or diverged (NaN or unbounded state)."""
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise PhysicsError('the physics check needs MuJoCo: pip install "dualarm-qp[physics]"'
+                           ) from None
+    return mujoco
+
+
+def torque_limits(task: DualArmTask, settings: PhysicsSettings) -> dict[str, FloatArray]:
+    """Each arm's joint torque limits [N m]: the file's ``tau_max``, else the model's.
+
+    A URDF's ``effort`` is the model's; a joint without one (a DH arm) gets inf.
+    """
+    out = {}
+    for role, arm in (("leader", task.leader), ("follower", task.follower)):
+        given = None if settings.tau_max is None else settings.tau_max.get(role)
+        if given is not None:
+            lim = np.broadcast_to(np.asarray(given, dtype=float), (arm.n,)).copy()
+        else:
+            lim = np.asarray(arm.model.effortLimit, dtype=float).copy()
+            lim[~((lim > 0) & (lim < 1e30))] = np.inf
+        out[role] = lim
+    return out
+
+
+class MujocoPlant:
+    """The task in MuJoCo, driven by joint servos (see the module docstring).
+
+    Parameters
+    ----------
+    task : DualArmTask
+        The task (arms, object, grasps, scene).
+    settings : PhysicsSettings
+        Servo gains, delay, default object.
+    delay : bool, optional
+        Override ``settings.delay``.
+    """
+
+    def __init__(self, task: DualArmTask, settings: PhysicsSettings, *,
+                 delay: bool | None = None) -> None:
+        self.task = task
+        self.settings = settings
+        self.delay = settings.delay if delay is None else bool(delay)
+        self.physics: PhysicsModel = build_mjcf(task, settings)
+        self.notes: list[str] = list(self.physics.notes)
+        self.limits = torque_limits(task, settings)
+        self._mj = _mujoco()
+        pm = self.physics
+        self._load_task = task if task.load is not None else dataclasses.replace(
+            task, load=ObjectLoad(pm.mass, pm.mass_centre, pm.gravity))
+        self._ff = np.zeros(task.leader.n + task.follower.n)
+        self.log: dict[str, list[Any]] = {}
+        self.substeps = 1
+
+    # -- building ---------------------------------------------------------------------
+    def _compile(self, xml: str) -> None:
+        mj = self._mj
+        try:
+            self.model = mj.MjModel.from_xml_string(xml)
+        except ValueError as err:
+            raise PhysicsError(f"MuJoCo refused the model: {err}") from None
+        self.data = mj.MjData(self.model)
+        m = self.model
+        self._qadr = {role: np.array([m.jnt_qposadr[m.joint(n).id] for n in names])
+                      for role, names in self.physics.joints.items()}
+        self._dadr = {role: np.array([m.jnt_dofadr[m.joint(n).id] for n in names])
+                      for role, names in self.physics.joints.items()}
+        self._arm_dofs = np.r_[self._dadr["leader"], self._dadr["follower"]]
+        self._arm_q = np.r_[self._qadr["leader"], self._qadr["follower"]]
+        self._obj = m.body("object").id
+        self._obj_q = m.jnt_qposadr[m.joint("object_free").id]
+        self._obj_dof = m.jnt_dofadr[m.joint("object_free").id]
+        self._points = {r: m.body(b).id for r, b in self.physics.points.items()}
+        self._tools = {r: m.body(b).id for r, b in self.physics.tools.items()}
+        self._grasp_q = {r: (m.jnt_qposadr[m.joint(g.joint).id], g.rate)
+                         for r, g in self.physics.grasps.items()}
+        gap = self.physics.support_gap
+        self._gap_q = None if gap is None else m.jnt_qposadr[m.joint(gap).id]
+        n_l = len(self.physics.joints["leader"])
+        self._n_l = n_l
+        self._tau_max = np.r_[self.limits["leader"], self.limits["follower"]]
+
+    def _place(self, state: DualArmState) -> None:
+        """Set every coordinate from ``state`` (at rest) and compute the kinematics."""
+        m, d, task = self.model, self.data, self.task
+        d.qpos[:] = m.qpos0
+        d.qvel[:] = 0.0
+        d.qpos[self._qadr["leader"]] = state.q_l
+        d.qpos[self._qadr["follower"]] = state.q_f
+        T = task.object_pose(np.asarray(state.q_l), state.sigma_leader)
+        quat = pin.Quaternion(T[:3, :3]).coeffs()
+        d.qpos[self._obj_q:self._obj_q + 7] = np.r_[T[:3, 3], quat[3], quat[:3]]
+        for role, (adr, rate) in self._grasp_q.items():
+            sigma = state.sigma if role == "follower" else state.sigma_leader
+            d.qpos[adr] = rate * sigma
+        self._mj.mj_forward(m, d)
+
+    def reset(self, state: DualArmState, dt: float) -> None:
+        """Compile the model, leave out the pairs that overlap at ``state``, place it, settle.
+
+        The joints are then as the servos hold them under the object's load
+        (:meth:`_settle`), a little off ``state``: the first measured state.
+        """
+        xml = self.physics.xml
+        self._compile(xml)
+        self._place(state)
+        m, d = self.model, self.data
+        pairs = set()
+        for c in d.contact[:d.ncon]:
+            if c.dist < 0:
+                b1, b2 = m.geom_bodyid[c.geom[0]], m.geom_bodyid[c.geom[1]]
+                pairs.add(tuple(sorted((m.body(b1).name, m.body(b2).name))))
+        if pairs:
+            extra = "".join(f'<exclude body1="{a}" body2="{b}"/>' for a, b in sorted(pairs))
+            self.notes.append("contact pairs left out because they overlap at the start: "
+                              + ", ".join(f"{a} - {b}" for a, b in sorted(pairs)))
+            self._compile(xml.replace("</contact>", extra + "</contact>"))
+            self._place(state)
+        self.substeps = max(1, math.ceil(dt / SUBSTEP - 1e-9))
+        self.model.opt.timestep = dt / self.substeps
+        self.q_ref = np.r_[state.q_l, state.q_f].astype(float)
+        self._rates = np.zeros(self.q_ref.size)
+        #: The largest torque ratio, the joint (index over both arms) and the time [s].
+        self.worst: tuple[float, int, float] = (0.0, -1, 0.0)
+        self._settle()
+        self.t = 0.0
+        self.log = {k: [] for k in LOG_COLUMNS}
+        self.log.update(w_leader=[], w_follower=[], torque=[], sigma=[])
+        self._measured = self._measure(state.t)
+        self._record(state.t, state.sigma, 0.0)
+
+    def _settle(self) -> None:
+        """Hold the start for :data:`SETTLE` s, so that the run starts from rest under load.
+
+        The object is put into its grasps with no force on it; holding the joints while
+        the servos take up its weight keeps that start-up out of the run's record. The
+        object's free joint is left where the welds put it.
+        """
+        rest = np.zeros(self.q_ref.size)
+        self._feedforward(self._measure(0.0))
+        for _ in range(math.ceil(SETTLE / self.model.opt.timestep)):
+            self._servo(rest)
+            self._mj.mj_step(self.model, self.data)
+        self._servo(rest)
+        self._mj.mj_forward(self.model, self.data)
+
+    # -- stepping ---------------------------------------------------------------------
+    def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
+              leak: bool = False) -> float:
+        """Servo the arms at ``rates`` [rad/s] for ``dt``; return the peak torque ratio.
+
+        The ratio is |torque| / limit, the largest of every joint's over the substeps.
+
+        ``q_ref`` resets the position reference first (a replay sets it to each recorded
+        sample); otherwise it goes on from where the last call left it. With ``leak``
+        the reference is also pulled towards the measured joints with the time constant
+        ``settings.reference_time``.
+        """
+        mj, m, d = self._mj, self.model, self.data
+        if q_ref is not None:
+            self.q_ref = np.asarray(q_ref, dtype=float).copy()
+        h = m.opt.timestep
+        dofs = self._arm_dofs
+        peak_tau = 0.0
+        start, n = self._rates, self.substeps
+        pull = h / self.settings.reference_time if leak else 0.0
+        qadr = self._arm_q
+        for i in range(n):
+            self.q_ref = self.q_ref + h * rates + pull * (d.qpos[qadr] - self.q_ref)
+            self._servo(start + (i + 1) / n * (rates - start))
+            mj.mj_step(m, d)
+            if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
+                raise PhysicsError(f"the simulation diverged at t = {self.t:.4f} s")
+            ratio = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs]) / self._tau_max
+            if ratio.size and float(ratio.max()) > peak_tau:
+                peak_tau = float(ratio.max())
+                self.worst = max(self.worst, (peak_tau, int(np.argmax(ratio)), self.t))
+        self._rates = np.asarray(rates, dtype=float).copy()
+        self.t += dt
+        return peak_tau
+
+    def _feedforward(self, state: DualArmState) -> None:
+        """Set the load feed-forward: the torques that hold each hand's share of the load.
+
+        The share is the quasi-static split of :func:`dualarm_qp.control.loads.hand_wrenches`
+        at the measured state (zero where the grasps cannot hold the load), and the torque
+        ``J^T w`` with ``J`` the hand's Jacobian at its grasp point.
+        """
+        task = self._load_task
+        try:
+            split = hand_wrenches(task, state.q_l, state.sigma, state.sigma_leader).wrenches
+        except (UnbalancedLoadError, SupportLostError):
+            self._ff = np.zeros(self._arm_dofs.size)
+            return
+        parts = []
+        for arm, q, w in ((task.leader, state.q_l, split[0]), (task.follower, state.q_f,
+                                                              split[1])):
+            _, J = arm.fk_jacobian(q)
+            parts.append(J.T @ w)
+        self._ff = np.concatenate(parts)
+
+    def _servo(self, rates: FloatArray) -> None:
+        """Set the servos' references and the arms' bias feed-forward."""
+        d = self.data
+        if self.settings.servo == "position":
+            d.ctrl[0::2], d.ctrl[1::2] = self.q_ref, rates
+        else:
+            d.ctrl[:] = rates
+        d.qfrc_applied[self._arm_dofs] = d.qfrc_bias[self._arm_dofs] + self._ff
+
+    def advance(self, state: DualArmState, command: Command, dt: float) -> DualArmState:
+        """Apply the command's rates for ``dt``; return the measured state (see the module)."""
+        rates = np.r_[command.ql_dot, command.qf_dot]
+        self._feedforward(self._measured)
+        peak_tau = self.drive(rates, dt, leak=self.settings.reference == "measured")
+        tau = state.t + dt * command.scale
+        previous = self._measured
+        self._measured = self._measure(tau)
+        self._record(tau, state.sigma + dt * command.m, peak_tau)
+        out = previous if self.delay else self._measured
+        return DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
+
+    def replay_step(self, q_from: FloatArray, q_to: FloatArray, dt: float, tau: float,
+                    sigma_ref: float) -> None:
+        """Servo from the recorded joints ``q_from`` to ``q_to`` over ``dt``; record it.
+
+        ``tau`` is the sample's path time [s], ``sigma_ref`` the recorded grasp [m].
+        """
+        rates = (np.asarray(q_to, dtype=float) - q_from) / dt
+        self._feedforward(self._measure(tau))
+        peak_tau = self.drive(rates, dt, q_ref=q_from)
+        self._measured = self._measure(tau)
+        self._record(tau, sigma_ref, peak_tau)
+
+    # -- measuring --------------------------------------------------------------------
+    def _measure(self, tau: float) -> DualArmState:
+        d = self.data
+        sig = {r: float(d.qpos[adr]) / rate for r, (adr, rate) in self._grasp_q.items()}
+        return DualArmState(tau, d.qpos[self._qadr["leader"]].copy(),
+                            d.qpos[self._qadr["follower"]].copy(), sig["follower"],
+                            sig.get("leader", 0.0))
+
+    def wrenches(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Return the hands' wrenches on the object and their grasp points (world)."""
+        m, d = self.model, self.data
+        p_l, p_f = d.xpos[self._points["leader"]].copy(), d.xpos[self._points["follower"]].copy()
+        w_l = weld_wrench(m, d, self.physics.welds["leader"], self._obj, self._obj_dof, p_l)
+        w_f = weld_wrench(m, d, self.physics.welds["follower"], self._obj, self._obj_dof, p_f)
+        return w_l, w_f, p_l, p_f
+
+    def _spaces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Each hand's wrench space (world) and the follower's push direction."""
+        task, d = self.task, self.data
+        R = d.xmat[self._obj].reshape(3, 3)
+        spaces = []
+        for role, surface in (("leader", task.leader_surface), ("follower", task.surface)):
+            p = d.xpos[self._points[role]]
+            if surface is None:
+                spaces.append(space_of(rigid_grasp(p).free))
+                continue
+            sigma = self._measured.sigma if role == "follower" else self._measured.sigma_leader
+            if role == "follower" and task.contact is not None:
+                spaces.append(space_of(support_push(p, R @ surface.normal(sigma), 1.0).free))
+                continue
+            g = sliding_grasp(p, R @ surface.tangent(sigma), R @ surface.angular_rate(sigma))
+            spaces.append(space_of(g.free))
+        normal = (R @ task.surface.normal(self._measured.sigma) if task.contact is not None
+                  else -self.physics.gravity / np.linalg.norm(self.physics.gravity))
+        return spaces[0], spaces[1], normal
+
+    def _weld_error(self, eq: int) -> float:
+        d = self.data
+        nefc = int(d.nefc)
+        rows = np.flatnonzero((d.efc_type[:nefc] == 0) & (d.efc_id[:nefc] == eq))
+        return float(np.linalg.norm(d.efc_pos[rows[:3]])) if rows.size else 0.0
+
+    def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> None:
+        d, log = self.data, self.log
+        D = self.task.trajectory.pose(tau)
+        R = d.xmat[self._obj].reshape(3, 3)
+        log["t"].append(self.t)
+        log["tau"].append(tau)
+        log["deviation_pos"].append(float(np.linalg.norm(d.xpos[self._obj] - D[:3, 3])))
+        log["deviation_rot"].append(float(np.linalg.norm(pin.log3(D[:3, :3].T @ R))))
+        w_l, w_f, p_l, p_f = self.wrenches()
+        s_l, s_f, normal = self._spaces()
+        internal, _ = internal_force((p_l, p_f), (s_l, s_f), (w_l, w_f))
+        log["internal"].append(internal)
+        log["support"].append(float(w_f[:3] @ normal))
+        log["slip"].append(abs(self._measured.sigma - sigma_ref))
+        log["weld_leader"].append(self._weld_error(self.physics.welds["leader"]))
+        log["weld_follower"].append(self._weld_error(self.physics.welds["follower"]))
+        log["gap"].append(0.0 if self._gap_q is None else float(-d.qpos[self._gap_q]))
+        tau_j = d.qfrc_actuator[self._arm_dofs] + d.qfrc_applied[self._arm_dofs]
+        ratio = np.abs(tau_j) / self._tau_max
+        log["torque_ratio_peak"].append(max(peak_tau, float(np.max(ratio)))
+                                        if np.isfinite(self._tau_max).any() else np.nan)
+        log["w_leader"].append(w_l)
+        log["w_follower"].append(w_f)
+        log["torque"].append(tau_j.copy())
+        log["sigma"].append(self._measured.sigma)
+
+    def arrays(self) -> dict[str, FloatArray]:
+        """Return the log as arrays (one row per controller sample)."""
+        return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
+
+
+__all__ = ["LOG_COLUMNS", "SETTLE", "MujocoPlant", "PhysicsError", "torque_limits"]

@@ -1,0 +1,177 @@
+"""The ``physics:`` section of an experiment file: servos, thresholds, default object.
+
+::
+
+    physics:
+      servo: position          # position (PD about the commanded motion) or velocity
+      reference: measured      # the position reference leaks towards the measured
+                               # joints (measured) or only integrates (integrated)
+      reference_time: 0.03     # time unit: the leak's time constant
+      kp: 100000               # N m/rad, position gain (SI whatever the file's units)
+      kv: 300                  # N m s/rad, velocity gain
+      armature: 0.05           # kg m^2, rotor inertia added to every arm joint
+      delay: false             # closed loop: the controller sees the previous sample
+      contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
+                               # all (also arm-arm, arm-object) or none
+      object_mass: 3           # kg, when the object states no mass
+      link_density: 1000       # kg/m^3, links whose model has no inertia
+      deviation_max: 10        # length unit: the object off D(t) -> dropped
+      rotation_max: 0.05       # angle unit (here rad): the object turned off D(t) -> dropped
+      slip_max: 5              # length unit: a grasp off its commanded place -> slipped
+      squeeze_max: 20          # N: internal force above the rigid replay's -> squeezed
+      torque_ratio_max: 1.0    # share of the joint torque limit -> torque
+      tau_max: {leader: [...], follower: [...]}   # N m; default: the URDF's effort
+
+Every key is optional; the defaults are those above (docs/physics.md says why). The
+section is validated with the rest of the file: an unknown key or a bad value is a
+:class:`~dualarm_qp.errors.ConfigError` naming the file and ``physics.<key>``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..experiments.config_physics import PhysicsSpec
+
+FloatArray = NDArray[np.float64]
+
+#: Servo kinds: ``position`` (PD about the integrated command, velocity feed-forward)
+#: or ``velocity`` (damping about the commanded rate only).
+SERVOS = ("position", "velocity")
+
+#: The closed loop's position reference: pulled towards the measured joints, or the
+#: commands integrated since the start only.
+REFERENCES = ("measured", "integrated")
+
+#: Which contacts are simulated: ``obstacles`` (the arms' links and the object against
+#: the obstacles; arm-arm and arm-object clearance is the collision module's, measured on
+#: the same conservative capsules), ``all`` (every pair but those excluded) or ``none``.
+CONTACTS = ("obstacles", "all", "none")
+
+#: MuJoCo's time step [s]: the controller's ``dt`` is cut into substeps of at most this.
+SUBSTEP = 1e-3
+
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """The physics check's settings in SI units (built from :class:`PhysicsSpec`).
+
+    Attributes
+    ----------
+    servo : {"position", "velocity"}
+        Joint servo kind (:data:`SERVOS`).
+    reference : {"measured", "integrated"}
+        Closed loop, position servo: the position reference integrates the commanded
+        rates and is pulled towards the measured joints (``measured``) or not
+        (``integrated``: the commands integrated since the start).
+    reference_time : float
+        Time constant of that pull [s] (default 0.03 s).
+    kp : float
+        Position gain [N m/rad] (position servo only).
+    kv : float
+        Velocity gain [N m s/rad].
+    armature : float
+        Rotor inertia added to every arm joint [kg m^2].
+    delay : bool
+        Closed loop: the controller is handed the measurement of the previous sample.
+    contacts : {"obstacles", "all", "none"}
+        Which contacts are simulated (:data:`CONTACTS`).
+    object_mass : float
+        Mass of an object whose file states none [kg].
+    link_density : float
+        Density of the capsules that give a link without inertia its mass [kg/m^3].
+    deviation_max : float
+        Largest deviation of the object from ``D(t)`` before the verdict is
+        ``dropped`` [m] (default 10 mm).
+    rotation_max : float
+        Largest rotation of the object off ``D(t)`` before the verdict is ``dropped``
+        [rad] (default 0.05 rad, about 3 deg).
+    slip_max : float
+        Largest slip of a grasp before the verdict is ``slipped`` [m] (default 5 mm).
+    squeeze_max : float
+        Largest internal force above the rigid replay's before the verdict is
+        ``squeezed`` [N].
+    torque_ratio_max : float
+        Largest share of a joint torque limit before the verdict is ``torque``.
+    tau_max : dict of str to ndarray or None
+        Torque limits [N m] per arm (``"leader"``, ``"follower"``) given in the file;
+        None: the arm model's own (a URDF's ``effort``), if any.
+    """
+
+    servo: str = "position"
+    reference: str = "measured"
+    reference_time: float = 0.03
+    kp: float = 100000.0
+    kv: float = 300.0
+    armature: float = 0.05
+    delay: bool = False
+    contacts: str = "obstacles"
+    object_mass: float = 3.0
+    link_density: float = 1000.0
+    deviation_max: float = 0.01
+    rotation_max: float = 0.05
+    slip_max: float = 0.005
+    squeeze_max: float = 20.0
+    torque_ratio_max: float = 1.0
+    tau_max: dict[str, FloatArray | None] | None = None
+
+    def __post_init__(self) -> None:
+        if self.servo not in SERVOS:
+            raise ValueError(f"servo must be one of {SERVOS}, got {self.servo!r}")
+        if self.reference not in REFERENCES:
+            raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
+        if self.contacts not in CONTACTS:
+            raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
+        for key in ("kv", "reference_time", "object_mass", "link_density", "deviation_max",
+                    "rotation_max",
+                    "slip_max",
+                    "squeeze_max", "torque_ratio_max"):
+            value = float(getattr(self, key))
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{key} must be a finite number > 0, got {value}")
+
+    @classmethod
+    def from_spec(cls, spec: PhysicsSpec, length_scale: float, angle_scale: float = 1.0,
+                  time_scale: float = 1.0) -> PhysicsSettings:
+        """Convert the file's section to SI.
+
+        ``length_scale`` [m], ``angle_scale`` [rad] and ``time_scale`` [s] per file unit.
+        """
+        def length(value: float | None, default: float) -> float:
+            return default if value is None else value * length_scale
+
+        tau = {role: (None if getattr(spec.tau_max, role) is None
+                      else np.asarray(getattr(spec.tau_max, role), dtype=float))
+               for role in ("leader", "follower")}
+        return cls(servo=spec.servo, reference=spec.reference,
+                   reference_time=(0.03 if spec.reference_time is None
+                                   else spec.reference_time * time_scale),
+                   kp=spec.kp, kv=spec.kv,
+                   armature=spec.armature,
+                   delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
+                   link_density=spec.link_density,
+                   deviation_max=length(spec.deviation_max, 0.01),
+                   rotation_max=(0.05 if spec.rotation_max is None
+                                 else spec.rotation_max * angle_scale),
+                   slip_max=length(spec.slip_max, 0.005), squeeze_max=spec.squeeze_max,
+                   torque_ratio_max=spec.torque_ratio_max, tau_max=tau)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready, SI."""
+        return {"servo": self.servo, "reference": self.reference,
+                "reference_time_s": self.reference_time, "kp_N_m_rad": self.kp,
+                "kv_N_m_s_rad": self.kv,
+                "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
+                "contacts": self.contacts,
+                "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
+                "rotation_max_rad": self.rotation_max,
+                "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
+                "torque_ratio_max": self.torque_ratio_max,
+                "link_density_kg_m3": self.link_density}
+
+
+__all__ = ["CONTACTS", "REFERENCES", "SERVOS", "SUBSTEP", "PhysicsSettings"]

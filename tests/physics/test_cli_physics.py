@@ -1,0 +1,108 @@
+"""``dualarm-qp physics RUN_DIR`` and ``dualarm-qp run --plant mujoco``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from dualarm_qp.cli import main
+from dualarm_qp.kinematics.robots import example_robots_dir
+
+pytest.importorskip("mujoco", reason="the physics check needs MuJoCo "
+                                     "(pip install -e '.[physics]'; '.[dev]' has it)")
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+BEAM = CONFIGS / "puma_beam_limits.yaml"
+
+
+def _short_beam(tmp_path: Path, **physics) -> Path:
+    data = yaml.safe_load(BEAM.read_text())
+    data["controller"]["duration"] = 0.31  # 10 samples
+    if physics:
+        data["physics"] = physics
+    path = tmp_path / "beam.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.fixture
+def short_run(tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", str(_short_beam(tmp_path)), "--out", str(out), "--quiet",
+                 "--no-plots"]) == 0
+    return out
+
+
+def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
+    assert main(["physics", str(short_run)]) == 0
+    printed = capsys.readouterr().out
+    summary = json.loads((short_run / "summary.json").read_text())
+    physics = summary["physics"]
+    assert physics["status"] == "ok" and f"physics.status: {physics['status']}" in printed
+    for run in ("replay", "closed_loop"):
+        assert physics[run]["samples"] == 11
+        assert physics[run]["deviation_pos_max_m"] < 1e-3
+    assert physics["closed_loop"]["completed"] is True
+    assert (short_run / "physics.png").is_file()
+    assert summary["outputs"].count("physics.png") == 1
+    report = (short_run / "report.html").read_text()
+    assert 'id="physics"' in report and "physics.status: <b>ok</b>" in report
+    assert main(["physics", str(short_run)]) == 0  # again: replaced, not added twice
+    again = json.loads((short_run / "summary.json").read_text())
+    assert again["outputs"].count("physics.png") == 1
+
+
+def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypatch, capsys):
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+
+    def broken(path, data):
+        raise OSError("disk full")
+
+    monkeypatch.setattr("dualarm_qp.physics.command.write_json", broken)
+    assert main(["physics", str(short_run)]) == 1
+    assert "disk full" in capsys.readouterr().err
+    after = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    assert after == before
+
+
+def test_not_a_run_folder_is_bad_input(tmp_path, capsys):
+    assert main(["physics", str(tmp_path)]) == 2
+    assert "summary.json" in capsys.readouterr().err
+
+
+def test_a_bad_physics_section_of_the_run_is_bad_input(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", str(_short_beam(tmp_path, servo="position", kp=1000.0)),
+                 "--out", str(out), "--quiet", "--no-plots"]) == 0
+    resolved = out / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"]["kv"] = -3
+    resolved.write_text(yaml.safe_dump(data))
+    assert main(["physics", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "physics.kv" in err and "config.yaml" in err
+
+
+def test_the_delay_option_reaches_the_closed_loop(short_run):
+    assert main(["physics", str(short_run), "--delay"]) == 0
+    physics = json.loads((short_run / "summary.json").read_text())["physics"]
+    assert physics["settings"]["delay_samples"] == 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", [
+    "puma_beam_limits.yaml",
+    pytest.param("ur5_pair_sliding_bar.yaml", marks=pytest.mark.skipif(
+        example_robots_dir() is None, reason="example-robot-data is not installed")),
+])
+def test_run_with_the_mujoco_plant_completes(tmp_path, config, capsys):
+    out = tmp_path / "run"
+    code = main(["run", str(CONFIGS / config), "--out", str(out), "--quiet", "--no-plots",
+                 "--plant", "mujoco"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert code == 0, summary["message"]
+    assert summary["plant"] == "MujocoPlant" and summary["completed"]
+    assert summary["projection"] is False

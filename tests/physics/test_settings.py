@@ -1,0 +1,92 @@
+"""The ``physics:`` section of an experiment file (no simulator needed)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dualarm_qp.cli import main
+from dualarm_qp.errors import ConfigError
+from dualarm_qp.experiments.config import load_config, parse_config
+from dualarm_qp.physics.settings import PhysicsSettings
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+BEAM = CONFIGS / "puma_beam_limits.yaml"
+
+
+def _with_physics(physics: object) -> dict:
+    data = yaml.safe_load(BEAM.read_text())
+    data["physics"] = physics
+    return data
+
+
+def test_defaults_are_documented_values():
+    s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
+    assert (s.servo, s.reference, s.reference_time, s.kp, s.kv, s.armature, s.delay) == (
+        "position", "measured", 0.03, 1e5, 300.0, 0.05, False)
+    assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
+        0.01, 0.005, 20.0, 1.0)
+
+
+def test_lengths_follow_the_file_units_and_gains_stay_si():
+    cfg = parse_config(_with_physics({"deviation_max": 4, "slip_max": 2, "kp": 5000,
+                                      "rotation_max": 3, "reference_time": 0.5,
+                                      "tau_max": {"leader": 80, "follower": [1, 2, 3, 4, 5, 6]}}),
+                       "beam.yaml")
+    s = PhysicsSettings.from_spec(cfg.physics, 1e-3, np.pi / 180, 1e-3)  # mm, deg, ms
+    assert s.deviation_max == pytest.approx(0.004) and s.slip_max == pytest.approx(0.002)
+    assert s.rotation_max == pytest.approx(np.radians(3)) and s.reference_time == 5e-4
+    assert s.kp == 5000
+    assert s.tau_max is not None
+    np.testing.assert_array_equal(s.tau_max["leader"], [80.0])
+    np.testing.assert_array_equal(s.tau_max["follower"], [1, 2, 3, 4, 5, 6])
+
+
+@pytest.mark.parametrize(("physics", "key", "words"), [
+    ({"servo": "torque"}, "physics.servo", "position, velocity"),
+    ({"reference": "planned"}, "physics.reference", "measured, integrated"),
+    ({"reference_time": 0}, "physics.reference_time", "> 0"),
+    ({"kv": 0}, "physics.kv", "> 0"),
+    ({"squeeze_max": -1}, "physics.squeeze_max", "> 0"),
+    ({"servo": "position", "kp": 0}, "physics.kp", "kp > 0"),
+    ({"delay": "yes"}, "physics.delay", ""),
+    ({"tau_max": {"leader": [0, 1]}}, "physics.tau_max.leader", "> 0"),
+    ({"gain": 3}, "physics.gain", "valid"),
+])
+def test_bad_values_name_the_file_and_the_key(physics, key, words):
+    with pytest.raises(ConfigError) as err:
+        parse_config(_with_physics(physics), "beam.yaml")
+    text = str(err.value)
+    assert "beam.yaml" in text and key in text and words in text
+
+
+def test_a_bad_section_exits_2_from_the_command_line(tmp_path, capsys):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(_with_physics({"servo": "torque"})))
+    assert main(["run", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "physics.servo" in err and str(path) in err and "Traceback" not in err
+
+
+def test_the_package_and_a_config_load_without_mujoco():
+    code = ("import sys, dualarm_qp, dualarm_qp.physics.settings, dualarm_qp.physics.mjcf; "
+            "from dualarm_qp.experiments.config import load_config; "
+            f"load_config({str(BEAM)!r}); "
+            "assert 'mujoco' not in sys.modules, 'mujoco imported'")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_without_mujoco_the_plant_says_how_to_install_it(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    path = tmp_path / "beam.yaml"
+    path.write_text(yaml.safe_dump(yaml.safe_load(BEAM.read_text())))
+    code = main(["run", str(path), "--out", str(tmp_path / "o"), "--quiet", "--plant",
+                 "mujoco"])
+    err = capsys.readouterr().err
+    assert code == 2 and 'pip install "dualarm-qp[physics]"' in err
+    assert not (tmp_path / "o" / "summary.json").exists()
