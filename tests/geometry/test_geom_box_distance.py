@@ -62,7 +62,7 @@ def test_sphere_box_matches_clamping(box, centre, radius):
         outward = np.zeros(3)
         outward[axis] = 1.0 if local[axis] >= 0.0 else -1.0
         box_normal = box.pose[:3, :3] @ outward  # from the box out through that face
-        if local[axis] == 0.0:  # centred between two faces: either one will do
+        if abs(local[axis]) < 1e-9:  # centred between two faces (to roundoff): either one
             box_normal *= -np.sign(box_normal @ proximity(sphere(radius, centre), box).normal)
     else:
         gap = local - np.clip(local, -half, half)
