@@ -19,7 +19,7 @@ from geom_oracles import (
     separating_axes,
     support_signed_distance,
 )
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
@@ -49,6 +49,9 @@ def check_conventions(prox):
 # ------------------------------------------------------------------ sphere vs box: clamping
 @settings(max_examples=150, deadline=None)
 @given(boxes, vec3, st.floats(0.01, 0.5))
+# Centred between two faces: local x is 1e-17, not 0.
+@example(Box(np.array([0.25, 1.0, 1.0]), pose([0.0, 0.25, 0.25], [0.0, 0.075, 0.075])),
+         np.array([0.0, 0.25, 0.25]), 0.5)
 def test_sphere_box_matches_clamping(box, centre, radius):
     centre = 1.5 * centre
     local = box_local(centre, box)
