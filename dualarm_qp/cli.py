@@ -62,10 +62,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     controller = exp.controller()  # fail early (exit 2) on an unknown or missing solver
     plant = None
     if args.plant == "mujoco":  # docs/physics.md
+        from .physics.check import arm_tau_max
         from .physics.command import settings_of
         from .physics.plant import MujocoPlant
 
-        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)))
+        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)),
+                            arm_tau_max=arm_tau_max(exp))
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)

@@ -126,7 +126,7 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
         Replay the follower this many samples late (a deliberately lagged follower).
     """
     t0 = time.perf_counter()
-    plant = MujocoPlant(exp.task, settings, delay=False)
+    plant = MujocoPlant(exp.task, settings, delay=False, arm_tau_max=arm_tau_max(exp))
     sl = np.zeros_like(grasp) if grasp_leader is None else np.nan_to_num(grasp_leader)
     dt = float(t[1] - t[0]) if t.size > 1 else exp.options.dt
     plant.reset(DualArmState(float(path_t[0]), q_l[0], q_f[0], float(grasp[0]), float(sl[0])),
@@ -149,12 +149,17 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
     hold, and the verdict judges the run.
     """
     t0 = time.perf_counter()
-    plant = MujocoPlant(exp.task, settings, delay=delay)
+    plant = MujocoPlant(exp.task, settings, delay=delay, arm_tau_max=arm_tau_max(exp))
     result = rollout(exp.controller(), exp.initial, duration=exp.duration,
                      limits=closed_loop_limits(exp.limits, settings), plant=plant,
                      stop_on_interrupt=True)
     return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
                       plant.limits, result, _worst(plant))
+
+
+def arm_tau_max(exp: Experiment) -> dict[str, FloatArray | None]:
+    """Each arm's configured ``tau_max`` [N m] (None: the model's ``effort``, if any)."""
+    return {"leader": exp.options.leader_tau_max, "follower": exp.options.follower_tau_max}
 
 
 def closed_loop_limits(limits: RunLimits, settings: PhysicsSettings) -> RunLimits:

@@ -81,14 +81,20 @@ def _mujoco() -> Any:
     return mujoco
 
 
-def torque_limits(task: DualArmTask, settings: PhysicsSettings) -> dict[str, FloatArray]:
-    """Each arm's joint torque limits [N m]: the file's ``tau_max``, else the model's.
+def torque_limits(task: DualArmTask, settings: PhysicsSettings,
+                  arm_tau_max: dict[str, FloatArray | None] | None = None
+                  ) -> dict[str, FloatArray]:
+    """Each arm's joint torque limits [N m].
 
-    A URDF's ``effort`` is the model's; a joint without one (a DH arm) gets inf.
+    The ``physics.tau_max`` of the file, else the arm's own ``tau_max`` (``arm_tau_max``:
+    the controller's, :class:`~dualarm_qp.step.options.StepOptions`), else the model's: a
+    URDF's ``effort``; a joint without one (a DH arm) gets inf.
     """
     out = {}
     for role, arm in (("leader", task.leader), ("follower", task.follower)):
         given = None if settings.tau_max is None else settings.tau_max.get(role)
+        if given is None and arm_tau_max is not None:
+            given = arm_tau_max.get(role)
         if given is not None:
             lim = np.broadcast_to(np.asarray(given, dtype=float), (arm.n,)).copy()
         else:
@@ -109,16 +115,19 @@ class MujocoPlant:
         Servo gains, delay, default object.
     delay : bool, optional
         Override ``settings.delay``.
+    arm_tau_max : dict of str to ndarray, optional
+        Each arm's configured ``tau_max`` [N m] (:func:`torque_limits`).
     """
 
     def __init__(self, task: DualArmTask, settings: PhysicsSettings, *,
-                 delay: bool | None = None) -> None:
+                 delay: bool | None = None,
+                 arm_tau_max: dict[str, FloatArray | None] | None = None) -> None:
         self.task = task
         self.settings = settings
         self.delay = settings.delay if delay is None else bool(delay)
         self.physics: PhysicsModel = build_mjcf(task, settings)
         self.notes: list[str] = list(self.physics.notes)
-        self.limits = torque_limits(task, settings)
+        self.limits = torque_limits(task, settings, arm_tau_max)
         self._mj = _mujoco()
         pm = self.physics
         self._load_task = task if task.load is not None else dataclasses.replace(

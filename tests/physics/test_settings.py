@@ -90,3 +90,27 @@ def test_without_mujoco_the_plant_says_how_to_install_it(tmp_path, monkeypatch, 
     err = capsys.readouterr().err
     assert code == 2 and 'pip install "dualarm-qp[physics]"' in err
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_torque_limits_take_the_arms_tau_max_after_the_physics_section():
+    """physics.tau_max, else the controller's <arm>.tau_max, else the URDF's effort."""
+    from dualarm_qp.experiments.setup import build_experiment
+    from dualarm_qp.physics.check import arm_tau_max
+    from dualarm_qp.physics.plant import torque_limits
+
+    path = CONFIGS / "ur5_pair_heavy_bar.yaml"
+    cfg = load_config(path)
+    exp = build_experiment(cfg, str(path))
+    effort = np.asarray(exp.task.follower.model.effortLimit, dtype=float)[:6]
+    plain = PhysicsSettings.from_spec(cfg.physics, exp.options.dt)
+    assert exp.options.follower_tau_max is not None
+    lim = torque_limits(exp.task, plain, arm_tau_max(exp))
+    np.testing.assert_array_equal(lim["follower"], exp.options.follower_tau_max)
+    assert lim["follower"][1] < effort[1]  # the file halves the shoulder's limit
+    np.testing.assert_array_equal(torque_limits(exp.task, plain)["follower"], effort)
+    data = yaml.safe_load(path.read_text())
+    data["physics"] = {"tau_max": {"follower": 40}}
+    given = parse_config(data, "bar.yaml")
+    own = PhysicsSettings.from_spec(given.physics, exp.options.dt)
+    np.testing.assert_array_equal(torque_limits(exp.task, own, arm_tau_max(exp))["follower"],
+                                  np.full(6, 40.0))
