@@ -191,8 +191,9 @@ class StepBuilder:
             [] if task.leader_surface is None else [task.leader_surface])
         self._contact = task.contact
         self._zeros = np.zeros(lay.n)
-        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l)
-        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f)
+        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l,
+                                         self.carry.chain)
+        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
         self._no_rows = np.zeros((0, lay.n))
         self._no_rhs = np.zeros(0)
         self._labels = tuple(limit.name for limit in self.limits)
