@@ -201,7 +201,7 @@ class SerialArm:
         else:
             raise InvalidInputError("an arm is built from a DHTable or a pinocchio.Model, "
                                     f"got {type(source).__name__}")
-        n = template.nq
+        n = self._n = int(template.nq)
         if lo is None or hi is None or vel is None:  # a DH table: no limits of its own
             lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
         self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
@@ -244,6 +244,10 @@ class SerialArm:
         self._data = model.createData()
         self._chain = compiled_chain(model)
         self._tool_frames = (int(self._tool_id),)
+        # No Jacobian asked for: an empty (0, n) output. Sliced from a row, so that its
+        # strides are a C array's (numpy gives np.empty((0, n)) zero strides, which the
+        # kernel's in-place outputs refuse).
+        self._no_jacobian = np.empty((1, model.nq))[:0]
         self.base = base  # validated by the property setters
         self.tool = tool
 
@@ -251,7 +255,7 @@ class SerialArm:
     @property
     def n(self) -> int:
         """Number of joints."""
-        return int(self._template.nq)
+        return self._n
 
     @property
     def model(self) -> Any:
@@ -387,15 +391,18 @@ class SerialArm:
         it is the frame of joint i (the link it moves), which need not be the flange.
         The tool transform is not applied; see :meth:`fk`.
         """
-        T, _ = self._chain.compute(self.check_q(q), self._links, ())
-        return T.reshape(-1, 4, 4)
+        links = self._links
+        T = np.empty((len(links), 4, 4))
+        self._chain.compute(self.check_q(q), links, (), T.reshape(-1, 4), self._no_jacobian)
+        return T
 
     def fk(self, q: Any) -> FloatArray:
         """Pose of the tool frame in the world, ``T_world_tool`` (4x4, metres).
 
         With the default identity tool this is the flange.
         """
-        T, _ = self._chain.compute(self.check_q(q), self._tool_frames, ())
+        T = np.empty((4, 4))
+        self._chain.compute(self.check_q(q), self._tool_frames, (), T, self._no_jacobian)
         return T
 
     def jacobian(self, q: Any) -> FloatArray:
@@ -420,7 +427,9 @@ class SerialArm:
         # One kernel call: every joint's Jacobian and every frame's pose are computed,
         # so :attr:`chain` then also serves the link frames (collision rows).
         tool = self._tool_frames
-        T, J = self._chain.compute(self.check_q(q), tool, tool)
+        T = np.empty((4, 4))
+        J = np.empty((6, self._n))
+        self._chain.compute(self.check_q(q), tool, tool, T, J)
         return T, J
 
 

@@ -71,15 +71,21 @@ class ArmKinematics:
 
     def frame_pose(self, frame: int) -> FloatArray:
         """World pose (4, 4) [m] of the model's frame ``frame``."""
-        return self._chain.frame_pose(frame)
+        T = np.empty((4, 4))
+        self._chain.frame_poses((frame,), T)
+        return T
 
     def frame_poses(self, frames: Sequence[int]) -> FloatArray:
         """World poses (k, 4, 4) [m] of the model's frames ``frames`` (one kernel call)."""
-        return self._chain.frame_poses(frames).reshape(-1, 4, 4)
+        T = np.empty((len(frames), 4, 4))
+        self._chain.frame_poses(frames, T.reshape(-1, 4))
+        return T
 
     def frame_jacobian(self, frame: int) -> FloatArray:
         """Jacobian (6, n_joints) of frame ``frame``'s origin, world axes ``[v; w]``."""
-        return self._chain.frame_jacobian(frame)[:, :self.n_joints]
+        J = np.empty((6, self._chain.nq))
+        self._chain.frame_jacobian(frame, J)
+        return J[:, :self.n_joints]
 
     def point_jacobian(self, frame: int, point: FloatArray) -> FloatArray:
         """Jacobian (3, n_joints) of the world point ``point`` [m] fixed to frame ``frame``."""

@@ -175,7 +175,9 @@ class CarryModel:
             q[n_l + 1] = self._follower_rate * sigma_f
         else:
             q[n_l] = self._follower_rate * sigma_f
-        T, J = self.chain.compute(q, self._frames, self._frames)
+        T = np.empty((12, 4))
+        J = np.empty((18, q.shape[0]))
+        self.chain.compute(q, self._frames, self._frames, T, J)
         J_tool = J[0:6, :n_l]
         J_object = J[6:12]
         J_target = J[12:18]

@@ -116,36 +116,35 @@ void Chain::update(const Eigen::VectorXd& q) {
   ++updates_;
 }
 
-Pose Chain::frame_pose(int f) const {
-  check_frame(f);
-  return impl_->data.oMf[static_cast<std::size_t>(f)].toHomogeneousMatrix();
-}
-
-RowMat Chain::frame_poses(const std::vector<int>& frames) const {
-  RowMat out(4 * static_cast<Eigen::Index>(frames.size()), 4);
-  for (std::size_t k = 0; k < frames.size(); ++k) {
-    check_frame(frames[k]);
-    out.block<4, 4>(4 * static_cast<Eigen::Index>(k), 0) =
+void Chain::frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) const {
+  if (T.rows() != 4 * static_cast<Eigen::Index>(frames.size()) || T.cols() != 4)
+    throw std::invalid_argument("T must be (4k, 4) for k frames");
+  for (int f : frames) check_frame(f);
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    T.middleRows<4>(4 * static_cast<Eigen::Index>(k)) =
         impl_->data.oMf[static_cast<std::size_t>(frames[k])].toHomogeneousMatrix();
-  }
-  return out;
 }
 
-RowMat Chain::frame_jacobian(int f) const {
+void Chain::frame_jacobian(int f, Eigen::Ref<RowMat> J) const {
   check_frame(f);
-  pin::Data::Matrix6x J = pin::Data::Matrix6x::Zero(6, nq());
+  if (J.rows() != 6 || J.cols() != nq()) throw std::invalid_argument("J must be (6, nq)");
+  pin::Data::Matrix6x Jf = pin::Data::Matrix6x::Zero(6, nq());
   pin::getFrameJacobian(impl_->model, impl_->data, static_cast<pin::FrameIndex>(f),
-                        pin::LOCAL_WORLD_ALIGNED, J);
-  return J;
+                        pin::LOCAL_WORLD_ALIGNED, Jf);
+  J = Jf;
 }
 
-std::pair<RowMat, RowMat> Chain::compute(const Eigen::VectorXd& q,
-                                         const std::vector<int>& pose_frames,
-                                         const std::vector<int>& jac_frames) {
+void Chain::compute(const Eigen::VectorXd& q, const std::vector<int>& pose_frames,
+                    const std::vector<int>& jac_frames, Eigen::Ref<RowMat> T,
+                    Eigen::Ref<RowMat> J) {
+  if (T.rows() != 4 * static_cast<Eigen::Index>(pose_frames.size()) || T.cols() != 4)
+    throw std::invalid_argument("T must be (4k, 4) for k pose frames");
+  if (J.rows() != 6 * static_cast<Eigen::Index>(jac_frames.size()) || J.cols() != nq())
+    throw std::invalid_argument("J must be (6m, nq) for m Jacobian frames");
   for (int f : pose_frames) check_frame(f);
   for (int f : jac_frames) check_frame(f);
   update(q);
-  RowMat J(6 * static_cast<Eigen::Index>(jac_frames.size()), nq());
+  frame_poses(pose_frames, T);
   pin::Data::Matrix6x Jf(6, nq());
   for (std::size_t k = 0; k < jac_frames.size(); ++k) {
     Jf.setZero();
@@ -153,7 +152,6 @@ std::pair<RowMat, RowMat> Chain::compute(const Eigen::VectorXd& q,
                           pin::LOCAL_WORLD_ALIGNED, Jf);
     J.middleRows(6 * static_cast<Eigen::Index>(k), 6) = Jf;
   }
-  return {frame_poses(pose_frames), J};
 }
 
 const char* pinocchio_version() { return PINOCCHIO_VERSION; }

@@ -46,14 +46,15 @@ class Chain {
 
   // Forward kinematics, every joint's Jacobian and every frame's placement at q.
   void update(const Eigen::VectorXd& q);
-  // update(q), then the world poses of pose_frames stacked (4k x 4) and the
-  // LOCAL_WORLD_ALIGNED Jacobians [v; w] of jac_frames stacked (6m x nq).
-  std::pair<RowMat, RowMat> compute(const Eigen::VectorXd& q, const std::vector<int>& pose_frames,
-                                    const std::vector<int>& jac_frames);
-  // After update: the world pose of frame f, its Jacobian (6 x nq).
-  Pose frame_pose(int f) const;
-  RowMat frame_jacobian(int f) const;
-  RowMat frame_poses(const std::vector<int>& frames) const;
+  // update(q), then the world poses of pose_frames stacked into T (4k x 4) and the
+  // LOCAL_WORLD_ALIGNED Jacobians [v; w] of jac_frames stacked into J (6m x nq). The
+  // outputs are the caller's arrays: returning fresh ones costs more than the kinematics.
+  void compute(const Eigen::VectorXd& q, const std::vector<int>& pose_frames,
+               const std::vector<int>& jac_frames, Eigen::Ref<RowMat> T, Eigen::Ref<RowMat> J);
+  // After update: the world poses of frames into T (4k x 4), the Jacobian of frame f
+  // into J (6 x nq).
+  void frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) const;
+  void frame_jacobian(int f, Eigen::Ref<RowMat> J) const;
 
  private:
   struct Impl;

@@ -73,10 +73,13 @@ NB_MODULE(_kernel, m) {
       .def("update", &dqk::Chain::update, "q"_a,
            "Forward kinematics, every joint's Jacobian and every frame's pose at q.")
       .def("compute", &dqk::Chain::compute, "q"_a, "pose_frames"_a, "jac_frames"_a,
-           "update(q); then the poses (4k, 4) and the Jacobians (6m, nq) of the frames.")
-      .def("frame_pose", &dqk::Chain::frame_pose, "frame"_a)
-      .def("frame_poses", &dqk::Chain::frame_poses, "frames"_a)
-      .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a);
+           "T"_a.noconvert(), "J"_a.noconvert(),
+           "update(q); then the poses of pose_frames into T (4k, 4) and the Jacobians of "
+           "jac_frames into J (6m, nq), C-contiguous float64 arrays.")
+      .def("frame_poses", &dqk::Chain::frame_poses, "frames"_a, "T"_a.noconvert(),
+           "The poses of frames at the last update into T (4k, 4).")
+      .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a, "J"_a.noconvert(),
+           "The Jacobian of frame at the last update into J (6, nq).");
 
   m.def("factor", [](const Mat& A) { return factor_tuple(dqk::factor(A)); }, "A"_a,
         "Truncated SVD of A: (U, sigma, V, N).");

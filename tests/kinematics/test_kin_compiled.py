@@ -84,8 +84,9 @@ def test_arm_kinematics_equal_python_pinocchio(name: str, seed: int) -> None:
     np.testing.assert_allclose(arm.link_frames(q), np.array(poses[1:]), rtol=0, atol=1e-12)
     # The link frames' Jacobians (collision rows) read after the step's one call.
     arm.fk_jacobian(q)
+    view = ArmKinematics(arm.model, arm.data, arm.n, arm.chain)
     for f, J_py in zip(frames, jacobians, strict=True):
-        np.testing.assert_allclose(arm.chain.frame_jacobian(f), J_py, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(view.frame_jacobian(f), J_py, rtol=0, atol=1e-12)
     np.testing.assert_allclose(J, fd_jacobian(arm, q), rtol=0, atol=1e-8)
 
 
@@ -96,7 +97,8 @@ def test_every_frame_of_the_model_is_the_same(name: str) -> None:
     q = np.random.default_rng(5).uniform(-1.0, 1.0, arm.n)
     frames = list(range(1, len(arm.model.frames)))  # 0 is the universe, no frame of ours
     poses, jacobians = python_kinematics(arm.model, frames, q)
-    P, J = arm.chain.compute(q, frames, frames)
+    P, J = np.empty((4 * len(frames), 4)), np.empty((6 * len(frames), arm.n))
+    arm.chain.compute(q, frames, frames, P, J)
     np.testing.assert_allclose(P.reshape(-1, 4, 4), np.array(poses), rtol=0, atol=1e-12)
     np.testing.assert_allclose(J.reshape(-1, 6, arm.n), np.array(jacobians), rtol=0,
                                atol=1e-12)
@@ -128,6 +130,7 @@ def test_carried_object_model_equals_python_pinocchio(follower: str, leader: str
     carry = CarryModel(arm, surfaces[follower](), random_pose(rng, 0.1),
                        None if leader is None else surfaces[leader]())
     frames = list(range(1, len(carry.model.frames)))
+    view = ArmKinematics(carry.model, carry.data, 6, carry.chain)
     for _ in range(5):
         kin = carry.update(rng.uniform(-2.0, 2.0, 6), rng.uniform(-0.2, 0.3),
                            rng.uniform(-0.2, 0.3))
@@ -136,9 +139,10 @@ def test_carried_object_model_equals_python_pinocchio(follower: str, leader: str
         np.testing.assert_allclose(kin.T_tool, poses[tool], rtol=0, atol=1e-12)
         np.testing.assert_allclose(kin.J_tool, jacobians[tool][:, :6], rtol=0, atol=1e-12)
         for k, f in enumerate(frames):
-            np.testing.assert_allclose(carry.chain.frame_pose(f), poses[k], rtol=0, atol=1e-12)
-            np.testing.assert_allclose(carry.chain.frame_jacobian(f), jacobians[k], rtol=0,
-                                       atol=1e-12)
+            np.testing.assert_allclose(view.frame_pose(f), poses[k], rtol=0, atol=1e-12)
+            J = np.empty((6, carry.model.nv))
+            carry.chain.frame_jacobian(f, J)
+            np.testing.assert_allclose(J, jacobians[k], rtol=0, atol=1e-12)
 
 
 def test_moved_follower_path_reaches_the_kernel() -> None:
@@ -192,8 +196,13 @@ def test_kernel_chain_refuses_malformed_arrays() -> None:
     with pytest.raises(ValueError, match="entries"):
         chain.update(np.zeros(2))
     chain.update(np.zeros(1))
+    out = np.empty((4, 4))
     with pytest.raises(IndexError):
-        chain.frame_pose(2)
+        chain.frame_poses([2], out)
+    with pytest.raises(ValueError, match="T must be"):
+        chain.frame_poses([1, 1], out)
+    with pytest.raises(TypeError):  # the outputs are written in place: never converted
+        chain.frame_poses([1], np.empty((4, 4), dtype=np.float32))
     with pytest.raises(IndexError):
         chain.set_joint_placement(0, T)
 
