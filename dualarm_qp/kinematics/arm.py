@@ -251,6 +251,17 @@ class SerialArm:
         self.base = base  # validated by the property setters
         self.tool = tool
 
+    def __getstate__(self) -> dict[str, Any]:
+        # The kernel's copy is no Python object: a pickle holds the Pinocchio model,
+        # from which it is rebuilt.
+        state = self.__dict__.copy()
+        del state["_chain"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._chain = compiled_chain(self._model)
+
     # ------------------------------------------------------------------ basics
     @property
     def n(self) -> int:

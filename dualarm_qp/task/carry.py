@@ -23,6 +23,7 @@ trace and the checks.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -139,6 +140,16 @@ class CarryModel:
         self.chain = compiled_chain(model)
         self._frames = (int(self._tool), int(self._object), int(self._target))
         self._q = np.zeros(model.nq)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The kernel's copy is rebuilt from the Pinocchio model on unpickling.
+        state = self.__dict__.copy()
+        del state["chain"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.chain = compiled_chain(self.model)
 
     def place_follower(self, surface: GraspSurface) -> None:
         """Put the follower's grasp joint on a new path of the same kind.
