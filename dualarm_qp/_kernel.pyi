@@ -37,6 +37,10 @@ def kkt_holds(A: ArrayLike, b: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: Arr
               N: ArrayLike, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
+def carry_equality(n_l: int, J_object: ArrayLike, J_target: ArrayLike, J_f: ArrayLike,
+                   twist: ArrayLike, e_l: ArrayLike, e_c: ArrayLike, scale: float,
+                   gain_l: float, gain_c: float, exact_orientation: bool, A: _F, b: _F
+                   ) -> bool: ...
 def scale_lp(M: ArrayLike, a: ArrayLike, g: ArrayLike, s_lo: float, s_hi: float
              ) -> tuple[int, _F, float, list[int]]: ...
 

@@ -12,6 +12,7 @@
 #include "certify.hpp"
 #include "constants.hpp"
 #include "dense_qp.hpp"
+#include "equality.hpp"
 #include "kinematics.hpp"
 #include "linalg.hpp"
 #include "nnls.hpp"
@@ -181,6 +182,12 @@ NB_MODULE(_kernel, m) {
       "A"_a, "b"_a, "U"_a, "sigma"_a, "V"_a, "N"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a,
       "root_full"_a, "center"_a, "x"_a, "bounds"_a,
       "Whether x is the step's minimiser (the KKT test of certify).");
+
+  m.def("carry_equality", &dqk::carry_equality, "n_l"_a, "J_object"_a, "J_target"_a, "J_f"_a,
+        "twist"_a, "e_l"_a, "e_c"_a, "scale"_a, "gain_l"_a, "gain_c"_a,
+        "exact_orientation"_a, "A"_a.noconvert(), "b"_a.noconvert(),
+        "The step's equality block into A (12, n) and b (12): the object follows D(t), "
+        "the grasp stays closed. Returns whether both are finite.");
 
   m.def(
       "scale_lp",
