@@ -1,10 +1,12 @@
 """The compiled kernel ``dualarm_qp._kernel``, checked on import (private).
 
-The exact solver, the factorisations every solver shares and the certificate's numeric
-core are C++ (``src/kernel``, built by ``pip install``). This module imports the
-extension once and refuses it, with a :class:`~dualarm_qp.errors.KernelError` that says
-what to do, when it is missing or was built from other sources than those next to the
-package (an editable install whose C++ was edited since the last build).
+The exact solver, the factorisations every solver shares, the certificate's numeric
+core and the arms' kinematics are C++ (``src/kernel``, built by ``pip install``). This
+module imports the extension once and refuses it, with a
+:class:`~dualarm_qp.errors.KernelError` that says what to do, when it is missing or was
+built from other sources than those next to the package (an editable install whose C++
+was edited since the last build). :func:`check_pinocchio` refuses an installed
+Pinocchio of another release than the kernel's.
 """
 
 from __future__ import annotations
@@ -53,6 +55,22 @@ def check_fresh(folder: Path = SOURCES, built: str = kernel.SOURCE_HASH) -> None
             f"sources than those in {folder}; {REBUILD}")
 
 
+def check_pinocchio(installed: str, built: str = kernel.PINOCCHIO_VERSION) -> None:
+    """Raise :class:`KernelError` unless the installed Pinocchio is the kernel's.
+
+    The kernel compiles Pinocchio's kinematics from the headers of the ``pin`` wheel
+    present at build time, and is handed models built by the installed ``pinocchio``
+    Python package; both must be the same release (``pyproject.toml`` pins it), or the
+    two sides may describe or compute the models differently. ``installed`` is
+    ``pinocchio.__version__``.
+    """
+    if installed.split("+")[0] != built:
+        raise KernelError(
+            f"the compiled kernel dualarm_qp._kernel was built with Pinocchio {built}, but "
+            f"Pinocchio {installed} is installed; install the pinned version "
+            f"(`pip install pin=={built}`) or rebuild the kernel for this one: {REBUILD}")
+
+
 check_fresh()
 
-__all__ = ["KernelError", "check_fresh", "kernel", "source_hash"]
+__all__ = ["KernelError", "check_fresh", "check_pinocchio", "kernel", "source_hash"]

@@ -4,8 +4,9 @@ An arm is one chain of revolute joints. Its kinematics (forward kinematics, the
 geometric Jacobian, the link frames) are computed by Pinocchio on a model whose
 *universe* is the arm's base frame (frame 0): the base placement ``T_world_base`` is
 folded into the placements of the joints and frames attached to the universe, and the
-tool ``T_flange_tool`` is a frame on the last joint. One ``pinocchio.Data`` is
-allocated per arm and reused by every call.
+tool ``T_flange_tool`` is a frame on the last joint. The model is built in Python; the
+computations run in the compiled kernel, on its copy of the model
+(:mod:`~dualarm_qp.kinematics.compiled`, Pinocchio's C++ API), one call each.
 
 Where a model comes from does not matter above this module; the builders all return a
 :class:`SerialArm`:
@@ -47,6 +48,7 @@ from numpy.typing import NDArray
 
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
+from .compiled import compiled_chain, set_frame_placement, set_joint_placement
 
 FloatArray = NDArray[np.float64]
 Convention = Literal["standard", "modified"]
@@ -56,7 +58,6 @@ REVOLUTE_JOINTS = frozenset({"JointModelRX", "JointModelRY", "JointModelRZ",
                              "JointModelRevoluteUnaligned"})
 #: Limits at or beyond this magnitude mean "no limit" (Pinocchio's default is DBL_MAX).
 _NO_LIMIT = 1e300
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # Names of the frames SerialArm adds to a model.
 _BASE, _LINK, _TOOL = "dualarm_base", "dualarm_link", "dualarm_tool"
 
@@ -200,7 +201,7 @@ class SerialArm:
         else:
             raise InvalidInputError("an arm is built from a DHTable or a pinocchio.Model, "
                                     f"got {type(source).__name__}")
-        n = template.nq
+        n = self._n = int(template.nq)
         if lo is None or hi is None or vel is None:  # a DH table: no limits of its own
             lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
         self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
@@ -241,14 +242,31 @@ class SerialArm:
             model.upperVelocityLimit = self.qd_max
         self._model = model
         self._data = model.createData()
+        self._chain = compiled_chain(model)
+        self._tool_frames = (int(self._tool_id),)
+        # No Jacobian asked for: an empty (0, n) output. Sliced from a row, so that its
+        # strides are a C array's (numpy gives np.empty((0, n)) zero strides, which the
+        # kernel's in-place outputs refuse).
+        self._no_jacobian = np.empty((1, model.nq))[:0]
         self.base = base  # validated by the property setters
         self.tool = tool
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The kernel's copy is no Python object: a pickle holds the Pinocchio model,
+        # from which it is rebuilt.
+        state = self.__dict__.copy()
+        del state["_chain"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._chain = compiled_chain(self._model)
 
     # ------------------------------------------------------------------ basics
     @property
     def n(self) -> int:
         """Number of joints."""
-        return int(self._template.nq)
+        return self._n
 
     @property
     def model(self) -> Any:
@@ -257,8 +275,21 @@ class SerialArm:
 
     @property
     def data(self) -> Any:
-        """The arm's ``pinocchio.Data``: allocated once, overwritten by every call."""
+        """A ``pinocchio.Data`` of :attr:`model`, allocated once, for your own calls.
+
+        The arm's methods compute in the compiled kernel (:attr:`chain`) and do not
+        write it.
+        """
         return self._data
+
+    @property
+    def chain(self) -> Any:
+        """The kernel's copy of :attr:`model` (``dualarm_qp._kernel.Chain``).
+
+        Every method of the arm computes there; it holds the kinematics of the last call
+        (see :class:`~dualarm_qp.step.context.ArmKinematics`).
+        """
+        return self._chain
 
     @property
     def tool_frame_id(self) -> int:
@@ -298,11 +329,11 @@ class SerialArm:
     def base(self, value: Any) -> None:
         self._base = _frozen_pose(value, "base")
         B = _se3(self._base)
-        model, template = self._model, self._template
+        model, chain, template = self._model, self._chain, self._template
         for j in self._root_joints:
-            model.jointPlacements[j] = B * template.jointPlacements[j]
+            set_joint_placement(model, chain, j, B * template.jointPlacements[j])
         for i in self._root_frames:
-            model.frames[i].placement = B * template.frames[i].placement
+            set_frame_placement(model, chain, i, B * template.frames[i].placement)
 
     @property
     def tool(self) -> FloatArray:
@@ -312,7 +343,8 @@ class SerialArm:
     @tool.setter
     def tool(self, value: Any) -> None:
         self._tool = _frozen_pose(value, "tool")
-        self._model.frames[self._tool_id].placement = self._flange * _se3(self._tool)
+        set_frame_placement(self._model, self._chain, self._tool_id,
+                            self._flange * _se3(self._tool))
 
     def with_base(self, base: Any) -> SerialArm:
         """Return a copy of this arm placed at ``base`` (``T_world_base``)."""
@@ -391,19 +423,18 @@ class SerialArm:
         it is the frame of joint i (the link it moves), which need not be the flange.
         The tool transform is not applied; see :meth:`fk`.
         """
-        model, data = self._model, self._data
-        pin.forwardKinematics(model, data, self.check_q(q))
-        return np.array([pin.updateFramePlacement(model, data, i).homogeneous
-                         for i in self._links])
+        links = self._links
+        T = np.empty((len(links), 4, 4))
+        self._chain.compute(self.check_q(q), links, (), T.reshape(-1, 4), self._no_jacobian)
+        return T
 
     def fk(self, q: Any) -> FloatArray:
         """Pose of the tool frame in the world, ``T_world_tool`` (4x4, metres).
 
         With the default identity tool this is the flange.
         """
-        model, data = self._model, self._data
-        pin.forwardKinematics(model, data, self.check_q(q))
-        T: FloatArray = pin.updateFramePlacement(model, data, self._tool_id).homogeneous
+        T = np.empty((4, 4))
+        self._chain.compute(self.check_q(q), self._tool_frames, (), T, self._no_jacobian)
         return T
 
     def jacobian(self, q: Any) -> FloatArray:
@@ -425,14 +456,12 @@ class SerialArm:
         J : ndarray, shape (6, n)
             Geometric Jacobian, see :meth:`jacobian`.
         """
-        model, data, tool = self._model, self._data, self._tool_id
-        # Every joint's Jacobian (not only the tool's chain): :attr:`data` then also
-        # serves the Jacobians of the link frames (collision rows).
-        pin.computeJointJacobians(model, data, self.check_q(q))
-        T: FloatArray = pin.updateFramePlacement(model, data, tool).homogeneous
-        J: FloatArray = pin.getFrameJacobian(model, data, tool, _LWA)
-        if J.ndim == 1:  # eigenpy returns a 6x1 matrix as a vector
-            J = J.reshape(6, 1)
+        # One kernel call: every joint's Jacobian and every frame's pose are computed,
+        # so :attr:`chain` then also serves the link frames (collision rows).
+        tool = self._tool_frames
+        T = np.empty((4, 4))
+        J = np.empty((6, self._n))
+        self._chain.compute(self.check_q(q), tool, tool, T, J)
         return T, J
 
 

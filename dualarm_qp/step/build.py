@@ -6,7 +6,7 @@ them in the step's context (:class:`~dualarm_qp.step.context.StepContext`) and s
 the step's parts (:mod:`dualarm_qp.step.parts`):
 
 * the equality tasks, in this order: the object follows ``D(t)``, the grasp stays
-  closed (:mod:`.tasks`, Eqs. 14 and 25-27);
+  closed (:mod:`.tasks`, Eqs. 14 and 25-27; one block, assembled by the kernel);
 * the cost: the paper's centring (:mod:`.cost`, Eqs. 37-40);
 * the limits: joint and grasp ranges (Eqs. 30-36, with recovery), joint and grasp
   speeds, accelerations when asked for (:mod:`.limits`), then any limit of the user's.
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError, NonFiniteError, SupportLostError
+from ..errors import InvalidInputError, SupportLostError
 from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
@@ -41,10 +41,10 @@ from .cost import CentringCost
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
 from .options import StepOptions
-from .parts import Limit, Task
+from .parts import Limit
 from .problem import StepProblem
 from .state import DualArmState
-from .tasks import GraspClosureTask, ObjectPathTask
+from .tasks import CarryTasks
 
 FloatArray = NDArray[np.float64]
 
@@ -166,11 +166,9 @@ class StepBuilder:
         self.options = options
         self.carry = CarryModel(leader, task.surface, task.H1, task.leader_surface)
         self.layout = Layout(n_l, n_f, self.carry.n_grasp)
-        self.path_task = ObjectPathTask(float(options.leader_gain or 0.0)
-                                        if leader_gain is None else leader_gain)
-        self.closure_task = GraspClosureTask(float(options.correction_gain or 0.0),
-                                             exact_orientation=options.exact_orientation)
-        self.tasks: tuple[Task, ...] = (self.path_task, self.closure_task)
+        self.carry_tasks = CarryTasks(
+            float(options.leader_gain or 0.0) if leader_gain is None else leader_gain,
+            float(options.correction_gain or 0.0), exact_orientation=options.exact_orientation)
         self.cost = CentringCost(self.layout, options, leader_ranges=leader_bounds)
         setup = LimitSetup(task, options, self.layout, leader_bounds)
         self.limits: tuple[Limit, ...] = (*standard_limits(setup), *limits)
@@ -191,8 +189,9 @@ class StepBuilder:
             [] if task.leader_surface is None else [task.leader_surface])
         self._contact = task.contact
         self._zeros = np.zeros(lay.n)
-        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l)
-        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f)
+        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l,
+                                         self.carry.chain)
+        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
         self._no_rows = np.zeros((0, lay.n))
         self._no_rhs = np.zeros(0)
         self._labels = tuple(limit.name for limit in self.limits)
@@ -231,11 +230,11 @@ class StepBuilder:
     @property
     def leader_gain(self) -> float:
         """Feedback gain ``K_l`` [1/s] of the object's tracking of ``D(t)``."""
-        return self.path_task.gain
+        return self.carry_tasks.leader_gain
 
     @leader_gain.setter
     def leader_gain(self, value: float) -> None:
-        self.path_task.gain = float(value)
+        self.carry_tasks.leader_gain = float(value)
 
     @property
     def row_limits(self) -> tuple[str, ...]:
@@ -311,11 +310,7 @@ class StepBuilder:
         sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(ctx.J_f))
         t1 = time.perf_counter()
 
-        eqs = [task.equality(ctx) for task in self.tasks]
-        A = np.vstack([e.A for e in eqs])
-        b = np.concatenate([e.b for e in eqs])
-        if not (np.isfinite(A).all() and np.isfinite(b).all()):
-            raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
+        eq = self.carry_tasks.equality(ctx)  # raises NonFiniteError itself
         cost = self.cost.quadratic(ctx)
         lay = self.layout
         lower = np.full(lay.n, -np.inf)
@@ -343,11 +338,11 @@ class StepBuilder:
         upper = pin_rounding(lower, upper)
         labels = self._labels
         problem = StepProblem(
-            A, b, cost.weights, cost.center, lower, upper,
+            eq.A, eq.b, cost.weights, cost.center, lower, upper,
             G=np.vstack(G_parts) if G_parts else self._no_rows,
             h=np.concatenate(h_parts) if h_parts else self._no_rhs,
             n_grasp=lay.n_grasp, names=lay.names, row_names=tuple(row_names),
-            eq_names=tuple(name for e in eqs for name in e.names), x_prev=x_prev,
+            eq_names=eq.names, x_prev=x_prev,
             lower_by=tuple(labels[i] if i >= 0 else "" for i in lo_by.tolist()),
             upper_by=tuple(labels[i] if i >= 0 else "" for i in up_by.tolist()))
         recovering = ctx.outside & self._ranged

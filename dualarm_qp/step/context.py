@@ -7,6 +7,7 @@ cost term and limit; none of them computes kinematics of its own.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,38 +24,68 @@ from .state import DualArmState
 FloatArray = NDArray[np.float64]
 
 
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-
-@dataclass(frozen=True, slots=True)
 class ArmKinematics:
-    """One arm's Pinocchio model and data at this step, its kinematics already computed.
+    """One arm's model at this step, its kinematics already computed.
 
     For limits that need more than the tools' poses (the links of an arm, for
-    collisions): the builder ran forward kinematics and the joint Jacobians once; these
-    read them. The leader's model is the carried-object model (the leader's joints
-    first, then the sliding grasps); the follower's is the arm's.
+    collisions): the builder computed the forward kinematics, the joint Jacobians and
+    every frame's pose once, in the compiled kernel (one call per arm); these methods read
+    them. The leader's model is the carried-object model (the leader's joints first, then
+    the sliding grasps); the follower's is the arm's.
 
-    Attributes
+    Parameters
     ----------
-    model, data : pinocchio.Model, pinocchio.Data
-        The model and its data at this step's joints (valid during this step only).
+    model : pinocchio.Model
+        The model (its frame indices are those the methods take).
+    data : pinocchio.Data
+        A data of ``model``, filled at this step's joints when :attr:`data` is read.
     n_joints : int
         The arm's joints (the first columns of its Jacobians).
+    chain : dualarm_qp._kernel.Chain
+        The kernel's copy of ``model`` (:mod:`dualarm_qp.kinematics.compiled`), which the
+        builder updates each step.
     """
 
-    model: Any
-    data: Any
-    n_joints: int
+    __slots__ = ("_chain", "_data", "_filled", "model", "n_joints")
+
+    def __init__(self, model: Any, data: Any, n_joints: int, chain: Any) -> None:
+        self.model = model
+        self.n_joints = n_joints
+        self._data = data
+        self._chain = chain
+        self._filled = -1
+
+    @property
+    def data(self) -> Any:
+        """``pinocchio.Data`` at this step's joints, for a limit's own Pinocchio calls.
+
+        Filled (forward kinematics, joint Jacobians, frame placements) on first use in a
+        step: the step itself never needs it. Valid during this step only.
+        """
+        chain = self._chain
+        if self._filled != chain.updates:
+            pin.computeJointJacobians(self.model, self._data, chain.q)
+            pin.updateFramePlacements(self.model, self._data)
+            self._filled = chain.updates
+        return self._data
 
     def frame_pose(self, frame: int) -> FloatArray:
         """World pose (4, 4) [m] of the model's frame ``frame``."""
-        return np.asarray(pin.updateFramePlacement(self.model, self.data, frame).homogeneous)
+        T = np.empty((4, 4))
+        self._chain.frame_poses((frame,), T)
+        return T
+
+    def frame_poses(self, frames: Sequence[int]) -> FloatArray:
+        """World poses (k, 4, 4) [m] of the model's frames ``frames`` (one kernel call)."""
+        T = np.empty((len(frames), 4, 4))
+        self._chain.frame_poses(frames, T.reshape(-1, 4))
+        return T
 
     def frame_jacobian(self, frame: int) -> FloatArray:
         """Jacobian (6, n_joints) of frame ``frame``'s origin, world axes ``[v; w]``."""
-        J = pin.getFrameJacobian(self.model, self.data, frame, _LWA)
-        return np.asarray(J[:, :self.n_joints])
+        J = np.empty((6, self._chain.nq))
+        self._chain.frame_jacobian(frame, J)
+        return J[:, :self.n_joints]
 
     def point_jacobian(self, frame: int, point: FloatArray) -> FloatArray:
         """Jacobian (3, n_joints) of the world point ``point`` [m] fixed to frame ``frame``."""
@@ -106,8 +137,8 @@ class StepContext:
     closure_error : ndarray, shape (6,)
         ``[dp; dw]`` from the follower's tool to its target [m, rad].
     leader_arm, follower_arm : ArmKinematics
-        The arms' Pinocchio models and data at this step (their links, for limits that
-        need them).
+        The arms' models and kinematics at this step (their links, for limits that need
+        them).
     """
 
     state: DualArmState

@@ -1,7 +1,8 @@
 """The step's two equality tasks: the object follows ``D(t)``; the grasp stays closed.
 
 Both read the carried-object model's Jacobians from the step's context
-(:class:`~dualarm_qp.step.context.StepContext`), in world coordinates ``[v; w]``:
+(:class:`~dualarm_qp.step.context.StepContext`), in world coordinates ``[v; w]``, and
+are one block of twelve rows, assembled by the compiled kernel in one call:
 
     J_o [ql_dot; m_l] = s V_o(t) + K_l e_l                       (Eq. 14 differentiated)
     J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c                    (Eqs. 25-27)
@@ -20,68 +21,62 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._compiled import kernel
+from ..errors import NonFiniteError
 from .context import StepContext
 from .parts import Equality
 
 _AXES = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 
-class ObjectPathTask:
-    """The object frame follows the desired path ``D(t)`` (the leader's task).
+class CarryTasks:
+    """The object follows ``D(t)`` (rows 1-6); the follower's grasp stays closed (7-12).
 
     Parameters
     ----------
-    gain : float
+    leader_gain : float
         Feedback gain ``K_l`` [1/s] on the object's pose error to ``D(t)``.
-    """
-
-    name = "object path"
-    row_names = tuple(f"object {a}" for a in _AXES)
-
-    def __init__(self, gain: float) -> None:
-        self.gain = float(gain)
-
-    def equality(self, ctx: StepContext) -> Equality:
-        """``J_o [ql_dot; m_l] = scale_max V_o(t) + K_l e_l`` (six rows)."""
-        lay = ctx.layout
-        J = ctx.carry.J_object  # columns: leader joints, then the grasps
-        A = np.zeros((6, lay.n))
-        A[:, lay.leader] = J[:, :lay.n_l]
-        A[:, lay.grasps] = J[:, lay.n_l:]
-        b = ctx.scale_max * ctx.task.trajectory.twist(ctx.state.t) + self.gain * ctx.leader_error
-        return Equality(A, b, self.row_names)
-
-
-class GraspClosureTask:
-    """The follower's tool moves with its target on the object (Eqs. 25-27).
-
-    Parameters
-    ----------
-    gain : float
+    correction_gain : float
         Feedback gain ``K`` [1/s] on the closure error; 0 disables it.
     exact_orientation : bool
         Keep the curvature term of the follower's grasp frame (False: the paper's frozen
         orientation, Sec. 3.3).
+
+    Attributes
+    ----------
+    leader_gain, correction_gain : float
+        The gains (the controller may change ``leader_gain`` between steps).
     """
 
-    name = "grasp closure"
-    row_names = tuple(f"closure {a}" for a in _AXES)
+    name = "object path and grasp closure"
+    row_names = (*(f"object {a}" for a in _AXES), *(f"closure {a}" for a in _AXES))
 
-    def __init__(self, gain: float, *, exact_orientation: bool = False) -> None:
-        self.gain = float(gain)
+    def __init__(self, leader_gain: float, correction_gain: float, *,
+                 exact_orientation: bool = False) -> None:
+        self.leader_gain = float(leader_gain)
+        self.correction_gain = float(correction_gain)
         self.exact_orientation = bool(exact_orientation)
 
     def equality(self, ctx: StepContext) -> Equality:
-        """``J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c`` (six rows)."""
-        lay = ctx.layout
-        J = ctx.carry.J_target
-        A = np.zeros((6, lay.n))
-        A[:, lay.leader] = -J[:, :lay.n_l]
-        A[:, lay.follower] = ctx.J_f
-        A[:, lay.grasps] = -J[:, lay.n_l:]
-        if not self.exact_orientation:
-            A[3:, lay.grasp_follower] = 0.0  # the paper's frozen grasp orientation
-        return Equality(A, self.gain * ctx.closure_error, self.row_names)
+        """Rows 1-6 ``J_o [ql_dot; m_l] = scale_max V_o(t) + K_l e_l``, then the closure's.
+
+        Rows 7-12: ``J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c``.
+
+        Raises
+        ------
+        NonFiniteError
+            The rows would hold NaN or infinity.
+        """
+        carry, lay = ctx.carry, ctx.layout
+        A = np.empty((12, lay.n))
+        b = np.empty(12)
+        twist = ctx.task.trajectory.twist(ctx.state.t)
+        if not kernel.carry_equality(
+                lay.n_l, carry.J_object, carry.J_target, ctx.J_f, twist, ctx.leader_error,
+                ctx.closure_error, ctx.scale_max, self.leader_gain, self.correction_gain,
+                self.exact_orientation, A, b):
+            raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
+        return Equality(A, b, self.row_names)
 
 
-__all__ = ["GraspClosureTask", "ObjectPathTask"]
+__all__ = ["CarryTasks"]

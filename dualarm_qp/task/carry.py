@@ -14,13 +14,16 @@ rigid leader grasp the object frame sits at ``T_l H1``; with a sliding leader gr
 ``T_l G_l(sigma_l)^-1``, where ``G_l(sigma_l) = P M(rate sigma_l) C`` is the leader's
 grasp on its own path, so that its inverse is ``C^-1 M(-rate sigma_l) P^-1``.
 
-Every quantity is computed in one pass per state (:meth:`CarryModel.update`) and read
-from there by the step builder, the trace and the checks.
+Every quantity is computed in one call of the compiled kernel per state
+(:meth:`CarryModel.update`, on the kernel's copy of the model,
+:mod:`~dualarm_qp.kinematics.compiled`) and read from there by the step builder, the
+trace and the checks.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -28,11 +31,11 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
+from ..kinematics.compiled import compiled_chain, set_frame_placement, set_joint_placement
 from .surfaces import GraspSurface, SlideJoint
 
 FloatArray = NDArray[np.float64]
 
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _JOINTS = {("prismatic", "x"): pin.JointModelPX, ("prismatic", "y"): pin.JointModelPY,
            ("revolute", "x"): pin.JointModelRX, ("revolute", "y"): pin.JointModelRY}
 
@@ -133,8 +136,20 @@ class CarryModel:
             self._cols = [*range(n_l), n_l + 1, n_l]
             self._col_rate = np.r_[np.ones(n_l), joint_f.rate, self._leader_rate]
         self.model = model
-        self.data = model.createData()
+        self.data = model.createData()  # for the callers' own Pinocchio calls
+        self.chain = compiled_chain(model)
+        self._frames = (int(self._tool), int(self._object), int(self._target))
         self._q = np.zeros(model.nq)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The kernel's copy is rebuilt from the Pinocchio model on unpickling.
+        state = self.__dict__.copy()
+        del state["chain"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.chain = compiled_chain(self.model)
 
     def place_follower(self, surface: GraspSurface) -> None:
         """Put the follower's grasp joint on a new path of the same kind.
@@ -154,15 +169,16 @@ class CarryModel:
                 f"the follower's grasp joint is {self._follower_kind[0]} along "
                 f"{self._follower_kind[1]}; a {joint.kind} joint along {joint.axis} cannot "
                 "replace it")
-        model = self.model
-        model.jointPlacements[self._follower_joint] = self._follower_at * _se3(joint.placement)
-        model.frames[self._target].placement = _se3(joint.child)
+        model, chain = self.model, self.chain
+        set_joint_placement(model, chain, self._follower_joint,
+                            self._follower_at * _se3(joint.placement))
+        set_frame_placement(model, chain, self._target, _se3(joint.child))
         self._follower_rate = joint.rate
         self._col_rate[self.n_l] = joint.rate
 
     def update(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0) -> CarryKinematics:
         """Compute every pose and Jacobian at ``(q_l [rad], sigma_f [m], sigma_l [m])``."""
-        model, data, q = self.model, self.data, self._q
+        q = self._q
         n_l = self.n_l
         q[:n_l] = q_l
         if self.n_grasp == 2:
@@ -170,11 +186,12 @@ class CarryModel:
             q[n_l + 1] = self._follower_rate * sigma_f
         else:
             q[n_l] = self._follower_rate * sigma_f
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        J_tool = pin.getFrameJacobian(model, data, self._tool, _LWA)[:, :n_l]
-        J_object = pin.getFrameJacobian(model, data, self._object, _LWA)
-        J_target = pin.getFrameJacobian(model, data, self._target, _LWA)
+        T = np.empty((12, 4))
+        J = np.empty((18, q.shape[0]))
+        self.chain.compute(q, self._frames, self._frames, T, J)
+        J_tool = J[0:6, :n_l]
+        J_object = J[6:12]
+        J_target = J[12:18]
         if self.n_grasp == 2:  # Pinocchio's order [q_l, leader, follower] -> [q_l, f, l]
             cols, rate = self._cols, self._col_rate
             J_object = J_object[:, cols] * rate
@@ -182,9 +199,7 @@ class CarryModel:
         else:  # already in decision order: only the grasp column is scaled (a fresh array)
             J_object[:, n_l] *= self._follower_rate
             J_target[:, n_l] *= self._follower_rate
-        return CarryKinematics(
-            data.oMf[self._tool].homogeneous, J_tool, data.oMf[self._object].homogeneous,
-            J_object, data.oMf[self._target].homogeneous, J_target)
+        return CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
 
 
 __all__ = ["CarryKinematics", "CarryModel"]

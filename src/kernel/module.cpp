@@ -1,14 +1,19 @@
-// dualarm_qp._kernel: the compiled exact solver and the certificate's numeric core.
+// dualarm_qp._kernel: the compiled exact solver, the certificate's numeric core and the
+// arms' kinematics (Pinocchio's C++ API, header-only).
 // Every function takes numpy arrays (float64) and returns numpy arrays and Python
 // scalars; the Python wrappers (dualarm_qp/solvers) map them to the library's types.
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/stl/pair.h>
+#include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
 #include "certify.hpp"
 #include "constants.hpp"
 #include "dense_qp.hpp"
+#include "equality.hpp"
+#include "kinematics.hpp"
 #include "linalg.hpp"
 #include "nnls.hpp"
 #include "nullspace.hpp"
@@ -38,7 +43,10 @@ dqk::Factor factor_from(const Mat& U, const Vec& sigma, const Mat& V, const Mat&
 }  // namespace
 
 NB_MODULE(_kernel, m) {
-  m.doc() = "The compiled exact step solver and the certificate's numeric core.";
+  m.doc() = "The compiled exact step solver, the certificate's numeric core and the arms' kinematics.";
+  // Arms hold their Chain for the life of the process (module-level experiments and
+  // caches included); nanobind would list those still alive at exit as leaks.
+  nb::set_leak_warnings(false);
   m.attr("SOURCE_HASH") = DQK_SOURCE_HASH;
   m.attr("RANK_RTOL") = dqk::RANK_RTOL;
   m.attr("CONSISTENCY_TOL") = dqk::CONSISTENCY_TOL;
@@ -48,6 +56,31 @@ NB_MODULE(_kernel, m) {
   m.attr("TIE_RTOL") = dqk::TIE_RTOL;
   m.attr("PRICE_TOL") = dqk::PRICE_TOL;
   m.attr("PIVOT_TOL") = dqk::PIVOT_TOL;
+  m.attr("PINOCCHIO_VERSION") = dqk::pinocchio_version();
+
+  nb::class_<dqk::Chain>(m, "Chain",
+                         "A chain of one-dof joints with frames, rebuilt as a pinocchio::Model.")
+      .def(nb::init<const std::vector<int>&, const std::vector<int>&, const dqk::RowMat&,
+                    const dqk::RowMat&, const std::vector<int>&, const dqk::RowMat&>(),
+           "parents"_a, "kinds"_a, "axes"_a, "placements"_a, "frame_parents"_a,
+           "frame_placements"_a)
+      .def_prop_ro("nq", &dqk::Chain::nq)
+      .def_prop_ro("njoints", &dqk::Chain::njoints)
+      .def_prop_ro("nframes", &dqk::Chain::nframes)
+      .def_prop_ro("updates", &dqk::Chain::updates, "How many times update ran.")
+      .def_prop_ro("q", &dqk::Chain::q, "The joints of the last update.")
+      .def("set_joint_placement", &dqk::Chain::set_joint_placement, "joint"_a, "T"_a)
+      .def("set_frame_placement", &dqk::Chain::set_frame_placement, "frame"_a, "T"_a)
+      .def("update", &dqk::Chain::update, "q"_a,
+           "Forward kinematics, every joint's Jacobian and every frame's pose at q.")
+      .def("compute", &dqk::Chain::compute, "q"_a, "pose_frames"_a, "jac_frames"_a,
+           "T"_a.noconvert(), "J"_a.noconvert(),
+           "update(q); then the poses of pose_frames into T (4k, 4) and the Jacobians of "
+           "jac_frames into J (6m, nq), C-contiguous float64 arrays.")
+      .def("frame_poses", &dqk::Chain::frame_poses, "frames"_a, "T"_a.noconvert(),
+           "The poses of frames at the last update into T (4k, 4).")
+      .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a, "J"_a.noconvert(),
+           "The Jacobian of frame at the last update into J (6, nq).");
 
   m.def("factor", [](const Mat& A) { return factor_tuple(dqk::factor(A)); }, "A"_a,
         "Truncated SVD of A: (U, sigma, V, N).");
@@ -149,6 +182,12 @@ NB_MODULE(_kernel, m) {
       "A"_a, "b"_a, "U"_a, "sigma"_a, "V"_a, "N"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a,
       "root_full"_a, "center"_a, "x"_a, "bounds"_a,
       "Whether x is the step's minimiser (the KKT test of certify).");
+
+  m.def("carry_equality", &dqk::carry_equality, "n_l"_a, "J_object"_a, "J_target"_a, "J_f"_a,
+        "twist"_a, "e_l"_a, "e_c"_a, "scale"_a, "gain_l"_a, "gain_c"_a,
+        "exact_orientation"_a, "A"_a.noconvert(), "b"_a.noconvert(),
+        "The step's equality block into A (12, n) and b (12): the object follows D(t), "
+        "the grasp stays closed. Returns whether both are finite.");
 
   m.def(
       "scale_lp",

@@ -73,8 +73,8 @@ class CollisionLimit:
     def frames(self, ctx: StepContext) -> FloatArray:
         """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
         lf, ff = self._frames
-        leader = np.array([ctx.leader_arm.frame_pose(f) for f in lf])
-        follower = np.array([ctx.follower_arm.frame_pose(f) for f in ff])
+        leader = ctx.leader_arm.frame_poses(lf)
+        follower = ctx.follower_arm.frame_poses(ff)
         return self.scene.frames(leader, follower, ctx.carry.T_object)
 
     def constraint(self, ctx: StepContext) -> Constraint:

@@ -1,0 +1,70 @@
+// One kinematic chain (a tree of one-dof joints with frames) on Pinocchio's C++ API.
+// The Python layer builds the model with Pinocchio (URDF or DH, base folded in, tool and
+// link frames added) and hands its description over as arrays; the kernel rebuilds the
+// same pinocchio::Model (header-only: no libpinocchio is linked) and runs the forward
+// kinematics and the frame Jacobians on it. Pinocchio stays out of this header.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace dqk {
+
+using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using Pose = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
+
+// Joint kinds, Pinocchio's one-dof joints: revolute about x, y, z or an axis, prismatic
+// along x, y, z or an axis.
+enum JointKind : int { RX = 0, RY, RZ, RAXIS, PX, PY, PZ, PAXIS };
+
+class Chain {
+ public:
+  // Joints 1..n (the universe, joint 0, is implied): parents[i] is the parent of joint
+  // i + 1, kinds[i] its JointKind, axes row i its unit axis (RAXIS, PAXIS), placements
+  // rows 4i..4i+3 its placement in the parent joint. Frames 1..m likewise (frame 0 is
+  // the universe): the parent joint and the placement in it. Throws
+  // std::invalid_argument on malformed input.
+  Chain(const std::vector<int>& parents, const std::vector<int>& kinds, const RowMat& axes,
+        const RowMat& placements, const std::vector<int>& frame_parents,
+        const RowMat& frame_placements);
+  ~Chain();
+  Chain(const Chain&) = delete;
+  Chain& operator=(const Chain&) = delete;
+
+  int nq() const;
+  int njoints() const;  // with the universe
+  int nframes() const;  // with the universe
+  std::uint64_t updates() const { return updates_; }
+  const Eigen::VectorXd& q() const { return q_; }
+
+  // Replace the placement of joint j (1..n) or frame f (0..m: the universe's too) in its
+  // parent joint.
+  void set_joint_placement(int j, const Pose& T);
+  void set_frame_placement(int f, const Pose& T);
+
+  // Forward kinematics, every joint's Jacobian and every frame's placement at q.
+  void update(const Eigen::VectorXd& q);
+  // update(q), then the world poses of pose_frames stacked into T (4k x 4) and the
+  // LOCAL_WORLD_ALIGNED Jacobians [v; w] of jac_frames stacked into J (6m x nq). The
+  // outputs are the caller's arrays: returning fresh ones costs more than the kinematics.
+  void compute(const Eigen::VectorXd& q, const std::vector<int>& pose_frames,
+               const std::vector<int>& jac_frames, Eigen::Ref<RowMat> T, Eigen::Ref<RowMat> J);
+  // After update: the world poses of frames into T (4k x 4), the Jacobian of frame f
+  // into J (6 x nq).
+  void frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) const;
+  void frame_jacobian(int f, Eigen::Ref<RowMat> J) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Eigen::VectorXd q_;
+  std::uint64_t updates_ = 0;
+  void check_frame(int f) const;
+};
+
+// The Pinocchio version of the headers the kernel was compiled with.
+const char* pinocchio_version();
+
+}  // namespace dqk
