@@ -546,10 +546,17 @@ def rollout(
                             f"{clearance.minimum * 1e3:.1f} mm (sample {clearance.sample}; "
                             "collision avoidance is off)")
     if torque is not None and failure is None and torque.enforced and not torque.kept:
-        failure = torque_failure(torque, trace)
+        if plant is None:
+            failure = torque_failure(torque, trace)
+        else:  # quasi-static torques at measured states, not commanded ones: tell
+            warnings.append("the measured motion left a limit: "
+                            f"{torque_failure(torque, trace).message}")
     if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
         failure = blocked_by_pair(controller, trace, failure)
-    if failure is not None and failure.criterion in (*EXPLAINED, "solver") and len(trace):
+    if (failure is not None and plant is None
+            and failure.criterion in (*EXPLAINED, "solver") and len(trace)):
+        # With a plant, a failure at a measured state may be the plant's own (a diverged
+        # simulation): it is not relabelled.
         failure = blocked_by_torque(controller, trace, failure)
     if failure is not None and failure.criterion in EXPLAINED and len(trace):
         failure = _explained(controller, trace, failure)
@@ -682,7 +689,18 @@ def clearance_failure(report: ClearanceReport, trace: Trace) -> Failure:
 
 
 def torque_failure(report: TorqueReport, trace: Trace) -> Failure:
-    """Return the failure of a run whose recorded torque went beyond its limit and allowance."""
+    """Return the failure of a run whose recorded torque went beyond its limit and allowance.
+
+    A run whose grasps could not hold the load at some sample (no torque there) fails at
+    the first such sample.
+    """
+    if report.breach_sample < 0 or 0 <= report.first_unbalanced < report.breach_sample:
+        k = report.first_unbalanced
+        t = float(trace.t[k])
+        return Failure("torque", k, t, math.nan, math.nan,
+                       f"step {k} at t = {t:.4f} s: the grasps cannot hold the load there, "
+                       f"so the joint torques are not known ({report.unbalanced} such "
+                       "samples)")
     k = report.breach_sample
     t = float(trace.t[k])
     tau = np.r_[trace.tau_leader[k], trace.tau_follower[k]]
@@ -690,10 +708,11 @@ def torque_failure(report: TorqueReport, trace: Trace) -> Failure:
     names = [f"ql{i + 1}" for i in range(n_l)] + [f"qf{i + 1}"
                                                    for i in range(trace.tau_follower.shape[1])]
     j = names.index(report.breach_joint)
-    return Failure("torque", k, t, float(tau[j]), math.nan,
+    limit = report.breach_limit
+    return Failure("torque", k, t, float(tau[j]), limit,
                    f"step {k} at t = {t:.4f} s: the recorded motion needs "
-                   f"{tau[j]:.4g} N m at joint {report.breach_joint}, beyond its limit and "
-                   f"the allowance of {100 * report.allowance_rtol:g}%")
+                   f"{tau[j]:.4g} N m at joint {report.breach_joint}, beyond its limit of "
+                   f"{limit:.4g} N m and the allowance of {100 * report.allowance_rtol:g}%")
 
 
 def _realised_failure(realised: dict[str, LimitReport], trace: Trace, dt: float

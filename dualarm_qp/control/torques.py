@@ -97,6 +97,10 @@ class TorqueReport:
         Its joint ("" for none).
     unbalanced : int
         Samples where the grasps could not hold the load (torques NaN).
+    breach_limit : float
+        The breaching joint's limit [N m] (NaN: none).
+    first_unbalanced : int
+        The first of the ``unbalanced`` samples (-1: none).
     """
 
     ratio: float
@@ -109,11 +113,16 @@ class TorqueReport:
     breach_sample: int
     breach_joint: str
     unbalanced: int
+    breach_limit: float = math.nan
+    first_unbalanced: int = -1
 
     @property
     def kept(self) -> bool:
-        """Whether every recorded torque stays within its limit and the allowance."""
-        return self.breach_sample < 0
+        """Whether every recorded torque is known and within its limit and the allowance.
+
+        A sample where the grasps cannot hold the load has no torque: it is not kept.
+        """
+        return self.breach_sample < 0 and self.unbalanced == 0
 
     def as_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -147,7 +156,7 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
     n_l = task.leader.n
     n = len(trace)
     tau = np.full((n, n_l + task.follower.n), np.nan)
-    unbalanced = 0
+    unbalanced, first_unbalanced = 0, -1
     # The hands' wrenches are the trace's (record_loads wrote them): the same split.
     no_load = np.zeros(6)
     for k in range(n):
@@ -155,6 +164,7 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
                     else (trace.f_leader[k], trace.f_follower[k]))
         if not (np.isfinite(w_l).all() and np.isfinite(w_f).all()):
             unbalanced += 1  # the grasps cannot hold the load here
+            first_unbalanced = k if first_unbalanced < 0 else first_unbalanced
             continue
         tau[k, :n_l] = statics.leader.torque(trace.q_l[k], w_l)
         tau[k, n_l:] = statics.follower.torque(trace.q_f[k], w_f)
@@ -164,7 +174,7 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
     names = _names(controller)
     limited = np.isfinite(limit)
     ratio, joint, sample, peak, lim = math.nan, "", -1, math.nan, math.nan
-    breach, breach_joint = -1, ""
+    breach, breach_joint, breach_limit = -1, "", math.nan
     if limited.any() and n and np.isfinite(tau).any():
         r = np.where(limited, np.abs(tau) / np.where(limited, limit, 1.0), 0.0)
         r = np.where(np.isnan(r), -np.inf, r)
@@ -175,8 +185,9 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
         over = np.argwhere(r > 1.0 + TORQUE_RTOL)
         if over.size:
             breach, breach_joint = int(over[0, 0]), names[int(over[0, 1])]
+            breach_limit = float(limit[int(over[0, 1])])
     return TorqueReport(ratio, joint, sample, peak, lim, TORQUE_RTOL, opts.torque_limits,
-                        breach, breach_joint, unbalanced)
+                        breach, breach_joint, unbalanced, breach_limit, first_unbalanced)
 
 
 @dataclass(frozen=True)

@@ -62,11 +62,11 @@ class TorqueLimit:
 
     def constraint(self, ctx: StepContext) -> Constraint:
         """Return the two rows of every limited joint at this state."""
-        s = ctx.state
-        st = self.torques.linearised(s.q_l, s.q_f, s.sigma, s.sigma_leader)
         rows = self._rows
         if rows.size == 0:
             return Constraint()
+        s = ctx.state
+        st = self.torques.linearised(s.q_l, s.q_f, s.sigma, s.sigma_leader)
         D = ctx.dt * st.D[rows]
         tau, lim = st.tau[rows], self.tau_max[rows]
         return Constraint(G=np.vstack([D, -D]), h=np.r_[lim - tau, lim + tau],
