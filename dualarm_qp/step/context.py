@@ -91,11 +91,7 @@ class ArmKinematics:
         """Jacobian (3, n_joints) of the world point ``point`` [m] fixed to frame ``frame``."""
         J = self.frame_jacobian(frame)
         r = point - self.frame_pose(frame)[:3, 3]
-        return J[:3] - _skew(r) @ J[3:]
-
-
-def _skew(r: FloatArray) -> FloatArray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+        return J[:3] - pin.skew(r) @ J[3:]
 
 
 @dataclass(frozen=True, slots=True)

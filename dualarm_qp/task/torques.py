@@ -124,7 +124,7 @@ class ArmStatics:
         pin.forwardKinematics(model, data, q)
         p = pin.updateFramePlacement(model, data, self.frame).translation
         f, m = -wrench[:3], -wrench[3:]
-        at_origin = pin.Force(f, m + _skew(p) @ f)  # about the world origin
+        at_origin = pin.Force(f, m + pin.skew(p) @ f)  # about the world origin
         self._fext[self.joint] = data.oMi[self.joint].actInv(at_origin)
 
     def torque(self, q: FloatArray, wrench: FloatArray) -> FloatArray:
@@ -168,7 +168,7 @@ class ArmStatics:
         J = np.array(pin.getFrameJacobian(model, data, self.frame, _LWA)).reshape(6, self.n)
         omega = J[3:]
         # omega_j x f = -f x omega_j
-        turned = -np.vstack([_skew(wrench[:3]) @ omega, _skew(wrench[3:]) @ omega])
+        turned = -np.vstack([pin.skew(wrench[:3]) @ omega, pin.skew(wrench[3:]) @ omega])
         dtau -= J.T @ turned
         return tau, dtau, J
 
@@ -304,10 +304,10 @@ class LoadTorques:
             dw = np.stack(cols, axis=-1)  # (2, 6, n_l + n_g)
             return dw[0, :, :n_l], dw[1, :, :n_l], dw[0, :, n_l:], dw[1, :, n_l:]
         g = load.gravity
-        turned_g = -_skew(g) @ omega  # (3, n_l): omega_j x g
+        turned_g = -pin.skew(g) @ omega  # (3, n_l): omega_j x g
         dq = []
         for i in range(2):
-            rot = -np.vstack([_skew(w[i, :3]) @ omega, _skew(w[i, 3:]) @ omega])
+            rot = -np.vstack([pin.skew(w[i, :3]) @ omega, pin.skew(w[i, 3:]) @ omega])
             dq.append(rot - K[6 * i:6 * i + 6] @ turned_g)
         ds = np.zeros((2, 6, n_g))
         assert at is not None and load is not None
@@ -339,10 +339,6 @@ class LoadTorques:
         n_l = self.n_l
         sigma_l = float(y[n_l + 1]) if self.n_grasp == 2 else 0.0
         return self.wrenches(y[:n_l], float(y[n_l]), sigma_l)
-
-
-def _skew(r: FloatArray) -> FloatArray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
@@ -379,7 +375,7 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
     blocks = []
     for hand in hands:
         M_i = np.eye(6)  # S A_i U = [I 0; [p_i - about]x / L  I]
-        M_i[3:, :3] = _skew((hand.point - about) / L)
+        M_i[3:, :3] = pin.skew((hand.point - about) / L)
         T = hand.free * u[:, None]  # U T_i
         if T.shape[1]:  # M_i P_i, P_i = I - T (T^T T)^-1 T^T
             M_i = M_i - (M_i @ T) @ np.linalg.solve(T.T @ T, T.T)
@@ -387,7 +383,7 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
     MP = np.hstack(blocks)  # M P;  M P M^T = (M P)(M P)^T
     N = MP @ MP.T
     # b = S (-mass [g; (c - about) x g])
-    B = -mass * np.vstack([np.eye(3), _skew(centre - about)]) / u[:, None]
+    B = -mass * np.vstack([np.eye(3), pin.skew(centre - about)]) / u[:, None]
     eig, V = np.linalg.eigh(N)
     if eig[0] > RCOND_MIN * eig[-1]:
         scaled = MP.T @ np.linalg.solve(N, B)  # u per unit g, (6 n_hands, 3)
