@@ -63,10 +63,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     plant = None
     if args.plant == "mujoco":  # docs/physics.md
         from .physics.check import arm_tau_max
-        from .physics.command import settings_of
+        from .physics.command import settings_for
         from .physics.plant import MujocoPlant
 
-        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)),
+        plant = MujocoPlant(exp.task, settings_for(load_config(args.config), exp,
+                                                   str(args.config)),
                             arm_tau_max=arm_tau_max(exp))
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))

@@ -40,7 +40,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..control.loads import hand_wrenches
-from ..errors import DualArmError, SupportLostError
+from ..errors import DualArmError, InvalidInputError, SupportLostError
 from ..step.state import Command, DualArmState
 from ..task.loads import (
     ObjectLoad,
@@ -88,7 +88,13 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
 
     The ``physics.tau_max`` of the file, else the arm's own ``tau_max`` (``arm_tau_max``:
     the controller's, :class:`~dualarm_qp.step.options.StepOptions`), else the model's: a
-    URDF's ``effort``; a joint without one (a DH arm) gets inf.
+    URDF's ``effort``; a joint without one (a DH arm) gets inf. A given limit is one
+    value (every joint) or one per joint; ``inf`` leaves a joint unlimited.
+
+    Raises
+    ------
+    InvalidInputError
+        A given limit with another count.
     """
     out = {}
     for role, arm in (("leader", task.leader), ("follower", task.follower)):
@@ -96,7 +102,11 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
         if given is None and arm_tau_max is not None:
             given = arm_tau_max.get(role)
         if given is not None:
-            lim = np.broadcast_to(np.asarray(given, dtype=float), (arm.n,)).copy()
+            given = np.asarray(given, dtype=float).ravel()
+            if given.size not in (1, arm.n):
+                raise InvalidInputError(f"{role}: torque limits need 1 value or {arm.n} (one "
+                                        f"per joint), got {given.size}")
+            lim = np.broadcast_to(given, (arm.n,)).copy()
         else:
             lim = np.asarray(arm.model.effortLimit, dtype=float).copy()
             lim[~((lim > 0) & (lim < 1e30))] = np.inf

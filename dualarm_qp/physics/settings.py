@@ -20,7 +20,8 @@
       slip_max: 5              # length unit: a grasp off its commanded place -> slipped
       squeeze_max: 20          # N: internal force above the rigid replay's -> squeezed
       torque_ratio_max: 1.0    # share of the joint torque limit -> torque
-      tau_max: {leader: [...], follower: [...]}   # N m; default: the URDF's effort
+      tau_max: {leader: [...], follower: [...]}   # N m, 1 value or 1 per joint, .inf: none;
+                               # default: the arm's tau_max, else the URDF's effort
 
 Every key is optional; the defaults are those above (docs/physics.md says why). The
 section is validated with the rest of the file: an unknown key or a bad value is a

@@ -86,6 +86,30 @@ def test_a_bad_physics_section_of_the_run_is_bad_input(tmp_path, capsys):
     assert "physics.kv" in err and "config.yaml" in err
 
 
+def test_a_torque_limit_of_the_wrong_length_is_bad_input_before_any_output(short_run,
+                                                                         capsys):
+    resolved = short_run / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"] = {"tau_max": {"follower": [1, 2, 3]}}
+    resolved.write_text(yaml.safe_dump(data))
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    assert main(["physics", str(short_run)]) == 2
+    err = capsys.readouterr().err
+    assert "physics.tau_max.follower" in err and "config.yaml" in err
+    assert "1 value" in err and "or 6" in err and "Traceback" not in err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
+def test_run_with_the_plant_refuses_a_torque_limit_of_the_wrong_length(tmp_path, capsys):
+    path = _short_beam(tmp_path, tau_max={"leader": [10, 20]})
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots",
+                 "--plant", "mujoco"]) == 2
+    err = capsys.readouterr().err
+    assert "physics.tau_max.leader" in err and str(path) in err and "or 6" in err
+    assert not out.exists()
+
+
 def test_the_delay_option_reaches_the_closed_loop(short_run):
     assert main(["physics", str(short_run), "--delay"]) == 0
     physics = json.loads((short_run / "summary.json").read_text())["physics"]
