@@ -15,10 +15,11 @@ puts it at the run's start and then, for each controller sample of ``dt``:
   split of :mod:`dualarm_qp.control.loads`, at the sample's measured state), so that
   what the servo corrects is the dynamics and what the split does not foresee;
 * measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
-  chain joint), the object's pose, each hand's wrench on the object and its internal
-  part (:mod:`.measure`), the joint torques (their peak share of the limits over the
-  substeps), the welds' errors and a support's gap, into
-  :attr:`MujocoPlant.log`;
+  chain joint) and its slip (off the coordinate at the sample's start plus ``dt`` times
+  the commanded sliding speed, with or without ``delay``), the object's pose, each
+  hand's wrench on the object and its internal part (:mod:`.measure`), the joint
+  torques (their peak share of the limits over the substeps), the welds' errors and a
+  support's gap, into :attr:`MujocoPlant.log`;
 * hands the controller the measured state, or the previous sample's with ``delay``.
 
 Contacts (:attr:`PhysicsSettings.contacts
@@ -310,7 +311,10 @@ class MujocoPlant:
         tau = state.t + dt * command.scale
         previous = self._measured
         self._measured = self._measure(tau)
-        self._record(tau, state.sigma + dt * command.m, peak_tau)
+        # The slip's reference: where the sample's command moved the grasp from where it
+        # was at the sample's start, measured (previous), not from the state the controller
+        # was handed (with delay a sample older: one sample of sliding would count as slip).
+        self._record(tau, previous.sigma + dt * command.m, peak_tau)
         out = previous if self.delay else self._measured
         return DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
 
