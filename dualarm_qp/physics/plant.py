@@ -220,7 +220,9 @@ class MujocoPlant:
         self._settle()
         self.t = 0.0
         self.log = {k: [] for k in LOG_COLUMNS}
-        self.log.update(w_leader=[], w_follower=[], torque=[], sigma=[])
+        self.log.update(w_leader=[], w_follower=[], torque=[], torque_peak=[], sigma=[])
+        #: Each arm joint's largest |torque| over the last sample's substeps [N m].
+        self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
         self._record(state.t, state.sigma, 0.0)
 
@@ -244,7 +246,8 @@ class MujocoPlant:
               leak: bool = False) -> float:
         """Servo the arms at ``rates`` [rad/s] for ``dt``; return the peak torque ratio.
 
-        The ratio is |torque| / limit, the largest of every joint's over the substeps.
+        The ratio is |torque| / limit, the largest of every joint's over the substeps;
+        each joint's largest |torque| over them is left in :attr:`peak_torque` [N m].
 
         ``q_ref`` resets the position reference first (a replay sets it to each recorded
         sample); otherwise it goes on from where the last call left it. With ``leak``
@@ -257,6 +260,7 @@ class MujocoPlant:
         h = m.opt.timestep
         dofs = self._arm_dofs
         peak_tau = 0.0
+        peak_abs = np.zeros(dofs.size)
         start, n = self._rates, self.substeps
         pull = h / self.settings.reference_time if leak else 0.0
         qadr = self._arm_q
@@ -266,11 +270,14 @@ class MujocoPlant:
             mj.mj_step(m, d)
             if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
                 raise PhysicsError(f"the simulation diverged at t = {self.t:.4f} s")
-            ratio = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs]) / self._tau_max
+            torque = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs])
+            np.maximum(peak_abs, torque, out=peak_abs)
+            ratio = torque / self._tau_max
             if ratio.size and float(ratio.max()) > peak_tau:
                 peak_tau = float(ratio.max())
                 self.worst = max(self.worst, (peak_tau, int(np.argmax(ratio)), self.t))
         self._rates = np.asarray(rates, dtype=float).copy()
+        self.peak_torque = peak_abs
         self.t += dt
         return peak_tau
 
@@ -396,6 +403,7 @@ class MujocoPlant:
         log["w_leader"].append(w_l)
         log["w_follower"].append(w_f)
         log["torque"].append(tau_j.copy())
+        log["torque_peak"].append(np.maximum(self.peak_torque, np.abs(tau_j)))
         log["sigma"].append(self._measured.sigma)
 
     def arrays(self) -> dict[str, FloatArray]:

@@ -87,6 +87,18 @@ def test_a_delayed_measurement_does_not_count_the_commanded_sliding_as_slip(beam
     assert runs[True].summary()["slip_max_m"] < 2 * runs[False].summary()["slip_max_m"]
 
 
+def test_the_largest_torque_reported_is_the_peak_the_ratio_reads(beam):
+    """torque_max_N_m is each joint's peak over the substeps, as torque_ratio_max."""
+    short = dataclasses.replace(beam, duration=0.5)
+    settings = PhysicsSettings(tau_max={"leader": np.full(6, 200.0),
+                                        "follower": np.array([150.0, 150, 150, 20, 20, 20])})
+    s = closed_loop(short, settings).summary()
+    ratio = np.r_[np.asarray(s["torque_max_N_m"]["leader"]) / 200.0,
+                  np.asarray(s["torque_max_N_m"]["follower"]) / [150, 150, 150, 20, 20, 20]]
+    assert s["torque_ratio_max"] > 0.05
+    assert ratio.max() == pytest.approx(s["torque_ratio_max"], rel=1e-12)
+
+
 @pytest.mark.slow
 def test_a_lagged_follower_squeezes_more_than_the_rigid_replay(beam, beam_trace):
     tr, settings = beam_trace, PhysicsSettings()
@@ -107,7 +119,7 @@ def test_the_verdict_orders_its_reasons():
     log = {k: np.zeros(n) for k in ("t", "deviation_pos", "deviation_rot", "internal",
                                     "support", "slip", "weld_leader", "weld_follower", "gap",
                                     "torque_ratio_peak")}
-    log["torque"] = np.zeros((n, 12))
+    log["torque"] = log["torque_peak"] = np.zeros((n, 12))
     limits = {"leader": np.full(6, np.inf), "follower": np.full(6, np.inf)}
     base = PhysicsRun("replay", {k: v.copy() for k, v in log.items()}, 0.0, [], limits)
     assert verdict(PhysicsRun("closed_loop", log, 0.0, [], limits), base, settings) == ("ok", [])
@@ -137,7 +149,7 @@ def test_a_turned_object_is_dropped_and_the_closed_loop_runs_to_the_thresholds()
     log = {k: np.zeros(n) for k in ("t", "deviation_pos", "deviation_rot", "internal",
                                     "support", "slip", "weld_leader", "weld_follower", "gap",
                                     "torque_ratio_peak")}
-    log["torque"] = np.zeros((n, 12))
+    log["torque"] = log["torque_peak"] = np.zeros((n, 12))
     limits = {"leader": np.full(6, np.inf), "follower": np.full(6, np.inf)}
     log["deviation_rot"][1] = 0.15
     status, reasons = verdict(PhysicsRun("closed_loop", log, 0.0, [], limits), None, settings)
