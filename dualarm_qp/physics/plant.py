@@ -69,8 +69,21 @@ LOG_COLUMNS = {
 SETTLE = 0.5
 
 
+#: A weld's position error beyond which the simulation is taken to have diverged [m]:
+#: a sound run keeps its welds within a millimetre or so; a few centimetres means the
+#: hands have come off the object (:meth:`MujocoPlant.check_stable`).
+WELD_ERROR_DIVERGED = 0.05
+
+#: A joint speed beyond which the simulation is taken to have diverged [rad/s, m/s].
+SPEED_DIVERGED = 1e4
+
+
 class PhysicsError(DualArmError):
     """The simulation cannot be built or diverged (NaN or unbounded state)."""
+
+
+class DivergedError(PhysicsError):
+    """The simulation blew up (the servo gains are unstable for the model and substep)."""
 
 
 def _mujoco() -> Any:
@@ -240,6 +253,38 @@ class MujocoPlant:
             self._mj.mj_step(self.model, self.data)
         self._servo(rest)
         self._mj.mj_forward(self.model, self.data)
+        self.check_stable("while the start settled", welds=True)
+
+    def check_stable(self, when: str, *, welds: bool = False) -> None:
+        """Raise :class:`DivergedError` if the simulation blew up.
+
+        Blown up: a coordinate not finite, a joint faster than :data:`SPEED_DIVERGED`,
+        MuJoCo's own instability warning (it then resets the state, which looks sound),
+        or, with ``welds``, a weld's error beyond :data:`WELD_ERROR_DIVERGED`.
+        """
+        d = self.data
+        reason = None
+        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            reason = "a coordinate is not finite"
+        elif np.abs(d.qvel).max(initial=0.0) > SPEED_DIVERGED:
+            reason = f"a joint moves faster than {SPEED_DIVERGED:g} rad/s"
+        elif d.warning[self._mj.mjtWarning.mjWARN_BADQACC].number > 0:
+            reason = "MuJoCo found an infinite or huge acceleration and reset the state"
+        elif welds:
+            error = max(self._weld_error(self.physics.welds[r]) for r in ("leader", "follower"))
+            if error > WELD_ERROR_DIVERGED:
+                reason = (f"a hand is {error * 1e3:.0f} mm off its grasp (a sound run keeps "
+                          f"under {WELD_ERROR_DIVERGED * 1e3:g} mm)")
+        if reason is None:
+            return
+        st = self.settings
+        gains = (f"kp {st.kp:g} N m/rad, kv {st.kv:g} N m s/rad" if st.servo == "position"
+                 else f"kv {st.kv:g} N m s/rad")
+        raise DivergedError(
+            f"the simulation diverged {when}: {reason}. The servo gains ({gains}) are "
+            f"unstable with armature {st.armature:g} kg m^2 at substeps of "
+            f"{self.model.opt.timestep * 1e3:.3g} ms: lower physics.kp (or physics.kv), "
+            "or raise physics.armature")
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
@@ -268,8 +313,7 @@ class MujocoPlant:
             self.q_ref = self.q_ref + h * rates + pull * (d.qpos[qadr] - self.q_ref)
             self._servo(start + (i + 1) / n * (rates - start))
             mj.mj_step(m, d)
-            if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
-                raise PhysicsError(f"the simulation diverged at t = {self.t:.4f} s")
+            self.check_stable(f"at t = {self.t + (i + 1) * h:.4f} s")
             torque = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs])
             np.maximum(peak_abs, torque, out=peak_abs)
             ratio = torque / self._tau_max
@@ -279,6 +323,7 @@ class MujocoPlant:
         self._rates = np.asarray(rates, dtype=float).copy()
         self.peak_torque = peak_abs
         self.t += dt
+        self.check_stable(f"at t = {self.t:.4f} s", welds=True)
         return peak_tau
 
     def _feedforward(self, state: DualArmState) -> None:
@@ -411,4 +456,5 @@ class MujocoPlant:
         return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
 
 
-__all__ = ["LOG_COLUMNS", "SETTLE", "MujocoPlant", "PhysicsError", "torque_limits"]
+__all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",
+           "MujocoPlant", "PhysicsError", "torque_limits"]

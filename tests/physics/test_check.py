@@ -87,6 +87,16 @@ def test_a_delayed_measurement_does_not_count_the_commanded_sliding_as_slip(beam
     assert runs[True].summary()["slip_max_m"] < 2 * runs[False].summary()["slip_max_m"]
 
 
+def test_hands_off_their_grasps_are_a_divergence(beam, monkeypatch):
+    """The weld guard: an error beyond WELD_ERROR_DIVERGED stops the simulation."""
+    from dualarm_qp.physics.plant import DivergedError
+
+    monkeypatch.setattr("dualarm_qp.physics.plant.WELD_ERROR_DIVERGED", 1e-9)
+    plant = MujocoPlant(beam.task, PhysicsSettings())
+    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.kp"):
+        plant.reset(beam.initial, beam.options.dt)
+
+
 def test_the_largest_torque_reported_is_the_peak_the_ratio_reads(beam):
     """torque_max_N_m is each joint's peak over the substeps, as torque_ratio_max."""
     short = dataclasses.replace(beam, duration=0.5)

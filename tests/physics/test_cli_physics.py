@@ -110,6 +110,35 @@ def test_run_with_the_plant_refuses_a_torque_limit_of_the_wrong_length(tmp_path,
     assert not out.exists()
 
 
+UNSTABLE = {"kp": 1e11, "armature": 0}  # the servos blow the simulation up at once
+
+
+def test_a_simulation_that_blows_up_fails_the_run_and_says_which_gain(tmp_path, capsys,
+                                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warning to MUJOCO_LOG.TXT here
+    path = _short_beam(tmp_path, **UNSTABLE)
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots",
+                 "--plant", "mujoco"]) == 1
+    err = capsys.readouterr().err
+    assert "simulation diverged" in err and "unstable" in err and "lower physics.kp" in err
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_a_physics_check_that_blows_up_fails_and_leaves_the_run(short_run, capsys,
+                                                                 monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warning to MUJOCO_LOG.TXT here
+    resolved = short_run / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"] = UNSTABLE
+    resolved.write_text(yaml.safe_dump(data))
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    assert main(["physics", str(short_run)]) == 1
+    err = capsys.readouterr().err
+    assert "simulation diverged" in err and "lower physics.kp" in err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
 def test_the_delay_option_reaches_the_closed_loop(short_run):
     assert main(["physics", str(short_run), "--delay"]) == 0
     physics = json.loads((short_run / "summary.json").read_text())["physics"]
