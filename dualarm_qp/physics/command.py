@@ -6,7 +6,8 @@ The run's ``config.yaml`` rebuilds its task and its ``physics:`` settings; its
 ``physics.png`` is drawn, and ``report.html`` and ``summary.json`` (key ``physics``) are
 rewritten, ``summary.json`` last, with SIGINT and SIGTERM held.
 Nothing is written before both simulations are done; an error while writing puts the
-earlier ``report.html`` back and removes ``physics.png``, so the folder is as before.
+earlier ``report.html`` and ``physics.png`` back (or removes them if there were none),
+so the folder is as before.
 """
 
 from __future__ import annotations
@@ -122,7 +123,7 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
     report = run / REPORT_FILE
     old_report = report.read_bytes() if report.is_file() else None
     figure = run / PHYSICS_FIGURE
-    had_figure = figure.is_file()
+    old_figure = figure.read_bytes() if figure.is_file() else None  # an earlier check's
     outputs = [str(o) for o in summary.get("outputs", []) if o != "summary.json"]
     new = dict(summary, physics=physics)
     with SignalHold():
@@ -137,12 +138,11 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
             write_text(report, render_run_report(run, new, pngs))
             write_json(run / "summary.json", new)
         except BaseException:
-            if old_report is not None:
-                atomic_write_with(report, lambda tmp: _put(tmp, old_report))
-            else:
-                report.unlink(missing_ok=True)
-            if not had_figure:
-                figure.unlink(missing_ok=True)
+            for path, old in ((report, old_report), (figure, old_figure)):
+                if old is not None:
+                    atomic_write_with(path, lambda tmp, data=old: _put(tmp, data))
+                else:
+                    path.unlink(missing_ok=True)
             raise
 
 

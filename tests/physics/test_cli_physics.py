@@ -68,6 +68,21 @@ def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypa
     assert after == before
 
 
+def test_a_failure_while_writing_again_keeps_the_earlier_figure(short_run, monkeypatch,
+                                                                 capsys):
+    assert main(["physics", str(short_run)]) == 0
+    (short_run / "physics.png").write_bytes(b"an earlier check's figure")
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+
+    def broken(path, data):
+        raise OSError("disk full")
+
+    monkeypatch.setattr("dualarm_qp.physics.command.write_json", broken)
+    assert main(["physics", str(short_run), "--delay"]) == 1
+    assert "disk full" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
 def test_not_a_run_folder_is_bad_input(tmp_path, capsys):
     assert main(["physics", str(tmp_path)]) == 2
     assert "summary.json" in capsys.readouterr().err
