@@ -13,6 +13,7 @@ so the folder is as before.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from pathlib import Path
@@ -140,7 +141,7 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
         except BaseException:
             for path, old in ((report, old_report), (figure, old_figure)):
                 if old is not None:
-                    atomic_write_with(path, lambda tmp, data=old: _put(tmp, data))
+                    atomic_write_with(path, functools.partial(_put, data=old))
                 else:
                     path.unlink(missing_ok=True)
             raise
