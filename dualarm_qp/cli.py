@@ -180,6 +180,19 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _physics_line(name: str, r: dict[str, Any] | None) -> str:
+    """Return the console line of one simulation of the physics check (its peaks)."""
+    if r is None:
+        return f"  {name:<12} none (the run recorded fewer than two samples)"
+    ratio = r["torque_ratio_max"]
+    torque = ("no torque limits" if ratio is None or ratio != ratio  # None or NaN
+              else f"torque/limit {ratio:.3g}")
+    return (f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
+            f"internal force {r['internal_force_max_N']:.3g} N, follower support "
+            f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
+            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
+
+
 def _cmd_physics(args: argparse.Namespace) -> int:
     from .physics.command import check_run
     from .physics.plant import DivergedError
@@ -190,15 +203,7 @@ def _cmd_physics(args: argparse.Namespace) -> int:
         _err(str(err))
         return EXIT_FAILED
     for name in ("replay", "closed_loop"):
-        r = p[name]
-        if r is None:
-            print(f"  {name:<12} none (the run recorded fewer than two samples)")
-            continue
-        print(f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
-              f"internal force {r['internal_force_max_N']:.3g} N, follower support "
-              f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
-              f"slip {r['slip_max_m'] * 1e3:.3g} mm, torque/limit {r['torque_ratio_max']:.3g} "
-              f"({r['wall_time_s']:.1f} s)")
+        print(_physics_line(name, p[name]))
     print(f"physics.status: {p['status']}" + "".join(f"\n  {w}" for w in p["reasons"]))
     print(f"  outputs: {args.run_dir}/ (physics.png, report.html, summary.json)")
     return EXIT_OK

@@ -42,6 +42,7 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     summary = json.loads((short_run / "summary.json").read_text())
     physics = summary["physics"]
     assert physics["status"] == "ok" and f"physics.status: {physics['status']}" in printed
+    assert printed.count("no torque limits") == 2 and "nan" not in printed  # the PUMA's
     for run in ("replay", "closed_loop"):
         assert physics[run]["samples"] == 11
         assert physics[run]["deviation_pos_max_m"] < 1e-3
@@ -53,6 +54,19 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     assert main(["physics", str(short_run)]) == 0  # again: replaced, not added twice
     again = json.loads((short_run / "summary.json").read_text())
     assert again["outputs"].count("physics.png") == 1
+
+
+@pytest.mark.parametrize(("ratio", "words"), [(float("nan"), "no torque limits"),
+                                               (None, "no torque limits"),
+                                               (0.5, "torque/limit 0.5 ")])
+def test_the_console_line_says_when_no_joint_has_a_torque_limit(ratio, words):
+    from dualarm_qp.cli import _physics_line
+
+    peaks = {"deviation_pos_max_m": 1e-4, "internal_force_max_N": 10.0,
+             "follower_support_min_N": 15.0, "follower_support_max_N": 30.0,
+             "slip_max_m": 1e-4, "torque_ratio_max": ratio, "wall_time_s": 2.0}
+    line = _physics_line("closed_loop", peaks)
+    assert words in line and "nan" not in line
 
 
 def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypatch, capsys):
