@@ -152,6 +152,8 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
     result = rollout(exp.controller(), exp.initial, duration=exp.duration,
                      limits=closed_loop_limits(exp.limits, settings), plant=plant,
                      stop_on_interrupt=True)
+    if not plant.log:  # refused before its first sample (the preflight): record the start
+        plant.reset(exp.initial, exp.options.dt)
     return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
                       plant.limits, result, _worst(plant))
 

@@ -97,6 +97,17 @@ def test_hands_off_their_grasps_are_a_divergence(beam, monkeypatch):
         plant.reset(beam.initial, beam.options.dt)
 
 
+def test_a_closed_loop_the_preflight_refuses_still_records_its_start():
+    """The rollout skips the plant's reset then; the check records the start itself."""
+    path = CONFIGS / "puma_beam_leader_near_singular.yaml"  # a waypoint out of reach
+    exp = build_experiment(load_config(path), str(path))
+    run = closed_loop(exp, PhysicsSettings())
+    assert run.result is not None and run.result.failure is not None
+    assert run.result.failure.criterion == "unreachable"
+    assert run.summary()["samples"] == 1
+    assert verdict(run, None, PhysicsSettings())[0] == "stopped"
+
+
 def test_the_largest_torque_reported_is_the_peak_the_ratio_reads(beam):
     """torque_max_N_m is each joint's peak over the substeps, as torque_ratio_max."""
     short = dataclasses.replace(beam, duration=0.5)
