@@ -151,3 +151,22 @@ def test_a_physics_torque_limit_needs_one_value_or_one_per_joint(config):
     assert f"1 value (every joint) or {exp.task.follower.n}" in text
     with pytest.raises(InvalidInputError, match="follower: torque limits need 1 value"):
         torque_limits(exp.task, PhysicsSettings.from_spec(cfg.physics, 1e-3))
+
+
+def test_the_modules_example_is_the_defaults_in_the_units_it_states():
+    import dataclasses
+    import re
+
+    import dualarm_qp.physics.settings as module
+    from dualarm_qp.experiments.config_physics import PhysicsSpec
+
+    doc = module.__doc__ or ""
+    units = yaml.safe_load(re.search(r"``units: (\{.*?\})``", doc).group(1))
+    block = doc.split("    physics:\n", 1)[1].split("\n\n", 1)[0]
+    example = {k: v for k, v in yaml.safe_load(block).items() if k != "tau_max"}
+    scale = {"mm": 1e-3, "m": 1.0, "deg": np.pi / 180, "rad": 1.0, "ms": 1e-3, "s": 1.0}
+    got = PhysicsSettings.from_spec(PhysicsSpec(**example), scale[units["length"]],
+                                    scale[units["angle"]], scale[units["time"]])
+    assert dataclasses.replace(got, tau_max=None) == PhysicsSettings()
+    degrees = float(re.search(r"``rotation_max`` is ([0-9.]+)", doc).group(1))
+    assert np.radians(degrees) == pytest.approx(PhysicsSettings().rotation_max, rel=2e-3)
