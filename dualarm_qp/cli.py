@@ -61,20 +61,30 @@ def _cmd_run(args: argparse.Namespace) -> int:
     check_solver_options(solver_options, used=[exp.solver_name])
     controller = exp.controller()  # fail early (exit 2) on an unknown or missing solver
     plant = None
+    blown_up: tuple[type[DualArmError], ...] = ()  # what fails the run rather than the input
     if args.plant == "mujoco":  # docs/physics.md
         from .physics.check import arm_tau_max
-        from .physics.command import settings_of
-        from .physics.plant import MujocoPlant
+        from .physics.command import settings_for
+        from .physics.plant import DivergedError, MujocoPlant
 
-        plant = MujocoPlant(exp.task, settings_of(load_config(args.config)),
+        blown_up = (DivergedError,)
+        plant = MujocoPlant(exp.task, settings_for(load_config(args.config), exp,
+                                                   str(args.config)),
                             arm_tau_max=arm_tau_max(exp))
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
+    new_folder = not out.exists()
     out = _output_folder(out)
-    outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
-                             plots=not args.no_plots, animate=args.animate,
-                             controller=controller, plant=plant)
+    try:
+        outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
+                                 plots=not args.no_plots, animate=args.animate,
+                                 controller=controller, plant=plant)
+    except blown_up as err:  # the simulation blew up: a failed run, not bad input
+        if new_folder and not any(out.iterdir()):
+            out.rmdir()  # nothing was written: leave no empty folder
+        _err(str(err))
+        return EXIT_FAILED
     print_run_summary(outcome.summary, str(out))
     if outcome.interrupted:
         _err(f"{outcome.summary['message']}; the samples done are written")
@@ -170,20 +180,30 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _physics_line(name: str, r: dict[str, Any] | None) -> str:
+    """Return the console line of one simulation of the physics check (its peaks)."""
+    if r is None:
+        return f"  {name:<12} none (the run recorded fewer than two samples)"
+    ratio = r["torque_ratio_max"]
+    torque = ("no torque limits" if ratio is None or ratio != ratio  # None or NaN
+              else f"torque/limit {ratio:.3g}")
+    return (f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
+            f"internal force {r['internal_force_max_N']:.3g} N, follower support "
+            f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
+            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
+
+
 def _cmd_physics(args: argparse.Namespace) -> int:
     from .physics.command import check_run
+    from .physics.plant import DivergedError
 
-    p = check_run(args.run_dir, delay=True if args.delay else None)
+    try:
+        p = check_run(args.run_dir, delay=True if args.delay else None)
+    except DivergedError as err:  # the simulation blew up: a failed check, not bad input
+        _err(str(err))
+        return EXIT_FAILED
     for name in ("replay", "closed_loop"):
-        r = p[name]
-        if r is None:
-            print(f"  {name:<12} none (the run recorded fewer than two samples)")
-            continue
-        print(f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
-              f"internal force {r['internal_force_max_N']:.3g} N, follower support "
-              f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
-              f"slip {r['slip_max_m'] * 1e3:.3g} mm, torque/limit {r['torque_ratio_max']:.3g} "
-              f"({r['wall_time_s']:.1f} s)")
+        print(_physics_line(name, p[name]))
     print(f"physics.status: {p['status']}" + "".join(f"\n  {w}" for w in p["reasons"]))
     print(f"  outputs: {args.run_dir}/ (physics.png, report.html, summary.json)")
     return EXIT_OK

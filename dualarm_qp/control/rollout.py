@@ -401,8 +401,6 @@ def rollout(
     corr = (0.0, 0.0)
     controller.reset(initial_rates)
     v_start = controller.applied
-    if plant is not None:
-        plant.reset(DualArmState(path_start, q_l, q_f, sigma, sigma_l), dt)
     if preflight:
         miss = unreachable_waypoint(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
                                     path_end, within_ranges=hard)
@@ -433,6 +431,8 @@ def rollout(
                 _realised(controller, tr.truncate(0), dt, v_start), hard,
                 extras={"path_collision": {"obstacle": blocked.obstacle, "t_s": blocked.t,
                                            "distance_m": blocked.distance}})
+    if plant is not None:  # after the preflight: a run it refuses does not pay the settle
+        plant.reset(DualArmState(path_start, q_l, q_f, sigma, sigma_l), dt)
     failure: Failure | None = None
     warnings: list[str] = []
     projection_failures = 0

@@ -12,16 +12,20 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, model_validator
 
-from .config_types import Flag, Model, Num, keyed, scalar_to_list
+from .config_types import Flag, LimitNum, Model, Num, keyed, scalar_to_list
 
-NumList = Annotated[list[Num], Field(min_length=1)]
+LimitList = Annotated[list[LimitNum], Field(min_length=1)]
 
 
 class TorqueLimitSpec(Model):
-    """Joint torque limits [N m] per arm: one number for every joint, or one per joint."""
+    """Joint torque limits [N m] per arm: one number for every joint, or one per joint.
 
-    leader: NumList | None = None
-    follower: NumList | None = None
+    ``.inf`` leaves a joint unlimited. The count (1 or the arm's joint count) is checked
+    against the arm when the task is built (:func:`dualarm_qp.physics.command.settings_for`).
+    """
+
+    leader: LimitList | None = None
+    follower: LimitList | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -35,7 +39,7 @@ class TorqueLimitSpec(Model):
         for role in ("leader", "follower"):
             values = getattr(self, role)
             if values is not None and not all(v > 0 for v in values):
-                raise keyed(role, "torque limits must be > 0 N m")
+                raise keyed(role, "torque limits must be > 0 N m (.inf: no limit)")
         return self
 
 

@@ -87,7 +87,8 @@ class PhysicsRun:
             v = g[key]
             return float(np.max(v)) if v.size and not np.isnan(v).all() else float("nan")
 
-        torque = g["torque"]
+        torque = g["torque_peak"]  # each joint's largest |torque| over a sample's substeps
+        n_l = len(self.limits["leader"])
         out: dict[str, Any] = {
             "samples": int(g["t"].size), "wall_time_s": self.wall_s,
             "deviation_pos_max_m": peak("deviation_pos"),
@@ -100,10 +101,8 @@ class PhysicsRun:
             "support_gap_max_m": peak("gap"),
             "torque_ratio_max": peak("torque_ratio_peak"),
             "torque_ratio_worst": {"joint": self.worst[1], "t_s": self.worst[2]},
-            "torque_max_N_m": {"leader": np.max(np.abs(torque[:, :len(self.limits["leader"])]),
-                                                axis=0).tolist(),
-                               "follower": np.max(np.abs(torque[:, len(self.limits["leader"]):]),
-                                                  axis=0).tolist()},
+            "torque_max_N_m": {"leader": np.max(torque[:, :n_l], axis=0).tolist(),
+                               "follower": np.max(torque[:, n_l:], axis=0).tolist()},
         }
         if self.result is not None:
             out["completed"] = self.result.completed
@@ -153,6 +152,8 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
     result = rollout(exp.controller(), exp.initial, duration=exp.duration,
                      limits=closed_loop_limits(exp.limits, settings), plant=plant,
                      stop_on_interrupt=True)
+    if not plant.log:  # refused before its first sample (the preflight): record the start
+        plant.reset(exp.initial, exp.options.dt)
     return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
                       plant.limits, result, _worst(plant))
 

@@ -6,12 +6,14 @@ The run's ``config.yaml`` rebuilds its task and its ``physics:`` settings; its
 ``physics.png`` is drawn, and ``report.html`` and ``summary.json`` (key ``physics``) are
 rewritten, ``summary.json`` last, with SIGINT and SIGTERM held.
 Nothing is written before both simulations are done; an error while writing puts the
-earlier ``report.html`` back and removes ``physics.png``, so the folder is as before.
+earlier ``report.html`` and ``physics.png`` back (or removes them if there were none),
+so the folder is as before.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from pathlib import Path
@@ -19,12 +21,12 @@ from typing import Any
 
 from .._io import atomic_write_with, write_json, write_text
 from .._signals import SignalHold
-from ..errors import DualArmError, InvalidInputError
+from ..errors import ConfigError, DualArmError, InvalidInputError
 from ..experiments.animate import run_config
 from ..experiments.config import ExperimentConfig, load_config
 from ..experiments.figures.rundata import RunData
 from ..experiments.html_report import REPORT_FILE, render_run_report
-from ..experiments.setup import build_experiment
+from ..experiments.setup import Experiment, build_experiment
 from .check import closed_loop, physics_summary, replay
 from .report import PHYSICS_FIGURE, write_physics_figure
 from .settings import PhysicsSettings
@@ -49,6 +51,24 @@ def settings_of(cfg: ExperimentConfig) -> PhysicsSettings:
     return PhysicsSettings.from_spec(cfg.physics, 1e-3 if cfg.units.length == "mm" else 1.0,
                                      math.pi / 180.0 if cfg.units.angle == "deg" else 1.0,
                                      1e-3 if cfg.units.time == "ms" else 1.0)
+
+
+def settings_for(cfg: ExperimentConfig, exp: Experiment, path: str) -> PhysicsSettings:
+    """Return the physics settings of the experiment file ``path``, checked against its arms.
+
+    Raises
+    ------
+    ConfigError
+        A ``physics.tau_max.<arm>`` with neither 1 value nor one per joint of the arm.
+    """
+    settings = settings_of(cfg)
+    for role, arm in (("leader", exp.task.leader), ("follower", exp.task.follower)):
+        given = None if settings.tau_max is None else settings.tau_max.get(role)
+        if given is not None and given.size not in (1, arm.n):
+            raise ConfigError(f"needs 1 value (every joint) or {arm.n} (one per {role} "
+                              f"joint), got {given.size}", path=path,
+                              key=f"physics.tau_max.{role}", valid=("1", str(arm.n)))
+    return settings
 
 
 def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:
@@ -81,7 +101,7 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
         exp = build_experiment(cfg, str(config))
     except DualArmError as err:
         raise InvalidInputError(f"cannot rebuild the task of {run}: {err}") from None
-    settings = settings_of(cfg)
+    settings = settings_for(cfg, exp, str(config))
     if delay is not None:
         settings = dataclasses.replace(settings, delay=delay)
     data = RunData.read(run / "trajectory.csv")
@@ -104,7 +124,7 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
     report = run / REPORT_FILE
     old_report = report.read_bytes() if report.is_file() else None
     figure = run / PHYSICS_FIGURE
-    had_figure = figure.is_file()
+    old_figure = figure.read_bytes() if figure.is_file() else None  # an earlier check's
     outputs = [str(o) for o in summary.get("outputs", []) if o != "summary.json"]
     new = dict(summary, physics=physics)
     with SignalHold():
@@ -119,12 +139,11 @@ def _write(run: Path, summary: dict[str, Any], physics: dict[str, Any],
             write_text(report, render_run_report(run, new, pngs))
             write_json(run / "summary.json", new)
         except BaseException:
-            if old_report is not None:
-                atomic_write_with(report, lambda tmp: _put(tmp, old_report))
-            else:
-                report.unlink(missing_ok=True)
-            if not had_figure:
-                figure.unlink(missing_ok=True)
+            for path, old in ((report, old_report), (figure, old_figure)):
+                if old is not None:
+                    atomic_write_with(path, functools.partial(_put, data=old))
+                else:
+                    path.unlink(missing_ok=True)
             raise
 
 
@@ -132,4 +151,4 @@ def _put(path: str, data: bytes) -> None:
     Path(path).write_bytes(data)
 
 
-__all__ = ["check_run", "settings_of"]
+__all__ = ["check_run", "settings_for", "settings_of"]

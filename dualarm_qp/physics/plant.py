@@ -15,10 +15,11 @@ puts it at the run's start and then, for each controller sample of ``dt``:
   split of :mod:`dualarm_qp.control.loads`, at the sample's measured state), so that
   what the servo corrects is the dynamics and what the split does not foresee;
 * measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
-  chain joint), the object's pose, each hand's wrench on the object and its internal
-  part (:mod:`.measure`), the joint torques (their peak share of the limits over the
-  substeps), the welds' errors and a support's gap, into
-  :attr:`MujocoPlant.log`;
+  chain joint) and its slip (off the coordinate at the sample's start plus ``dt`` times
+  the commanded sliding speed, with or without ``delay``), the object's pose, each
+  hand's wrench on the object and its internal part (:mod:`.measure`), the joint
+  torques (their peak share of the limits over the substeps), the welds' errors and a
+  support's gap, into :attr:`MujocoPlant.log`;
 * hands the controller the measured state, or the previous sample's with ``delay``.
 
 Contacts (:attr:`PhysicsSettings.contacts
@@ -40,7 +41,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..control.loads import hand_wrenches
-from ..errors import DualArmError, SupportLostError
+from ..errors import DualArmError, InvalidInputError, SupportLostError
 from ..step.state import Command, DualArmState
 from ..task.loads import (
     ObjectLoad,
@@ -68,8 +69,21 @@ LOG_COLUMNS = {
 SETTLE = 0.5
 
 
+#: A weld's position error beyond which the simulation is taken to have diverged [m]:
+#: a sound run keeps its welds within a millimetre or so; a few centimetres means the
+#: hands have come off the object (:meth:`MujocoPlant.check_stable`).
+WELD_ERROR_DIVERGED = 0.05
+
+#: A joint speed beyond which the simulation is taken to have diverged [rad/s, m/s].
+SPEED_DIVERGED = 1e4
+
+
 class PhysicsError(DualArmError):
     """The simulation cannot be built or diverged (NaN or unbounded state)."""
+
+
+class DivergedError(PhysicsError):
+    """The simulation blew up (the servo gains are unstable for the model and substep)."""
 
 
 def _mujoco() -> Any:
@@ -88,7 +102,13 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
 
     The ``physics.tau_max`` of the file, else the arm's own ``tau_max`` (``arm_tau_max``:
     the controller's, :class:`~dualarm_qp.step.options.StepOptions`), else the model's: a
-    URDF's ``effort``; a joint without one (a DH arm) gets inf.
+    URDF's ``effort``; a joint without one (a DH arm) gets inf. A given limit is one
+    value (every joint) or one per joint; ``inf`` leaves a joint unlimited.
+
+    Raises
+    ------
+    InvalidInputError
+        A given limit with another count.
     """
     out = {}
     for role, arm in (("leader", task.leader), ("follower", task.follower)):
@@ -96,7 +116,11 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
         if given is None and arm_tau_max is not None:
             given = arm_tau_max.get(role)
         if given is not None:
-            lim = np.broadcast_to(np.asarray(given, dtype=float), (arm.n,)).copy()
+            given = np.asarray(given, dtype=float).ravel()
+            if given.size not in (1, arm.n):
+                raise InvalidInputError(f"{role}: torque limits need 1 value or {arm.n} (one "
+                                        f"per joint), got {given.size}")
+            lim = np.broadcast_to(given, (arm.n,)).copy()
         else:
             lim = np.asarray(arm.model.effortLimit, dtype=float).copy()
             lim[~((lim > 0) & (lim < 1e30))] = np.inf
@@ -209,7 +233,9 @@ class MujocoPlant:
         self._settle()
         self.t = 0.0
         self.log = {k: [] for k in LOG_COLUMNS}
-        self.log.update(w_leader=[], w_follower=[], torque=[], sigma=[])
+        self.log.update(w_leader=[], w_follower=[], torque=[], torque_peak=[], sigma=[])
+        #: Each arm joint's largest |torque| over the last sample's substeps [N m].
+        self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
         self._record(state.t, state.sigma, 0.0)
 
@@ -227,13 +253,46 @@ class MujocoPlant:
             self._mj.mj_step(self.model, self.data)
         self._servo(rest)
         self._mj.mj_forward(self.model, self.data)
+        self.check_stable("while the start settled", welds=True)
+
+    def check_stable(self, when: str, *, welds: bool = False) -> None:
+        """Raise :class:`DivergedError` if the simulation blew up.
+
+        Blown up: a coordinate not finite, a joint faster than :data:`SPEED_DIVERGED`,
+        MuJoCo's own instability warning (it then resets the state, which looks sound),
+        or, with ``welds``, a weld's error beyond :data:`WELD_ERROR_DIVERGED`.
+        """
+        d = self.data
+        reason = None
+        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            reason = "a coordinate is not finite"
+        elif np.abs(d.qvel).max(initial=0.0) > SPEED_DIVERGED:
+            reason = f"a joint moves faster than {SPEED_DIVERGED:g} rad/s"
+        elif d.warning[self._mj.mjtWarning.mjWARN_BADQACC].number > 0:
+            reason = "MuJoCo found an infinite or huge acceleration and reset the state"
+        elif welds:
+            error = max(self._weld_error(self.physics.welds[r]) for r in ("leader", "follower"))
+            if error > WELD_ERROR_DIVERGED:
+                reason = (f"a hand is {error * 1e3:.0f} mm off its grasp (a sound run keeps "
+                          f"under {WELD_ERROR_DIVERGED * 1e3:g} mm)")
+        if reason is None:
+            return
+        st = self.settings
+        gains = (f"kp {st.kp:g} N m/rad, kv {st.kv:g} N m s/rad" if st.servo == "position"
+                 else f"kv {st.kv:g} N m s/rad")
+        raise DivergedError(
+            f"the simulation diverged {when}: {reason}. The servo gains ({gains}) are "
+            f"unstable with armature {st.armature:g} kg m^2 at substeps of "
+            f"{self.model.opt.timestep * 1e3:.3g} ms: lower physics.kp (or physics.kv), "
+            "or raise physics.armature")
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
               leak: bool = False) -> float:
         """Servo the arms at ``rates`` [rad/s] for ``dt``; return the peak torque ratio.
 
-        The ratio is |torque| / limit, the largest of every joint's over the substeps.
+        The ratio is |torque| / limit, the largest of every joint's over the substeps;
+        each joint's largest |torque| over them is left in :attr:`peak_torque` [N m].
 
         ``q_ref`` resets the position reference first (a replay sets it to each recorded
         sample); otherwise it goes on from where the last call left it. With ``leak``
@@ -246,6 +305,7 @@ class MujocoPlant:
         h = m.opt.timestep
         dofs = self._arm_dofs
         peak_tau = 0.0
+        peak_abs = np.zeros(dofs.size)
         start, n = self._rates, self.substeps
         pull = h / self.settings.reference_time if leak else 0.0
         qadr = self._arm_q
@@ -253,14 +313,17 @@ class MujocoPlant:
             self.q_ref = self.q_ref + h * rates + pull * (d.qpos[qadr] - self.q_ref)
             self._servo(start + (i + 1) / n * (rates - start))
             mj.mj_step(m, d)
-            if not np.all(np.isfinite(d.qpos)) or np.abs(d.qvel).max(initial=0.0) > 1e4:
-                raise PhysicsError(f"the simulation diverged at t = {self.t:.4f} s")
-            ratio = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs]) / self._tau_max
+            self.check_stable(f"at t = {self.t + (i + 1) * h:.4f} s")
+            torque = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs])
+            np.maximum(peak_abs, torque, out=peak_abs)
+            ratio = torque / self._tau_max
             if ratio.size and float(ratio.max()) > peak_tau:
                 peak_tau = float(ratio.max())
                 self.worst = max(self.worst, (peak_tau, int(np.argmax(ratio)), self.t))
         self._rates = np.asarray(rates, dtype=float).copy()
+        self.peak_torque = peak_abs
         self.t += dt
+        self.check_stable(f"at t = {self.t:.4f} s", welds=True)
         return peak_tau
 
     def _feedforward(self, state: DualArmState) -> None:
@@ -300,7 +363,10 @@ class MujocoPlant:
         tau = state.t + dt * command.scale
         previous = self._measured
         self._measured = self._measure(tau)
-        self._record(tau, state.sigma + dt * command.m, peak_tau)
+        # The slip's reference: where the sample's command moved the grasp from where it
+        # was at the sample's start, measured (previous), not from the state the controller
+        # was handed (with delay a sample older: one sample of sliding would count as slip).
+        self._record(tau, previous.sigma + dt * command.m, peak_tau)
         out = previous if self.delay else self._measured
         return DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
 
@@ -382,6 +448,7 @@ class MujocoPlant:
         log["w_leader"].append(w_l)
         log["w_follower"].append(w_f)
         log["torque"].append(tau_j.copy())
+        log["torque_peak"].append(np.maximum(self.peak_torque, np.abs(tau_j)))
         log["sigma"].append(self._measured.sigma)
 
     def arrays(self) -> dict[str, FloatArray]:
@@ -389,4 +456,5 @@ class MujocoPlant:
         return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
 
 
-__all__ = ["LOG_COLUMNS", "SETTLE", "MujocoPlant", "PhysicsError", "torque_limits"]
+__all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",
+           "MujocoPlant", "PhysicsError", "torque_limits"]

@@ -1,12 +1,13 @@
 """The ``physics:`` section of an experiment file: servos, thresholds, default object.
 
-::
+The defaults, as written in a file with ``units: {length: mm, angle: rad, time: s}``
+(in a file with degrees, ``rotation_max`` is 2.86 for the same 0.05 rad)::
 
     physics:
       servo: position          # position (PD about the commanded motion) or velocity
       reference: measured      # the position reference leaks towards the measured
                                # joints (measured) or only integrates (integrated)
-      reference_time: 0.03     # time unit: the leak's time constant
+      reference_time: 0.03     # time unit (here s): the leak's time constant
       kp: 100000               # N m/rad, position gain (SI whatever the file's units)
       kv: 300                  # N m s/rad, velocity gain
       armature: 0.05           # kg m^2, rotor inertia added to every arm joint
@@ -15,12 +16,13 @@
                                # all (also arm-arm, arm-object) or none
       object_mass: 3           # kg, when the object states no mass
       link_density: 1000       # kg/m^3, links whose model has no inertia
-      deviation_max: 10        # length unit: the object off D(t) -> dropped
+      deviation_max: 10        # length unit (here mm): the object off D(t) -> dropped
       rotation_max: 0.05       # angle unit (here rad): the object turned off D(t) -> dropped
-      slip_max: 5              # length unit: a grasp off its commanded place -> slipped
+      slip_max: 5              # length unit (here mm): a grasp off its commanded place -> slipped
       squeeze_max: 20          # N: internal force above the rigid replay's -> squeezed
       torque_ratio_max: 1.0    # share of the joint torque limit -> torque
-      tau_max: {leader: [...], follower: [...]}   # N m; default: the URDF's effort
+      tau_max: {leader: [...], follower: [...]}   # N m, 1 value or 1 per joint, .inf: none;
+                               # default: the arm's tau_max, else the URDF's effort
 
 Every key is optional; the defaults are those above (docs/physics.md says why). The
 section is validated with the rest of the file: an unknown key or a bad value is a

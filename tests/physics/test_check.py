@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +74,52 @@ def test_the_beam_in_closed_loop_stays_on_its_path(beam):
     assert s["follower_support_min_N"] > 0.0
 
 
+def test_a_delayed_measurement_does_not_count_the_commanded_sliding_as_slip(beam):
+    """With delay the controller plans from a sample-old state; the grasp still slides
+    as commanded, so the slip stays well under one sample's sliding."""
+    short = dataclasses.replace(beam, duration=1.0)
+    runs = {delay: closed_loop(short, PhysicsSettings(), delay=delay) for delay in (False, True)}
+    for run in runs.values():
+        assert run.result is not None and run.result.completed
+    step = float(np.abs(np.diff(runs[True].log["sigma"])).max())
+    assert step > 2e-3  # the grasp slides: over 2 mm in a sample
+    assert runs[True].summary()["slip_max_m"] < 0.1 * step
+    assert runs[True].summary()["slip_max_m"] < 2 * runs[False].summary()["slip_max_m"]
+
+
+def test_hands_off_their_grasps_are_a_divergence(beam, monkeypatch):
+    """The weld guard: an error beyond WELD_ERROR_DIVERGED stops the simulation."""
+    from dualarm_qp.physics.plant import DivergedError
+
+    monkeypatch.setattr("dualarm_qp.physics.plant.WELD_ERROR_DIVERGED", 1e-9)
+    plant = MujocoPlant(beam.task, PhysicsSettings())
+    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.kp"):
+        plant.reset(beam.initial, beam.options.dt)
+
+
+def test_a_closed_loop_the_preflight_refuses_still_records_its_start():
+    """The rollout skips the plant's reset then; the check records the start itself."""
+    path = CONFIGS / "puma_beam_leader_near_singular.yaml"  # a waypoint out of reach
+    exp = build_experiment(load_config(path), str(path))
+    run = closed_loop(exp, PhysicsSettings())
+    assert run.result is not None and run.result.failure is not None
+    assert run.result.failure.criterion == "unreachable"
+    assert run.summary()["samples"] == 1
+    assert verdict(run, None, PhysicsSettings())[0] == "stopped"
+
+
+def test_the_largest_torque_reported_is_the_peak_the_ratio_reads(beam):
+    """torque_max_N_m is each joint's peak over the substeps, as torque_ratio_max."""
+    short = dataclasses.replace(beam, duration=0.5)
+    settings = PhysicsSettings(tau_max={"leader": np.full(6, 200.0),
+                                        "follower": np.array([150.0, 150, 150, 20, 20, 20])})
+    s = closed_loop(short, settings).summary()
+    ratio = np.r_[np.asarray(s["torque_max_N_m"]["leader"]) / 200.0,
+                  np.asarray(s["torque_max_N_m"]["follower"]) / [150, 150, 150, 20, 20, 20]]
+    assert s["torque_ratio_max"] > 0.05
+    assert ratio.max() == pytest.approx(s["torque_ratio_max"], rel=1e-12)
+
+
 @pytest.mark.slow
 def test_a_lagged_follower_squeezes_more_than_the_rigid_replay(beam, beam_trace):
     tr, settings = beam_trace, PhysicsSettings()
@@ -93,7 +140,7 @@ def test_the_verdict_orders_its_reasons():
     log = {k: np.zeros(n) for k in ("t", "deviation_pos", "deviation_rot", "internal",
                                     "support", "slip", "weld_leader", "weld_follower", "gap",
                                     "torque_ratio_peak")}
-    log["torque"] = np.zeros((n, 12))
+    log["torque"] = log["torque_peak"] = np.zeros((n, 12))
     limits = {"leader": np.full(6, np.inf), "follower": np.full(6, np.inf)}
     base = PhysicsRun("replay", {k: v.copy() for k, v in log.items()}, 0.0, [], limits)
     assert verdict(PhysicsRun("closed_loop", log, 0.0, [], limits), base, settings) == ("ok", [])
@@ -123,7 +170,7 @@ def test_a_turned_object_is_dropped_and_the_closed_loop_runs_to_the_thresholds()
     log = {k: np.zeros(n) for k in ("t", "deviation_pos", "deviation_rot", "internal",
                                     "support", "slip", "weld_leader", "weld_follower", "gap",
                                     "torque_ratio_peak")}
-    log["torque"] = np.zeros((n, 12))
+    log["torque"] = log["torque_peak"] = np.zeros((n, 12))
     limits = {"leader": np.full(6, np.inf), "follower": np.full(6, np.inf)}
     log["deviation_rot"][1] = 0.15
     status, reasons = verdict(PhysicsRun("closed_loop", log, 0.0, [], limits), None, settings)

@@ -42,6 +42,7 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     summary = json.loads((short_run / "summary.json").read_text())
     physics = summary["physics"]
     assert physics["status"] == "ok" and f"physics.status: {physics['status']}" in printed
+    assert printed.count("no torque limits") == 2 and "nan" not in printed  # the PUMA's
     for run in ("replay", "closed_loop"):
         assert physics[run]["samples"] == 11
         assert physics[run]["deviation_pos_max_m"] < 1e-3
@@ -55,6 +56,19 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     assert again["outputs"].count("physics.png") == 1
 
 
+@pytest.mark.parametrize(("ratio", "words"), [(float("nan"), "no torque limits"),
+                                               (None, "no torque limits"),
+                                               (0.5, "torque/limit 0.5 ")])
+def test_the_console_line_says_when_no_joint_has_a_torque_limit(ratio, words):
+    from dualarm_qp.cli import _physics_line
+
+    peaks = {"deviation_pos_max_m": 1e-4, "internal_force_max_N": 10.0,
+             "follower_support_min_N": 15.0, "follower_support_max_N": 30.0,
+             "slip_max_m": 1e-4, "torque_ratio_max": ratio, "wall_time_s": 2.0}
+    line = _physics_line("closed_loop", peaks)
+    assert words in line and "nan" not in line
+
+
 def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypatch, capsys):
     before = {p.name: p.read_bytes() for p in short_run.iterdir()}
 
@@ -66,6 +80,21 @@ def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypa
     assert "disk full" in capsys.readouterr().err
     after = {p.name: p.read_bytes() for p in short_run.iterdir()}
     assert after == before
+
+
+def test_a_failure_while_writing_again_keeps_the_earlier_figure(short_run, monkeypatch,
+                                                                 capsys):
+    assert main(["physics", str(short_run)]) == 0
+    (short_run / "physics.png").write_bytes(b"an earlier check's figure")
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+
+    def broken(path, data):
+        raise OSError("disk full")
+
+    monkeypatch.setattr("dualarm_qp.physics.command.write_json", broken)
+    assert main(["physics", str(short_run), "--delay"]) == 1
+    assert "disk full" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
 
 
 def test_not_a_run_folder_is_bad_input(tmp_path, capsys):
@@ -84,6 +113,59 @@ def test_a_bad_physics_section_of_the_run_is_bad_input(tmp_path, capsys):
     assert main(["physics", str(out)]) == 2
     err = capsys.readouterr().err
     assert "physics.kv" in err and "config.yaml" in err
+
+
+def test_a_torque_limit_of_the_wrong_length_is_bad_input_before_any_output(short_run,
+                                                                         capsys):
+    resolved = short_run / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"] = {"tau_max": {"follower": [1, 2, 3]}}
+    resolved.write_text(yaml.safe_dump(data))
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    assert main(["physics", str(short_run)]) == 2
+    err = capsys.readouterr().err
+    assert "physics.tau_max.follower" in err and "config.yaml" in err
+    assert "1 value" in err and "or 6" in err and "Traceback" not in err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
+
+
+def test_run_with_the_plant_refuses_a_torque_limit_of_the_wrong_length(tmp_path, capsys):
+    path = _short_beam(tmp_path, tau_max={"leader": [10, 20]})
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots",
+                 "--plant", "mujoco"]) == 2
+    err = capsys.readouterr().err
+    assert "physics.tau_max.leader" in err and str(path) in err and "or 6" in err
+    assert not out.exists()
+
+
+UNSTABLE = {"kp": 1e11, "armature": 0}  # the servos blow the simulation up at once
+
+
+def test_a_simulation_that_blows_up_fails_the_run_and_says_which_gain(tmp_path, capsys,
+                                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warning to MUJOCO_LOG.TXT here
+    path = _short_beam(tmp_path, **UNSTABLE)
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots",
+                 "--plant", "mujoco"]) == 1
+    err = capsys.readouterr().err
+    assert "simulation diverged" in err and "unstable" in err and "lower physics.kp" in err
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_a_physics_check_that_blows_up_fails_and_leaves_the_run(short_run, capsys,
+                                                                 monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warning to MUJOCO_LOG.TXT here
+    resolved = short_run / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"] = UNSTABLE
+    resolved.write_text(yaml.safe_dump(data))
+    before = {p.name: p.read_bytes() for p in short_run.iterdir()}
+    assert main(["physics", str(short_run)]) == 1
+    err = capsys.readouterr().err
+    assert "simulation diverged" in err and "lower physics.kp" in err
+    assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
 
 
 def test_the_delay_option_reaches_the_closed_loop(short_run):

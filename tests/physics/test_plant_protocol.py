@@ -61,3 +61,16 @@ def test_a_plant_turns_the_position_level_corrections_off():
     without = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits)
     assert with_plant.summary()["projection"] is False
     assert without.summary()["projection"] is True
+
+
+def test_a_run_the_preflight_refuses_never_resets_the_plant():
+    """The plant's reset (MuJoCo's settle) comes after the preflight checks."""
+    name = "puma_beam_leader_near_singular.yaml"  # a waypoint out of the leader's reach
+    exp = build_experiment(parse_config(yaml.safe_load((CONFIGS / name).read_text()), name),
+                           name)
+    plant = LaggingPlant(1.0)
+    result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
+                     plant=plant)
+    assert not result.completed and result.failure is not None
+    assert result.failure.criterion == "unreachable" and len(result.trace) == 0
+    assert plant.resets == [] and plant.calls == 0

@@ -114,3 +114,59 @@ def test_torque_limits_take_the_arms_tau_max_after_the_physics_section():
     own = PhysicsSettings.from_spec(given.physics, exp.options.dt)
     np.testing.assert_array_equal(torque_limits(exp.task, own, arm_tau_max(exp))["follower"],
                                   np.full(6, 40.0))
+
+
+def test_a_physics_torque_limit_may_be_infinite():
+    """``.inf`` leaves that joint without a limit, as ``<arm>.tau_max`` does."""
+    from dualarm_qp.experiments.setup import build_experiment
+    from dualarm_qp.physics.command import settings_for
+    from dualarm_qp.physics.plant import torque_limits
+
+    text = BEAM.read_text() + "\nphysics: {tau_max: {leader: [.inf, 90, 90, .inf, 20, 20]}}\n"
+    path = "beam.yaml"
+    cfg = parse_config(yaml.safe_load(text), path)
+    exp = build_experiment(cfg, path)
+    lim = torque_limits(exp.task, settings_for(cfg, exp, path))
+    np.testing.assert_array_equal(lim["leader"], [np.inf, 90, 90, np.inf, 20, 20])
+
+
+@pytest.mark.parametrize("config", ["puma_beam_limits.yaml", "ur5_pair_heavy_bar.yaml"])
+def test_a_physics_torque_limit_needs_one_value_or_one_per_joint(config):
+    from dualarm_qp.errors import InvalidInputError
+    from dualarm_qp.experiments.setup import build_experiment
+    from dualarm_qp.kinematics.robots import example_robots_dir
+    from dualarm_qp.physics.command import settings_for
+    from dualarm_qp.physics.plant import torque_limits
+
+    if config.startswith("ur5") and example_robots_dir() is None:
+        pytest.skip("example-robot-data is not installed")
+    data = yaml.safe_load((CONFIGS / config).read_text())
+    data["physics"] = {"tau_max": {"follower": [1, 2, 3]}}
+    cfg = parse_config(data, config)
+    exp = build_experiment(cfg, config)
+    with pytest.raises(ConfigError) as err:
+        settings_for(cfg, exp, config)
+    text = str(err.value)
+    assert config in text and "physics.tau_max.follower" in text
+    assert f"1 value (every joint) or {exp.task.follower.n}" in text
+    with pytest.raises(InvalidInputError, match="follower: torque limits need 1 value"):
+        torque_limits(exp.task, PhysicsSettings.from_spec(cfg.physics, 1e-3))
+
+
+def test_the_modules_example_is_the_defaults_in_the_units_it_states():
+    import dataclasses
+    import re
+
+    import dualarm_qp.physics.settings as module
+    from dualarm_qp.experiments.config_physics import PhysicsSpec
+
+    doc = module.__doc__ or ""
+    units = yaml.safe_load(re.search(r"``units: (\{.*?\})``", doc).group(1))
+    block = doc.split("    physics:\n", 1)[1].split("\n\n", 1)[0]
+    example = {k: v for k, v in yaml.safe_load(block).items() if k != "tau_max"}
+    scale = {"mm": 1e-3, "m": 1.0, "deg": np.pi / 180, "rad": 1.0, "ms": 1e-3, "s": 1.0}
+    got = PhysicsSettings.from_spec(PhysicsSpec(**example), scale[units["length"]],
+                                    scale[units["angle"]], scale[units["time"]])
+    assert dataclasses.replace(got, tau_max=None) == PhysicsSettings()
+    degrees = float(re.search(r"``rotation_max`` is ([0-9.]+)", doc).group(1))
+    assert np.radians(degrees) == pytest.approx(PhysicsSettings().rotation_max, rel=2e-3)
