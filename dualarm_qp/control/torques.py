@@ -28,11 +28,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import DualArmError, InvalidInputError
+from ..errors import DualArmError
 from ..solvers._scale import max_task_scale
 from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
-from ..task.torques import LoadTorques, torque_limits_of
+from ..task.torques import LoadTorques, model_effort, torque_limits_of
 from .trace import Trace
 
 if TYPE_CHECKING:
@@ -55,19 +55,18 @@ __all__ = ["BLOCKED_SCALE", "TORQUE_RTOL", "TorqueReport", "blocked_by_torque",
 def joint_torque_limits(controller: DualArmController) -> FloatArray:
     """Both arms' joint torque limits [N m], the leader's first (``inf`` where none is known).
 
-    The configured ``tau_max`` or the arm's ``effort``; with torque limits off an arm
+    The configured ``tau_max`` or the arm's ``effort``; with torque limits off a joint
     without either is reported against no limit.
     """
     task, opts = controller.task, controller.options
     out = []
     for arm, given, role in ((task.leader, opts.leader_tau_max, "leader"),
                              (task.follower, opts.follower_tau_max, "follower")):
-        try:
+        if opts.torque_limits:
             out.append(torque_limits_of(arm, given, role))
-        except InvalidInputError:
-            if opts.torque_limits:
-                raise
-            out.append(np.full(arm.n, np.inf))
+        else:
+            out.append(model_effort(arm) if given is None
+                       else np.asarray(given, dtype=np.float64))
     return np.concatenate(out)
 
 

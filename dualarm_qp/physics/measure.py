@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..task.loads import FALLBACK_LENGTH, wrench_space
@@ -28,10 +29,6 @@ FloatArray = NDArray[np.float64]
 
 #: MuJoCo's constraint type of an equality (``mjCNSTR_EQUALITY``).
 _EQUALITY = 0
-
-
-def _skew(r: FloatArray) -> FloatArray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def weld_wrench(model: Any, data: Any, eq: int, obj: int, dof: int, point: FloatArray
@@ -83,7 +80,7 @@ def internal_force(points: tuple[FloatArray, FloatArray], spaces: tuple[FloatArr
     for p, B, w in zip(points, spaces, wrenches, strict=True):
         C, _ = np.linalg.qr(S_inv @ B)
         A = np.eye(6)
-        A[3:, :3] = _skew(p - points[0])
+        A[3:, :3] = pin.skew(p - points[0])
         blocks.append(S_inv @ A @ S @ C)
         coords.append(C.T @ (S_inv @ w))
         bases.append(C)

@@ -51,6 +51,7 @@ from ..task.loads import (
     support_push,
 )
 from ..task.scene import DualArmTask
+from ..task.torques import model_effort
 from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
 from .settings import SUBSTEP, PhysicsSettings
@@ -122,8 +123,7 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
                                         f"per joint), got {given.size}")
             lim = np.broadcast_to(given, (arm.n,)).copy()
         else:
-            lim = np.asarray(arm.model.effortLimit, dtype=float).copy()
-            lim[~((lim > 0) & (lim < 1e30))] = np.inf
+            lim = model_effort(arm)
         out[role] = lim
     return out
 

@@ -56,10 +56,23 @@ GRASP_STEP = 1e-7
 RCOND_MIN = 1e-10
 
 __all__ = ["GRASP_STEP", "RCOND_MIN", "SPLIT_STEP", "ArmStatics", "LoadTorques", "TorqueState",
-           "split_operator", "torque_limits_of"]
+           "model_effort", "split_operator", "torque_limits_of"]
 
 #: A model's effort limit at or above this [N m] means none (Pinocchio's default).
 _NO_EFFORT = 1e30
+
+
+def model_effort(arm: SerialArm) -> FloatArray:
+    """Return an arm's joint torque limits from its model [N m] (a URDF's ``effort``).
+
+    A joint whose model states none (zero, or Pinocchio's default: every joint of a DH
+    arm) gets ``inf``.
+    """
+    effort = np.array(arm.model.effortLimit, dtype=np.float64)[:arm.n]
+    if effort.shape != (arm.n,):
+        return np.full(arm.n, np.inf)
+    effort[~((effort > 0.0) & (effort < _NO_EFFORT))] = np.inf
+    return effort
 
 
 def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> FloatArray:
@@ -75,8 +88,8 @@ def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> Flo
         is not > 0 (``inf``: that joint is not limited).
     """
     if given is None:
-        effort = np.array(arm.model.effortLimit, dtype=np.float64)[:arm.n]
-        if effort.shape != (arm.n,) or not ((effort > 0.0) & (effort < _NO_EFFORT)).all():
+        effort = model_effort(arm)
+        if not np.isfinite(effort).all():
             raise InvalidInputError(
                 f"{role}: torque limits are on but the arm's model states no joint torque "
                 "limits (a URDF's effort); give tau_max [N m] for this arm")
