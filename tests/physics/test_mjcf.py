@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from dualarm_qp.experiments import build_experiment, load_config
@@ -49,7 +50,8 @@ def test_the_models_kinematics_are_pinocchios(config):
             np.testing.assert_allclose(data.xpos[b], T[:3, 3], rtol=0, atol=1e-9)
             np.testing.assert_allclose(data.xmat[b].reshape(3, 3), T[:3, :3], rtol=0, atol=1e-9)
             frames = arm.link_frames(q)  # joint i's body carries link frame i (both models)
-            pin_data = arm.data
+            pin_data = arm.data  # the kernel computes fk: Pinocchio's own data is ours to fill
+            pin.forwardKinematics(arm.model, pin_data, q)
             for j in range(1, arm.n + 1):
                 body = model.body(f"{role}_link{j}").id
                 np.testing.assert_allclose(data.xpos[body],
