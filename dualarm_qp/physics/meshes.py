@@ -36,10 +36,10 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
 from ..geometry.fit import geometry_balls
-from ..geometry.links import arm_capsules
+from ..geometry.links import arm_capsules, chain_collision_objects
 from ..geometry.shapes import Box, Capsule
-from ..kinematics.arm import SerialArm, frame_id
-from ..kinematics.robots import RobotModelError, example_robot_urdf, frame_below, urdf_arm
+from ..kinematics.arm import SerialArm
+from ..kinematics.robots import example_robot_urdf
 from ..task.scene import DualArmTask
 from .settings import PhysicsSettings
 
@@ -125,7 +125,12 @@ def link_geom(name: str, geometry: Any, pose: Any) -> LinkGeom:
     if np.any(radii > 0.0):
         raise InvalidInputError(f"collision geometry {name!r}: a {type(g).__name__} "
                                 "with a swept-sphere radius has no MuJoCo geom")
-    return LinkGeom(name, "mesh", T, np.zeros(0), hull_vertices(points))
+    try:
+        hull = hull_vertices(points)
+    except InvalidInputError as err:
+        raise InvalidInputError(f"collision geometry {name!r}: {err}; set physics.geometry: "
+                                "capsules to use the capsules instead") from None
+    return LinkGeom(name, "mesh", T, np.zeros(0), hull)
 
 
 def urdf_link_geoms(file: str | Path, root: str, tip: str, *,
@@ -151,7 +156,8 @@ def urdf_link_geoms(file: str | Path, root: str, tip: str, *,
     Raises
     ------
     RobotModelError
-        Unreadable URDF or meshes, or a chain ``urdf_arm`` rejects.
+        Unreadable URDF or meshes, or a chain ``urdf_arm`` rejects
+        (:func:`~dualarm_qp.geometry.links.chain_collision_objects`).
     InvalidInputError
         A geometry MuJoCo cannot collide (see :func:`link_geom`).
 
@@ -182,32 +188,8 @@ _READ_MAX = 32
 def _read(path: Path, root: str, tip: str, dirs: tuple[str, ...] | None
           ) -> dict[int, tuple[LinkGeom, ...]]:
     """Read and convert the geometry of :func:`urdf_link_geoms` (uncached)."""
-    arm = urdf_arm(path, root, tip)  # checks the file, the frames and the chain
-    model = pin.buildModelFromUrdf(str(path))
-    folders = [str(p) for p in path.resolve().parents] if dirs is None else list(dirs)
-    try:
-        geom = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION,
-                                     package_dirs=folders)
-    except (RuntimeError, ValueError, OSError) as err:
-        raise RobotModelError(f"cannot read the collision geometry of {path}: {err} "
-                              f"(package folders searched: {', '.join(folders)})",
-                              "file") from None
-    chain = [model.getJointId(name) for name in arm.joint_names]
-    data = model.createData()
-    pin.forwardKinematics(model, data, pin.neutral(model))
-    pin.updateFramePlacements(model, data)
-    root_id = frame_id(model, root, "root", model.name)
-    root_joint = model.frames[root_id].parentJoint
     out: dict[int, list[LinkGeom]] = {}
-    for obj in geom.geometryObjects:
-        movers = [j for j in model.supports[obj.parentJoint] if j in chain]
-        if not (movers or (obj.parentJoint == root_joint
-                           and frame_below(model, obj.parentFrame, root_id))):
-            continue  # not on the arm
-        key = chain.index(movers[-1]) + 1 if movers else 0
-        frame = data.oMi[movers[-1]] if movers else data.oMf[root_id]
-        # GeometryObject.placement is relative to its parent joint.
-        pose = frame.actInv(data.oMi[obj.parentJoint] * obj.placement)
+    for key, obj, pose in chain_collision_objects(path, root, tip, package_dirs=dirs):
         out.setdefault(key, []).append(link_geom(obj.name, obj.geometry, pose.homogeneous))
     return {key: tuple(geoms) for key, geoms in sorted(out.items())}
 

@@ -163,6 +163,12 @@ def test_a_flat_mesh_is_refused_with_a_reason():
     flat = np.c_[np.random.default_rng(1).uniform(size=(20, 2)), np.zeros(20)]
     with pytest.raises(InvalidInputError, match="spans no volume"):
         hull_vertices(flat)
+    mesh = coal.BVHModelOBBRSS()
+    mesh.beginModel(0, 0)
+    mesh.addVertices(flat)
+    mesh.endModel()
+    with pytest.raises(InvalidInputError, match=r"'plate'.*geometry: capsules"):
+        link_geom("plate", mesh, np.eye(4))
 
 
 def test_primitives_stay_primitives_and_have_no_mesh():
