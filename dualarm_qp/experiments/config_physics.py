@@ -54,6 +54,7 @@ class PhysicsSpec(Model):
     armature: Num = 0.05
     delay: Flag = False
     contacts: Literal["obstacles", "all", "none"] = "obstacles"
+    geometry: Literal["meshes", "capsules"] = "meshes"
     object_mass: Num = 3.0
     link_density: Num = 1000.0
     deviation_max: Num | None = None

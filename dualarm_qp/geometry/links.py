@@ -11,6 +11,8 @@ moves); a frame that carries no geometry has no key.
   (:func:`~dualarm_qp.geometry.fit.fit_capsule`) around every collision object of the
   links that joint moves, the links of locked joints below it included (grippers, a
   hand), so that each capsule contains its links' collision geometry.
+  :func:`chain_collision_objects` lists those collision objects, each placed in the
+  frame of its key (the physics check gives them to MuJoCo as they are).
 * :func:`dh_capsules` puts one capsule along each segment between consecutive DH frame
   origins, with given radii (defaults for the PUMA 560 preset:
   :data:`PUMA560_LINK_RADII`).
@@ -111,6 +113,32 @@ _FITTED_MAX = 32
 def _urdf_capsules(file: str | Path, root: str, tip: str, *,
                    package_dirs: Any = None) -> dict[int, Capsule]:
     """Fit the capsules of :func:`urdf_capsules` (uncached)."""
+    balls: dict[int, list[tuple[Any, Any]]] = {}
+    for key, obj, pose in chain_collision_objects(file, root, tip, package_dirs=package_dirs):
+        balls.setdefault(key, []).append(geometry_balls(obj.geometry, pose.homogeneous))
+    return {key: fit_capsule(np.vstack([c for c, _ in parts]),
+                             np.concatenate([r for _, r in parts]))
+            for key, parts in sorted(balls.items())}
+
+
+def chain_collision_objects(file: str | Path, root: str, tip: str, *,
+                            package_dirs: Any = None) -> list[tuple[int, Any, pin.SE3]]:
+    """Return the URDF's collision objects on the arm ``urdf_arm(file, root, tip)``, placed.
+
+    Returns
+    -------
+    list of (int, pinocchio.GeometryObject, pinocchio.SE3)
+        For every collision object on the chain, in the URDF's order: its key (as in
+        :func:`urdf_capsules`: ``i`` in 1..n for the links joint ``i`` moves, 0 for the
+        root and the links fixed to it), the object (its ``geometry`` is coal's, the
+        mesh ``scale`` applied) and its pose in frame ``key`` (joint ``i``, or ``root``)
+        [m]. Objects off the chain (another arm, a head) are left out.
+
+    Raises
+    ------
+    RobotModelError
+        Unreadable URDF, a mesh that cannot be found, or a chain ``urdf_arm`` rejects.
+    """
     path = Path(file)
     arm = urdf_arm(path, root, tip)  # checks the file, the frames and the chain
     model = pin.buildModelFromUrdf(str(path))
@@ -129,7 +157,7 @@ def _urdf_capsules(file: str | Path, root: str, tip: str, *,
     pin.updateFramePlacements(model, data)
     root_id = frame_id(model, root, "root", model.name)
     root_joint = model.frames[root_id].parentJoint
-    balls: dict[int, list[tuple[Any, Any]]] = {}
+    out = []
     for obj in geom.geometryObjects:
         movers = [j for j in model.supports[obj.parentJoint] if j in chain]
         if not (movers or (obj.parentJoint == root_joint
@@ -138,11 +166,8 @@ def _urdf_capsules(file: str | Path, root: str, tip: str, *,
         key = chain.index(movers[-1]) + 1 if movers else 0
         frame = data.oMi[movers[-1]] if movers else data.oMf[root_id]
         # GeometryObject.placement is relative to its parent joint.
-        pose = frame.actInv(data.oMi[obj.parentJoint] * obj.placement)
-        balls.setdefault(key, []).append(geometry_balls(obj.geometry, pose.homogeneous))
-    return {key: fit_capsule(np.vstack([c for c, _ in parts]),
-                             np.concatenate([r for _, r in parts]))
-            for key, parts in sorted(balls.items())}
+        out.append((key, obj, frame.actInv(data.oMi[obj.parentJoint] * obj.placement)))
+    return out
 
 
 def example_robot_capsules(robot: str, root: str, tip: str) -> dict[int, Capsule]:

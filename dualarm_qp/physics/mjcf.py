@@ -6,8 +6,11 @@
   MJCF's kinematics are Pinocchio's (the DH table's or the URDF's). A link's mass and
   inertia are the model's; a link whose model has none is given the mass of its
   capsules at :attr:`PhysicsSettings.link_density` (MuJoCo computes their inertia).
-  The geometry is the project's per-link capsules (:mod:`dualarm_qp.geometry.links`,
-  or the collision scene's when the task has one): it only matters for contacts.
+  The geometry only matters for contacts: a URDF arm's is its collision geometry
+  (:mod:`dualarm_qp.physics.meshes`: meshes as their convex hulls, given inline, and
+  primitives) under ``geometry: meshes``, the default; a DH arm's, and any arm's
+  under ``geometry: capsules``, the project's per-link capsules
+  (:mod:`dualarm_qp.geometry.links`, or the collision scene's when the task has one).
 * The **object** is a free body with its mass (the file's, else
   :attr:`PhysicsSettings.object_mass`) at its mass centre; its shape is the file's, else
   a 20 mm capsule from the leader's hand to the far end of the follower's range.
@@ -34,19 +37,16 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError
-from ..geometry.links import arm_capsules
 from ..geometry.shapes import Box, Capsule
 from ..kinematics.arm import SerialArm
 from ..task.scene import DualArmTask
 from ..task.surfaces import GraspSurface
+from .meshes import LinkGeom, geom_xml, link_shapes, mesh_xml
 from .settings import SUBSTEP, PhysicsSettings
 
 FloatArray = NDArray[np.float64]
 
-#: Radius [m] of a DH arm's capsules when neither the scene nor a preset gives them, and
-#: of the default object.
-DEFAULT_RADIUS = 0.05
+#: Radius [m] of the default object.
 OBJECT_RADIUS = 0.02
 #: Mass [kg] and inertia [kg m^2] of the bodies of a grasp chain (nearly massless).
 CHAIN_MASS, CHAIN_INERTIA = 0.1, 1e-4
@@ -143,8 +143,10 @@ def _axis(joint: Any) -> FloatArray:
     return np.asarray(joint.axis, dtype=float)
 
 
-def _geom(shape: Capsule | Box, T: FloatArray, name: str, extra: str = "") -> str:
+def _geom(shape: Capsule | Box | LinkGeom, T: FloatArray, name: str, extra: str = "") -> str:
     """Return a geom of ``shape`` given in a frame placed at ``T`` in the body."""
+    if isinstance(shape, LinkGeom):
+        return geom_xml(shape, T, name, extra)
     if isinstance(shape, Box):
         pose = T @ shape.pose
         return (f'<geom name="{name}" type="box" size="{_f(shape.half_size)}" '
@@ -165,34 +167,24 @@ def _inertial(inertia: Any) -> str:
             f'fullinertia="{_f(full)}"/>')
 
 
-def _capsules(task: DualArmTask, role: str, arm: SerialArm, notes: list[str]
-              ) -> dict[int, Capsule | Box]:
-    """Each link's shape, keyed like ``arm.link_frames``: the scene's, else the arm's own."""
-    if task.scene is not None:
-        return {b.link: b.shape for b in task.scene.bodies if b.owner == role}
-    try:
-        return dict(arm_capsules(arm))
-    except InvalidInputError:
-        if arm.dh is None:
-            raise
-        notes.append(f"{role}: no capsule radii for this DH arm: every link is a "
-                     f"{DEFAULT_RADIUS * 1e3:g} mm capsule")
-        return dict(arm_capsules(arm, radii=np.full(arm.n, DEFAULT_RADIUS)))
-
-
 def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSettings,
-             notes: list[str]) -> tuple[str, str, tuple[str, ...], list[str]]:
-    """Return the arm's base geoms (world) and body tree; its joint names and its body names."""
+             notes: list[str], assets: list[str]
+             ) -> tuple[str, str, tuple[str, ...], list[str]]:
+    """Return the arm's base geoms (world) and body tree; its joint names and its body names.
+
+    The mesh assets its geoms refer to are appended to ``assets``.
+    """
     model = arm.model
-    shapes = _capsules(task, role, arm, notes)
-    by_joint: dict[int, list[tuple[Capsule | Box, FloatArray, int]]] = {}
-    for key, shape in shapes.items():
+    by_joint: dict[int, list[tuple[Capsule | Box | LinkGeom, FloatArray, str]]] = {}
+    for key, shapes in link_shapes(task, role, arm, settings, notes).items():
         frame = model.frames[arm.link_frame_ids[key]]
-        by_joint.setdefault(int(frame.parentJoint), []).append(
-            (shape, frame.placement.homogeneous, key))
+        for shape, name in shapes:
+            by_joint.setdefault(int(frame.parentJoint), []).append(
+                (shape, frame.placement.homogeneous, name))
+            if isinstance(shape, LinkGeom) and shape.kind == "mesh":
+                assets.append(mesh_xml(shape, name))
     moving = _contact_bits(settings, obstacle=False)
-    base = "".join(_geom(s, T, f"{role}_base_{k}", moving)
-                   for s, T, k in by_joint.get(0, []))
+    base = "".join(_geom(s, T, name, moving) for s, T, name in by_joint.get(0, []))
     joints = tuple(f"{role}_{name}" for name in arm.joint_names)
     bodies = [f"{role}_link{j}" for j in range(1, model.njoints)]
     fallback = []
@@ -212,9 +204,8 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
         else:
             fallback.append(bodies[j - 1])
         density = settings.link_density if not has_inertia else 0.0
-        lines += [_geom(s, T, f"{role}_link{k}",
-                        f'{moving} density="{density!r}"')
-                  for s, T, k in geoms]
+        lines += [_geom(s, T, name, f'{moving} density="{density!r}"')
+                  for s, T, name in geoms]
         if j == model.njoints - 1:
             tool = model.frames[arm.tool_frame_id].placement
             lines.append(f'<body name="{role}_tool" {_pose_attrs(tool)}>'
@@ -224,7 +215,7 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
         close.append("</body>")
     if fallback:
         notes.append(f"{role}: no inertia in the arm model for {', '.join(fallback)}: "
-                     f"mass of its capsules at {settings.link_density:g} kg/m^3")
+                     f"mass of its geometry at {settings.link_density:g} kg/m^3")
     return base, "\n".join(xml + close), joints, bodies
 
 
@@ -312,9 +303,10 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
     J = _object_inertia(shape, mass)
     full = [J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]]
     joints, bodies, tree, base = {}, {}, [], []
+    assets: list[str] = []
     for role, arm in (("leader", task.leader), ("follower", task.follower)):
         base_xml, body_xml, joints[role], bodies[role] = _arm_xml(task, role, arm, settings,
-                                                                  notes)
+                                                                  notes, assets)
         base.append(base_xml)
         tree.append(body_xml)
     grasps: dict[str, GraspJoint] = {}
@@ -357,6 +349,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
         f'<option timestep="{SUBSTEP!r}" gravity="{_f(gravity)}" integrator="implicitfast" '
         'jacobian="dense" cone="elliptic"/>',
         '<default><geom friction="0.5 0.005 0.0001" solref="0.004 1" margin="0"/></default>',
+        "<asset>", *assets, "</asset>",
         "<worldbody>", *base, *obstacles, *tree,
         '<body name="object" pos="0 0 0">',
         '<freejoint name="object_free"/>',

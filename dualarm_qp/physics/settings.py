@@ -14,6 +14,8 @@ The defaults, as written in a file with ``units: {length: mm, angle: rad, time: 
       delay: false             # closed loop: the controller sees the previous sample
       contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
                                # all (also arm-arm, arm-object) or none
+      geometry: meshes         # a URDF arm's links: its collision meshes (convex hulls)
+                               # and primitives, or the project's capsules
       object_mass: 3           # kg, when the object states no mass
       link_density: 1000       # kg/m^3, links whose model has no inertia
       deviation_max: 10        # length unit (here mm): the object off D(t) -> dropped
@@ -55,6 +57,11 @@ REFERENCES = ("measured", "integrated")
 #: the same conservative capsules), ``all`` (every pair but those excluded) or ``none``.
 CONTACTS = ("obstacles", "all", "none")
 
+#: The links' geometry in MuJoCo: a URDF arm's collision ``meshes`` (convex hulls and
+#: primitives, :mod:`~dualarm_qp.physics.meshes`) or the project's ``capsules``. A DH
+#: arm has capsules either way.
+GEOMETRIES = ("meshes", "capsules")
+
 #: MuJoCo's time step [s]: the controller's ``dt`` is cut into substeps of at most this.
 SUBSTEP = 1e-3
 
@@ -82,6 +89,8 @@ class PhysicsSettings:
         Closed loop: the controller is handed the measurement of the previous sample.
     contacts : {"obstacles", "all", "none"}
         Which contacts are simulated (:data:`CONTACTS`).
+    geometry : {"meshes", "capsules"}
+        The links' geometry of a URDF arm (:data:`GEOMETRIES`); DH arms: capsules.
     object_mass : float
         Mass of an object whose file states none [kg].
     link_density : float
@@ -112,6 +121,7 @@ class PhysicsSettings:
     armature: float = 0.05
     delay: bool = False
     contacts: str = "obstacles"
+    geometry: str = "meshes"
     object_mass: float = 3.0
     link_density: float = 1000.0
     deviation_max: float = 0.01
@@ -128,6 +138,8 @@ class PhysicsSettings:
             raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
         if self.contacts not in CONTACTS:
             raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
+        if self.geometry not in GEOMETRIES:
+            raise ValueError(f"geometry must be one of {GEOMETRIES}, got {self.geometry!r}")
         for key in ("kv", "reference_time", "object_mass", "link_density", "deviation_max",
                     "rotation_max",
                     "slip_max",
@@ -154,7 +166,8 @@ class PhysicsSettings:
                                    else spec.reference_time * time_scale),
                    kp=spec.kp, kv=spec.kv,
                    armature=spec.armature,
-                   delay=spec.delay, contacts=spec.contacts, object_mass=spec.object_mass,
+                   delay=spec.delay, contacts=spec.contacts,
+                   geometry=spec.geometry, object_mass=spec.object_mass,
                    link_density=spec.link_density,
                    deviation_max=length(spec.deviation_max, 0.01),
                    rotation_max=(0.05 if spec.rotation_max is None
@@ -168,7 +181,7 @@ class PhysicsSettings:
                 "reference_time_s": self.reference_time, "kp_N_m_rad": self.kp,
                 "kv_N_m_s_rad": self.kv,
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
-                "contacts": self.contacts,
+                "contacts": self.contacts, "geometry": self.geometry,
                 "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
                 "rotation_max_rad": self.rotation_max,
                 "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
@@ -176,4 +189,4 @@ class PhysicsSettings:
                 "link_density_kg_m3": self.link_density}
 
 
-__all__ = ["CONTACTS", "REFERENCES", "SERVOS", "SUBSTEP", "PhysicsSettings"]
+__all__ = ["CONTACTS", "GEOMETRIES", "REFERENCES", "SERVOS", "SUBSTEP", "PhysicsSettings"]

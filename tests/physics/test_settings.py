@@ -50,6 +50,7 @@ def test_lengths_follow_the_file_units_and_gains_stay_si():
 @pytest.mark.parametrize(("physics", "key", "words"), [
     ({"servo": "torque"}, "physics.servo", "position, velocity"),
     ({"reference": "planned"}, "physics.reference", "measured, integrated"),
+    ({"geometry": "hulls"}, "physics.geometry", "meshes, capsules"),
     ({"reference_time": 0}, "physics.reference_time", "> 0"),
     ({"kv": 0}, "physics.kv", "> 0"),
     ({"squeeze_max": -1}, "physics.squeeze_max", "> 0"),
@@ -63,6 +64,16 @@ def test_bad_values_name_the_file_and_the_key(physics, key, words):
         parse_config(_with_physics(physics), "beam.yaml")
     text = str(err.value)
     assert "beam.yaml" in text and key in text and words in text
+
+
+def test_the_geometry_defaults_to_meshes_and_is_reported():
+    s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
+    assert s.geometry == "meshes" and s.as_dict()["geometry"] == "meshes"
+    cfg = parse_config(_with_physics({"geometry": "capsules"}), "beam.yaml")
+    s = PhysicsSettings.from_spec(cfg.physics, 1e-3)
+    assert s.geometry == "capsules" and s.as_dict()["geometry"] == "capsules"
+    with pytest.raises(ValueError, match="geometry"):
+        PhysicsSettings(geometry="hulls")
 
 
 def test_a_bad_section_exits_2_from_the_command_line(tmp_path, capsys):
