@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -77,9 +76,7 @@ def blocked_by_pair(controller: DualArmController, trace: Trace, failure: Failur
     if scene is None or not scene.settings.enabled:
         return failure
     k = min(failure.sample, len(trace) - 1)
-    sigma_l = float(trace.grasp_leader[k])
-    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
-                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    state = trace.state(k)
     try:
         problem = controller.builder.build(state).problem
     except DualArmError:

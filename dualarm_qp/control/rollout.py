@@ -626,9 +626,7 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
 def _explained(controller: DualArmController, trace: Trace, failure: Failure) -> Failure:
     """``failure`` with its cause appended (:func:`.diagnosis.explain` at its sample)."""
     k = min(failure.sample, len(trace) - 1)
-    sigma_l = float(trace.grasp_leader[k])
-    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
-                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    state = trace.state(k)
     try:
         why = controller.explain(state)
     except DualArmError:  # the state itself cannot be posed: say nothing more

@@ -238,9 +238,7 @@ def blocked_by_torque(controller: DualArmController, trace: Trace, failure: Fail
     if not controller.options.torque_limits or not len(trace):
         return failure
     k = min(failure.sample, len(trace) - 1)
-    sigma_l = float(trace.grasp_leader[k])
-    state = DualArmState(float(trace.tau[k]), trace.q_l[k], trace.q_f[k],
-                         float(trace.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+    state = trace.state(k)
     try:
         problem = controller.builder.build(state).problem
         tau = LoadTorques(controller.task).torques(state.q_l, state.q_f, state.sigma,

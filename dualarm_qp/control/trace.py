@@ -131,6 +131,16 @@ class Trace:
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
+    def state(self, k: int) -> DualArmState:
+        """Return the controller's input at sample ``k`` (clipped to the last sample).
+
+        The path time is the sample's ``tau``; a fixed leader grasp (NaN) is 0.
+        """
+        k = min(k, len(self) - 1)
+        sigma_l = float(self.grasp_leader[k])
+        return DualArmState(float(self.tau[k]), self.q_l[k], self.q_f[k],
+                            float(self.grasp[k]), sigma_l if math.isfinite(sigma_l) else 0.0)
+
 
 def record(tr: Trace, k: int, t: float, state: DualArmState, out: ControlOutput,
            controller: DualArmController) -> None:

@@ -21,7 +21,7 @@ import yaml
 from csv_check import read_trajectory
 from oracle import puma_fk
 from statics_oracle import min_norm_split, residual, slide_space
-from urdf_oracle import UrdfChain, rpy_matrix
+from urdf_oracle import UrdfChain, config_pose
 
 from dualarm_qp.cli import main
 from dualarm_qp.kinematics.robots import example_robot_urdf, example_robots_dir
@@ -60,22 +60,12 @@ def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
     return (name, *_run(name, tmp_path_factory.mktemp(name)))
 
 
-def _pose(spec: dict[str, Any]) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = np.array(spec.get("position", [0, 0, 0]), dtype=float) / 1000.0
-    if "rotation" in spec:
-        T[:3, :3] = np.array(spec["rotation"], dtype=float)
-    elif "rpy" in spec:
-        T[:3, :3] = rpy_matrix(*np.deg2rad(spec["rpy"]))
-    return T
-
-
 def _leader_tool(name: str, data: dict[str, Any]):
     if name.startswith("puma"):
         return puma_fk
     model = data["leader"]["example_robot"]
     chain = UrdfChain(example_robot_urdf(model["name"]), model["root"], model["tip"])
-    base = _pose(data["leader"]["base"])
+    base = config_pose(data["leader"]["base"])
     return lambda q: chain.fk(q, base, np.eye(4))
 
 
@@ -85,7 +75,7 @@ def test_loads_recomputed_from_the_csv_joints(run) -> None:
     mass = data["object"]["mass"]
     r_c = np.array(data["object"]["mass_centre"]) / 1000.0
     weight = mass * np.array([0.0, 0.0, -9.81])  # the default gravity
-    H1 = _pose(data["object"]["H1"])
+    H1 = config_pose(data["object"]["H1"])
     fk = _leader_tool(name, data)
     q_l = np.column_stack([traj[f"ql{i}"] for i in range(1, 7)])
     w_l = np.column_stack([traj[f"f_leader_{p}"] for p in PARTS])

@@ -26,7 +26,7 @@ from csv_check import check_ranges, check_speeds, limits_of, read_trajectory
 from executed_runs import ROW_SOLVERS
 from statics_oracle import min_norm_split, slide_space
 from torque_oracle import UrdfStatics
-from urdf_oracle import UrdfChain, rpy_matrix
+from urdf_oracle import UrdfChain, config_pose
 
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, parse_config
@@ -58,16 +58,6 @@ def _run(data: dict[str, Any], tmp: Path, *extra: str) -> tuple[int, Path]:
     return code, out
 
 
-def _pose(spec: dict[str, Any]) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = np.array(spec.get("position", [0, 0, 0]), dtype=float) / 1000.0
-    if "rotation" in spec:
-        T[:3, :3] = np.array(spec["rotation"], dtype=float)
-    elif "rpy" in spec:
-        T[:3, :3] = rpy_matrix(*np.deg2rad(spec["rpy"]))
-    return T
-
-
 def oracle_torques(traj: dict[str, np.ndarray], data: dict[str, Any]) -> np.ndarray:
     """Every sample's joint torques, leader then follower (rows: samples) [N m]."""
     models = {}
@@ -75,11 +65,11 @@ def oracle_torques(traj: dict[str, np.ndarray], data: dict[str, Any]) -> np.ndar
         m = data[role]["example_robot"]
         path = example_robot_urdf(m["name"])
         models[role] = (UrdfChain(path, m["root"], m["tip"]),
-                        UrdfStatics(path, m["root"], m["tip"]), _pose(data[role]["base"]))
+                        UrdfStatics(path, m["root"], m["tip"]), config_pose(data[role]["base"]))
     g = np.array([0.0, 0.0, -9.81])
     mass = float(data["object"]["mass"])
     r_c = np.array(data["object"]["mass_centre"]) / 1000.0
-    H1 = _pose(data["object"]["H1"])
+    H1 = config_pose(data["object"]["H1"])
     q_l = np.column_stack([traj[f"ql{i}"] for i in range(1, 7)])
     q_f = np.column_stack([traj[f"qf{i}"] for i in range(1, 7)])
     out = np.zeros((len(traj["t"]), 12))

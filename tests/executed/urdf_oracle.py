@@ -30,6 +30,17 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
     return rz @ ry @ rx
 
 
+def config_pose(spec: dict) -> np.ndarray:
+    """A pose of an experiment file in mm and degrees (``position``, ``rotation`` or ``rpy``)."""
+    T = np.eye(4)
+    T[:3, 3] = np.array(spec.get("position", [0, 0, 0]), dtype=float) / 1000.0
+    if "rotation" in spec:
+        T[:3, :3] = np.array(spec["rotation"], dtype=float)
+    elif "rpy" in spec:
+        T[:3, :3] = rpy_matrix(*np.deg2rad(spec["rpy"]))
+    return T
+
+
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation by ``angle`` about the unit vector ``axis`` (Rodrigues)."""
     k = axis / np.linalg.norm(axis)
