@@ -19,7 +19,14 @@ from .config import load_config
 from .setup import build_experiment
 
 
-def _read_summary(run: Path) -> dict[str, Any]:
+def read_run_summary(run: Path) -> dict[str, Any]:
+    """Return a run folder's ``summary.json``.
+
+    Raises
+    ------
+    InvalidInputError
+        The file is missing, unreadable or not a JSON object.
+    """
     path = run / "summary.json"
     try:
         summary = json.loads(path.read_text(encoding="utf-8"))
@@ -83,7 +90,7 @@ def animate_run(run_dir: str | Path, out: str | Path | None = None) -> Path:
     run = Path(run_dir)
     if not run.is_dir():
         raise InvalidInputError(f"{run}: not a folder (RUN_DIR is the output folder of a run)")
-    summary = _read_summary(run)
+    summary = read_run_summary(run)
     config = run_config(run, summary)
     try:
         exp = build_experiment(load_config(config), str(config))
@@ -100,4 +107,4 @@ def animate_run(run_dir: str | Path, out: str | Path | None = None) -> Path:
     return target
 
 
-__all__ = ["animate_run", "run_config"]
+__all__ = ["animate_run", "read_run_summary", "run_config"]

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -22,7 +21,7 @@ from typing import Any
 from .._io import atomic_write_with, write_json, write_text
 from .._signals import SignalHold
 from ..errors import ConfigError, DualArmError, InvalidInputError
-from ..experiments.animate import run_config
+from ..experiments.animate import read_run_summary, run_config
 from ..experiments.config import ExperimentConfig, load_config
 from ..experiments.figures.rundata import RunData
 from ..experiments.html_report import REPORT_FILE, render_run_report
@@ -30,20 +29,6 @@ from ..experiments.setup import Experiment, build_experiment
 from .check import closed_loop, physics_summary, replay
 from .report import PHYSICS_FIGURE, write_physics_figure
 from .settings import PhysicsSettings
-
-
-def _summary(run: Path) -> dict[str, Any]:
-    path = run / "summary.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InvalidInputError(f"{path}: not found; RUN_DIR must be a folder written by "
-                                "'dualarm-qp run'") from None
-    except (OSError, ValueError) as err:
-        raise InvalidInputError(f"{path}: cannot read it: {err}") from None
-    if not isinstance(data, dict):
-        raise InvalidInputError(f"{path}: not a run summary (a JSON object expected)")
-    return data
 
 
 def settings_of(cfg: ExperimentConfig) -> PhysicsSettings:
@@ -94,7 +79,7 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
     run = Path(run_dir)
     if not run.is_dir():
         raise InvalidInputError(f"{run}: not a folder (RUN_DIR is the output folder of a run)")
-    summary = _summary(run)
+    summary = read_run_summary(run)
     config = run_config(run, summary)
     cfg = load_config(config)
     try:
