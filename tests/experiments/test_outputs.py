@@ -198,6 +198,7 @@ def test_owned_entries_match_only_names_and_their_temporary_files(tmp_path):
     assert found == [".summary.json.k2_9ab0x.json", "summary.json"]
 
 
+@pytest.mark.slow
 def test_reproduce_twice_into_the_same_folder(tmp_path, cases, case_plots, capsys):
     out = tmp_path / "reproduction"
     argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
@@ -297,6 +298,7 @@ def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     assert s["status"] == "interrupted" and s["samples"] == 5
 
 
+@pytest.mark.slow
 @pytest.mark.sigint
 def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, capsys):
     from dualarm_qp.experiments.figures import run_figures

@@ -82,6 +82,7 @@ def test_a_failure_while_writing_leaves_the_folder_as_it_was(short_run, monkeypa
     assert after == before
 
 
+@pytest.mark.slow
 def test_a_failure_while_writing_again_keeps_the_earlier_figure(short_run, monkeypatch,
                                                                  capsys):
     assert main(["physics", str(short_run)]) == 0
