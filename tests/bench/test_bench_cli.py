@@ -16,6 +16,7 @@ from dualarm_qp.experiments.reproduce import bundled_config
 CONFIG = str(bundled_config("puma_beam_sliding_s7_100.yaml"))
 
 
+@pytest.mark.slow
 def test_bench_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     args = ["bench", CONFIG, "--solvers", "reference,nullspace", "--out", str(tmp_path),
             "--duration", "0.124", "--quiet"]

@@ -81,6 +81,7 @@ def run(config: Path, out: Path, *extra: str) -> int:
     return main(["run", str(config), "--out", str(out), "--quiet", *extra])
 
 
+@pytest.mark.slow
 def test_fresh_folder_holds_exactly_the_listed_set(tmp_path):
     out = tmp_path / "new" / "deeper"
     assert run(short_config(tmp_path), out) == 0
