@@ -85,6 +85,7 @@ def test_an_error_caused_by_an_interrupt_is_an_interrupt(monkeypatch, capsys):
     assert "internal error" not in err and "interrupted" in err
 
 
+@pytest.mark.slow
 def test_import_selects_no_backend_and_no_pyplot(tmp_path):
     proc = _python("""
         import sys, warnings

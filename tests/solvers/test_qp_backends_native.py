@@ -143,6 +143,7 @@ def test_osqp_interrupted_is_never_a_result() -> None:
 
 
 @pytest.mark.skipif("qp:highs" not in available_solvers(), reason="highs is not installed")
+@pytest.mark.slow
 def test_highs_prints_no_banner() -> None:
     code = ("import numpy as np\n"
             "from dualarm_qp.bench.suite import load_suite\n"

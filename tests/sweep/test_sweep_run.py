@@ -200,7 +200,6 @@ def test_a_sweep_stores_every_point_once_and_a_rerun_computes_none(
     assert len(_store_keys(out)) == 6
 
 
-@pytest.mark.slow
 @pytest.mark.sigint
 def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
         tmp_path, in_process_cluster, monkeypatch, capsys):

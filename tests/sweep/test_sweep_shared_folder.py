@@ -39,6 +39,7 @@ def _all_stored_but_one_claimed_elsewhere(tmp_path):
     return spec, out, held, claim
 
 
+@pytest.mark.slow
 def test_a_point_another_sweep_computes_is_taken_from_the_store(tmp_path):
     spec, out, held, claim = _all_stored_but_one_claimed_elsewhere(tmp_path)
 
@@ -61,6 +62,7 @@ def test_a_point_another_sweep_computes_is_taken_from_the_store(tmp_path):
     assert not (out / ".claims" / held.key).exists()
 
 
+@pytest.mark.slow
 def test_a_point_left_by_an_interrupted_sweep_is_computed(tmp_path):
     spec, out, held, claim = _all_stored_but_one_claimed_elsewhere(tmp_path)
     timer = threading.Timer(0.5, lambda: claim.release(stored=False))  # stopped, unstored
