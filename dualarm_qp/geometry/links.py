@@ -237,6 +237,19 @@ def dh_capsules(arm: SerialArm, radii: Any = None) -> dict[int, Capsule]:
     return out
 
 
+def arm_urdf_chain(arm: SerialArm) -> tuple[Path, str, str] | None:
+    """Return the robot file and chain ``(file, root, tip)`` recorded in ``arm.source``.
+
+    None for an arm without one (a DH table or a bare Pinocchio model).
+    """
+    kind, _, rest = arm.source.partition(":")
+    where, _, chain = rest.rpartition(" ")
+    root, _, tip = chain.partition("->")
+    if kind not in ("urdf", "example_robot") or not (where and root and tip):
+        return None
+    return (example_robot_urdf(where) if kind == "example_robot" else Path(where)), root, tip
+
+
 def arm_capsules(arm: SerialArm, *, radii: Any = None,
                  package_dirs: Any = None) -> dict[int, Capsule]:
     """Return the capsules of an arm, keyed like ``arm.link_frames(q)``, whatever its source.
@@ -255,16 +268,14 @@ def arm_capsules(arm: SerialArm, *, radii: Any = None,
     """
     if arm.dh is not None:
         return dh_capsules(arm, radii)
-    kind, _, rest = arm.source.partition(":")
-    where, _, chain = rest.rpartition(" ")
-    root, _, tip = chain.partition("->")
-    if kind not in ("urdf", "example_robot") or not (where and root and tip):
+    recorded = arm_urdf_chain(arm)
+    if recorded is None:
         raise InvalidInputError(f"{arm.name}: no robot file recorded for this arm "
                                 f"(source {arm.source!r}); use urdf_capsules(file, root, tip)")
     if radii is not None:
         raise InvalidInputError(f"{arm.name}: radii apply to DH arms only; a URDF arm's "
                                 "capsules are fitted to its collision geometry")
-    file = example_robot_urdf(where) if kind == "example_robot" else Path(where)
+    file, root, tip = recorded
     found = urdf_arm(file, root, tip).joint_names
     if found != arm.joint_names:
         raise InvalidInputError(f"{arm.name}: the chain {root}->{tip} of {file} has joints "

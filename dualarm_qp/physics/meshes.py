@@ -36,10 +36,9 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
 from ..geometry.fit import geometry_balls
-from ..geometry.links import arm_capsules, chain_collision_objects
+from ..geometry.links import arm_capsules, arm_urdf_chain, chain_collision_objects
 from ..geometry.shapes import Box, Capsule
 from ..kinematics.arm import SerialArm
-from ..kinematics.robots import example_robot_urdf
 from ..task.scene import DualArmTask
 from .settings import PhysicsSettings
 
@@ -203,14 +202,11 @@ def arm_link_geoms(arm: SerialArm) -> dict[int, tuple[LinkGeom, ...]]:
         A DH arm (it has no collision geometry of its own), or an arm built from a
         bare Pinocchio model (no file to read).
     """
-    kind, _, rest = arm.source.partition(":")
-    where, _, chain = rest.rpartition(" ")
-    root, _, tip = chain.partition("->")
-    if kind not in ("urdf", "example_robot") or not (where and root and tip):
+    recorded = arm_urdf_chain(arm)
+    if recorded is None:
         raise InvalidInputError(f"{arm.name}: no robot file recorded for this arm "
                                 f"(source {arm.source!r}): no collision meshes")
-    file = example_robot_urdf(where) if kind == "example_robot" else Path(where)
-    return urdf_link_geoms(file, root, tip)
+    return urdf_link_geoms(*recorded)
 
 
 def _capsules(task: DualArmTask, role: str, arm: SerialArm, notes: list[str]

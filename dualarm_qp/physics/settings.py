@@ -110,7 +110,7 @@ class PhysicsSettings:
         Largest share of a joint torque limit before the verdict is ``torque``.
     tau_max : dict of str to ndarray or None
         Torque limits [N m] per arm (``"leader"``, ``"follower"``) given in the file;
-        None: the arm model's own (a URDF's ``effort``), if any.
+        None: the arm's own ``tau_max``, else its model's (a URDF's ``effort``), if any.
     """
 
     servo: str = "position"
