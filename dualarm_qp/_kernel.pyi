@@ -37,6 +37,19 @@ def kkt_holds(A: ArrayLike, b: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: Arr
               N: ArrayLike, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
+def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
+                G: ArrayLike, h: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: ArrayLike,
+                N: ArrayLike, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
+                w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
+                center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
+                bounds_tol: float, ask_kkt: bool
+                ) -> tuple[bool, float, float, float, float, int, float,
+                           NDArray[np.uint8], NDArray[np.uint8], list[int]]: ...
+def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
+                    upper_ids: Sequence[int], n: int, pin_rtol: float
+                    ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
+def first_defect(finite: Sequence[ArrayLike], not_nan: Sequence[ArrayLike]) -> int: ...
+def smallest_singular_value(J: ArrayLike) -> float: ...
 def carry_equality(n_l: int, J_object: ArrayLike, J_target: ArrayLike, J_f: ArrayLike,
                    twist: ArrayLike, e_l: ArrayLike, e_c: ArrayLike, scale: float,
                    gain_l: float, gain_c: float, exact_orientation: bool, A: _F, b: _F

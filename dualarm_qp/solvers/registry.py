@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInputError, PairingError, SolverNotFoundError
-from .base import StepSolution, StepSolver, Tolerance
+from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance, failed
+from .certify import certify
 
 if TYPE_CHECKING:
     from ..step.problem import StepProblem
@@ -283,8 +284,6 @@ class CertifiedSolver:
 
     def __init__(self, solver: StepSolver, info: SolverInfo,
                  tol: Tolerance | None = None) -> None:
-        from .base import DEFAULT_TOLERANCE
-
         self.inner = solver
         self.info = info
         self.name = solver.name
@@ -292,9 +291,6 @@ class CertifiedSolver:
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve ``problem`` and certify the answer against it."""
-        from .base import Status, failed
-        from .certify import certify
-
         why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
                                 not problem.diagonal_cost)
         if why is not None:

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError, SupportLostError
+from .._compiled import kernel
+from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
 from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
@@ -101,18 +102,20 @@ PIN_RTOL = 1e-9
 def pin_rounding(lower: FloatArray, upper: FloatArray) -> FloatArray:
     """Raise ``upper`` to ``lower`` where a box is empty by rounding only.
 
-    See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step).
+    See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step). The
+    kernel's box intersection, on one box.
     """
-    rounding = (upper < lower) & (lower - upper <= PIN_RTOL * np.maximum(1.0, np.abs(lower)))
-    return np.where(rounding, lower, upper) if rounding.any() else upper
+    return np.asarray(kernel.intersect_boxes(lower[None], [0], upper[None], [0],
+                                             lower.shape[0], PIN_RTOL)[1])
 
 
 def smallest_singular_value(J: FloatArray) -> float:
     """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
-    m, n = J.shape
-    if n < m or n == 0:
-        return 0.0
-    return float(np.linalg.svd(J, compute_uv=False)[-1])
+    return float(kernel.smallest_singular_value(J))
+
+
+#: Patterns of bound sources a builder keeps named (:meth:`StepBuilder._bound_sources`).
+_SOURCE_PATTERNS = 64
 
 
 class StepBuilder:
@@ -194,7 +197,9 @@ class StepBuilder:
         self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
         self._no_rows = np.zeros((0, lay.n))
         self._no_rhs = np.zeros(0)
+        self._no_bounds = np.zeros((0, lay.n))
         self._labels = tuple(limit.name for limit in self.limits)
+        self._sources: dict[bytes, tuple[tuple[str, ...], tuple[str, ...]]] = {}
 
     # -- what the controller and the reports read -----------------------------------------
     @property
@@ -313,43 +318,82 @@ class StepBuilder:
         eq = self.carry_tasks.equality(ctx)  # raises NonFiniteError itself
         cost = self.cost.quadratic(ctx)
         lay = self.layout
-        lower = np.full(lay.n, -np.inf)
-        upper = np.full(lay.n, np.inf)
-        lo_by = np.full(lay.n, -1)
-        up_by = np.full(lay.n, -1)
+        lowers: list[FloatArray] = []
+        lower_ids: list[int] = []
+        uppers: list[FloatArray] = []
+        upper_ids: list[int] = []
         G_parts: list[FloatArray] = []
         h_parts: list[FloatArray] = []
         row_names: list[str] = []
         for k, limit in enumerate(self.limits):
             c = limit.constraint(ctx)
             if c.lower is not None:
-                tighter = c.lower > lower
-                lo_by[tighter] = k
-                lower = np.where(tighter, c.lower, lower)
+                lowers.append(c.lower)
+                lower_ids.append(k)
             if c.upper is not None:
-                tighter = c.upper < upper
-                up_by[tighter] = k
-                upper = np.where(tighter, c.upper, upper)
+                uppers.append(c.upper)
+                upper_ids.append(k)
             if c.G is not None and c.h is not None and len(c.h):
                 G_parts.append(np.atleast_2d(c.G))
                 h_parts.append(np.atleast_1d(c.h))
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                    for i in range(len(c.h))]
-        upper = pin_rounding(lower, upper)
-        labels = self._labels
+        lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(
+            self._stacked(lowers, lower_ids, "lower"), lower_ids,
+            self._stacked(uppers, upper_ids, "upper"), upper_ids, lay.n, PIN_RTOL)
+        if nan_limit >= 0:
+            raise NonFiniteError(f"the bounds of the limit '{self._labels[nan_limit]}'")
+        lower_by, upper_by = self._bound_sources(lo_by, up_by)
         problem = StepProblem(
             eq.A, eq.b, cost.weights, cost.center, lower, upper,
             G=np.vstack(G_parts) if G_parts else self._no_rows,
             h=np.concatenate(h_parts) if h_parts else self._no_rhs,
             n_grasp=lay.n_grasp, names=lay.names, row_names=tuple(row_names),
-            eq_names=eq.names, x_prev=x_prev,
-            lower_by=tuple(labels[i] if i >= 0 else "" for i in lo_by.tolist()),
-            upper_by=tuple(labels[i] if i >= 0 else "" for i in up_by.tolist()))
+            eq_names=eq.names, x_prev=x_prev, lower_by=lower_by, upper_by=upper_by)
         recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
         object.__setattr__(problem, "build_time", t2 - t0)
         return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, kin,
                          ctx.T_f, ctx.J_f, sigma_min, t1 - t0, t2 - t1, support_force, ctx)
+
+    def _stacked(self, bounds: list[FloatArray], ids: list[int], side: str) -> FloatArray:
+        """Return the limits' ``side`` bounds as rows of one array (k, n).
+
+        Raises
+        ------
+        ShapeError
+            A limit's bounds are not one number per variable.
+        """
+        n = self.layout.n
+        if not bounds:
+            return self._no_bounds
+        try:
+            out = np.array(bounds, dtype=np.float64)
+        except (TypeError, ValueError):
+            out = np.zeros(0)
+        if out.shape != (len(bounds), n):
+            k = next(k for b, k in zip(bounds, ids, strict=True) if np.shape(b) != (n,))
+            raise ShapeError(f"the {side} bounds of the limit '{self._labels[k]}'", (n,),
+                             np.shape(bounds[ids.index(k)]))
+        return out
+
+    def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]
+                       ) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """Return ``lower_by`` and ``upper_by``: the limit that set each bound (by index).
+
+        The sources rarely change from one step to the next: the names are kept per
+        pattern of indices (a handful of patterns in a run).
+        """
+        key = lo_by.tobytes() + up_by.tobytes()
+        known = self._sources.get(key)
+        if known is None:
+            labels = self._labels
+            known = (tuple(labels[i] if i >= 0 else "" for i in lo_by.tolist()),
+                     tuple(labels[i] if i >= 0 else "" for i in up_by.tolist()))
+            if len(self._sources) >= _SOURCE_PATTERNS:
+                self._sources.clear()
+            self._sources[key] = known
+        return known
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> tuple[CarryKinematics, float]:

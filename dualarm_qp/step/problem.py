@@ -24,9 +24,10 @@ The problem converts to and from :class:`qpsolvers.Problem` (:meth:`StepProblem.
 
 from __future__ import annotations
 
+import copy
 import math
 import operator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -77,6 +78,10 @@ class Inequalities:
         """Names of ``rows`` (indices; default every row), each once, in order."""
         picked = range(self.C.shape[0]) if rows is None else rows
         return tuple(dict.fromkeys(self.label(int(i)) for i in picked))
+
+
+#: The arrays :meth:`StepProblem.__post_init__` checks, in ``kernel.first_defect``'s order.
+_CHECKED = ("A", "b", "weights", "center", "G", "lower", "upper", "h")
 
 
 @dataclass(frozen=True)
@@ -169,18 +174,11 @@ class StepProblem:
             if xp.shape != (n,):
                 raise ShapeError("x_prev", (n,), xp.shape)
             set_(self, "x_prev", xp)
-        # One sum per array: NaN and infinity propagate through it; only a sum that is
-        # not finite needs the element-wise look (an overflow of huge finite entries
-        # passes it).
-        for name in ("A", "b", "weights", "center", "G"):
-            arr = getattr(self, name)
-            if not math.isfinite(float(arr.sum())) and not np.isfinite(arr).all():
-                raise NonFiniteError(name)
-        # Bounds and row right-hand sides may be infinite (no limit) but never NaN.
-        for name in ("lower", "upper", "h"):
-            arr = getattr(self, name)
-            if math.isnan(float(arr.sum())) and np.isnan(arr).any():
-                raise NonFiniteError(name)
+        # One compiled pass over every array: the first that holds NaN or infinity is
+        # named. Bounds and row right-hand sides may be infinite (no limit), never NaN.
+        bad = kernel.first_defect([A, self.b, w, self.center, G], [self.lower, self.upper, h])
+        if bad >= 0:
+            raise NonFiniteError(_CHECKED[bad])
         if n:
             if w.ndim == 1:
                 if not float(w.min()) > 0.0:
@@ -230,12 +228,27 @@ class StepProblem:
 
         Its right-hand side is ``scale b``; ``x_prev`` replaces the warm start when given.
         """
-        out = replace(self, b=scale * self.b,
-                      x_prev=self.x_prev if x_prev is None else x_prev)
+        if not math.isfinite(scale):
+            raise NonFiniteError("scale")
+        if abs(scale) <= 1.0:  # the policies' scales: no overflow possible
+            b = scale * self.b
+        else:
+            with np.errstate(over="ignore"):
+                b = scale * self.b
+            if kernel.first_defect([b], []) >= 0:
+                raise NonFiniteError("b (scaled)")
+        if x_prev is not None:
+            x_prev = np.asarray(x_prev, dtype=np.float64)
+            if x_prev.shape != (self.n,):
+                raise ShapeError("x_prev", (self.n,), x_prev.shape)
+        # Everything else was checked when this problem was made: a copy, not a new check.
+        out = copy.copy(self)
+        set_ = object.__setattr__
+        set_(out, "b", b)
+        set_(out, "x_prev", self.x_prev if x_prev is None else x_prev)
         # The same A, boxes, rows and cost: their factorisations carry over.
-        for key in ("factor", "ineq", "root"):
-            if key in self._cache:
-                out._cache[key] = self._cache[key]
+        set_(out, "_cache", {key: self._cache[key] for key in ("factor", "ineq", "root")
+                             if key in self._cache})
         return out
 
     def weight_matrix(self) -> FloatArray:

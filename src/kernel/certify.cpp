@@ -111,4 +111,35 @@ bool kkt_holds(const Mat& A, const Vec& b, const Factor& fa, const Mat& C, const
   return max_abs(step) <= tol;
 }
 
+Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
+                        const Mat& G, const Vec& h, const Factor& fa, const Mat& C,
+                        const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
+                        const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
+                        double bounds_tol, bool ask_kkt) {
+  Certificate out;
+  const Index n = x.size();
+  out.finite = x.allFinite();
+  out.active_lower.setZero(n);
+  out.active_upper.setZero(n);
+  if (!out.finite) return out;
+  out.res = residuals(A, b, lower, upper, G, h, x);
+  out.eq_limit = eq_rtol * std::max(1.0, max_abs(b));
+  if (ask_kkt && out.res.eq <= out.eq_limit &&
+      std::max(out.res.box, out.res.row) <= bounds_tol) {
+    out.kkt = kkt_holds(A, b, fa, C, e, cost, x, bounds) ? 1 : 0;
+  }
+  for (Index i = 0; i < n; ++i) {
+    out.active_lower(i) = lower(i) - x(i) >= -ACTIVE_TOL;
+    out.active_upper(i) = x(i) - upper(i) >= -ACTIVE_TOL;
+  }
+  if (G.rows()) {
+    for (Index i = 0; i < C.rows(); ++i) {
+      if (kind(i) == 0 && C.row(i).dot(x) - e(i) >= -ACTIVE_TOL) out.active_rows.push_back(i);
+    }
+  }
+  const Vec d = x - cost.center;
+  out.objective = cost.diagonal ? d.dot(cost.w.cwiseProduct(d)) : d.dot(cost.W * d);
+  return out;
+}
+
 }  // namespace dqk

@@ -2,6 +2,9 @@
 // dualarm_qp/solvers/certify.py).
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "linalg.hpp"
 
 namespace dqk {
@@ -19,5 +22,26 @@ Residuals residuals(const Mat& A, const Vec& b, const Vec& lower, const Vec& upp
 // the active rows of C; otherwise the equality alone).
 bool kkt_holds(const Mat& A, const Vec& b, const Factor& fa, const Mat& C, const Vec& e,
                const Cost& cost, const Vec& x, bool bounds);
+
+// Everything certify reads of x, in one pass (dualarm_qp/solvers/certify.py decides).
+struct Certificate {
+  bool finite = true;  // x holds no NaN or infinity (else nothing below is computed)
+  Residuals res{0.0, 0.0, 0.0};
+  double eq_limit = 0.0;  // eq_rtol * max(1, max |b|)
+  int kkt = -1;  // -1 not asked (or x breaks a limit), 0 fails, 1 holds
+  double objective = 0.0;  // (x - c)^T W (x - c)
+  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_lower;  // lower - x >= -ACTIVE_TOL
+  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_upper;  // x - upper >= -ACTIVE_TOL
+  std::vector<Index> active_rows;  // rows of C of kind 0 (general) within ACTIVE_TOL
+};
+
+// The residuals, the equality's limit, the active bounds and rows and the objective of
+// x; the KKT test too when ask_kkt and x meets the equality (eq <= eq_limit) and every
+// limit (box and row violation <= bounds_tol).
+Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
+                        const Mat& G, const Vec& h, const Factor& fa, const Mat& C,
+                        const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
+                        const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
+                        double bounds_tol, bool ask_kkt);
 
 }  // namespace dqk

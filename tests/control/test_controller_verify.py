@@ -71,9 +71,10 @@ def test_a_step_is_certified_once(monkeypatch):
         calls.append(args)
         return certify(*args, **kwargs)
 
-    # The module (the package's attribute of that name is the function).
-    monkeypatch.setattr(importlib.import_module("dualarm_qp.solvers.certify"), "certify",
-                        counting_certify)
+    # Every module that calls it (the package's attribute of that name is the function).
+    for module in ("dualarm_qp.solvers.certify", "dualarm_qp.solvers.registry",
+                   "dualarm_qp.solvers.policy", "dualarm_qp.control.controller"):
+        monkeypatch.setattr(importlib.import_module(module), "certify", counting_certify)
     out = controller.step(state)
     assert out.applied and out.status in (Status.OPTIMAL, Status.RECOVERING)
     assert out.solution.verified_with == controller.tolerance

@@ -1,0 +1,78 @@
+#include "boxes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace dqk {
+
+Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lower_ids,
+                    const BoundRows& uppers, const std::vector<std::int64_t>& upper_ids,
+                    Index n, double pin_rtol) {
+  if (lowers.rows() != static_cast<Index>(lower_ids.size()) ||
+      uppers.rows() != static_cast<Index>(upper_ids.size()) ||
+      (lowers.rows() && lowers.cols() != n) || (uppers.rows() && uppers.cols() != n)) {
+    throw std::invalid_argument("intersect_boxes: bounds and ids of different sizes");
+  }
+  constexpr double INF = std::numeric_limits<double>::infinity();
+  Box box;
+  box.lower = Vec::Constant(n, -INF);
+  box.upper = Vec::Constant(n, INF);
+  box.lower_by = IndexVec::Constant(n, -1);
+  box.upper_by = IndexVec::Constant(n, -1);
+  // The first NaN in the limits' order, lower and upper bounds of one limit together.
+  std::int64_t nan_limit = -1;
+  auto note_nan = [&nan_limit](std::int64_t id) {
+    if (nan_limit < 0 || id < nan_limit) nan_limit = id;
+  };
+  for (Index k = 0; k < lowers.rows(); ++k) {
+    for (Index i = 0; i < n; ++i) {
+      const double v = lowers(k, i);
+      if (std::isnan(v)) {
+        note_nan(lower_ids[k]);
+      } else if (v > box.lower(i)) {
+        box.lower(i) = v;
+        box.lower_by(i) = lower_ids[k];
+      }
+    }
+  }
+  for (Index k = 0; k < uppers.rows(); ++k) {
+    for (Index i = 0; i < n; ++i) {
+      const double v = uppers(k, i);
+      if (std::isnan(v)) {
+        note_nan(upper_ids[k]);
+      } else if (v < box.upper(i)) {
+        box.upper(i) = v;
+        box.upper_by(i) = upper_ids[k];
+      }
+    }
+  }
+  box.nan_limit = nan_limit;
+  for (Index i = 0; i < n; ++i) {
+    const double lo = box.lower(i), hi = box.upper(i);
+    if (hi < lo && lo - hi <= pin_rtol * std::max(1.0, std::abs(lo))) box.upper(i) = lo;
+  }
+  return box;
+}
+
+std::int64_t first_defect(const std::vector<Values>& finite,
+                          const std::vector<Values>& not_nan) {
+  for (std::size_t k = 0; k < finite.size(); ++k) {
+    if (!finite[k].isFinite().all()) return static_cast<std::int64_t>(k);
+  }
+  for (std::size_t k = 0; k < not_nan.size(); ++k) {
+    if (not_nan[k].isNaN().any()) {
+      return static_cast<std::int64_t>(finite.size() + k);
+    }
+  }
+  return -1;
+}
+
+double smallest_singular_value(const Mat& J) {
+  if (J.cols() < J.rows() || J.cols() == 0) return 0.0;
+  const Eigen::JacobiSVD<Mat> svd(J);
+  return svd.singularValues()(svd.singularValues().size() - 1);
+}
+
+}  // namespace dqk

@@ -1,0 +1,40 @@
+// The step's box: the intersection of the boxes its limits give (StepBuilder.build).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "linalg.hpp"
+
+namespace dqk {
+
+using IndexVec = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>;
+using BoundRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct Box {
+  Vec lower;
+  Vec upper;
+  IndexVec lower_by;  // the limit that set each lower bound (-1: none)
+  IndexVec upper_by;  // the limit that set each upper bound (-1: none)
+  std::int64_t nan_limit = -1;  // the first limit whose bounds hold NaN (-1: none)
+};
+
+// Row k of lowers is limit lower_ids[k]'s lower bounds (likewise the uppers), in the
+// limits' order. Each bound is the largest lower and the smallest upper; a tie keeps the
+// earlier limit. A box then empty by at most pin_rtol * max(1, |lower|) is rounding and
+// is pinned at its lower end (upper = lower). A NaN bound is reported, not intersected.
+Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lower_ids,
+                    const BoundRows& uppers, const std::vector<std::int64_t>& upper_ids,
+                    Index n, double pin_rtol);
+
+// Index of the first array that holds a value it may not: NaN or infinity in
+// finite[k], NaN in not_nan[k]; the finite arrays are numbered first (-1: none).
+using Values = Eigen::Map<const Eigen::ArrayXd>;  // an array's values, in any shape
+std::int64_t first_defect(const std::vector<Values>& finite,
+                          const std::vector<Values>& not_nan);
+
+// Smallest singular value of J (m x n); 0 when n < m or n == 0 (a Jacobian with fewer
+// joints than task rows has a direction it cannot move in).
+double smallest_singular_value(const Mat& J);
+
+}  // namespace dqk

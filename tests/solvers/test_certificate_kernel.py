@@ -1,0 +1,160 @@
+"""What the certificate reads of an answer, in one compiled call, against numpy.
+
+``kernel.certificate`` gives certify the residuals, the equality's limit, the active
+bounds and rows, the objective and (when asked) the KKT test. Each is recomputed here
+with numpy from its definition in :mod:`dualarm_qp.solvers.certify`. The problem's own
+checks (one compiled pass naming the first bad array) and the smallest singular value
+the step reports are checked likewise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dualarm_qp._compiled import kernel
+from dualarm_qp.errors import NonFiniteError, ShapeError
+from dualarm_qp.solvers import Status, StepSolution, get_solver
+from dualarm_qp.solvers._affine import cost_arrays, problem_factor
+from dualarm_qp.solvers.certify import ACTIVE_TOL, certify, kkt_holds
+from dualarm_qp.step.build import smallest_singular_value
+from dualarm_qp.step.problem import StepProblem
+
+seeds = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+def problem_and_points(seed):
+    """A random step with rows, and points on and off its limits."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 10))
+    m = int(rng.integers(0, n))
+    A = rng.normal(size=(m, n))
+    x_in = rng.uniform(-0.5, 0.5, n)
+    p = int(rng.integers(0, 4))
+    G = rng.normal(size=(p, n))
+    dense = bool(rng.integers(2))
+    if dense:
+        B = rng.normal(size=(n, n))
+        weights = B @ B.T + n * np.eye(n)
+    else:
+        weights = 10.0 ** rng.uniform(-1, 3, n)
+    problem = StepProblem(A=A, b=A @ x_in, weights=weights, center=rng.normal(0, 2, n),
+                          lower=-rng.uniform(0.6, 2.0, n), upper=rng.uniform(0.6, 2.0, n),
+                          G=G, h=G @ x_in + rng.uniform(0.0, 0.5, p))
+    solved = get_solver("nullspace").solve(problem).x
+    points = [solved, x_in, rng.normal(0, 2, n)]
+    if n:  # exactly on one bound
+        x = x_in.copy()
+        x[0] = problem.upper[0]
+        points.append(x)
+    return problem, points
+
+
+@settings(max_examples=120, deadline=None)
+@given(seeds, st.booleans())
+def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
+    problem, points = problem_and_points(seed)
+    f = problem_factor(problem)
+    ineq = problem.inequalities()
+    w_diag, w_full, root_full = cost_arrays(problem)
+    W = problem.weight_matrix()
+    for x in points:
+        (finite, eq, box, rows, limit, kkt, objective, act_lo, act_up,
+         act_rows) = kernel.certificate(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, f.U,
+            f.sigma, f.V, f.N, ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
+            problem.center, x, bounds, 1e-7, 1e-7, True)
+        assert finite
+        want_eq = np.abs(problem.A @ x - problem.b).max(initial=0.0)
+        want_box = max(0.0, float(np.max(np.r_[problem.lower - x, x - problem.upper])))
+        norms = np.linalg.norm(problem.G, axis=1)
+        gaps = (problem.G @ x - problem.h) / np.where(norms > 0, norms, 1.0)
+        want_rows = max(0.0, float(gaps.max(initial=0.0)))
+        assert eq == pytest.approx(want_eq, rel=1e-12, abs=1e-14)
+        assert box == pytest.approx(want_box, rel=1e-12, abs=1e-15)
+        assert rows == pytest.approx(want_rows, rel=1e-12, abs=1e-14)
+        assert limit == 1e-7 * max(1.0, float(np.abs(problem.b).max(initial=0.0)))
+        d = x - problem.center
+        assert objective == pytest.approx(float(d @ W @ d), rel=1e-12)
+        np.testing.assert_array_equal(act_lo.view(bool), problem.lower - x >= -ACTIVE_TOL)
+        np.testing.assert_array_equal(act_up.view(bool), x - problem.upper >= -ACTIVE_TOL)
+        on = (ineq.kind == 0) & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
+        assert act_rows == np.flatnonzero(on).tolist()
+        meets = eq <= limit and max(box, rows) <= 1e-7
+        assert kkt == (int(kkt_holds(problem, x, bounds=bounds)) if meets else -1)
+
+
+def test_the_kkt_test_is_not_run_unless_asked():
+    problem, points = problem_and_points(7)
+    f = problem_factor(problem)
+    ineq = problem.inequalities()
+    out = kernel.certificate(
+        problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, f.U,
+        f.sigma, f.V, f.N, ineq.C, ineq.e, ineq.kind, *cost_arrays(problem),
+        problem.center, points[0], True, 1e-7, 1e-7, False)
+    assert out[5] == -1
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_a_non_finite_answer_is_an_error_and_a_float32_one_is_read(bad):
+    problem, points = problem_and_points(11)
+    x = points[0].copy()
+    x[-1] = bad
+    out = certify(problem, StepSolution(x=x, status=Status.OPTIMAL))
+    assert out.status is Status.ERROR and not out.x.any()
+    single = certify(problem, StepSolution(x=points[0].astype(np.float32),
+                                           status=Status.FEASIBLE))
+    assert single.status.usable and single.x.dtype == np.float64
+
+
+@pytest.mark.parametrize("name", ["A", "b", "weights", "center", "G", "lower", "upper", "h"])
+def test_the_problem_names_the_first_array_holding_a_value_it_may_not(name):
+    problem, _ = problem_and_points(13)
+    fields = {k: getattr(problem, k).copy() for k in
+              ("A", "b", "weights", "center", "G", "lower", "upper", "h")}
+    if name in ("G", "h"):
+        fields["G"], fields["h"] = np.ones((1, problem.n)), np.ones(1)
+    if fields[name].size == 0:
+        pytest.skip("no equality rows in this draw")
+    fields[name].flat[0] = np.nan
+    with pytest.raises(NonFiniteError, match=f"^{name} contains"):
+        StepProblem(**fields)
+    if name in ("lower", "upper", "h"):  # infinite: no limit, allowed
+        fields[name].flat[0] = np.inf if name != "lower" else -np.inf
+        StepProblem(**fields)
+    else:
+        fields[name].flat[0] = np.inf
+        with pytest.raises(NonFiniteError, match=f"^{name} contains"):
+            StepProblem(**fields)
+
+
+def test_a_scaled_problem_is_checked_where_it_changed():
+    problem, points = problem_and_points(17)
+    assert problem.m  # seed chosen with equality rows
+    out = problem.scaled(0.5, x_prev=points[1])
+    np.testing.assert_array_equal(out.b, 0.5 * problem.b)
+    assert out.x_prev is not None and out.A is problem.A and problem.b is not out.b
+    with pytest.raises(NonFiniteError, match="scale"):
+        problem.scaled(np.inf)
+    big = StepProblem(A=np.eye(2), b=np.array([10.0, 1.0]), weights=np.ones(2),
+                      center=np.zeros(2), lower=-np.ones(2), upper=np.ones(2))
+    with pytest.raises(NonFiniteError, match="b"):  # 1e308 * 10 overflows
+        big.scaled(1e308)
+    with pytest.raises(ShapeError, match="x_prev"):
+        problem.scaled(0.5, x_prev=np.zeros(problem.n + 1))
+
+
+@settings(max_examples=100, deadline=None)
+@given(seeds, st.integers(min_value=0, max_value=3))
+def test_the_smallest_singular_value_equals_numpys(seed, drop):
+    rng = np.random.default_rng(seed)
+    J = rng.normal(size=(6, int(rng.integers(6, 8))))
+    if drop:  # a near-singular Jacobian: singular values down to 1e-9 (perturbed)
+        U, s, Vt = np.linalg.svd(J, full_matrices=False)
+        s[-drop:] = 10.0 ** -rng.uniform(3, 9, drop)
+        J = (U * s) @ Vt
+    want = np.linalg.svd(J, compute_uv=False)[-1]
+    assert smallest_singular_value(J) == pytest.approx(want, rel=1e-9, abs=1e-14)
+    assert smallest_singular_value(J[:, :5]) == 0.0  # fewer joints than task rows
