@@ -33,11 +33,35 @@ using namespace nb::literals;
 using dqk::Index;
 using dqk::Mat;
 using dqk::Vec;
+// A matrix argument as numpy holds it, C- or Fortran-ordered, without a copy through
+// Python (a `const Mat&` parameter makes nanobind call numpy to re-order a C-ordered
+// array: about 2 us per argument); the kernel's functions copy it in C++ as needed.
+using In = nb::DRef<const Mat>;
 
 namespace {
 
+// A result handed to Python without a copy: nanobind copies an Eigen result under 1 kB
+// through numpy.copy (a Python call, about 1.5 us per array); this moves it to the heap
+// and gives numpy a view that owns it.
+template <typename M>
+nb::ndarray<nb::numpy, typename M::Scalar> out(M&& value) {
+  using T = std::decay_t<M>;
+  T* heap = new T(std::forward<M>(value));
+  nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<T*>(p); });
+  if constexpr (T::ColsAtCompileTime == 1) {
+    const size_t shape[1] = {static_cast<size_t>(heap->size())};
+    return nb::ndarray<nb::numpy, typename M::Scalar>(heap->data(), 1, shape, owner);
+  } else {
+    const size_t shape[2] = {static_cast<size_t>(heap->rows()),
+                             static_cast<size_t>(heap->cols())};
+    const int64_t strides[2] = {heap->rowStride(), heap->colStride()};
+    return nb::ndarray<nb::numpy, typename M::Scalar>(heap->data(), 2, shape, owner,
+                                                      strides);
+  }
+}
+
 nb::tuple factor_tuple(const dqk::Factor& f) {
-  return nb::make_tuple(f.U, f.sigma, f.V, f.N);
+  return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
 }
 
 dqk::Factor factor_from(const Mat& U, const Vec& sigma, const Mat& V, const Mat& N) {
@@ -86,44 +110,46 @@ NB_MODULE(_kernel, m) {
       .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a, "J"_a.noconvert(),
            "The Jacobian of frame at the last update into J (6, nq).");
 
-  m.def("factor", [](const Mat& A) { return factor_tuple(dqk::factor(A)); }, "A"_a,
+  m.def("factor", [](In A) { return factor_tuple(dqk::factor(A)); }, "A"_a,
         "Truncated SVD of A: (U, sigma, V, N).");
 
   m.def(
       "affine",
-      [](const Mat& A, const Vec& b) -> nb::object {
+      [](In A, const Vec& b) -> nb::object {
         const dqk::Factor f = dqk::factor(A);
         const auto x0 = dqk::affine_point(A, b, f);
         if (!x0) return nb::none();
-        return nb::make_tuple(*x0, f.U, f.sigma, f.V, f.N);
+        return nb::make_tuple(out(Vec(*x0)), out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)),
+                              out(Mat(f.N)));
       },
       "A"_a, "b"_a, "(x0, U, sigma, V, N) of A x = b, or None if inconsistent.");
 
   m.def(
       "inequalities",
-      [](const Vec& lower, const Vec& upper, const Mat& G, const Vec& h) {
-        const dqk::Rows r = dqk::inequalities(lower, upper, G, h);
-        return nb::make_tuple(r.C, r.e, r.kind, r.index);
+      [](const Vec& lower, const Vec& upper, In G, const Vec& h) {
+        dqk::Rows r = dqk::inequalities(lower, upper, G, h);
+        return nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
+                              out(std::move(r.index)));
       },
       "lower"_a, "upper"_a, "G"_a, "h"_a,
       "Every finite limit as unit-norm rows: (C, e, kind, index).");
 
   m.def(
       "least_distance",
-      [](const Mat& N, const Vec& x0, const Vec& w_diag, const Mat& w_full,
-         const Mat& root_full, const Vec& center) -> Vec {
-        if (N.cols() == 0) return x0;
+      [](In N, const Vec& x0, const Vec& w_diag, In w_full,
+         In root_full, const Vec& center) {
+        if (N.cols() == 0) return out(Vec(x0));
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        const Vec t = dqk::qr_lstsq(cost.root_times(N), cost.root_times(Vec(center - x0)));
-        return x0 + N * t;
+        const Vec t = dqk::qr_lstsq(cost.root_times(Mat(N)), cost.root_times(Vec(center - x0)));
+        return out(Vec(x0 + N * t));
       },
       "N"_a, "x0"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a,
       "The minimiser of |R (x - c)|^2 over x = x0 + N t.");
 
   m.def(
       "solve_nullspace",
-      [](const Mat& A, const Vec& b, const Mat& C, const Vec& e, const Vec& w_diag,
-         const Mat& w_full, const Mat& root_full, const Vec& center, double feas_tol,
+      [](In A, const Vec& b, In C, const Vec& e, const Vec& w_diag,
+         In w_full, In root_full, const Vec& center, double feas_tol,
          Index max_iter, nb::object known) {
         // The problem's factor when it is already known (the same computation, so the
         // same arrays), else computed here.
@@ -136,9 +162,9 @@ NB_MODULE(_kernel, m) {
                           nb::cast<Mat>(t[3]));
         }
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        const dqk::StepAnswer s =
+        dqk::StepAnswer s =
             dqk::solve_nullspace(A, b, f, C, e, cost, feas_tol, max_iter);
-        return nb::make_tuple(static_cast<int>(s.code), s.x, s.conflicts, s.nullity,
+        return nb::make_tuple(static_cast<int>(s.code), out(std::move(s.x)), s.conflicts, s.nullity,
                               s.iterations, known.is_none() ? factor_tuple(f) : known);
       },
       "A"_a, "b"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a,
@@ -148,10 +174,11 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "dense_qp",
-      [](const Mat& R, const Vec& t_free, const Mat& M, const Vec& f, double feas_tol,
+      [](In R, const Vec& t_free, In M, const Vec& f, double feas_tol,
          Index max_iter) {
-        const dqk::DenseQPResult r = dqk::solve_dense_qp(R, t_free, M, f, feas_tol, max_iter);
-        return nb::make_tuple(static_cast<int>(r.status), r.t, r.active, r.multipliers,
+        dqk::DenseQPResult r = dqk::solve_dense_qp(R, t_free, M, f, feas_tol, max_iter);
+        return nb::make_tuple(static_cast<int>(r.status), out(std::move(r.t)), r.active,
+                              r.multipliers,
                               r.blocking, r.iterations);
       },
       "R"_a, "t_free"_a, "M"_a, "f"_a, "feas_tol"_a, "max_iter"_a,
@@ -159,15 +186,15 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "nnls",
-      [](const Mat& A, const Vec& b, Index max_iter) {
-        const dqk::NNLSResult r = dqk::nnls(A, b, max_iter);
-        return nb::make_tuple(r.x, r.rnorm, r.converged);
+      [](In A, const Vec& b, Index max_iter) {
+        dqk::NNLSResult r = dqk::nnls(A, b, max_iter);
+        return nb::make_tuple(out(std::move(r.x)), r.rnorm, r.converged);
       },
       "A"_a, "b"_a, "max_iter"_a, "Lawson-Hanson NNLS: (x, rnorm, converged).");
 
   m.def(
       "residuals",
-      [](const Mat& A, const Vec& b, const Vec& lower, const Vec& upper, const Mat& G,
+      [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
          const Vec& h, const Vec& x) {
         const dqk::Residuals r = dqk::residuals(A, b, lower, upper, G, h, x);
         return nb::make_tuple(r.eq, r.box, r.row);
@@ -177,9 +204,9 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "kkt_holds",
-      [](const Mat& A, const Vec& b, const Mat& U, const Vec& sigma, const Mat& V,
-         const Mat& N, const Mat& C, const Vec& e, const Vec& w_diag, const Mat& w_full,
-         const Mat& root_full, const Vec& center, const Vec& x, bool bounds) {
+      [](In A, const Vec& b, In U, const Vec& sigma, In V,
+         In N, In C, const Vec& e, const Vec& w_diag, In w_full,
+         In root_full, const Vec& center, const Vec& x, bool bounds) {
         const dqk::Cost cost(w_diag, w_full, root_full, center);
         return dqk::kkt_holds(A, b, factor_from(U, sigma, V, N), C, e, cost, x, bounds);
       },
@@ -189,17 +216,18 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "certificate",
-      [](const Mat& A, const Vec& b, const Vec& lower, const Vec& upper, const Mat& G,
-         const Vec& h, const Mat& U, const Vec& sigma, const Mat& V, const Mat& N,
-         const Mat& C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
-         const Vec& w_diag, const Mat& w_full, const Mat& root_full, const Vec& center,
+      [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
+         const Vec& h, In U, const Vec& sigma, In V, In N,
+         In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
+         const Vec& w_diag, In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        const dqk::Certificate c =
+        dqk::Certificate c =
             dqk::certificate(A, b, lower, upper, G, h, factor_from(U, sigma, V, N), C, e,
                              kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
         return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
-                              c.objective, c.active_lower, c.active_upper, c.active_rows);
+                              c.objective, out(std::move(c.active_lower)),
+                              out(std::move(c.active_upper)), c.active_rows);
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "U"_a, "sigma"_a, "V"_a, "N"_a,
       "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a, "x"_a,
@@ -219,9 +247,10 @@ NB_MODULE(_kernel, m) {
       [](const dqk::BoundRows& lowers, const std::vector<std::int64_t>& lower_ids,
          const dqk::BoundRows& uppers, const std::vector<std::int64_t>& upper_ids, Index n,
          double pin_rtol) {
-        const dqk::Box b =
+        dqk::Box b =
             dqk::intersect_boxes(lowers, lower_ids, uppers, upper_ids, n, pin_rtol);
-        return nb::make_tuple(b.lower, b.upper, b.lower_by, b.upper_by, b.nan_limit);
+        return nb::make_tuple(out(std::move(b.lower)), out(std::move(b.upper)),
+                              out(std::move(b.lower_by)), out(std::move(b.upper_by)), b.nan_limit);
       },
       "lowers"_a, "lower_ids"_a, "uppers"_a, "upper_ids"_a, "n"_a, "pin_rtol"_a,
       "The step's box from its limits' boxes: (lower, upper, lower_by, upper_by, "
@@ -248,9 +277,9 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "scale_lp",
-      [](const Mat& M, const Vec& a, const Vec& g, double s_lo, double s_hi) {
-        const dqk::ScaleLPResult r = dqk::scale_lp(M, a, g, s_lo, s_hi);
-        return nb::make_tuple(static_cast<int>(r.status), r.t, r.s, r.rows);
+      [](In M, const Vec& a, const Vec& g, double s_lo, double s_hi) {
+        dqk::ScaleLPResult r = dqk::scale_lp(M, a, g, s_lo, s_hi);
+        return nb::make_tuple(static_cast<int>(r.status), out(std::move(r.t)), r.s, r.rows);
       },
       "M"_a, "a"_a, "g"_a, "s_lo"_a, "s_hi"_a,
       "Largest s with M t + a s <= g, s_lo <= s <= s_hi: (status, t, s, rows); status 0 "
