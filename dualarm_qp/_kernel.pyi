@@ -23,23 +23,23 @@ def inequalities(lower: ArrayLike, upper: ArrayLike, G: ArrayLike, h: ArrayLike
                  ) -> tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]]: ...
 def least_distance(N: ArrayLike, x0: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                    root_full: ArrayLike, center: ArrayLike) -> _F: ...
-def solve_nullspace(A: ArrayLike, b: ArrayLike, C: ArrayLike, e: ArrayLike,
-                    w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
-                    center: ArrayLike, feas_tol: float, max_iter: int,
-                    factor: tuple[_F, _F, _F, _F] | None
-                    ) -> tuple[int, _F, list[int], int, int, tuple[_F, _F, _F, _F]]: ...
+def basis(A: ArrayLike) -> tuple[_F, _F, int, float, bool]: ...
+def solve_nullspace(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
+                    sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
+                    w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike,
+                    feas_tol: float, max_iter: int) -> tuple[int, _F, list[int], int, int]: ...
 def dense_qp(R: ArrayLike, t_free: ArrayLike, M: ArrayLike, f: ArrayLike, feas_tol: float,
              max_iter: int) -> tuple[int, _F, list[int], list[float], int, int]: ...
 def nnls(A: ArrayLike, b: ArrayLike, max_iter: int) -> tuple[_F, float, bool]: ...
 def residuals(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
               G: ArrayLike, h: ArrayLike, x: ArrayLike) -> tuple[float, float, float]: ...
-def kkt_holds(A: ArrayLike, b: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: ArrayLike,
-              N: ArrayLike, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
+def kkt_holds(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
+              sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
 def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
-                G: ArrayLike, h: ArrayLike, U: ArrayLike, sigma: ArrayLike, V: ArrayLike,
-                N: ArrayLike, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
+                G: ArrayLike, h: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
+                sigma_max: float, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
                 w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
                 center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
                 bounds_tol: float, ask_kkt: bool

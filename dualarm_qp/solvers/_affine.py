@@ -4,6 +4,9 @@ The tools every solver, the certificate and the policies share, computed by the
 compiled kernel (:mod:`dualarm_qp._compiled`; this module maps its arrays to typed results):
 
 * :func:`factor`, the one truncated SVD that takes every rank decision;
+* :func:`null_basis`, what the exact solver and the certificate need of ``A`` (its
+  pseudo-inverse and null space), from a QR factorisation where that proves the SVD's
+  decision (full row rank), from :func:`factor` otherwise;
 * :func:`affine_solutions` writes every solution of ``A x = b`` as ``x0 + N t``;
 * :func:`least_distance_eq`, the one equality-constrained least-distance kernel:
   the minimiser of Eq. 37 over an affine set, with its multipliers.
@@ -11,7 +14,9 @@ compiled kernel (:mod:`dualarm_qp._compiled`; this module maps its arrays to typ
 Every decision about a dimension in the solvers, the certificate and here (the rank
 of ``A`` or of a column subset of it, hence the null-space dimension; whether a
 variable moves along a null direction) is taken from a singular value decomposition
-with the one relative tolerance :data:`RANK_RTOL`. None rests on an LU pivot, on the
+with the one relative tolerance :data:`RANK_RTOL` (:func:`null_basis` skips the SVD only
+where Frobenius bounds of its QR factor prove the SVD would keep every singular value).
+None rests on an LU pivot, on the
 ``info`` of a LAPACK solve, or on a machine-dependent default cut-off, so the decided
 dimension is the same on every CPU and BLAS build unless a singular value lies within
 rounding (about 1e-15 relative) of the cut-off.
@@ -182,6 +187,63 @@ def least_distance_eq(problem: StepProblem, E: FloatArray, r: FloatArray
     f = factor(E)
     x = least_distance(problem, f.N, f.solve(r))
     return x, f.solve_transposed(problem.gradient(x))
+
+
+@dataclass(frozen=True, slots=True)
+class NullBasis:
+    """What the exact solver and the certificate need of ``A`` (m x n).
+
+    The rank is decided as :func:`factor` decides it, at :data:`RANK_RTOL` of the
+    largest singular value. When ``A``'s QR factorisation ``A^T = Q R`` proves full row
+    rank (Frobenius bounds: ``sigma_min >= 1 / |R^-1|_F > RANK_RTOL |R|_F >= RANK_RTOL
+    sigma_max``), the basis comes from it: ``P = Q_1 R^-T`` and ``N = Q_2``, at a
+    quarter of an SVD's cost. Any other ``A`` (near-singular, rank-deficient, more rows
+    than columns) takes :func:`factor`'s SVD.
+
+    Attributes
+    ----------
+    P : ndarray, shape (n, m)
+        The (truncated) pseudo-inverse of ``A``: ``P b`` is the minimum-norm
+        least-squares solution of ``A x = b``.
+    N : ndarray, shape (n, n - rank)
+        Orthonormal basis of the numerical null space of ``A``.
+    rank : int
+        Numerical rank of ``A``.
+    sigma_max : float
+        Largest singular value (SVD path) or its Frobenius bound (QR path) [units of A].
+    qr : bool
+        Whether the QR path proved full row rank.
+    """
+
+    P: FloatArray
+    N: FloatArray
+    rank: int
+    sigma_max: float
+    qr: bool
+
+    @property
+    def nullity(self) -> int:
+        """Numerical null-space dimension ``n - rank``."""
+        return int(self.N.shape[1])
+
+    def args(self) -> tuple[FloatArray, FloatArray, int, float]:
+        """``(P, N, rank, sigma_max)``, as the kernel's functions take the basis."""
+        return self.P, self.N, self.rank, self.sigma_max
+
+
+def null_basis(A: FloatArray) -> NullBasis:
+    """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
+    P, N, rank, sigma_max, qr = kernel.basis(np.asarray(A, dtype=np.float64))
+    return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
+
+
+def problem_basis(problem: StepProblem) -> NullBasis:
+    """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
+    f = problem._cache.get("basis")
+    if f is None:
+        f = null_basis(problem.A)
+        problem._cache["basis"] = f
+    return f
 
 
 def problem_factor(problem: StepProblem) -> Factor:

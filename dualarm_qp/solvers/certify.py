@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import cost_arrays, problem_factor
+from ._affine import cost_arrays, problem_basis
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
 FloatArray = NDArray[np.float64]
@@ -112,13 +112,13 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
     status, message = claim.status, claim.message
     if isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype.kind in "fiu":
         x = np.asarray(x, dtype=np.float64)
-        f = problem_factor(problem)
         ineq = problem.inequalities()
         w_diag, w_full, root_full = cost_arrays(problem)
         (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up,
          active) = kernel.certificate(
-            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, f.U,
-            f.sigma, f.V, f.N, ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, w_diag, w_full,
+            root_full,
             problem.center, x, claims_bounds, tol.equality, tol.bounds,
             status is Status.OPTIMAL)
     else:
@@ -194,12 +194,11 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     bounds : bool
         Include the boxes and rows (False: the minimiser over ``A x = b`` alone).
     """
-    f = problem_factor(problem)
     ineq = problem.inequalities()
     w_diag, w_full, root_full = cost_arrays(problem)
-    return bool(kernel.kkt_holds(problem.A, problem.b, f.U, f.sigma, f.V, f.N, ineq.C,
-                                 ineq.e, w_diag, w_full, root_full, problem.center, x,
-                                 bounds))
+    return bool(kernel.kkt_holds(problem.A, problem.b, *problem_basis(problem).args(),
+                                 ineq.C, ineq.e, w_diag, w_full, root_full, problem.center,
+                                 x, bounds))
 
 
 __all__ = ["ACTIVE_TOL", "certify", "equality_limit", "kkt_holds", "residuals"]

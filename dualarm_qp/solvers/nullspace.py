@@ -1,7 +1,8 @@
 """Exact solver of the step QP by parametrising the null space of ``A``.
 
-Every solution of ``A x = b`` is ``x = x0 + N t`` (:func:`~._affine.affine_solutions`:
-one SVD, the null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`). Every
+Every solution of ``A x = b`` is ``x = x0 + N t`` (:func:`~._affine.null_basis`: the
+null-space dimension ``d`` decided with :data:`~._affine.RANK_RTOL`, from a QR
+factorisation where it proves full row rank, from one SVD otherwise). Every
 limit of the step, box or general row, is a row ``C_i x <= e_i`` of
 :meth:`~dualarm_qp.step.StepProblem.inequalities` (unit norm), hence a row
 ``(C_i N) t <= e_i - C_i x0`` on ``t``:
@@ -35,7 +36,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import Factor, cost_arrays
+from ._affine import cost_arrays, problem_basis
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .registry import check_number, check_tolerance, register
@@ -78,13 +79,10 @@ class NullspaceSolver:
             return empty
         ineq = problem.inequalities()
         w_diag, w_full, root_full = cost_arrays(problem)
-        known = problem._cache.get("factor")  # e.g. of the unscaled step: the same A
-        code, x, rows, nullity, iterations, factor = kernel.solve_nullspace(
-            problem.A, problem.b, ineq.C, ineq.e, w_diag, w_full, root_full,
-            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter,
-            None if known is None else (known.U, known.sigma, known.V, known.N))
-        if known is None:  # shared with the certificate
-            problem._cache["factor"] = Factor(*factor)
+        basis = problem_basis(problem)  # shared with the certificate and scaled copies
+        code, x, rows, nullity, iterations = kernel.solve_nullspace(
+            problem.A, problem.b, *basis.args(), ineq.C, ineq.e, w_diag, w_full, root_full,
+            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter)
         if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",

@@ -247,7 +247,7 @@ class StepProblem:
         set_(out, "b", b)
         set_(out, "x_prev", self.x_prev if x_prev is None else x_prev)
         # The same A, boxes, rows and cost: their factorisations carry over.
-        set_(out, "_cache", {key: self._cache[key] for key in ("factor", "ineq", "root")
+        set_(out, "_cache", {key: self._cache[key] for key in ("factor", "basis", "ineq", "root")
                              if key in self._cache})
         return out
 

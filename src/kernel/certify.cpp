@@ -44,7 +44,7 @@ Residuals residuals(const Mat& A, const Vec& b, const Vec& lower, const Vec& upp
   return r;
 }
 
-bool kkt_holds(const Mat& A, const Vec& b, const Factor& fa, const Mat& C, const Vec& e,
+bool kkt_holds(const Mat& A, const Vec& b, const Basis& fa, const Mat& C, const Vec& e,
                const Cost& cost, const Vec& x, bool bounds) {
   const Mat& Z = fa.N;
   const Index d = Z.cols();
@@ -112,7 +112,7 @@ bool kkt_holds(const Mat& A, const Vec& b, const Factor& fa, const Mat& C, const
 }
 
 Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
-                        const Mat& G, const Vec& h, const Factor& fa, const Mat& C,
+                        const Mat& G, const Vec& h, const Basis& fa, const Mat& C,
                         const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
                         const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
                         double bounds_tol, bool ask_kkt) {

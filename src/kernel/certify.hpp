@@ -20,7 +20,7 @@ Residuals residuals(const Mat& A, const Vec& b, const Vec& lower, const Vec& upp
 
 // Whether x is the minimiser of |R (x - c)|^2 on A x = b and C x <= e (bounds: hold
 // the active rows of C; otherwise the equality alone).
-bool kkt_holds(const Mat& A, const Vec& b, const Factor& fa, const Mat& C, const Vec& e,
+bool kkt_holds(const Mat& A, const Vec& b, const Basis& fa, const Mat& C, const Vec& e,
                const Cost& cost, const Vec& x, bool bounds);
 
 // Everything certify reads of x, in one pass (dualarm_qp/solvers/certify.py decides).
@@ -39,7 +39,7 @@ struct Certificate {
 // x; the KKT test too when ask_kkt and x meets the equality (eq <= eq_limit) and every
 // limit (box and row violation <= bounds_tol).
 Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
-                        const Mat& G, const Vec& h, const Factor& fa, const Mat& C,
+                        const Mat& G, const Vec& h, const Basis& fa, const Mat& C,
                         const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
                         const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
                         double bounds_tol, bool ask_kkt);

@@ -43,17 +43,63 @@ Factor factor(const Mat& A) {
   return f;
 }
 
-std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Factor& f) {
-  Vec x0 = f.solve(b);
-  if (f.rank() < A.rows()) {
+Basis basis(const Mat& A) {
+  const Index m = A.rows(), n = A.cols();
+  Basis out;
+  if (m == 0 || n == 0) {
+    out.P = Mat::Zero(n, m);
+    out.N = Mat::Identity(n, n);
+    return out;
+  }
+  if (m <= n && A.allFinite()) {
+    const Eigen::HouseholderQR<Mat> qr(A.transpose());
+    const Mat R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+    if ((R.diagonal().array() != 0.0).all()) {
+      const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity(m, m));
+      const double lo = 1.0 / R_inv.norm(), hi = R.norm();
+      if (std::isfinite(lo) && std::isfinite(hi) && lo > RANK_RTOL * hi) {
+        const Mat Q = qr.householderQ();
+        out.P = Q.leftCols(m) * R_inv.transpose();
+        out.N = Q.rightCols(n - m);
+        out.rank = m;
+        out.sigma_max = hi;
+        out.qr = true;
+        return out;
+      }
+    }
+  }
+  const Factor f = factor(A);
+  out.P = f.V * f.sigma.cwiseInverse().asDiagonal() * f.U.transpose();
+  out.N = f.N;
+  out.rank = f.rank();
+  out.sigma_max = f.rank() ? f.sigma(0) : 0.0;
+  return out;
+}
+
+namespace {
+
+// x0 when A x0 = b holds (always at full row rank), else nothing.
+std::optional<Vec> checked_point(const Mat& A, const Vec& b, Vec x0, Index rank,
+                                 double sigma_max) {
+  if (rank < A.rows()) {
     double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
-    if (f.rank() > 0 && x0.size() > 0) {
-      scale = std::max(scale, f.sigma(0) * x0.cwiseAbs().maxCoeff());
+    if (rank > 0 && x0.size() > 0) {
+      scale = std::max(scale, sigma_max * x0.cwiseAbs().maxCoeff());
     }
     const double res = (A * x0 - b).cwiseAbs().maxCoeff();
     if (!(res <= CONSISTENCY_TOL * scale)) return std::nullopt;
   }
   return x0;
+}
+
+}  // namespace
+
+std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Basis& f) {
+  return checked_point(A, b, f.solve(b), f.rank, f.sigma_max);
+}
+
+std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Factor& f) {
+  return checked_point(A, b, f.solve(b), f.rank(), f.rank() ? f.sigma(0) : 0.0);
 }
 
 Cost::Cost(const Vec& weights_diag, const Mat& weights_full, const Mat& root_full,

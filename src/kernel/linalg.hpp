@@ -26,8 +26,27 @@ struct Factor {
 
 Factor factor(const Mat& A);
 
+// What the exact solver and the certificate need of A: its pseudo-inverse P (n x m), a
+// basis N of its null space and its rank, decided as factor() decides it. A with full
+// row rank proven by its QR factorisation (A^T = Q R; Frobenius bounds give
+// sigma_min >= 1 / |R^-1|_F > RANK_RTOL |R|_F >= RANK_RTOL sigma_max) takes the QR
+// path: P = Q_1 R^-T, N = Q_2. Any other A (wider than tall, near-singular, rank
+// deficient) takes the SVD of factor().
+struct Basis {
+  Mat P;
+  Mat N;
+  Index rank = 0;
+  double sigma_max = 0.0;  // the SVD's largest singular value; |R|_F on the QR path
+  bool qr = false;         // which path was taken
+  Index nullity() const { return N.cols(); }
+  Vec solve(const Vec& b) const { return P * b; }  // minimum-norm least squares
+};
+
+Basis basis(const Mat& A);
+
 // x0 (minimum norm) of A x = b, or nothing when the equality is inconsistent.
 std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Factor& f);
+std::optional<Vec> affine_point(const Mat& A, const Vec& b, const Basis& f);
 
 // Eq. 37 as |R (x - c)|^2: a diagonal cost (R = sqrt(w)) or a full one (R given).
 struct Cost {

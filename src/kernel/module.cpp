@@ -64,8 +64,14 @@ nb::tuple factor_tuple(const dqk::Factor& f) {
   return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
 }
 
-dqk::Factor factor_from(const Mat& U, const Vec& sigma, const Mat& V, const Mat& N) {
-  return dqk::Factor{U, sigma, V, N};
+// A basis as Python holds it: (P, N, rank, sigma_max, qr).
+dqk::Basis basis_from(const Mat& P, const Mat& N, Index rank, double sigma_max) {
+  dqk::Basis f;
+  f.P = P;
+  f.N = N;
+  f.rank = rank;
+  f.sigma_max = sigma_max;
+  return f;
 }
 
 }  // namespace
@@ -147,30 +153,32 @@ NB_MODULE(_kernel, m) {
       "The minimiser of |R (x - c)|^2 over x = x0 + N t.");
 
   m.def(
-      "solve_nullspace",
-      [](In A, const Vec& b, In C, const Vec& e, const Vec& w_diag,
-         In w_full, In root_full, const Vec& center, double feas_tol,
-         Index max_iter, nb::object known) {
-        // The problem's factor when it is already known (the same computation, so the
-        // same arrays), else computed here.
-        dqk::Factor f;
-        if (known.is_none()) {
-          f = dqk::factor(A);
-        } else {
-          const nb::tuple t = nb::cast<nb::tuple>(known);
-          f = factor_from(nb::cast<Mat>(t[0]), nb::cast<Vec>(t[1]), nb::cast<Mat>(t[2]),
-                          nb::cast<Mat>(t[3]));
-        }
-        const dqk::Cost cost(w_diag, w_full, root_full, center);
-        dqk::StepAnswer s =
-            dqk::solve_nullspace(A, b, f, C, e, cost, feas_tol, max_iter);
-        return nb::make_tuple(static_cast<int>(s.code), out(std::move(s.x)), s.conflicts, s.nullity,
-                              s.iterations, known.is_none() ? factor_tuple(f) : known);
+      "basis",
+      [](In A) {
+        dqk::Basis f = dqk::basis(A);
+        return nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max,
+                              f.qr);
       },
-      "A"_a, "b"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a,
-      "feas_tol"_a, "max_iter"_a, "factor"_a.none(),
-      "The exact step: (code, x, conflicts, nullity, iterations, factor); factor, when "
-      "given, is (U, sigma, V, N) of A.");
+      "A"_a,
+      "(P, N, rank, sigma_max, qr): the pseudo-inverse of A, a basis of its null space, "
+      "its rank, its largest singular value (or a bound) and whether the QR path proved "
+      "full row rank.");
+
+  m.def(
+      "solve_nullspace",
+      [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
+         const Vec& w_diag, In w_full, In root_full, const Vec& center, double feas_tol,
+         Index max_iter) {
+        const dqk::Cost cost(w_diag, w_full, root_full, center);
+        dqk::StepAnswer s = dqk::solve_nullspace(A, b, basis_from(P, N, rank, sigma_max), C,
+                                                 e, cost, feas_tol, max_iter);
+        return nb::make_tuple(static_cast<int>(s.code), out(std::move(s.x)), s.conflicts,
+                              s.nullity, s.iterations);
+      },
+      "A"_a, "b"_a, "P"_a, "N"_a, "rank"_a, "sigma_max"_a, "C"_a, "e"_a, "w_diag"_a,
+      "w_full"_a, "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a,
+      "The exact step on A's basis (P, N, rank, sigma_max): (code, x, conflicts, "
+      "nullity, iterations).");
 
   m.def(
       "dense_qp",
@@ -204,33 +212,34 @@ NB_MODULE(_kernel, m) {
 
   m.def(
       "kkt_holds",
-      [](In A, const Vec& b, In U, const Vec& sigma, In V,
-         In N, In C, const Vec& e, const Vec& w_diag, In w_full,
-         In root_full, const Vec& center, const Vec& x, bool bounds) {
+      [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
+         const Vec& w_diag, In w_full, In root_full, const Vec& center, const Vec& x,
+         bool bounds) {
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        return dqk::kkt_holds(A, b, factor_from(U, sigma, V, N), C, e, cost, x, bounds);
+        return dqk::kkt_holds(A, b, basis_from(P, N, rank, sigma_max), C, e, cost, x,
+                              bounds);
       },
-      "A"_a, "b"_a, "U"_a, "sigma"_a, "V"_a, "N"_a, "C"_a, "e"_a, "w_diag"_a, "w_full"_a,
-      "root_full"_a, "center"_a, "x"_a, "bounds"_a,
+      "A"_a, "b"_a, "P"_a, "N"_a, "rank"_a, "sigma_max"_a, "C"_a, "e"_a, "w_diag"_a,
+      "w_full"_a, "root_full"_a, "center"_a, "x"_a, "bounds"_a,
       "Whether x is the step's minimiser (the KKT test of certify).");
 
   m.def(
       "certificate",
       [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
-         const Vec& h, In U, const Vec& sigma, In V, In N,
+         const Vec& h, In P, In N, Index rank, double sigma_max,
          In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
          const Vec& w_diag, In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
         const dqk::Cost cost(w_diag, w_full, root_full, center);
         dqk::Certificate c =
-            dqk::certificate(A, b, lower, upper, G, h, factor_from(U, sigma, V, N), C, e,
+            dqk::certificate(A, b, lower, upper, G, h, basis_from(P, N, rank, sigma_max), C, e,
                              kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
         return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
                               c.objective, out(std::move(c.active_lower)),
                               out(std::move(c.active_upper)), c.active_rows);
       },
-      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "U"_a, "sigma"_a, "V"_a, "N"_a,
-      "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a, "x"_a,
+      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "P"_a, "N"_a, "rank"_a,
+      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a, "x"_a,
       "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
       "Everything certify reads of x: (finite, eq, box, row, eq_limit, kkt, objective, "
       "active_lower, active_upper, active_rows); kkt is -1 when not asked or x breaks a "

@@ -40,7 +40,7 @@ bool interval(const Vec& c, const Vec& f, double t_free, double tol, double* t,
   return true;
 }
 
-StepAnswer solve_nullspace(const Mat& A, const Vec& b, const Factor& fa, const Mat& C,
+StepAnswer solve_nullspace(const Mat& A, const Vec& b, const Basis& fa, const Mat& C,
                            const Vec& e, const Cost& cost, double feas_tol,
                            Index max_iter) {
   StepAnswer out{StepCode::optimal, Vec(), {}, -1, -1};

@@ -19,7 +19,7 @@ struct StepAnswer {
 };
 
 // The minimiser of |R (x - c)|^2 subject to A x = b and C x <= e (unit-norm rows).
-StepAnswer solve_nullspace(const Mat& A, const Vec& b, const Factor& fa, const Mat& C,
+StepAnswer solve_nullspace(const Mat& A, const Vec& b, const Basis& fa, const Mat& C,
                            const Vec& e, const Cost& cost, double feas_tol,
                            Index max_iter);
 

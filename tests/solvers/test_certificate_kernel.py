@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from dualarm_qp._compiled import kernel
 from dualarm_qp.errors import NonFiniteError, ShapeError
 from dualarm_qp.solvers import Status, StepSolution, get_solver
-from dualarm_qp.solvers._affine import cost_arrays, problem_factor
+from dualarm_qp.solvers._affine import cost_arrays, problem_basis
 from dualarm_qp.solvers.certify import ACTIVE_TOL, certify, kkt_holds
 from dualarm_qp.step.build import smallest_singular_value
 from dualarm_qp.step.problem import StepProblem
@@ -56,15 +56,15 @@ def problem_and_points(seed):
 @given(seeds, st.booleans())
 def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
     problem, points = problem_and_points(seed)
-    f = problem_factor(problem)
+    f = problem_basis(problem)
     ineq = problem.inequalities()
     w_diag, w_full, root_full = cost_arrays(problem)
     W = problem.weight_matrix()
     for x in points:
         (finite, eq, box, rows, limit, kkt, objective, act_lo, act_up,
          act_rows) = kernel.certificate(
-            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, f.U,
-            f.sigma, f.V, f.N, ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            *f.args(), ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
             problem.center, x, bounds, 1e-7, 1e-7, True)
         assert finite
         want_eq = np.abs(problem.A @ x - problem.b).max(initial=0.0)
@@ -88,11 +88,10 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
 
 def test_the_kkt_test_is_not_run_unless_asked():
     problem, points = problem_and_points(7)
-    f = problem_factor(problem)
     ineq = problem.inequalities()
     out = kernel.certificate(
-        problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, f.U,
-        f.sigma, f.V, f.N, ineq.C, ineq.e, ineq.kind, *cost_arrays(problem),
+        problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+        *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, *cost_arrays(problem),
         problem.center, points[0], True, 1e-7, 1e-7, False)
     assert out[5] == -1
 
