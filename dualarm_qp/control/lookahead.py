@@ -96,10 +96,12 @@ class Lookahead:
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:
         """Whether the bound alone keeps the command's error under a tenth of the budget."""
         n_l, n_f = self.n_l, self.n_f
-        turn_l = dt * float(np.abs(x[:n_l]).sum())
-        turn_f = dt * float(np.abs(x[n_l:n_l + n_f]).sum())
-        lever = float(np.linalg.norm(build.carry.T_target[:3, 3] - build.carry.T_tool[:3, 3]))
-        grasps = dt * float(np.abs(x[n_l + n_f:]).sum())
+        rates = x.tolist()  # a handful of numbers: Python floats beat numpy's calls
+        turn_l = dt * sum(map(abs, rates[:n_l]))
+        turn_f = dt * sum(map(abs, rates[n_l:n_l + n_f]))
+        lever = math.dist(build.carry.T_target[:3, 3].tolist(),
+                          build.carry.T_tool[:3, 3].tolist())
+        grasps = dt * sum(map(abs, rates[n_l + n_f:]))
         pos = 0.5 * (turn_l ** 2 * (self._length[0] + lever) + turn_f ** 2 * self._length[1])
         rot = 0.5 * (turn_l ** 2 + turn_f ** 2)
         # A grasp sliding on a curved path turns with it: count its travel as a turn of

@@ -30,7 +30,6 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
-from ..se3 import pose_error
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
 from ..task.scene import DualArmTask
@@ -39,6 +38,7 @@ from ..task.surfaces import GraspSurface
 from .bounds import grasp_rate_range
 from .context import ArmKinematics, StepContext
 from .cost import CentringCost
+from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
 from .options import StepOptions
@@ -258,13 +258,16 @@ class StepBuilder:
             Follower push ``h`` [N] of a Case 2 support (NaN for a grasp).
         """
         sigma, sigma_l = state.sigma, state.sigma_leader
-        kin = self.carry.update(state.q_l, sigma, sigma_l)
+        T_D = self.task.trajectory.pose(state.t)
+        arms = both_arms(self.carry, self.task.follower, state.q_l, state.q_f, sigma, sigma_l,
+                         T_D)
         support_force = math.nan
         if self._contact is not None:
-            kin, support_force = self._support(self._contact, kin, state)
-        T_f, J_f = self.task.follower.fk_jacobian(state.q_f)
-        e_l = pose_error(self.task.trajectory.pose(state.t), kin.T_object)
-        e_c = pose_error(kin.T_target, T_f)
+            moved, support_force = self._support(self._contact, arms.carry, state)
+            if moved:  # the follower's target moved with the support line
+                arms = both_arms(self.carry, self.task.follower, state.q_l, state.q_f, sigma,
+                                 sigma_l, T_D)
+        kin = arms.carry
         lay, dt = self.layout, self.options.dt
         positions = lay.join(state.q_l, state.q_f, sigma, sigma_l)
         lo = np.empty(lay.n)
@@ -279,10 +282,11 @@ class StepBuilder:
             j = lay.grasps.start + i
             lo[j] = max(rho_min, (surf.sigma_min - s) / dt)
             hi[j] = min(rho_max, (surf.sigma_max - s) / dt)
-        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T_f, J_f,
+        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, arms.T_f, arms.J_f,
                           tuple(self._surfaces), positions, lo, hi,
-                          self._zeros if x_applied is None else x_applied, e_l, e_c,
-                          self._leader_arm, self._follower_arm)
+                          self._zeros if x_applied is None else x_applied,
+                          arms.leader_error, arms.closure_error,
+                          self._leader_arm, self._follower_arm, arms.sigma_min)
         return ctx, support_force
 
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
@@ -312,7 +316,7 @@ class StepBuilder:
         t0 = time.perf_counter()
         ctx, support_force = self.context(state, scale_max=scale_max, x_applied=x_applied)
         kin = ctx.carry
-        sigma_min = (smallest_singular_value(kin.J_tool), smallest_singular_value(ctx.J_f))
+        sigma_min = ctx.sigma_min
         t1 = time.perf_counter()
 
         eq = self.carry_tasks.equality(ctx)  # raises NonFiniteError itself
@@ -396,14 +400,21 @@ class StepBuilder:
         return known
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
-                 ) -> tuple[CarryKinematics, float]:
+                 ) -> tuple[bool, float]:
         """Case 2: put the follower's path on the support line of this step; its push.
 
         The line is computed for the object's orientation at ``state`` and frozen for
         the step (as the paper freezes the grasp frame, Sec. 3.3). When it moved, the
-        follower's grasp joint is re-placed and the kinematics recomputed; the target
-        then jumps by the line's motion at ``sigma``, which the closure feedback
+        follower's grasp joint is re-placed (the caller recomputes the kinematics); the
+        target then jumps by the line's motion at ``sigma``, which the closure feedback
         removes. The grasp bounds of the step are the line's (``h > 0``).
+
+        Returns
+        -------
+        moved : bool
+            Whether the line moved (the follower's grasp joint was re-placed).
+        force : float
+            The follower's push ``h`` [N] at ``sigma``.
 
         Raises
         ------
@@ -418,11 +429,11 @@ class StepBuilder:
             raise SupportLostError(
                 "support lost: the support line reversed (gravity's component along the "
                 "surface normal changed sign), so the follower would have to pull")
-        if not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12):
+        moved = not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12)
+        if moved:
             self.carry.place_follower(line)
-            kin = self.carry.update(state.q_l, state.sigma, state.sigma_leader)
         self._surfaces[0] = line
-        return kin, contact.force(line, state.sigma)
+        return moved, contact.force(line, state.sigma)
 
 
 __all__ = ["StepBuild", "StepBuilder", "smallest_singular_value"]

@@ -135,6 +135,8 @@ class StepContext:
     leader_arm, follower_arm : ArmKinematics
         The arms' models and kinematics at this step (their links, for limits that need
         them).
+    sigma_min : tuple of float
+        Smallest singular value of the leader's and the follower's tool Jacobian.
     """
 
     state: DualArmState
@@ -154,6 +156,7 @@ class StepContext:
     closure_error: FloatArray
     leader_arm: ArmKinematics
     follower_arm: ArmKinematics
+    sigma_min: tuple[float, float] = (float("nan"), float("nan"))
 
     @property
     def outside(self) -> NDArray[np.bool_]:

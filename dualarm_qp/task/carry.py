@@ -176,8 +176,17 @@ class CarryModel:
         self._follower_rate = joint.rate
         self._col_rate[self.n_l] = joint.rate
 
-    def update(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0) -> CarryKinematics:
-        """Compute every pose and Jacobian at ``(q_l [rad], sigma_f [m], sigma_l [m])``."""
+    @property
+    def frames(self) -> tuple[int, int, int]:
+        """The model's tool, object and target frame indices (the order of :meth:`kinematics`)."""
+        return self._frames
+
+    def configuration(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0
+                      ) -> FloatArray:
+        """Return the model's joints at ``(q_l [rad], sigma_f [m], sigma_l [m])``.
+
+        In Pinocchio's order; a buffer of the model, overwritten by the next call.
+        """
         q = self._q
         n_l = self.n_l
         q[:n_l] = q_l
@@ -186,9 +195,16 @@ class CarryModel:
             q[n_l + 1] = self._follower_rate * sigma_f
         else:
             q[n_l] = self._follower_rate * sigma_f
-        T = np.empty((12, 4))
-        J = np.empty((18, q.shape[0]))
-        self.chain.compute(q, self._frames, self._frames, T, J)
+        return q
+
+    def kinematics(self, T: FloatArray, J: FloatArray) -> CarryKinematics:
+        """Return the kinematics from the chain's poses ``T`` (12, 4) and Jacobians ``J`` (18, nq).
+
+        ``T`` and ``J`` hold the tool's, the object's and the target's pose and Jacobian
+        (:attr:`frames`' order) at :meth:`configuration`'s joints; the Jacobians' grasp
+        columns are put in decision order and scaled to sliding speeds here.
+        """
+        n_l = self.n_l
         J_tool = J[0:6, :n_l]
         J_object = J[6:12]
         J_target = J[12:18]
@@ -200,6 +216,14 @@ class CarryModel:
             J_object[:, n_l] *= self._follower_rate
             J_target[:, n_l] *= self._follower_rate
         return CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
+
+    def update(self, q_l: FloatArray, sigma_f: float, sigma_l: float = 0.0) -> CarryKinematics:
+        """Compute every pose and Jacobian at ``(q_l [rad], sigma_f [m], sigma_l [m])``."""
+        q = self.configuration(q_l, sigma_f, sigma_l)
+        T = np.empty((12, 4))
+        J = np.empty((18, q.shape[0]))
+        self.chain.compute(q, self._frames, self._frames, T, J)
+        return self.kinematics(T, J)
 
 
 __all__ = ["CarryKinematics", "CarryModel"]
