@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import CONSISTENCY_TOL, problem_factor
+from ._affine import CONSISTENCY_TOL, NullBasis, problem_basis
 
 FloatArray = NDArray[np.float64]
 
@@ -111,8 +111,8 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     if problem.has_empty_box():
         return TaskScale(None, None, problem.empty_bounds())
     A = problem.A
-    f = problem_factor(problem)
-    x_b, x_d = f.solve(base), f.solve(direction)
+    f = problem_basis(problem)  # the exact solver's, shared
+    x_b, x_d = f.P @ base, f.P @ direction
     s_lo, s_hi = 0.0, float(cap)
     rank_limited = False
     if f.rank < problem.m:
@@ -149,9 +149,9 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     return TaskScale(s, x, blocking, rank_limited=rank_limited)
 
 
-def _size(f: object, x: FloatArray) -> float:
-    sigma = getattr(f, "sigma")  # noqa: B009  (a Factor)
-    return float(sigma[0]) * float(np.abs(x).max(initial=0.0)) if sigma.size else 0.0
+def _size(f: NullBasis, x: FloatArray) -> float:
+    """``sigma_max |x|``: the scale of ``A x`` (a rank-deficient ``A``: the SVD's sigma)."""
+    return f.sigma_max * float(np.abs(x).max(initial=0.0)) if f.rank else 0.0
 
 
 def _lp(M: FloatArray, a: FloatArray, g: FloatArray, s_lo: float, s_hi: float
