@@ -113,7 +113,7 @@ def factor(A: FloatArray) -> Factor:
     Factor
         Range, kept singular values, row space and null space of ``A``.
     """
-    U, sigma, V, N = kernel.factor(A)
+    U, sigma, V, N = kernel.factor(np.ascontiguousarray(A, dtype=np.float64))
     return Factor(U, sigma, V, N)
 
 
@@ -197,7 +197,7 @@ class NullBasis:
     largest singular value. When ``A``'s QR factorisation ``A^T = Q R`` proves full row
     rank (Frobenius bounds: ``sigma_min >= 1 / |R^-1|_F > RANK_RTOL |R|_F >= RANK_RTOL
     sigma_max``), the basis comes from it: ``P = Q_1 R^-T`` and ``N = Q_2``, at a
-    quarter of an SVD's cost. Any other ``A`` (near-singular, rank-deficient, more rows
+    fifth of an SVD's cost. Any other ``A`` (near-singular, rank-deficient, more rows
     than columns) takes :func:`factor`'s SVD.
 
     Attributes
@@ -233,7 +233,7 @@ class NullBasis:
 
 def null_basis(A: FloatArray) -> NullBasis:
     """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
-    P, N, rank, sigma_max, qr = kernel.basis(np.asarray(A, dtype=np.float64))
+    P, N, rank, sigma_max, qr = kernel.basis(np.ascontiguousarray(A, dtype=np.float64))
     return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
 
 
@@ -305,7 +305,7 @@ def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
         None when ``A x = b`` has no solution (``A`` rank-deficient, ``b`` outside its
         numerical range).
     """
-    out = kernel.affine(A, b)
+    out = kernel.affine(np.ascontiguousarray(A, dtype=np.float64), b)
     if out is None:
         return None
     x0, U, sigma, V, N = out

@@ -5,8 +5,8 @@ largest ``s`` in ``[0, cap]`` for which some ``x`` meets every box and row of th
 step. The policy asks it with ``base = 0`` and ``direction = b`` (the task scale,
 :func:`max_task_scale`).
 
-Every solution of the equality is ``x = x_b + s x_d + N t`` (one truncated SVD of
-``A``, :func:`~._affine.factor`), so the problem is an LP in ``(t, s)``, a handful of
+Every solution of the equality is ``x = x_b + s x_d + N t`` (the exact solver's basis of
+``A``, :func:`~._affine.null_basis`), so the problem is an LP in ``(t, s)``, a handful of
 variables, with one row per finite bound and general row:
 
     maximise s   subject to   M t + a s <= g,   s_lo <= s <= s_hi.

@@ -114,13 +114,13 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         x = np.asarray(x, dtype=np.float64)
         ineq = problem.inequalities()
         w_diag, w_full, root_full = cost_arrays(problem)
+        ask = status is Status.OPTIMAL  # only an optimum needs A's basis (the KKT test)
         (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up,
          active) = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, w_diag, w_full,
-            root_full,
-            problem.center, x, claims_bounds, tol.equality, tol.bounds,
-            status is Status.OPTIMAL)
+            *(problem_basis(problem).args() if ask else _NO_BASIS), ineq.C, ineq.e,
+            ineq.kind, w_diag, w_full, root_full,
+            problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
     else:
         finite = False
     if not finite:
@@ -137,7 +137,7 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         elif max(box, rows) > tol.bounds:
             status = Status.VIOLATION
             message = message or _worst_breach(problem, x, box >= rows, claims_bounds)
-        elif kkt == 0:  # asked for an OPTIMAL claim only
+        elif status is Status.OPTIMAL and kkt != 1:  # not confirmed (or not computed)
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
@@ -147,6 +147,10 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
                    active_rows=ineq.labels(active) if active else (),
                    build_time=problem.build_time, verified_with=tol,
                    solve_time=claim.solve_time + (time.perf_counter() - start))
+
+
+#: What the kernel's certificate takes for A's basis when no KKT test is asked.
+_NO_BASIS = (np.zeros((0, 0)), np.zeros((0, 0)), 0, 0.0)
 
 
 def _worst_breach(problem: StepProblem, x: FloatArray, box: bool, claims_bounds: bool

@@ -105,8 +105,11 @@ def pin_rounding(lower: FloatArray, upper: FloatArray) -> FloatArray:
     See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step). The
     kernel's box intersection, on one box.
     """
-    return np.asarray(kernel.intersect_boxes(lower[None], [0], upper[None], [0],
-                                             lower.shape[0], PIN_RTOL)[1])
+    out = kernel.intersect_boxes(lower[None], [0], upper[None], [0], lower.shape[0],
+                                 PIN_RTOL)
+    if out[4] >= 0:
+        raise NonFiniteError("the bounds")
+    return np.asarray(out[1])
 
 
 def smallest_singular_value(J: FloatArray) -> float:
@@ -258,15 +261,16 @@ class StepBuilder:
             Follower push ``h`` [N] of a Case 2 support (NaN for a grasp).
         """
         sigma, sigma_l = state.sigma, state.sigma_leader
+        follower = self.task.follower
+        q_l = self.task.leader.check_q(state.q_l, "q_l")
+        q_f = follower.check_q(state.q_f, "q_f")
         T_D = self.task.trajectory.pose(state.t)
-        arms = both_arms(self.carry, self.task.follower, state.q_l, state.q_f, sigma, sigma_l,
-                         T_D)
+        arms = both_arms(self.carry, follower, q_l, q_f, sigma, sigma_l, T_D)
         support_force = math.nan
         if self._contact is not None:
             moved, support_force = self._support(self._contact, arms.carry, state)
             if moved:  # the follower's target moved with the support line
-                arms = both_arms(self.carry, self.task.follower, state.q_l, state.q_f, sigma,
-                                 sigma_l, T_D)
+                arms = both_arms(self.carry, follower, q_l, q_f, sigma, sigma_l, T_D)
         kin = arms.carry
         lay, dt = self.layout, self.options.dt
         positions = lay.join(state.q_l, state.q_f, sigma, sigma_l)
@@ -376,9 +380,14 @@ class StepBuilder:
         except (TypeError, ValueError):
             out = np.zeros(0)
         if out.shape != (len(bounds), n):
-            k = next(k for b, k in zip(bounds, ids, strict=True) if np.shape(b) != (n,))
-            raise ShapeError(f"the {side} bounds of the limit '{self._labels[k]}'", (n,),
-                             np.shape(bounds[ids.index(k)]))
+            for bound, k in zip(bounds, ids, strict=True):
+                name = f"the {side} bounds of the limit '{self._labels[k]}'"
+                if np.shape(bound) != (n,):
+                    raise ShapeError(name, (n,), np.shape(bound))
+                try:
+                    np.asarray(bound, dtype=np.float64)
+                except (TypeError, ValueError) as err:
+                    raise InvalidInputError(f"{name} are not numbers: {err}") from err
         return out
 
     def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]

@@ -6,8 +6,8 @@ the follower's tool pose and Jacobian, the two pose errors of the step (the obje
 ``D(t)``, the follower's tool to its target; the convention of
 :func:`~dualarm_qp.se3.pose_error`) and both arms' smallest singular values. One call
 into the kernel computes all of them (``src/kernel/step_kinematics.cpp``, on Pinocchio's
-C++ kinematics and ``log3``); the builder's context and the look-ahead's prediction
-both take this path.
+C++ kinematics and ``log3``) for the builder's context. (The look-ahead's prediction
+needs the poses only and keeps its own calls.)
 """
 
 from __future__ import annotations

@@ -80,6 +80,17 @@ class Inequalities:
         return tuple(dict.fromkeys(self.label(int(i)) for i in picked))
 
 
+def _c_array(value: Any) -> FloatArray:
+    """``value`` as a C-ordered float64 array (a copy only when it is not one already).
+
+    The kernel maps matrices as numpy holds them; a view with a zero stride (a
+    broadcast) or another layout is copied here, once, so that every kernel call reads
+    plain arrays.
+    """
+    arr = np.asarray(value, dtype=np.float64)
+    return arr if arr.flags.c_contiguous else np.ascontiguousarray(arr)
+
+
 #: The arrays :meth:`StepProblem.__post_init__` checks, in ``kernel.first_defect``'s order.
 _CHECKED = ("A", "b", "weights", "center", "G", "lower", "upper", "h")
 
@@ -143,7 +154,7 @@ class StepProblem:
                                    repr=False)
 
     def __post_init__(self) -> None:
-        A = np.asarray(self.A, dtype=np.float64)
+        A = _c_array(self.A)
         if A.ndim != 2:
             raise ShapeError("A", (-1, -1), A.shape)
         m, n = A.shape
@@ -151,26 +162,26 @@ class StepProblem:
         set_(self, "A", A)
         for name, shape in (("b", (m,)), ("center", (n,)), ("lower", (n,)),
                             ("upper", (n,))):
-            arr = np.asarray(getattr(self, name), dtype=np.float64)
+            arr = _c_array(getattr(self, name))
             if arr.shape != shape:
                 raise ShapeError(name, shape, arr.shape)
             set_(self, name, arr)
-        w = np.asarray(self.weights, dtype=np.float64)
+        w = _c_array(self.weights)
         if w.shape not in ((n,), (n, n)):
             raise ShapeError("weights", (n,), w.shape)
         set_(self, "weights", w)
-        G = np.asarray(self.G, dtype=np.float64)
+        G = _c_array(self.G)
         if G.size == 0:
             G = np.zeros((0, n))
         if G.ndim != 2 or G.shape[1] != n:
             raise ShapeError("G", (-1, n), G.shape)
-        h = np.asarray(self.h, dtype=np.float64)
+        h = _c_array(self.h)
         if h.shape != (G.shape[0],):
             raise ShapeError("h", (G.shape[0],), h.shape)
         set_(self, "G", G)
         set_(self, "h", h)
         if self.x_prev is not None:
-            xp = np.asarray(self.x_prev, dtype=np.float64)
+            xp = _c_array(self.x_prev)
             if xp.shape != (n,):
                 raise ShapeError("x_prev", (n,), xp.shape)
             set_(self, "x_prev", xp)

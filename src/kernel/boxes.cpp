@@ -51,7 +51,12 @@ Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lo
   box.nan_limit = nan_limit;
   for (Index i = 0; i < n; ++i) {
     const double lo = box.lower(i), hi = box.upper(i);
-    if (hi < lo && lo - hi <= pin_rtol * std::max(1.0, std::abs(lo))) box.upper(i) = lo;
+    // Only a finite gap is rounding: an infinite one (a lower bound of +inf, an upper
+    // one of -inf) keeps the box empty.
+    if (hi < lo && std::isfinite(lo) && std::isfinite(hi) &&
+        lo - hi <= pin_rtol * std::max(1.0, std::abs(lo))) {
+      box.upper(i) = lo;
+    }
   }
   return box;
 }
@@ -70,7 +75,9 @@ std::int64_t first_defect(const std::vector<Values>& finite,
 }
 
 double smallest_singular_value(const Mat& J) {
-  if (J.cols() < J.rows() || J.cols() == 0) return 0.0;
+  if (!J.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  if (J.rows() == 0) return std::numeric_limits<double>::infinity();  // nothing to reach
+  if (J.cols() < J.rows()) return 0.0;
   const Eigen::JacobiSVD<Mat> svd(J);
   return svd.singularValues()(svd.singularValues().size() - 1);
 }

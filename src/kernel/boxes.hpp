@@ -21,8 +21,9 @@ struct Box {
 
 // Row k of lowers is limit lower_ids[k]'s lower bounds (likewise the uppers), in the
 // limits' order. Each bound is the largest lower and the smallest upper; a tie keeps the
-// earlier limit. A box then empty by at most pin_rtol * max(1, |lower|) is rounding and
-// is pinned at its lower end (upper = lower). A NaN bound is reported, not intersected.
+// earlier limit. A box then empty by at most pin_rtol * max(1, |lower|) (both ends
+// finite) is rounding and is pinned at its lower end (upper = lower). A NaN bound is
+// reported, not intersected.
 Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lower_ids,
                     const BoundRows& uppers, const std::vector<std::int64_t>& upper_ids,
                     Index n, double pin_rtol);
@@ -33,8 +34,8 @@ using Values = Eigen::Map<const Eigen::ArrayXd>;  // an array's values, in any s
 std::int64_t first_defect(const std::vector<Values>& finite,
                           const std::vector<Values>& not_nan);
 
-// Smallest singular value of J (m x n); 0 when n < m or n == 0 (a Jacobian with fewer
-// joints than task rows has a direction it cannot move in).
+// Smallest singular value of J (m x n); 0 when n < m (a Jacobian with fewer joints than
+// task rows has a direction it cannot move in), +inf when m == 0, NaN for a non-finite J.
 double smallest_singular_value(const Mat& J);
 
 }  // namespace dqk

@@ -2,6 +2,8 @@
 // arms' kinematics (Pinocchio's C++ API, header-only).
 // Every function takes numpy arrays (float64) and returns numpy arrays and Python
 // scalars; the Python wrappers (dualarm_qp/solvers) map them to the library's types.
+#include <stdexcept>
+
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -37,6 +39,8 @@ using dqk::Vec;
 // A matrix argument as numpy holds it, C- or Fortran-ordered, without a copy through
 // Python (a `const Mat&` parameter makes nanobind call numpy to re-order a C-ordered
 // array: about 2 us per argument); the kernel's functions copy it in C++ as needed.
+// Eigen reads a zero stride as the default one: a broadcast view must not come here
+// (StepProblem and the Python wrappers hand over C-ordered arrays).
 using In = nb::DRef<const Mat>;
 
 namespace {
@@ -65,8 +69,15 @@ nb::tuple factor_tuple(const dqk::Factor& f) {
   return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
 }
 
-// A basis as Python holds it: (P, N, rank, sigma_max, qr).
-dqk::Basis basis_from(const Mat& P, const Mat& N, Index rank, double sigma_max) {
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+// A basis of A as Python holds it: (P, N, rank, sigma_max, qr).
+dqk::Basis basis_from(const In& A, const Mat& P, const Mat& N, Index rank, double sigma_max) {
+  require(P.rows() == A.cols() && P.cols() == A.rows() && N.rows() == A.cols() &&
+              rank >= 0 && rank + N.cols() == A.cols(),
+          "the basis (P, N, rank) does not belong to A's shape");
   dqk::Basis f;
   f.P = P;
   f.N = N;
@@ -186,9 +197,12 @@ NB_MODULE(_kernel, m) {
       [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
          const Vec& w_diag, In w_full, In root_full, const Vec& center, double feas_tol,
          Index max_iter) {
+        require(b.size() == A.rows() && C.cols() == A.cols() && e.size() == C.rows() &&
+                    center.size() == A.cols(),
+                "solve_nullspace: arguments of inconsistent sizes");
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        dqk::StepAnswer s = dqk::solve_nullspace(A, b, basis_from(P, N, rank, sigma_max), C,
-                                                 e, cost, feas_tol, max_iter);
+        dqk::StepAnswer s = dqk::solve_nullspace(
+            A, b, basis_from(A, P, N, rank, sigma_max), C, e, cost, feas_tol, max_iter);
         return nb::make_tuple(static_cast<int>(s.code), out(std::move(s.x)), s.conflicts,
                               s.nullity, s.iterations);
       },
@@ -232,8 +246,11 @@ NB_MODULE(_kernel, m) {
       [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
          const Vec& w_diag, In w_full, In root_full, const Vec& center, const Vec& x,
          bool bounds) {
+        require(b.size() == A.rows() && C.cols() == A.cols() && e.size() == C.rows() &&
+                    center.size() == A.cols() && x.size() == A.cols(),
+                "kkt_holds: arguments of inconsistent sizes");
         const dqk::Cost cost(w_diag, w_full, root_full, center);
-        return dqk::kkt_holds(A, b, basis_from(P, N, rank, sigma_max), C, e, cost, x,
+        return dqk::kkt_holds(A, b, basis_from(A, P, N, rank, sigma_max), C, e, cost, x,
                               bounds);
       },
       "A"_a, "b"_a, "P"_a, "N"_a, "rank"_a, "sigma_max"_a, "C"_a, "e"_a, "w_diag"_a,
@@ -247,17 +264,24 @@ NB_MODULE(_kernel, m) {
          In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
          const Vec& w_diag, In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
+        const Index n = A.cols();
+        require(b.size() == A.rows() && lower.size() == n && upper.size() == n &&
+                    G.cols() == n && h.size() == G.rows() && C.cols() == n &&
+                    e.size() == C.rows() && kind.size() == C.rows() &&
+                    center.size() == n && x.size() == n,
+                "certificate: arguments of inconsistent sizes");
         const dqk::Cost cost(w_diag, w_full, root_full, center);
         dqk::Certificate c =
-            dqk::certificate(A, b, lower, upper, G, h, basis_from(P, N, rank, sigma_max), C, e,
+            dqk::certificate(A, b, lower, upper, G, h,
+                             ask_kkt ? basis_from(A, P, N, rank, sigma_max) : dqk::Basis{}, C, e,
                              kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
         return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
                               c.objective, out(std::move(c.active_lower)),
                               out(std::move(c.active_upper)), c.active_rows);
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "P"_a, "N"_a, "rank"_a,
-      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a, "x"_a,
-      "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
+      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
+      "center"_a, "x"_a, "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
       "Everything certify reads of x: (finite, eq, box, row, eq_limit, kkt, objective, "
       "active_lower, active_upper, active_rows); kkt is -1 when not asked or x breaks a "
       "limit.");
@@ -287,19 +311,20 @@ NB_MODULE(_kernel, m) {
       [](const std::vector<nb::ndarray<const double, nb::c_contig, nb::device::cpu>>& finite,
          const std::vector<nb::ndarray<const double, nb::c_contig, nb::device::cpu>>& not_nan) {
         auto values = [](const auto& arrays) {
-          std::vector<dqk::Values> out;
-          out.reserve(arrays.size());
-          for (const auto& a : arrays) out.emplace_back(a.data(), static_cast<Index>(a.size()));
-          return out;
+          std::vector<dqk::Values> spans;
+          spans.reserve(arrays.size());
+          for (const auto& a : arrays) spans.emplace_back(a.data(), static_cast<Index>(a.size()));
+          return spans;
         };
         return dqk::first_defect(values(finite), values(not_nan));
       },
       "finite"_a, "not_nan"_a,
-        "Index of the first array with NaN or infinity (finite) or NaN (not_nan, numbered "
-        "after the finite ones); -1 when none.");
+      "Index of the first array with NaN or infinity (finite) or NaN (not_nan, numbered "
+      "after the finite ones); -1 when none.");
 
   m.def("smallest_singular_value", &dqk::smallest_singular_value, "J"_a,
-        "Smallest singular value of J (0 with fewer columns than rows).");
+        "Smallest singular value of J (0 with fewer columns than rows, inf with no rows, NaN "
+        "for a non-finite J).");
 
   m.def(
       "scale_lp",

@@ -27,16 +27,24 @@ NNLSResult nnls(const Mat& A, const Vec& b, Index max_iter) {
   const Index limit = max_iter < 0 ? 3 * n : max_iter;
   Vec x = Vec::Zero(n);
   std::vector<bool> passive(n, false);
-  // Dual feasibility tolerance, scaled by the size of A (as MATLAB's lsqnonneg).
-  const double tol = 10.0 * std::numeric_limits<double>::epsilon() *
-                     (n ? A.cwiseAbs().colwise().sum().maxCoeff() : 0.0) *
-                     static_cast<double>(std::max(m, n));
+  // Dual feasibility tolerance: MATLAB's lsqnonneg's (10 eps |A|_1 max(m, n)), times the
+  // size of the terms whose difference the residual b - A x is (at least 1): with a
+  // large x the rounding of A x alone exceeds the fixed tolerance and the method would
+  // keep adding columns to a residual that is zero to rounding.
+  const double col_max = n ? A.cwiseAbs().colwise().sum().maxCoeff() : 0.0;
+  const double base = 10.0 * std::numeric_limits<double>::epsilon() * col_max *
+                      static_cast<double>(std::max(m, n));
+  const double b_max = m ? b.cwiseAbs().maxCoeff() : 0.0;
+  auto tolerance = [&](const Vec& x_now) {
+    const double x_max = n ? x_now.cwiseAbs().maxCoeff() : 0.0;
+    return base * std::max({1.0, b_max, col_max * x_max});
+  };
   Vec w = A.transpose() * (b - A * x);
   Index iterations = 0;
   bool converged = true;
   while (true) {
     Index j_max = -1;
-    double w_max = tol;
+    double w_max = tolerance(x);
     for (Index j = 0; j < n; ++j) {
       if (!passive[j] && w(j) > w_max) {
         w_max = w(j);

@@ -76,8 +76,23 @@ def test_support_output_is_unchanged_by_the_hand_wrenches(run_dir: Path) -> None
     assert set(summary) - set(BEFORE["summary"]) >= {"loads"}
     summary["realised_limits"].pop("torque")  # added with the joint torques
     for key, value in BEFORE["summary"].items():
-        assert json.dumps(summary[key], sort_keys=True) == json.dumps(value, sort_keys=True) \
-            or summary[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+        assert_close(summary[key], value, key)
+
+
+def assert_close(now: Any, before: Any, where: str) -> None:
+    """``now`` equals ``before``: the same keys and texts, numbers to 1e-9 (nested)."""
+    if isinstance(before, dict):
+        assert isinstance(now, dict) and set(now) == set(before), where
+        for key, value in before.items():
+            assert_close(now[key], value, f"{where}.{key}")
+    elif isinstance(before, list):
+        assert isinstance(now, list) and len(now) == len(before), where
+        for i, (a, b) in enumerate(zip(now, before, strict=True)):
+            assert_close(a, b, f"{where}[{i}]")
+    elif isinstance(before, float) and not isinstance(now, bool):
+        assert now == pytest.approx(before, rel=1e-9, abs=1e-12, nan_ok=True), where
+    else:
+        assert now == before, where
 
 
 def test_support_wrenches_are_the_push_and_the_leader_takes_the_rest(

@@ -139,7 +139,7 @@ def test_a_scaled_problem_is_checked_where_it_changed():
         problem.scaled(np.inf)
     big = StepProblem(A=np.eye(2), b=np.array([10.0, 1.0]), weights=np.ones(2),
                       center=np.zeros(2), lower=-np.ones(2), upper=np.ones(2))
-    with pytest.raises(NonFiniteError, match="b"):  # 1e308 * 10 overflows
+    with pytest.raises(NonFiniteError, match=r"^b \(scaled\)"):  # 1e308 * 10 overflows
         big.scaled(1e308)
     with pytest.raises(ShapeError, match="x_prev"):
         problem.scaled(0.5, x_prev=np.zeros(problem.n + 1))
@@ -157,3 +157,42 @@ def test_the_smallest_singular_value_equals_numpys(seed, drop):
     want = np.linalg.svd(J, compute_uv=False)[-1]
     assert smallest_singular_value(J) == pytest.approx(want, rel=1e-9, abs=1e-14)
     assert smallest_singular_value(J[:, :5]) == 0.0  # fewer joints than task rows
+
+
+def test_the_smallest_singular_value_of_no_rows_and_of_nan():
+    assert smallest_singular_value(np.zeros((0, 3))) == np.inf
+    J = np.eye(6)
+    J[2, 2] = np.nan
+    assert np.isnan(smallest_singular_value(J))
+
+
+def test_a_broadcast_view_is_read_as_the_array_it_shows():
+    """A problem given broadcast views (zero strides) solves as the plain arrays do."""
+    n = 7
+    row, other = np.linspace(-1.0, 1.0, n), np.linspace(0.5, -0.3, n)
+    fields = dict(b=np.ones(2), center=np.zeros(n), lower=-np.ones(n), upper=np.ones(n),
+                  h=np.full(3, 0.2))
+    plain = StepProblem(A=np.tile(row, (2, 1)), weights=np.full(n, 2.0),
+                        G=np.tile(other, (3, 1)), **fields)
+    views = StepProblem(A=np.broadcast_to(row, (2, n)), weights=np.broadcast_to(2.0, (n,)),
+                        G=np.broadcast_to(other, (3, n)), **fields)
+    assert views.A.strides[0] != 0 and views.G.strides[0] != 0  # plain copies, once
+    solver = get_solver("nullspace")
+    a, b = solver.solve(plain), solver.solve(views)
+    assert a.status is b.status and a.status.usable
+    np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_the_kernel_refuses_arguments_of_inconsistent_sizes():
+    problem, points = problem_and_points(29)
+    ineq = problem.inequalities()
+    with pytest.raises(ValueError, match="inconsistent sizes"):
+        kernel.certificate(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind,
+            *cost_arrays(problem), problem.center, np.zeros(problem.n + 1), True, 1e-7,
+            1e-7, True)
+    P, N, rank, sigma_max = problem_basis(problem).args()
+    with pytest.raises(ValueError, match="basis"):
+        kernel.kkt_holds(problem.A, problem.b, P[:-1], N, rank, sigma_max, ineq.C, ineq.e,
+                         *cost_arrays(problem), problem.center, points[0], True)

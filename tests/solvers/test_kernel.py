@@ -127,6 +127,17 @@ def test_nnls_agrees_with_scipy(seed: int, m: int, n: int) -> None:
         assert np.abs(x - ref).max() <= 1e-9 * max(1.0, float(np.abs(ref).max()))
 
 
+def test_nnls_converges_when_the_answer_is_large() -> None:
+    """b in the cone of nearly dependent columns: x ~ 900 for |b| ~ 3, the residual zero
+    to rounding (the fixed tolerance alone kept adding columns to it until the limit)."""
+    rng = np.random.default_rng(189822818)
+    A = rng.normal(size=(2, 7))
+    b = rng.normal(size=2) * 3.0
+    x, rnorm, converged = kernel.nnls(A, b, 50 * 8)
+    assert converged and (x >= 0.0).all() and x.max() > 100.0
+    assert rnorm <= 1e-10 and abs(rnorm - nnls(A, b)[1]) <= 1e-10
+
+
 def test_nnls_zero_and_nonpositive_answers() -> None:
     A = np.eye(3)
     x, rnorm, converged = kernel.nnls(A, np.array([-1.0, 2.0, 0.0]), 20)

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from test_step_builder import make_task, options
 
 from dualarm_qp._compiled import kernel
-from dualarm_qp.errors import NonFiniteError, ShapeError
+from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
 from dualarm_qp.step.build import PIN_RTOL, StepBuilder, pin_rounding
 from dualarm_qp.step.parts import Constraint
 from dualarm_qp.step.state import DualArmState
@@ -124,3 +124,38 @@ def test_the_bound_sources_name_the_limit_that_set_each_bound():
         assert problem.lower_by[0] == "tight"
         assert problem.lower_by[1] in ("joint range", "joint speed")
         assert problem.lower[0] == -1e-9
+
+
+def test_an_infinitely_empty_box_stays_empty():
+    lower = np.array([np.inf, 0.0])
+    upper = np.array([1.0, -np.inf])
+    out = kernel.intersect_boxes(lower[None], [0], upper[None], [1], 2, PIN_RTOL)
+    assert out[0][0] == np.inf and out[1][0] == 1.0  # not pinned to [inf, inf]
+    assert out[1][1] == -np.inf
+
+
+def test_pin_rounding_refuses_a_nan_bound():
+    with pytest.raises(NonFiniteError):
+        pin_rounding(np.zeros(2), np.array([1.0, np.nan]))
+
+
+def test_a_users_bounds_that_are_not_numbers_are_a_clear_error():
+    rng = np.random.default_rng(4)
+    task, q_l, q_f, sigma = make_task(rng, PlaneBar())
+    builder = StepBuilder(task, options(), limits=(
+        _Bad("words", lambda n: np.array(["x"] * n)),))
+    with pytest.raises(InvalidInputError, match="the lower bounds of the limit 'words' are not"):
+        builder.build(DualArmState(0.0, q_l, q_f, sigma))
+
+
+@pytest.mark.parametrize("which", ["q_l", "q_f"])
+def test_the_builder_checks_the_joints_it_is_given(which):
+    rng = np.random.default_rng(6)
+    task, q_l, q_f, sigma = make_task(rng, PlaneBar())
+    joints = {"q_l": q_l, "q_f": q_f}
+    joints[which] = joints[which][:3]
+    with pytest.raises(ShapeError, match=which):
+        StepBuilder(task, options()).build(DualArmState(0.0, joints["q_l"], joints["q_f"],
+                                                        sigma))
+    joints[which] = [0.1] * 6  # a list is taken
+    StepBuilder(task, options()).build(DualArmState(0.0, joints["q_l"], joints["q_f"], sigma))

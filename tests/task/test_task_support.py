@@ -355,6 +355,10 @@ def test_builder_puts_the_follower_on_the_support_line_and_records_h() -> None:
     assert b.support_force == pytest.approx(4.0 * G * 0.25 / s0.sigma, rel=1e-12)
     ref = StepBuilder(task, opts).build(s0)
     np.testing.assert_allclose(b.problem.A, ref.problem.A, atol=1e-14)
+    # The errors and the right-hand side are those of the re-placed target.
+    np.testing.assert_allclose(b.closure_error, ref.closure_error, atol=1e-14)
+    np.testing.assert_allclose(b.problem.b, ref.problem.b, atol=1e-12)
+    assert np.abs(b.closure_error).max() < 1e-9  # the start closes the grasp on the line
     # A grasp records no force.
     grasp = StepBuilder(replace(task, contact=None), opts).build(s0)
     assert math.isnan(grasp.support_force)
