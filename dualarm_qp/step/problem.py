@@ -28,7 +28,7 @@ import copy
 import math
 import operator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +40,21 @@ if TYPE_CHECKING:
     import qpsolvers
 
 FloatArray = NDArray[np.float64]
+
+
+class Names(NamedTuple):
+    """The names a problem's messages use: variables, rows, and the limit of each bound."""
+
+    variables: tuple[str, ...]
+    rows: tuple[str, ...]
+    lower_by: tuple[str, ...]
+    upper_by: tuple[str, ...]
+
+    def bound(self, index: int, upper: bool) -> str:
+        """Name of one bound with the limit that set it, e.g. ``"qf3 upper (joint speed)"``."""
+        side = "upper" if upper else "lower"
+        source = (self.upper_by if upper else self.lower_by)[index]
+        return f"{self.variables[index]} {side}" + (f" ({source})" if source else "")
 
 
 @dataclass(frozen=True)
@@ -57,22 +72,25 @@ class Inequalities:
         ``+1`` upper box, ``-1`` lower box, ``0`` general row.
     index : ndarray of int, shape (k,)
         The variable (boxes) or the row of ``G`` (general rows).
-    problem : StepProblem
-        The problem they come from (for the names of the rows, made on demand).
+    names : Names
+        The names of the problem's variables, rows and bound sources (for the names of
+        the rows, made on demand). The names, not the problem: a problem keeps its
+        inequalities, and a reference back would make every step's problem a cycle
+        that only the garbage collector frees (a pause of milliseconds in a 1 kHz loop).
     """
 
     C: FloatArray
     e: FloatArray
     kind: NDArray[np.int8]
     index: NDArray[np.intp]
-    problem: StepProblem = field(repr=False, compare=False)
+    names: Names = field(repr=False, compare=False)
 
     def label(self, i: int) -> str:
         """Name of row ``i``: ``"qf4 upper (joint speed)"``, ``"wall"``."""
         k, j = int(self.kind[i]), int(self.index[i])
         if k == 0:
-            return self.problem.row_names[j]
-        return self.problem.bound_label(j, k > 0)
+            return self.names.rows[j]
+        return self.names.bound(j, k > 0)
 
     def labels(self, rows: Any = None) -> tuple[str, ...]:
         """Names of ``rows`` (indices; default every row), each once, in order."""
@@ -316,9 +334,8 @@ class StepProblem:
 
     def bound_label(self, index: int, upper: bool) -> str:
         """Name of one bound with the limit that set it, e.g. ``"qf3 upper (joint speed)"``."""
-        side = "upper" if upper else "lower"
-        source = (self.upper_by if upper else self.lower_by)[index]
-        return f"{self.names[index]} {side}" + (f" ({source})" if source else "")
+        return Names(self.names, self.row_names, self.lower_by, self.upper_by).bound(index,
+                                                                                    upper)
 
     def inequalities(self) -> Inequalities:
         """Every finite inequality as unit-norm rows ``C x <= e`` (computed once)."""
@@ -327,7 +344,8 @@ class StepProblem:
             return cached
         # Built by the compiled kernel (src/kernel/rows.cpp), which the exact solver uses.
         C, e, kind, index = kernel.inequalities(self.lower, self.upper, self.G, self.h)
-        out = Inequalities(C, e, kind, index, self)
+        out = Inequalities(C, e, kind, index,
+                           Names(self.names, self.row_names, self.lower_by, self.upper_by))
         self._cache["ineq"] = out
         return out
 
@@ -394,4 +412,4 @@ class StepProblem:
                    **fields)
 
 
-__all__ = ["Inequalities", "StepProblem"]
+__all__ = ["Inequalities", "Names", "StepProblem"]
