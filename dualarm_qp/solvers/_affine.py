@@ -24,7 +24,9 @@ rounding (about 1e-15 relative) of the cut-off.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -237,22 +239,25 @@ def null_basis(A: FloatArray) -> NullBasis:
     return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
 
 
+_T = TypeVar("_T")
+
+
+def _of_problem(problem: StepProblem, key: str, make: Callable[[FloatArray], _T]) -> _T:
+    """``make(problem.A)``, computed once per problem (kept in its cache) and shared."""
+    value = problem._cache.get(key)
+    if value is None:
+        value = problem._cache[key] = make(problem.A)
+    return cast(_T, value)
+
+
 def problem_basis(problem: StepProblem) -> NullBasis:
     """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
-    f = problem._cache.get("basis")
-    if f is None:
-        f = null_basis(problem.A)
-        problem._cache["basis"] = f
-    return f
+    return _of_problem(problem, "basis", null_basis)
 
 
 def problem_factor(problem: StepProblem) -> Factor:
     """:func:`factor` of ``problem.A``, computed once per problem and shared."""
-    f = problem._cache.get("factor")
-    if f is None:
-        f = factor(problem.A)
-        problem._cache["factor"] = f
-    return f
+    return _of_problem(problem, "factor", factor)
 
 
 @dataclass(frozen=True, slots=True)
