@@ -1,9 +1,11 @@
-"""Rate bounds and range centres of one step (Eqs. 30-36 and 38-40).
+"""The rate range of a sliding grasp over one sample (Eqs. 30-31).
 
-Every variable of the step (a joint of either arm, a sliding grasp) gets a hard box on
-its rate from its position range over one sample and its speed limit, and a centre: the
-middle of the position-derived rate range, which the cost (Eq. 37) pulls it towards. A
-variable that starts outside its range may never move further out.
+Every variable of the step (a joint of either arm, a sliding grasp) gets the rates that
+reach the ends of its position range in one sample (the step's context); for a grasp
+the range is also the surface box ``[r_min, r_max]`` of the hand's point, which
+:func:`grasp_rate_range` turns into rates. The range limits
+(:mod:`~dualarm_qp.step.limits.ranges`, Eqs. 34-36 with recovery) and the centring cost
+(:mod:`~dualarm_qp.step.cost`, Eqs. 38-40) read those rates.
 """
 
 from __future__ import annotations
@@ -15,59 +17,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
-
-
-def rate_bounds(
-    x: FloatArray,
-    x_min: FloatArray,
-    x_max: FloatArray,
-    v_max: FloatArray,
-    dt: float,
-    recovery_fraction: float,
-) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
-    """Rate bounds from a position box and a speed limit (Eqs. 34-36 and Sec. 4).
-
-    Parameters
-    ----------
-    x, x_min, x_max : ndarray
-        Current positions and their box.
-    v_max : ndarray
-        Symmetric speed limits (``inf`` for none).
-    dt : float
-        Sampling interval [s].
-    recovery_fraction : float
-        See :class:`StepOptions`.
-
-    Returns
-    -------
-    lower, upper : ndarray
-        Hard bounds on the rate.
-    center : ndarray
-        Centre of the position-derived rate range (Eq. 39); 0 where the range is
-        unbounded.
-    recovering : ndarray of bool
-        Positions outside their box.
-    """
-    with np.errstate(invalid="ignore"):
-        lo = (np.asarray(x_min, dtype=np.float64) - x) / dt
-        hi = (np.asarray(x_max, dtype=np.float64) - x) / dt
-    return clip_rates(lo, hi, np.broadcast_to(np.asarray(v_max, dtype=np.float64), lo.shape),
-                      recovery_fraction)
-
-
-def clip_rates(lo: FloatArray, hi: FloatArray, v_max: FloatArray, recovery_fraction: float
-               ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
-    """:func:`rate_bounds` from the position-derived rate range ``[lo, hi]``."""
-    bounded = np.isfinite(lo) & np.isfinite(hi)
-    center = np.where(bounded, 0.5 * (np.where(bounded, lo, 0.0) + np.where(bounded, hi, 0.0)),
-                      0.0)
-    # Below the box: may not move further down; with a recovery fraction it must
-    # move up at least at that share of its speed limit. Above the box: mirrored.
-    rec = recovery_fraction * v_max if recovery_fraction > 0.0 else np.zeros_like(v_max)
-    below, above = lo > 0.0, hi < 0.0
-    lower = np.where(below, np.minimum(lo, rec), np.maximum(lo, -v_max))
-    upper = np.where(above, np.maximum(hi, -rec), np.minimum(hi, v_max))
-    return lower, upper, center, below | above
 
 
 def grasp_rate_range(
@@ -94,4 +43,4 @@ def grasp_rate_range(
     return rho_min, rho_max
 
 
-__all__ = ["clip_rates", "grasp_rate_range", "rate_bounds"]
+__all__ = ["grasp_rate_range"]

@@ -61,6 +61,41 @@ Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lo
   return box;
 }
 
+void range_box(const Vec& lo, const Vec& hi, const Vec& rec,
+               const Eigen::Matrix<bool, Eigen::Dynamic, 1>& off, Vec& lower, Vec& upper) {
+  const Index n = lo.size();
+  if (hi.size() != n || rec.size() != n || off.size() != n) {
+    throw std::invalid_argument("range_box: lo, hi, rec and off of different lengths");
+  }
+  constexpr double INF = std::numeric_limits<double>::infinity();
+  lower.resize(n);
+  upper.resize(n);
+  for (Index i = 0; i < n; ++i) {
+    if (off(i)) {
+      lower(i) = -INF;
+      upper(i) = INF;
+      continue;
+    }
+    lower(i) = lo(i) > 0.0 ? std::min(lo(i), rec(i)) : lo(i);
+    upper(i) = hi(i) < 0.0 ? std::max(hi(i), -rec(i)) : hi(i);
+  }
+}
+
+Vec centre(const Vec& lo, const Vec& hi, const Eigen::Matrix<bool, Eigen::Dynamic, 1>& centred,
+           double shrink) {
+  const Index n = lo.size();
+  if (hi.size() != n || centred.size() != n) {
+    throw std::invalid_argument("centre: lo, hi and centred of different lengths");
+  }
+  Vec c(n);
+  for (Index i = 0; i < n; ++i) {
+    const bool bounded = centred(i) && std::isfinite(lo(i)) && std::isfinite(hi(i));
+    c(i) = bounded ? 0.5 * (lo(i) + hi(i)) : 0.0;
+    if (shrink != 1.0) c(i) *= shrink;
+  }
+  return c;
+}
+
 std::int64_t first_defect(const std::vector<Values>& finite,
                           const std::vector<Values>& not_nan) {
   for (std::size_t k = 0; k < finite.size(); ++k) {

@@ -28,6 +28,19 @@ Box intersect_boxes(const BoundRows& lowers, const std::vector<std::int64_t>& lo
                     const BoundRows& uppers, const std::vector<std::int64_t>& upper_ids,
                     Index n, double pin_rtol);
 
+// The rate box of a range limit (Eqs. 34-36 with recovery): [lo, hi] are the rates
+// that reach the ends of each variable's range in one sample. Below its range (lo > 0)
+// a variable may not move further down and must come back at least at rec (the
+// recovery rate, >= 0): lower = min(lo, rec); above it, mirrored. off marks the
+// variables the limit does not bound (-inf, inf).
+void range_box(const Vec& lo, const Vec& hi, const Vec& rec,
+               const Eigen::Matrix<bool, Eigen::Dynamic, 1>& off, Vec& lower, Vec& upper);
+
+// The centre rates of Eqs. 38-40: the middle of [lo, hi] for a centred variable with a
+// finite range, 0 otherwise, times shrink (dt over the centring horizon).
+Vec centre(const Vec& lo, const Vec& hi, const Eigen::Matrix<bool, Eigen::Dynamic, 1>& centred,
+           double shrink);
+
 // Index of the first array that holds a value it may not: NaN or infinity in
 // finite[k], NaN in not_nan[k]; the finite arrays are numbered first (-1: none).
 using Values = Eigen::Map<const Eigen::ArrayXd>;  // an array's values, in any shape

@@ -322,6 +322,24 @@ NB_MODULE(_kernel, m) {
       "Index of the first array with NaN or infinity (finite) or NaN (not_nan, numbered "
       "after the finite ones); -1 when none.");
 
+  m.def(
+      "range_box",
+      [](const Vec& lo, const Vec& hi, const Vec& rec,
+         const Eigen::Matrix<bool, Eigen::Dynamic, 1>& off) {
+        Vec lower, upper;
+        dqk::range_box(lo, hi, rec, off, lower, upper);
+        return nb::make_tuple(out(std::move(lower)), out(std::move(upper)));
+      },
+      "lo"_a, "hi"_a, "rec"_a, "off"_a,
+      "A range limit's rate box (lower, upper) from the rates to the range's ends.");
+
+  m.def(
+      "centre",
+      [](const Vec& lo, const Vec& hi, const Eigen::Matrix<bool, Eigen::Dynamic, 1>& centred,
+         double shrink) { return out(dqk::centre(lo, hi, centred, shrink)); },
+      "lo"_a, "hi"_a, "centred"_a, "shrink"_a,
+      "The centre rates of Eqs. 38-40 from the rates to the range's ends.");
+
   m.def("smallest_singular_value", &dqk::smallest_singular_value, "J"_a,
         "Smallest singular value of J (0 with fewer columns than rows, inf with no rows, NaN "
         "for a non-finite J).");

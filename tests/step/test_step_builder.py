@@ -9,6 +9,7 @@ import pinocchio as pin
 import pytest
 
 from dualarm_qp import puma560
+from dualarm_qp._compiled import kernel
 from dualarm_qp.errors import InvalidInputError, NonFiniteError
 from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.build import StepBuilder
@@ -186,3 +187,32 @@ def test_range_and_speed_limits_match_the_per_variable_formula(seed):
         want = _rate_bounds_reference(x, x_min, x_max, v_max, 0.05, fraction)
         for g, w in zip(got, (want[0], want[1], want[3]), strict=True):
             np.testing.assert_array_equal(g, w)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_partial_range_limit_and_the_centring_match_the_per_variable_formula(seed):
+    """The range box of some variables only, and the centres (Eqs. 38-40, shrunk from dt
+    to a horizon), from the compiled calls the range limit and the cost make."""
+    rng = np.random.default_rng(10 + seed)
+    n = 11
+    x = rng.normal(size=n) * 2.0
+    x_min = np.where(rng.random(n) < 0.2, -np.inf, rng.normal(size=n) - 1.0)
+    x_max = np.where(rng.random(n) < 0.2, np.inf, rng.normal(size=n) + 1.0)
+    v_max = np.where(rng.random(n) < 0.3, np.inf, rng.uniform(0.5, 3.0, n))
+    mask = rng.random(n) < 0.6
+    with np.errstate(invalid="ignore"):
+        lo, hi = (x_min - x) / 0.05, (x_max - x) / 0.05
+    ctx = SimpleNamespace(rate_lo=lo, rate_hi=hi)
+    box = RangeLimit("range", mask, v_max, 0.5).constraint(ctx)
+    with np.errstate(invalid="ignore"):
+        want = _rate_bounds_reference(x, x_min, x_max, np.full(n, np.inf), 0.05, 0.0)
+    for i in range(n):
+        if not mask[i]:
+            assert (box.lower[i], box.upper[i]) == (-np.inf, np.inf)
+            continue
+        rec = 0.5 * v_max[i]
+        assert box.lower[i] == (min(lo[i], rec) if lo[i] > 0 else lo[i])
+        assert box.upper[i] == (max(hi[i], -rec) if hi[i] < 0 else hi[i])
+    np.testing.assert_array_equal(kernel.centre(lo, hi, np.ones(n, bool), 1.0), want[2])
+    shrunk = kernel.centre(lo, hi, mask, 0.25)
+    np.testing.assert_array_equal(shrunk, np.where(mask, 0.25 * want[2], 0.0))

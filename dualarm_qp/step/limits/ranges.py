@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._compiled import kernel
 from ..context import StepContext
 from ..parts import Constraint
 from .registry import LimitSetup, register_limit
@@ -52,14 +53,9 @@ class RangeLimit:
 
     def constraint(self, ctx: StepContext) -> Constraint:
         """``[rate_lo, rate_hi]``, opened towards the range for a variable outside it."""
-        lo, hi = ctx.rate_lo, ctx.rate_hi
-        rec = self._rec
-        lower = np.where(lo > 0.0, np.minimum(lo, rec), lo)
-        upper = np.where(hi < 0.0, np.maximum(hi, -rec), hi)
-        off = self._off
-        if off.any():
-            lower[off] = -np.inf
-            upper[off] = np.inf
+        # Below the range: not further down, back at least at the recovery rate (one
+        # compiled call, src/kernel/boxes.cpp).
+        lower, upper = kernel.range_box(ctx.rate_lo, ctx.rate_hi, self._rec, self._off)
         return Constraint(lower=lower, upper=upper)
 
 
