@@ -235,7 +235,10 @@ def _meeting_normal(a0: FloatArray, a1: FloatArray, b0: FloatArray,
     out = np.empty_like(d1)
     if crossing.any():
         w = (b0 + b1 - a0 - a1)[crossing]
-        nc = n[crossing] / n_len[crossing, None]
+        # Scaled by its largest component first: the cross product of a very short axis
+        # squares into subnormal numbers, whose square root is off by 1e-9 and more.
+        nc = n[crossing] / np.abs(n[crossing]).max(axis=1, keepdims=True)
+        nc /= np.sqrt(_dot(nc, nc))[:, None]
         out[crossing] = np.where(_dot(w, nc)[:, None] < 0.0, -nc, nc)
     rest = ~crossing
     if rest.any():

@@ -7,7 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from geom_oracles import point_segment_distance, segment_distance_exact
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
@@ -95,6 +95,8 @@ def test_the_exact_oracle_agrees_with_dense_sampling():
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(segment_pair(), st.floats(0.0, 0.5), st.floats(0.0, 0.5)),
                 min_size=1, max_size=6))
+@example([((np.array([-0.5, 0.0, 0.0]), np.array([-0.375, 0.0, 1.0]),
+            np.array([-0.5, 0.0, 0.0]), np.array([-0.5, 0.0, 1.30179878e-157])), 0.5, 0.5)])
 def test_capsule_proximity_conventions(items):
     pairs = [pair for pair, _, _ in items]
     p0, p1, q0, q1 = (np.array(v) for v in zip(*pairs, strict=True))
