@@ -16,6 +16,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from ._compiled import kernel
+
 FloatArray = NDArray[np.float64]
 
 #: A matrix as nested Python lists, row by row (what ``ndarray.tolist()`` returns).
@@ -23,10 +25,13 @@ Rows = list[list[float]]
 
 
 def pose_error(T_target: FloatArray, T_actual: FloatArray) -> FloatArray:
-    """6-vector ``[dp; dw]``: position error [m] and world rotation error [rad]."""
+    """6-vector ``[dp; dw]``: position error [m] and world rotation error [rad].
+
+    Computed by the compiled kernel (Pinocchio's C++ ``log3``), the one implementation
+    of the convention, which the step's kinematics call also uses. The poses are 4x4.
+    """
     e = np.empty(6)
-    e[:3] = T_target[:3, 3] - T_actual[:3, 3]
-    e[3:] = pin.log3(T_target[:3, :3] @ T_actual[:3, :3].T)
+    kernel.pose_error(T_target, T_actual, e)
     return e
 
 

@@ -273,7 +273,7 @@ class StepBuilder:
                 arms = both_arms(self.carry, follower, q_l, q_f, sigma, sigma_l, T_D)
         kin = arms.carry
         lay, dt = self.layout, self.options.dt
-        positions = lay.join(state.q_l, state.q_f, sigma, sigma_l)
+        positions = lay.join(q_l, q_f, sigma, sigma_l)
         lo = np.empty(lay.n)
         hi = np.empty(lay.n)
         q = positions[lay.joints]  # finite: no inf - inf below
@@ -388,6 +388,8 @@ class StepBuilder:
                     np.asarray(bound, dtype=np.float64)
                 except (TypeError, ValueError) as err:
                     raise InvalidInputError(f"{name} are not numbers: {err}") from err
+            raise InvalidInputError(f"the limits' {side} bounds do not stack into "
+                                    f"({len(bounds)}, {n}) numbers")
         return out
 
     def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]
