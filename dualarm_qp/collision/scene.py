@@ -25,27 +25,26 @@ Pairs (:meth:`CollisionScene.build`):
 
 Every body's pose is read from one stack of frames (:meth:`CollisionScene.frames`):
 the leader's link frames, the follower's, the object frame and the world. Distances
-come from :mod:`dualarm_qp.geometry.distance`: the closed form for capsule pairs,
-vectorised over all of them, and coal for pairs with a box. :meth:`measure` can skip
+come from :mod:`dualarm_qp.geometry.distance`: the closed form for capsule pairs (one
+compiled call places the bodies, skips the far pairs and measures the others), and coal
+for pairs with a box. :meth:`measure` can skip
 the pairs whose bounding spheres are already farther apart than a given distance (the
 rows only need the pairs within the influence distance).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InvalidInputError
-from ..geometry.distance import (
-    Proximities,
-    capsule_proximities,
-    coal_proximity,
-    coal_shape,
-)
+from .._compiled import kernel
+from ..errors import InvalidInputError, NonFiniteError
+from ..geometry.distance import Proximities, coal_proximity, coal_shape, coal_solver
 from ..geometry.links import arm_capsules
 from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
 from ..kinematics.arm import SerialArm
@@ -172,9 +171,14 @@ class CollisionScene:
                       for b in self.bodies]
         self._ia = np.array([p.a for p in self.pairs], dtype=np.intp)
         self._ib = np.array([p.b for p in self.pairs], dtype=np.intp)
+        # What the kernel's measure reads (src/kernel/clearance.cpp).
+        self._frame_list = self._frame.tolist()
+        self._ia_list = self._ia.tolist()
+        self._ib_list = self._ib.tolist()
         boxed = [isinstance(b.shape, Box) for b in self.bodies]
         self._boxed = np.array([boxed[p.a] or boxed[p.b] for p in self.pairs], dtype=bool)
         self.group_of = np.array([GROUPS.index(p.group) for p in self.pairs], dtype=np.intp)
+        self._solvers: dict[tuple[int, int], Any] = {}
 
     # -- names -------------------------------------------------------------------------
     @property
@@ -234,19 +238,14 @@ class CollisionScene:
         Measured
             The measured pairs (in the order of :attr:`pairs`) and their proximities.
         """
-        R = frames[self._frame, :3, :3]
-        p = frames[self._frame, :3, 3]
-        A = np.einsum("kij,kj->ki", R, self._a) + p
-        B = np.einsum("kij,kj->ki", R, self._b) + p
-        ia, ib = self._ia, self._ib
-        if np.isfinite(within):
-            gap = (A[ia] + B[ia] - A[ib] - B[ib]) * 0.5
-            lower = np.sqrt(np.einsum("ki,ki->k", gap, gap)) - self._sphere[ia] - self._sphere[ib]
-            keep = np.flatnonzero(lower < within)
-        else:
-            keep = np.arange(len(self.pairs))
-        a, b = ia[keep], ib[keep]
-        prox = capsule_proximities(A[a], B[a], self._r[a], A[b], B[b], self._r[b])
+        keep, *near = kernel.scene_proximities(
+            np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
+            self._a, self._b, self._r, self._sphere, self._ia_list, self._ib_list,
+            float(within))
+        prox = Proximities(*near)
+        if not math.isfinite(float(prox.distance.sum())):
+            raise NonFiniteError("the collision scene's frames")
+        a, b = self._ia[keep], self._ib[keep]
         boxed = np.flatnonzero(self._boxed[keep])
         if boxed.size == 0:
             return Measured(keep, prox)
@@ -255,23 +254,43 @@ class CollisionScene:
         dist, pa, pb, normal = (prox.distance.copy(), prox.point_a.copy(),
                                 prox.point_b.copy(), prox.normal.copy())
         for j in exact.tolist():
-            one = coal_proximity(*self._coal_at(int(a[j]), frames),
-                                 *self._coal_at(int(b[j]), frames))
+            i_a, i_b = int(a[j]), int(b[j])
+            one = coal_proximity(*self._coal_at(i_a, frames), *self._coal_at(i_b, frames),
+                                 solver=self._coal_solver(i_a, i_b))
             dist[j], pa[j], pb[j], normal[j] = one.distance, one.point_a, one.point_b, one.normal
         if np.isfinite(within):  # pairs with a box left at their lower bound: drop them
             kept = np.ones(keep.size, dtype=bool)
-            kept[np.setdiff1d(boxed, exact)] = False
+            kept[boxed] = False
+            kept[exact] = True
             return Measured(keep[kept], Proximities(dist[kept], pa[kept], pb[kept],
                                                     normal[kept]))
         return Measured(keep, Proximities(dist, pa, pb, normal))
 
     def _coal_at(self, body: int, frames: FloatArray) -> tuple[object, FloatArray]:
         """Coal geometry of ``body`` and its world pose."""
+        geom, local = self._geometry(body)
+        return geom, frames[self._frame[body]] @ local
+
+    def _geometry(self, body: int) -> tuple[object, FloatArray]:
+        """Coal geometry of ``body`` and its pose in the body's frame (made once)."""
         cached = self._coal[body]
         if cached is None:
             cached = self._coal[body] = coal_shape(self.bodies[body].shape)
-        geom, local = cached
-        return geom, frames[self._frame[body]] @ local
+        return cached
+
+    def _coal_solver(self, a: int, b: int) -> Any:
+        """Coal's solver of the bodies ``a`` and ``b`` (kept per pair; not pickled)."""
+        key = (a, b)
+        solver = self._solvers.get(key)
+        if solver is None:
+            solver = self._solvers[key] = coal_solver(self._geometry(a)[0],
+                                                      self._geometry(b)[0])
+        return solver
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["_solvers"] = {}
+        return state
 
     def nearest(self, frames: FloatArray) -> tuple[FloatArray, list[str]]:
         """Smallest distance of each group [m] (``inf`` for an empty group) and its pair."""

@@ -18,24 +18,27 @@ The first-order rule the velocity-damper rows rely on: if shape a moves rigidly 
 velocity field ``v_a(p)`` and shape b with ``v_b(p)``, the distance changes at the rate
 ``normal . (v_b(point_b) - v_a(point_a))`` wherever the nearest points are unique.
 
-Capsule pairs (:func:`capsule_proximities`) use a closed form for the closest points
-of two segments ``p0 + s d1`` and ``q0 + t d2``, ``(s, t)`` in ``[0, 1]^2``, vectorised
-over many pairs: the parameter ``t`` of the two lines' common perpendicular, clamped to
-[0, 1]; then the best ``s`` for that ``t`` (clamped), the best ``t`` for that ``s``
-(clamped) and once more the best ``s`` (the clamping sequence of Lumelsky 1985, as in
-Ericson, *Real-Time Collision Detection*, 5.1.9). The line parameter is computed as
-``t = r' . w / |w|^2`` with ``r = p0 - q0``, and ``r'`` and ``w`` the vectors ``r`` and
-``d2`` with their parts along ``d1`` removed: removing them before the product keeps
-``t`` accurate for nearly parallel segments (the tests compare the distance with exact
-rational arithmetic to 1e-9 m, nearly parallel and crossing segments included; the
-largest error seen at metre scale is about 2e-15 m). Exactly parallel segments start
-from ``t = 0``, and a zero-length segment keeps its parameter at 0.
+Capsule pairs (:func:`capsule_proximities`) use a closed form for the closest points of
+two segments ``p0 + s d1`` and ``q0 + t d2``, ``(s, t)`` in ``[0, 1]^2``, compiled
+(``src/kernel/capsules.cpp``, one call for many pairs): the parameter ``t`` of the two
+lines' common perpendicular, clamped to [0, 1]; then the best ``s`` for that ``t``
+(clamped), the best ``t`` for that ``s`` (clamped) and once more the best ``s`` (the
+clamping sequence of Lumelsky 1985, as in Ericson, *Real-Time Collision Detection*,
+5.1.9). The line parameter is computed as ``t = r' . w / |w|^2`` with ``r = p0 - q0``,
+and ``r'`` and ``w`` the vectors ``r`` and ``d2`` with their parts along ``d1`` removed:
+removing them before the product keeps ``t`` accurate for nearly parallel segments (the
+tests compare the distance with exact rational arithmetic to 1e-9 m, nearly parallel and
+crossing segments included; the largest error seen at metre scale is about 2e-15 m).
+Exactly parallel segments start from ``t = 0``, and a zero-length segment keeps its
+parameter at 0.
 
 Normal when the axes meet (axis distance at most :data:`TOUCH_TOL`), in order:
 
 1. axes not parallel (the sine of their angle above 1e-9): the unit common
    perpendicular ``d1 x d2 / |d1 x d2|``, signed so that it points from a's midpoint
-   towards b's midpoint (``+`` on a tie);
+   towards b's midpoint (``+`` on a tie: axes that truly cross lie in one plane, and
+   an offset along the perpendicular within sixteen ulps of the endpoints' summed
+   absolute coordinates is rounding);
 2. otherwise (parallel, or one segment a point): a fixed unit vector perpendicular to
    a's axis (to b's if a is a point): the cross product of the axis with the coordinate
    axis it is least aligned with, normalised;
@@ -54,6 +57,7 @@ import coal  # type: ignore[import-untyped]
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 from .shapes import Box, Capsule
 
@@ -118,7 +122,10 @@ class Proximities:
 def segment_closest_points(
     p0: Any, p1: Any, q0: Any, q1: Any
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Closest points of k pairs of segments ``[p0, p1]`` and ``[q0, q1]`` (vectorised).
+    """Closest points of k pairs of segments ``[p0, p1]`` and ``[q0, q1]``.
+
+    The closed form of the module docstring, in the compiled kernel
+    (``src/kernel/capsules.cpp``), one call for all pairs.
 
     Parameters
     ----------
@@ -134,49 +141,35 @@ def segment_closest_points(
         one of the closest pairs is returned).
     x, y : ndarray, shape (k, 3)
         The closest points ``p0 + s (p1 - p0)`` and ``q0 + t (q1 - q0)`` [m].
+
+    Raises
+    ------
+    ShapeError
+        An array that is not k 3-vectors.
+    InvalidInputError
+        Arrays of k that do not broadcast.
     """
-    P0, P1, Q0, Q1 = (np.asarray(v, dtype=np.float64).T for v in (p0, p1, q0, q1))
-    s, t, X, Y = _closest(P0, P1, Q0, Q1)
-    return s, t, X.T, Y.T
-
-
-def _closest(P0: FloatArray, P1: FloatArray, Q0: FloatArray,
-             Q1: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """:func:`segment_closest_points` on components first: arrays (3, k), points (3, k).
-
-    Every operation is one numpy call over all pairs (there is no loop over pairs).
-    """
-    d1, d2, r = P1 - P0, Q1 - Q0, P0 - Q0
-    a = (d1 * d1).sum(0)
-    e = (d2 * d2).sum(0)
-    b = (d1 * d2).sum(0)
-    c = (d1 * r).sum(0)
-    f = (d2 * r).sum(0)
-    a_safe = a + (a == 0.0)  # a == 0: d1 = 0, so b = c = 0 and s stays 0
-    e_safe = e + (e == 0.0)  # e == 0: d2 = 0, so b = f = 0 and t stays 0
-    # Stationary t of the two lines, from r and d2 with their parts along d1 removed
-    # (removing r's part first keeps t accurate for nearly parallel segments).
-    perp = d2 - (b / a_safe) * d1
-    pp = (perp * perp).sum(0)
-    t = _unit_clip(((r - (c / a_safe) * d1) * perp).sum(0) / (pp + (pp == 0.0)))
-    # Clamp, then the best s for that t, the best t for that s, the best s for that t.
-    s = _unit_clip((t * b - c) / a_safe)
-    t = _unit_clip((s * b + f) / e_safe)
-    s = _unit_clip((t * b - c) / a_safe)
-    return s, t, P0 + s * d1, Q0 + t * d2
-
-
-def _unit_clip(x: FloatArray) -> FloatArray:
-    """Clip ``x`` to [0, 1] in place (two ufunc calls: cheaper than ``np.clip``)."""
-    np.maximum(x, 0.0, out=x)
-    np.minimum(x, 1.0, out=x)
-    return x
+    ends = [np.asarray(v, dtype=np.float64) for v in (p0, p1, q0, q1)]
+    for name, arr in zip(("p0", "p1", "q0", "q1"), ends, strict=True):
+        if arr.ndim != 2 or arr.shape[1] != 3:
+            raise ShapeError(name, (-1, 3), arr.shape)
+    try:
+        wide = np.broadcast_arrays(*ends)
+    except ValueError as err:
+        shapes = ", ".join(str(a.shape) for a in ends)
+        raise InvalidInputError(f"segment ends p0, p1, q0, q1 of shapes {shapes} do not "
+                                "broadcast to one (k, 3)") from err
+    s, t, x, y = kernel.segment_closest_points(*(np.ascontiguousarray(a) for a in wide))
+    return s, t, x, y
 
 
 def capsule_proximities(
     a0: Any, a1: Any, radius_a: Any, b0: Any, b1: Any, radius_b: Any
 ) -> Proximities:
-    """Proximities of k capsule pairs, vectorised (the closed form of the module).
+    """Proximities of k capsule pairs (the closed form of the module, compiled).
+
+    One kernel call for all pairs (``src/kernel/capsules.cpp``); the scene's
+    :meth:`~dualarm_qp.collision.CollisionScene.measure` calls the same code.
 
     Parameters
     ----------
@@ -202,63 +195,17 @@ def capsule_proximities(
     InvalidInputError
         NaN or infinite values, or a negative radius.
     """
-    a0, a1, b0, b1 = (np.asarray(v, dtype=np.float64) for v in (a0, a1, b0, b1))
+    a0, a1, b0, b1 = (np.ascontiguousarray(v, dtype=np.float64) for v in (a0, a1, b0, b1))
     ra = np.asarray(radius_a, dtype=np.float64)
     rb = np.asarray(radius_b, dtype=np.float64)
     _check_shapes(a0, a1, ra, b0, b1, rb)
-    if ra.shape[0] == 0:
-        return Proximities(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
-    _, _, X, Y = _closest(a0.T, a1.T, b0.T, b1.T)
-    gap = Y - X
-    axis = np.sqrt((gap * gap).sum(0))
-    distance = axis - ra - rb
+    distance, point_a, point_b, normal = kernel.capsule_proximities(a0, a1, ra, b0, b1, rb)
     if not math.isfinite(float(distance.sum())):  # a NaN or infinity anywhere lands here
         _raise_non_finite(a0, a1, ra, b0, b1, rb)
-    if ra.min() < 0.0 or rb.min() < 0.0:
+    if ra.shape[0] and (ra.min() < 0.0 or rb.min() < 0.0):
         raise InvalidInputError("capsule radii must be non-negative [m], got "
                                 f"{min(ra.min(), rb.min())!r}")
-    meet = axis <= TOUCH_TOL
-    normal = gap / (axis + meet)
-    if meet.any():
-        normal[:, meet] = _meeting_normal(a0[meet], a1[meet], b0[meet], b1[meet]).T
-    return Proximities(distance, (X + ra * normal).T, (Y - rb * normal).T, normal.T)
-
-
-def _meeting_normal(a0: FloatArray, a1: FloatArray, b0: FloatArray,
-                    b1: FloatArray) -> FloatArray:
-    """Return unit normals for pairs whose axes meet (the rule of the module docstring)."""
-    d1, d2 = a1 - a0, b1 - b0
-    n = _cross(d1, d2)
-    n_len = np.sqrt(_dot(n, n))
-    len1, len2 = np.sqrt(_dot(d1, d1)), np.sqrt(_dot(d2, d2))
-    crossing = n_len > 1e-9 * len1 * len2
-    out = np.empty_like(d1)
-    if crossing.any():
-        w = (b0 + b1 - a0 - a1)[crossing]
-        # Scaled by its largest component first: the cross product of a very short axis
-        # squares into subnormal numbers, whose square root is off by 1e-9 and more.
-        nc = n[crossing] / np.abs(n[crossing]).max(axis=1, keepdims=True)
-        nc /= np.sqrt(_dot(nc, nc))[:, None]
-        out[crossing] = np.where(_dot(w, nc)[:, None] < 0.0, -nc, nc)
-    rest = ~crossing
-    if rest.any():
-        axis = np.where((len1 > 0.0)[:, None], d1, d2)[rest]
-        out[rest] = _perpendicular(axis)
-    return out
-
-
-def _perpendicular(axis: FloatArray) -> FloatArray:
-    """Return a fixed unit vector perpendicular to each row of ``axis`` (``+z`` if zero)."""
-    out = np.tile(np.array([0.0, 0.0, 1.0]), (axis.shape[0], 1))
-    length = np.sqrt(_dot(axis, axis))
-    some = length > 0.0
-    if some.any():
-        u = axis[some] / length[some, None]
-        helper = np.zeros_like(u)
-        helper[np.arange(u.shape[0]), np.argmin(np.abs(u), axis=1)] = 1.0
-        v = _cross(u, helper)
-        out[some] = v / np.sqrt(_dot(v, v))[:, None]
-    return out
+    return Proximities(distance, point_a, point_b, normal)
 
 
 _BATCH_NAMES = ("a0", "a1", "radius_a", "b0", "b1", "radius_b")
@@ -282,21 +229,6 @@ def _raise_non_finite(*arrays: FloatArray) -> None:
         if not np.isfinite(arr).all():
             raise NonFiniteError(name)
     raise InvalidInputError("capsule coordinates are too large: the distances overflow")
-
-
-def _dot(x: FloatArray, y: FloatArray) -> FloatArray:
-    """Row-wise dot products of (k, 3) arrays."""
-    out: FloatArray = np.einsum("ki,ki->k", x, y)
-    return out
-
-
-def _cross(x: FloatArray, y: FloatArray) -> FloatArray:
-    """Row-wise cross products of (k, 3) arrays."""
-    out = np.empty_like(x)
-    out[:, 0] = x[:, 1] * y[:, 2] - x[:, 2] * y[:, 1]
-    out[:, 1] = x[:, 2] * y[:, 0] - x[:, 0] * y[:, 2]
-    out[:, 2] = x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]
-    return out
 
 
 # ---------------------------------------------------------------- any pair
@@ -341,7 +273,43 @@ def _coal_proximity(shape_a: Capsule | Box, shape_b: Capsule | Box) -> Proximity
     return coal_proximity(geom_a, T_a, geom_b, T_b)
 
 
-def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray) -> Proximity:
+#: The request of every coal call: GJK's and EPA's tolerances tightened to 1e-10. Shared
+#: and never changed (a request is read-only to coal).
+_REQUEST = coal.DistanceRequest()
+_REQUEST.gjk_tolerance = 1e-10
+_REQUEST.epa_tolerance = 1e-10
+
+
+@dataclass(frozen=True, eq=False)
+class CoalPair:
+    """Coal's distance solver of one pair of geometries, with the geometries themselves.
+
+    Coal's solver keeps bare pointers to its geometries: this keeps them alive as long
+    as the solver.
+
+    Attributes
+    ----------
+    geom_a, geom_b : coal.CollisionGeometry
+        The pair's geometries.
+    solver : coal.ComputeDistance
+        Their solver.
+    """
+
+    geom_a: Any
+    geom_b: Any
+    solver: Any
+
+
+def coal_solver(geom_a: Any, geom_b: Any) -> CoalPair:
+    """Coal's distance solver of one pair of geometries, for repeated :func:`coal_proximity`.
+
+    It is ``coal.distance`` with the pair's function looked up once (the same answer).
+    """
+    return CoalPair(geom_a, geom_b, coal.ComputeDistance(geom_a, geom_b))
+
+
+def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray,
+                   solver: CoalPair | None = None) -> Proximity:
     """Signed distance, witness points and normal of two coal geometries.
 
     The same conventions as :func:`proximity` (which calls it for pairs with a box);
@@ -353,19 +321,29 @@ def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray) -
         The geometries, in their own frames (:func:`coal_shape`).
     T_a, T_b : ndarray, shape (4, 4)
         Their poses in the world [m].
+    solver : CoalPair, optional
+        The pair's solver (:func:`coal_solver` of ``geom_a, geom_b``); default: look it
+        up in this call.
+
+    Raises
+    ------
+    InvalidInputError
+        A solver of other geometries.
     """
-    request = coal.DistanceRequest()
-    request.gjk_tolerance = 1e-10
-    request.epa_tolerance = 1e-10
+    if solver is not None and (solver.geom_a is not geom_a or solver.geom_b is not geom_b):
+        raise InvalidInputError("the coal solver belongs to another pair of geometries")
     result = coal.DistanceResult()
-    distance = float(coal.distance(geom_a, coal.Transform3s(T_a[:3, :3], T_a[:3, 3]),
-                                   geom_b, coal.Transform3s(T_b[:3, :3], T_b[:3, 3]),
-                                   request, result))
+    tf_a = coal.Transform3s(T_a[:3, :3], T_a[:3, 3])
+    tf_b = coal.Transform3s(T_b[:3, :3], T_b[:3, 3])
+    if solver is None:
+        distance = float(coal.distance(geom_a, tf_a, geom_b, tf_b, _REQUEST, result))
+    else:
+        distance = float(solver.solver(tf_a, tf_b, _REQUEST, result))
     point_a = np.array(result.getNearestPoint1(), dtype=np.float64)
     point_b = np.array(result.getNearestPoint2(), dtype=np.float64)
     normal = np.array(result.normal, dtype=np.float64)
-    length = float(np.linalg.norm(normal)) if np.isfinite(normal).all() else 0.0
-    if abs(length - 1.0) > 1e-6:
+    length = math.sqrt(float(normal @ normal))  # NaN for a non-finite normal
+    if not abs(length - 1.0) <= 1e-6:
         normal = _fallback_normal(point_b - point_a, distance, T_b[:3, 3] - T_a[:3, 3])
     else:
         normal /= length
@@ -400,6 +378,13 @@ def coal_shape(shape: Capsule | Box) -> tuple[Any, FloatArray]:
 
 
 def _frame_with_z(z: FloatArray) -> FloatArray:
-    """Return a rotation matrix whose third column is the unit vector ``z``."""
-    x = _perpendicular(z[None])[0]
+    """Return a rotation matrix whose third column is the unit vector ``z``.
+
+    Its first column is ``z`` crossed with the coordinate axis ``z`` is least aligned
+    with, normalised (a capsule is the same about its axis: any such frame will do).
+    """
+    helper = np.zeros(3)
+    helper[int(np.argmin(np.abs(z)))] = 1.0
+    x = np.cross(z, helper)
+    x /= np.linalg.norm(x)
     return np.column_stack([x, np.cross(z, x), z])

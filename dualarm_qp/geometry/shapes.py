@@ -9,7 +9,7 @@ placed in one common frame.
 
 A sphere is a capsule whose two endpoints coincide (:func:`sphere` builds one): the
 distance code then has one closed form for every capsule-capsule, capsule-sphere and
-sphere-sphere pair, and one vectorised path for many pairs at once.
+sphere-sphere pair, and one compiled call for many pairs at once.
 
 Units are SI: lengths in metres.
 """

@@ -69,6 +69,11 @@ class ArmKinematics:
             self._filled = chain.updates
         return self._data
 
+    @property
+    def chain(self) -> Any:
+        """The kernel's chain (``dualarm_qp._kernel.Chain``), at this step's joints."""
+        return self._chain
+
     def frame_pose(self, frame: int) -> FloatArray:
         """World pose (4, 4) [m] of the model's frame ``frame``."""
         T = np.empty((4, 4))

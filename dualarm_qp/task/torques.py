@@ -29,19 +29,20 @@ finite differences.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
+from ..kinematics.compiled import compiled_chain
 from .loads import FALLBACK_LENGTH, GraspStatics, hand_statics, hand_wrenches, sliding_grasp
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
-
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 #: Step [rad or m] of the central differences of the whole load split (a support: its
 #: push depends on the orientation); the split is smooth.
@@ -106,10 +107,12 @@ def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> Flo
 
 
 class ArmStatics:
-    """One arm's quasi-static joint torques ``g(q) + J(q)^T w`` with Pinocchio.
+    """One arm's quasi-static joint torques ``g(q) + J(q)^T w``, compiled.
 
-    Works on its own copy of the arm's model (with ``gravity`` set) and its own data, so
-    it never disturbs the arm's kinematics.
+    The kernel's copy of the arm's model (:func:`~dualarm_qp.kinematics.compiled.compiled_chain`)
+    with the model's inertias and ``gravity``, its own: it never disturbs the arm's
+    kinematics. Pinocchio's static torques and their derivatives run there
+    (``src/kernel/statics.cpp``).
 
     Parameters
     ----------
@@ -120,25 +123,31 @@ class ArmStatics:
     """
 
     def __init__(self, arm: SerialArm, gravity: FloatArray) -> None:
-        model = pin.Model(arm.model)
-        model.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
-        self.model = model
-        self.data = model.createData()
         self.n = arm.n
         self.frame = arm.tool_frame_id
-        self.joint = int(model.frames[self.frame].parentJoint)
-        self._fext = pin.StdVec_Force()
-        for _ in range(model.njoints):
-            self._fext.append(pin.Force.Zero())
+        self.gravity = np.array(gravity, dtype=np.float64)
+        self._model = arm.model
+        self._chain = self._compiled()
 
-    def _set_wrench(self, q: FloatArray, wrench: FloatArray) -> None:
-        """Put ``-wrench`` (on the hand, about the tool point, world axes) on the last body."""
-        model, data = self.model, self.data
-        pin.forwardKinematics(model, data, q)
-        p = pin.updateFramePlacement(model, data, self.frame).translation
-        f, m = -wrench[:3], -wrench[3:]
-        at_origin = pin.Force(f, m + pin.skew(p) @ f)  # about the world origin
-        self._fext[self.joint] = data.oMi[self.joint].actInv(at_origin)
+    def _compiled(self) -> kernel.Chain:
+        """Return the kernel's chain of the arm's model, with its inertias and this gravity."""
+        model = self._model
+        chain = compiled_chain(model)
+        for j in range(1, model.njoints):
+            body = model.inertias[j]
+            chain.set_inertia(j, float(body.mass), np.array(body.lever),
+                              np.array(body.inertia))
+        chain.set_gravity(self.gravity)
+        return chain
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        del state["_chain"]  # the kernel's object: rebuilt on unpickling
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._chain = self._compiled()
 
     def torque(self, q: FloatArray, wrench: FloatArray) -> FloatArray:
         """Joint torques [N m] that hold the arm at ``q`` with the hand applying ``wrench``.
@@ -151,8 +160,8 @@ class ArmStatics:
             ``[f; m]`` the hand applies to the object [N, N m], world frame, moment about
             the tool point.
         """
-        self._set_wrench(q, wrench)
-        return np.array(pin.computeStaticTorque(self.model, self.data, q, self._fext))
+        tau, _, _ = self._chain.static_torques(q, self.frame, wrench, False)
+        return tau
 
     def linearised(self, q: FloatArray, wrench: FloatArray
                    ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -173,16 +182,7 @@ class ArmStatics:
         J : ndarray, shape (6, n)
             Tool-point Jacobian, world axes ``[v; omega]``.
         """
-        model, data = self.model, self.data
-        self._set_wrench(q, wrench)
-        tau = np.array(pin.computeStaticTorque(model, data, q, self._fext))
-        dtau = np.array(pin.computeStaticTorqueDerivatives(model, data, q, self._fext))
-        pin.computeJointJacobians(model, data, q)
-        J = np.array(pin.getFrameJacobian(model, data, self.frame, _LWA)).reshape(6, self.n)
-        omega = J[3:]
-        # omega_j x f = -f x omega_j
-        turned = -np.vstack([pin.skew(wrench[:3]) @ omega, pin.skew(wrench[3:]) @ omega])
-        dtau -= J.T @ turned
+        tau, dtau, J = self._chain.static_torques(q, self.frame, wrench, True)
         return tau, dtau, J
 
 
@@ -358,6 +358,8 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
                    ) -> FloatArray | None:
     """Return the minimum-norm split as a linear map of gravity, ``w = K g`` (6 n_hands, 3).
 
+    Compiled (``src/kernel/load_split.cpp``).
+
     The rule of :func:`~dualarm_qp.task.loads.split_load`, written with projectors:
     in scaled coordinates ``u_i = U^-1 w_i`` (``U = diag(1, 1, 1, L, L, L)``) hand ``i``'s
     wrenches are those orthogonal to ``U T_i`` (``T_i`` its free twists), with projector
@@ -381,27 +383,7 @@ def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float
     """
     if any(hand.wrench is not None for hand in hands):
         return None
-    about = hands[0].point
-    gap = float(np.linalg.norm(hands[0].point - hands[1].point)) if len(hands) > 1 else 0.0
-    L = gap if gap > 1e-9 else FALLBACK_LENGTH
-    u = np.array([1.0, 1.0, 1.0, L, L, L])
-    blocks = []
-    for hand in hands:
-        M_i = np.eye(6)  # S A_i U = [I 0; [p_i - about]x / L  I]
-        M_i[3:, :3] = pin.skew((hand.point - about) / L)
-        T = hand.free * u[:, None]  # U T_i
-        if T.shape[1]:  # M_i P_i, P_i = I - T (T^T T)^-1 T^T
-            M_i = M_i - (M_i @ T) @ np.linalg.solve(T.T @ T, T.T)
-        blocks.append(M_i)
-    MP = np.hstack(blocks)  # M P;  M P M^T = (M P)(M P)^T
-    N = MP @ MP.T
-    # b = S (-mass [g; (c - about) x g])
-    B = -mass * np.vstack([np.eye(3), pin.skew(centre - about)]) / u[:, None]
-    eig, V = np.linalg.eigh(N)
-    if eig[0] > RCOND_MIN * eig[-1]:
-        scaled = MP.T @ np.linalg.solve(N, B)  # u per unit g, (6 n_hands, 3)
-    else:  # fewer than 6 balance directions (two slides along one axis): least squares
-        keep = eig > RCOND_MIN * eig[-1]
-        Vk = V[:, keep]
-        scaled = MP.T @ (Vk @ ((Vk.T @ B) / eig[keep][:, None]))
-    return scaled * np.tile(u, len(hands))[:, None]
+    points = np.array([hand.point for hand in hands], dtype=np.float64)
+    return kernel.split_operator(points, [hand.free for hand in hands],
+                                 np.asarray(centre, dtype=np.float64), float(mass),
+                                 FALLBACK_LENGTH, RCOND_MIN)

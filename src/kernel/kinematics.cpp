@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "chain_impl.hpp"
+
 #ifdef PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION
 #error "the kernel uses Pinocchio header-only: do not link pinocchio's CMake targets"
 #endif
@@ -43,12 +45,6 @@ pin::JointModel joint_of(int kind, const Eigen::Vector3d& axis) {
 }
 
 }  // namespace
-
-struct Chain::Impl {
-  pin::Model model;
-  pin::Data data;
-  Impl() : model(), data(model) {}
-};
 
 Chain::Chain(const std::vector<int>& parents, const std::vector<int>& kinds, const RowMat& axes,
              const RowMat& placements, const std::vector<int>& frame_parents,

@@ -56,12 +56,16 @@ class Chain {
   void frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) const;
   void frame_jacobian(int f, Eigen::Ref<RowMat> J) const;
 
- private:
+  // The Pinocchio model and data (chain_impl.hpp; for the kernel's other algorithms on
+  // the same model, statics.cpp).
   struct Impl;
+  Impl& impl() { return *impl_; }
+  void check_frame(int f) const;
+
+ private:
   std::unique_ptr<Impl> impl_;
   Eigen::VectorXd q_;
   std::uint64_t updates_ = 0;
-  void check_frame(int f) const;
 };
 
 // The Pinocchio version of the headers the kernel was compiled with.

@@ -178,6 +178,29 @@ def test_crossing_axes_use_the_common_perpendicular_towards_b():
     assert proximity(a, moved).distance == pytest.approx(q.distance + 1e-3, abs=1e-12)
 
 
+def test_axes_that_truly_cross_tie_to_the_plus_perpendicular():
+    """Crossing axes lie in one plane: their midpoints' offset along the perpendicular is
+    zero but for rounding, and the documented tie gives ``+ d1 x d2`` (in generic
+    position too, where the offset's rounding has either sign)."""
+    a = Capsule([2, 0, 1], [-1, 0, 0], 0.1)
+    b = Capsule([-1, 0, 0], [0, -1, 0], 0.1)  # shares a's end: w . n = 0 exactly
+    np.testing.assert_allclose(proximity(a, b).normal, np.array([-1, -1, 3]) / np.sqrt(11),
+                               atol=1e-15)
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        x = rng.normal(0.0, 1.0, 3)
+        u, v = rng.normal(0.0, 1.0, (2, 3))
+        s0, s1 = -rng.uniform(0.1, 1.0, 2)
+        t0, t1 = rng.uniform(0.1, 1.0, 2)
+        a = Capsule(x + s0 * u, x + t0 * u, 0.05)
+        b = Capsule(x + s1 * v, x + t1 * v, 0.05)
+        p = proximity(a, b)
+        if p.distance > -0.1 + 1e-12:  # the rounded axes missed by more than TOUCH_TOL
+            continue
+        n = np.cross(a.b - a.a, b.b - b.a)
+        np.testing.assert_allclose(p.normal, n / np.linalg.norm(n), atol=1e-12)
+
+
 def test_t_contact_and_collinear_overlap_get_a_perpendicular_normal():
     a = Capsule([0, 0, 0], [1, 0, 0], 0.1)
     t_contact = proximity(a, Capsule([0.5, 0, 0], [0.5, 0, 1], 0.1))

@@ -10,6 +10,7 @@ the full split).
 
 from __future__ import annotations
 
+import pickle
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +76,42 @@ def test_arm_derivative_at_a_fixed_world_wrench(which: str) -> None:
         g = statics.torque(q, np.zeros(6))
         np.testing.assert_allclose(tau - g, J.T @ w, atol=1e-10)
         np.testing.assert_allclose(J, arm.jacobian(q), atol=1e-12)
+
+
+@pytest.mark.parametrize("which", ["puma", "ur5"])
+def test_compiled_gravity_is_pinocchios(which: str) -> None:
+    """The kernel's statics (its copy of the model, inertias and gravity) against
+    Pinocchio's Python ``computeGeneralizedGravity`` on the arm's own model."""
+    if which == "ur5":
+        if example_robots_dir() is None:
+            pytest.skip("example-robot-data is not installed")
+        arm = example_robot_arm("ur5", "base_link", "tool0")
+    else:
+        arm = puma560()
+    gravity = np.array([0.3, -0.2, -9.81])
+    statics = ArmStatics(arm, gravity)
+    model = pin.Model(arm.model)
+    model.gravity = pin.Motion(gravity, np.zeros(3))
+    data = model.createData()
+    rng = np.random.default_rng(9)
+    for _ in range(5):
+        q = rng.uniform(-2.0, 2.0, arm.n)
+        expected = pin.computeGeneralizedGravity(model, data, q)
+        assert np.abs(expected).max() > 1.0
+        np.testing.assert_allclose(statics.torque(q, np.zeros(6)), expected, rtol=0.0,
+                                   atol=1e-12 * max(1.0, np.abs(expected).max()))
+
+
+def test_load_torques_pickle() -> None:
+    """The statics' compiled chains are rebuilt on unpickling (a sweep's workers)."""
+    exp = _experiment("puma_beam_limits")
+    torques = LoadTorques(exp.task)
+    copy = pickle.loads(pickle.dumps(torques))
+    s = exp.initial
+    first = torques.linearised(s.q_l, s.q_f, s.sigma)
+    again = copy.linearised(s.q_l, s.q_f, s.sigma)
+    np.testing.assert_array_equal(first.tau, again.tau)
+    np.testing.assert_array_equal(first.D, again.D)
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -26,8 +26,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...collision.scene import CollisionScene
-from ..context import ArmKinematics, StepContext
+from ..._compiled import kernel
+from ...collision.scene import OWNERS, CollisionScene
+from ..context import StepContext
 from ..layout import Layout
 from ..parts import Constraint
 from .registry import LimitSetup, register_limit
@@ -66,9 +67,15 @@ class CollisionLimit:
         self._gain = s.approach_speed_max / s.band
         self._d_s = s.safety_distance
         self._d_i = s.influence_distance
-        self._owner = [b.owner for b in scene.bodies]
-        self._link = [b.link for b in scene.bodies]
         self._names = [ROW_PREFIX + p.name for p in scene.pairs]
+        # Per body, what the kernel's rows read: its owner's index in OWNERS (the kernel's
+        # codes) and its model frame (an arm's link; -1 for the object and the world).
+        self._owner = np.array([OWNERS.index(b.owner) for b in scene.bodies], dtype=np.intp)
+        self._frame = np.array([self._frames[OWNERS.index(b.owner)][b.link]
+                                if b.owner in ("leader", "follower") else -1
+                                for b in scene.bodies], dtype=np.intp)
+        self._ia = np.array([p.a for p in scene.pairs], dtype=np.intp)
+        self._ib = np.array([p.b for p in scene.pairs], dtype=np.intp)
 
     def frames(self, ctx: StepContext) -> FloatArray:
         """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
@@ -86,18 +93,16 @@ class CollisionLimit:
         if near.size == 0:
             return Constraint()
         lay = self.layout
-        G = np.zeros((near.size, lay.n))
-        cache: dict[tuple[str, int], FloatArray] = {}
-        pairs = self.scene.pairs
-        names = []
-        for row, j in enumerate(near.tolist()):
-            pair = pairs[int(measured.pairs[j])]
-            n = prox.normal[j]
-            # n^T (J_a - J_b) x <= h
-            self._add(G[row], pair.a, prox.point_a[j], n, 1.0, ctx, frames, cache)
-            self._add(G[row], pair.b, prox.point_b[j], n, -1.0, ctx, frames, cache)
-            names.append(self._names[int(measured.pairs[j])])
+        pairs = measured.pairs[near]
+        # n^T (J_a - J_b) x <= h: one kernel call for the rows (src/kernel/clearance.cpp).
+        ends = np.column_stack([self._ia[pairs], self._ib[pairs]]).ravel()
+        G = kernel.damper_rows(
+            ctx.leader_arm.chain, ctx.follower_arm.chain, ctx.carry.J_object,
+            ctx.carry.T_object[:3, 3], self._owner[ends].tolist(), self._frame[ends].tolist(),
+            np.ascontiguousarray(prox.point_a[near]), np.ascontiguousarray(prox.point_b[near]),
+            np.ascontiguousarray(prox.normal[near]), lay.n_l, lay.n_f, lay.grasps.start, lay.n)
         h = self._gain * (prox.distance[near] - self._d_s)
+        names = [self._names[k] for k in pairs.tolist()]
         # A pair that no variable moves at this state (a sphere on its joint's axis
         # against an obstacle) has a zero row: no step changes its distance to first
         # order, so the row is left out (with h < 0 it would only make the step
@@ -107,37 +112,6 @@ class CollisionLimit:
             G, h = G[moving], h[moving]
             names = [n for n, m in zip(names, moving.tolist(), strict=True) if m]
         return Constraint(G=G, h=h, row_names=tuple(names))
-
-    def _add(self, row: FloatArray, body: int, point: FloatArray, n: FloatArray, sign: float,
-             ctx: StepContext, frames: FloatArray,
-             cache: dict[tuple[str, int], FloatArray]) -> None:
-        """Add ``sign n^T J(point)`` of ``body`` to ``row``."""
-        owner = self._owner[body]
-        if owner == "world":
-            return
-        lay = self.layout
-        if owner == "object":
-            key = ("object", 0)
-            J = ctx.carry.J_object
-            origin = ctx.carry.T_object[:3, 3]
-            cols = np.r_[np.arange(lay.n_l), np.arange(lay.grasps.start, lay.grasps.stop)]
-        else:
-            link = self._link[body]
-            leader = owner == "leader"
-            arm: ArmKinematics = ctx.leader_arm if leader else ctx.follower_arm
-            frame = self._frames[0 if leader else 1][link]
-            key = (owner, link)
-            cached = cache.get(key)
-            if cached is None:
-                cached = cache[key] = arm.frame_jacobian(frame)
-            J = cached
-            origin = frames[link if leader else lay.n_l + 1 + link, :3, 3]
-            sl = lay.leader if leader else lay.follower
-            cols = np.arange(sl.start, sl.stop)
-        r = point - origin
-        w = np.array([r[1] * n[2] - r[2] * n[1], r[2] * n[0] - r[0] * n[2],
-                      r[0] * n[1] - r[1] * n[0]])
-        row[cols] += sign * (n @ J[:3] + w @ J[3:])
 
 
 def _collision(setup: LimitSetup) -> CollisionLimit | None:

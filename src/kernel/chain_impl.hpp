@@ -1,0 +1,17 @@
+// The Pinocchio model and data behind a Chain (kinematics.hpp keeps Pinocchio out of its
+// interface; the kernel's sources that run Pinocchio's algorithms include this).
+#pragma once
+
+#include <pinocchio/multibody.hpp>
+
+#include "kinematics.hpp"
+
+namespace dqk {
+
+struct Chain::Impl {
+  pinocchio::Model model;
+  pinocchio::Data data;
+  Impl() : model(), data(model) {}
+};
+
+}  // namespace dqk

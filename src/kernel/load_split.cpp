@@ -1,0 +1,67 @@
+#include "load_split.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <stdexcept>
+
+namespace dqk {
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0;
+  return S;
+}
+
+}  // namespace
+
+Mat split_operator(const Points& points, const std::vector<Mat>& free,
+                   const Eigen::Vector3d& centre, double mass, double fallback_length,
+                   double rcond_min) {
+  const Index h = points.rows();
+  if (h < 1 || static_cast<Index>(free.size()) != h)
+    throw std::invalid_argument("split_operator: one free-twist block per hand");
+  for (const Mat& T : free)
+    if (T.rows() != 6) throw std::invalid_argument("split_operator: free twists are 6 x k");
+  const Eigen::Vector3d about = points.row(0).transpose();
+  const double gap = h > 1 ? (points.row(0) - points.row(1)).norm() : 0.0;
+  const double L = gap > 1e-9 ? gap : fallback_length;
+  Vec u(6);
+  u << 1.0, 1.0, 1.0, L, L, L;
+  Mat MP(6, 6 * h);
+  for (Index i = 0; i < h; ++i) {
+    Mat M = Mat::Identity(6, 6);  // S A_i U = [I 0; [p_i - about]x / L  I]
+    M.block<3, 3>(3, 0) = skew((points.row(i).transpose() - about) / L);
+    const Mat T = u.asDiagonal() * free[static_cast<size_t>(i)];  // U T_i
+    if (T.cols() > 0) {  // M P_i, P_i = I - T (T^T T)^-1 T^T
+      const Mat MT = M * T;
+      M -= MT * (T.transpose() * T).partialPivLu().solve(T.transpose());
+    }
+    MP.middleCols(6 * i, 6) = M;
+  }
+  const Mat N = MP * MP.transpose();
+  // b = S (-mass [g; (c - about) x g]), per unit g
+  Mat B(6, 3);
+  B.topRows<3>() = Eigen::Matrix3d::Identity();
+  B.bottomRows<3>() = skew(centre - about);
+  B = (-mass) * (u.cwiseInverse().asDiagonal() * B);
+  Eigen::SelfAdjointEigenSolver<Mat> eig(N);
+  const Vec& lam = eig.eigenvalues();  // ascending
+  Mat scaled;
+  if (lam[0] > rcond_min * lam[5]) {
+    scaled = MP.transpose() * N.partialPivLu().solve(B);
+  } else {  // fewer than 6 balance directions: least squares on the kept eigenvectors
+    Mat VtB = eig.eigenvectors().transpose() * B;
+    for (Index k = 0; k < 6; ++k) {
+      if (lam[k] > rcond_min * lam[5])
+        VtB.row(k) /= lam[k];
+      else
+        VtB.row(k).setZero();
+    }
+    scaled = MP.transpose() * (eig.eigenvectors() * VtB);
+  }
+  for (Index i = 0; i < h; ++i) scaled.middleRows(6 * i, 6) = u.asDiagonal() * scaled.middleRows(6 * i, 6);
+  return scaled;
+}
+
+}  // namespace dqk
