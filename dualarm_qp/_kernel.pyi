@@ -80,6 +80,12 @@ def damper_rows(leader: Chain, follower: Chain, J_object: ArrayLike,
 def split_operator(points: ArrayLike, free: Sequence[ArrayLike], centre: ArrayLike,
                    mass: float, fallback_length: float, rcond_min: float) -> _F: ...
 
+def load_torques(leader: Chain, leader_tool: int, follower: Chain, follower_tool: int,
+                 q_l: ArrayLike, q_f: ArrayLike, gravity: ArrayLike, mass: float,
+                 points: Sequence[ArrayLike], free: Sequence[Sequence[ArrayLike]],
+                 centres: Sequence[ArrayLike], grasp_step: float, fallback_length: float,
+                 rcond_min: float) -> tuple[_F, _F, _F]: ...
+
 PINOCCHIO_VERSION: str
 
 class Chain:

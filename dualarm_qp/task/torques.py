@@ -21,9 +21,11 @@ and the derivative of the torques over the decision vector's variables (both arm
 joints, the grasps) has three parts: the arm's own ``d tau / d q`` at a fixed world
 wrench (Pinocchio's static torque derivatives, with fixed *world* forces instead of
 Pinocchio's fixed *local* ones, see :meth:`ArmStatics.linearised`), and ``J^T d w / d y``
-for ``y`` the leader's joints and the grasps (central differences of the load split).
-``docs/derivation.md`` ("Joint torques") derives it; the tests check every part against
-finite differences.
+for ``y`` the leader's joints and the grasps (the leader's columns by a rotation
+identity, the grasps' by forward differences of the split; for a support central
+differences of the whole split). ``docs/derivation.md`` ("Joint torques") derives it;
+the tests check every part against finite differences. With grasps the numeric work is
+one call into the compiled kernel.
 """
 
 from __future__ import annotations
@@ -32,14 +34,20 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
-from .loads import FALLBACK_LENGTH, GraspStatics, hand_statics, hand_wrenches, sliding_grasp
+from .loads import (
+    FALLBACK_LENGTH,
+    GraspStatics,
+    ObjectLoad,
+    hand_statics,
+    hand_wrenches,
+    sliding_grasp,
+)
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
@@ -139,6 +147,11 @@ class ArmStatics:
                               np.array(body.inertia))
         chain.set_gravity(self.gravity)
         return chain
+
+    @property
+    def chain(self) -> kernel.Chain:
+        """The kernel's chain (the arm's model, its inertias and gravity)."""
+        return self._chain
 
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
@@ -252,101 +265,82 @@ class LoadTorques:
                    sigma_l: float = 0.0) -> TorqueState:
         """Both arms' torques and their derivative over the decision variables.
 
+        With grasps (the split linear in gravity, :func:`split_operator`) the whole of it
+        is one kernel call (``src/kernel/load_torques.cpp``): both arms' statics, the
+        split, the leader's columns by the rotation identity and the grasps' by forward
+        differences of the split over :data:`GRASP_STEP` (the hands' geometry at the
+        moved grasps is computed here). A support (its push depends on the orientation):
+        central differences of the whole split over :data:`SPLIT_STEP`. Without a load
+        the arms hold only themselves.
+
         Raises
         ------
         UnbalancedLoadError, SupportLostError
             The grasps cannot hold the load here (or at a neighbouring state of the
             differences).
         """
-        n_l, n_f, n_g = self.n_l, self.n_f, self.n_grasp
         load = self.task.load
-        K = None
-        w = None
-        at: tuple[list[GraspStatics], FloatArray] | None = None
         if load is not None and self.task.contact is None:
-            at = hand_statics(self.task, q_l, sigma, sigma_l)
-            hands, T_obj = at
-            K = split_operator(hands, T_obj[:3, :3] @ load.mass_centre + T_obj[:3, 3],
-                               load.mass)
-            if K is not None:
-                w = (K @ load.gravity).reshape(2, 6)
-        if w is None:
-            w = self.wrenches(q_l, sigma, sigma_l)
+            tau, D, w = self._with_split(load, q_l, q_f, sigma, sigma_l)
+            return TorqueState(tau, D, w)
+        n_l, n_f, n_g = self.n_l, self.n_f, self.n_grasp
+        w = self.wrenches(q_l, sigma, sigma_l)
         tau_l, dl, J_l = self.leader.linearised(q_l, w[0])
         tau_f, df, J_f = self.follower.linearised(q_f, w[1])
         D = np.zeros((n_l + n_f, n_l + n_f + n_g))
         D[:n_l, :n_l] = dl
         D[n_l:, n_l:n_l + n_f] = df
-        if self.task.load is not None:
-            dw = self._split_derivative(q_l, sigma, sigma_l, w, J_l[3:], K, at)
-            D[:n_l, :n_l] += J_l.T @ dw[0]
-            D[n_l:, :n_l] += J_f.T @ dw[1]
-            D[:n_l, n_l + n_f:] += J_l.T @ dw[2]
-            D[n_l:, n_l + n_f:] += J_f.T @ dw[3]
+        if load is not None:
+            dw = self._support_derivative(q_l, sigma, sigma_l)
+            D[:n_l, :n_l] += J_l.T @ dw[0, :, :n_l]
+            D[n_l:, :n_l] += J_f.T @ dw[1, :, :n_l]
+            D[:n_l, n_l + n_f:] += J_l.T @ dw[0, :, n_l:]
+            D[n_l:, n_l + n_f:] += J_f.T @ dw[1, :, n_l:]
         return TorqueState(np.r_[tau_l, tau_f], D, w)
 
-    def _split_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float,
-                          w: FloatArray, omega: FloatArray, K: FloatArray | None,
-                          at: tuple[list[GraspStatics], FloatArray] | None
-                          ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """``d w / d q_l`` and ``d w / d sigma`` of both hands (6, n_l) x2, (6, n_grasp) x2.
+    def _with_split(self, load: ObjectLoad, q_l: FloatArray, q_f: FloatArray, sigma: float,
+                    sigma_l: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(tau, D, w)`` of grasps: the hands at the state and at each moved grasp.
 
-        The leader's joints move the object, both grasp points and every direction
-        rigidly, with the tool's angular velocity ``omega_j`` per joint; gravity stays.
-        Turning everything *and* gravity by ``R`` turns the split by ``R``, and the
-        split is linear in gravity (``w = K g``, :func:`split_operator`), so
-        ``d w / d q_j = omega_j x w - K (omega_j x g)`` (cross products on the force and
-        on the moment). The grasp coordinates move the contact point along its path:
-        forward differences of the split over :data:`GRASP_STEP` (the follower's grasp
-        moves only the follower's hand: the rest of the set-up is kept). A support (its
-        push depends on the orientation): central differences of the whole split.
+        The follower's grasp moved by :data:`GRASP_STEP` moves only the follower's hand
+        (the rest of the set-up is kept); a sliding leader's moves the object.
         """
         task = self.task
-        load = task.load
-        assert load is not None
+        hands, T_obj = hand_statics(task, q_l, sigma, sigma_l)
+        R, p = T_obj[:3, :3], T_obj[:3, 3]
+        centre = R @ load.mass_centre + p
+        surf = task.surface
+        s1 = sigma + GRASP_STEP
+        sets = [(hands, centre),
+                ([hands[0], sliding_grasp(R @ surf.point(s1) + p, R @ surf.tangent(s1),
+                                          R @ surf.angular_rate(s1))], centre)]
+        if self.n_grasp == 2:
+            moved, T1 = hand_statics(task, q_l, sigma, sigma_l + GRASP_STEP)
+            sets.append((moved, T1[:3, :3] @ load.mass_centre + T1[:3, 3]))
+        leader, follower = self.leader, self.follower
+        return kernel.load_torques(
+            leader.chain, leader.frame, follower.chain, follower.frame, q_l, q_f,
+            load.gravity, load.mass, [np.array([h.point for h in hs]) for hs, _ in sets],
+            [[h.free for h in hs] for hs, _ in sets], [c for _, c in sets], GRASP_STEP,
+            FALLBACK_LENGTH, RCOND_MIN)
+
+    def _support_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float
+                            ) -> FloatArray:
+        """``d w / d (q_l, grasps)`` of both hands with a support (2, 6, n_l + n_grasp).
+
+        Central differences of the whole split over :data:`SPLIT_STEP`: a support's push
+        depends on the object's orientation, so the split is not linear in gravity.
+        """
         n_l, n_g = self.n_l, self.n_grasp
         h = SPLIT_STEP
-        if K is None:
-            y = np.r_[q_l, sigma, sigma_l][:n_l + n_g]
-            cols = []
-            for k in range(n_l + n_g):
-                up, down = y.copy(), y.copy()
-                up[k] += h
-                down[k] -= h
-                cols.append((self._split(up) - self._split(down)) / (2.0 * h))
-            dw = np.stack(cols, axis=-1)  # (2, 6, n_l + n_g)
-            return dw[0, :, :n_l], dw[1, :, :n_l], dw[0, :, n_l:], dw[1, :, n_l:]
-        g = load.gravity
-        turned_g = -pin.skew(g) @ omega  # (3, n_l): omega_j x g
-        dq = []
-        for i in range(2):
-            rot = -np.vstack([pin.skew(w[i, :3]) @ omega, pin.skew(w[i, 3:]) @ omega])
-            dq.append(rot - K[6 * i:6 * i + 6] @ turned_g)
-        ds = np.zeros((2, 6, n_g))
-        assert at is not None and load is not None
-        hands, T_obj = at
-        R, p = T_obj[:3, :3], T_obj[:3, 3]
-        surf = task.surface
-        g_step = GRASP_STEP
-        s1 = sigma + g_step
-        moved = [hands[0], sliding_grasp(R @ surf.point(s1) + p, R @ surf.tangent(s1),
-                                         R @ surf.angular_rate(s1))]
-        K1 = split_operator(moved, R @ load.mass_centre + p, load.mass)
-        assert K1 is not None  # no support here
-        ds[:, :, 0] = ((K1 @ g).reshape(2, 6) - w) / g_step
-        if n_g == 2:
-            ds[:, :, 1] = (self._fast_split(q_l, sigma, sigma_l + g_step) - w) / g_step
-        return dq[0], dq[1], ds[0], ds[1]
-
-    def _fast_split(self, q_l: FloatArray, sigma: float, sigma_l: float) -> FloatArray:
-        """Return the split by :func:`split_operator` (which exists for every grasp)."""
-        load = self.task.load
-        assert load is not None
-        hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
-        K = split_operator(hands, T_obj[:3, :3] @ load.mass_centre + T_obj[:3, 3], load.mass)
-        if K is None:
-            return self.wrenches(q_l, sigma, sigma_l)
-        return (K @ load.gravity).reshape(2, 6)
+        y = np.r_[q_l, sigma, sigma_l][:n_l + n_g]
+        cols = []
+        for k in range(n_l + n_g):
+            up, down = y.copy(), y.copy()
+            up[k] += h
+            down[k] -= h
+            cols.append((self._split(up) - self._split(down)) / (2.0 * h))
+        return np.stack(cols, axis=-1)
 
     def _split(self, y: FloatArray) -> FloatArray:
         n_l = self.n_l

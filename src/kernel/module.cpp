@@ -23,6 +23,7 @@
 #include "kinematics.hpp"
 #include "linalg.hpp"
 #include "load_split.hpp"
+#include "load_torques.hpp"
 #include "nnls.hpp"
 #include "nullspace.hpp"
 #include "rows.hpp"
@@ -488,4 +489,30 @@ NB_MODULE(_kernel, m) {
       "points"_a, "free"_a, "centre"_a, "mass"_a, "fallback_length"_a, "rcond_min"_a,
       "The minimum-norm split of a load between hands as a linear map of gravity: K "
       "(6 hands, 3).");
+
+  m.def(
+      "load_torques",
+      [](dqk::Chain& leader, int leader_tool, dqk::Chain& follower, int follower_tool,
+         const Vec& q_l, const Vec& q_f, const Eigen::Vector3d& gravity, double mass,
+         const std::vector<Mat>& points, const std::vector<std::vector<Mat>>& free,
+         const std::vector<Eigen::Vector3d>& centres, double grasp_step,
+         double fallback_length, double rcond_min) {
+        require(points.size() == free.size() && points.size() == centres.size(),
+                "load_torques: points, free and centres hold one entry per set");
+        std::vector<dqk::HandSet> sets(points.size());
+        for (size_t k = 0; k < sets.size(); ++k) {
+          require(points[k].rows() == 2 && points[k].cols() == 3,
+                  "load_torques: each set's points are (2, 3)");
+          sets[k] = {dqk::Points(points[k]), free[k], centres[k]};
+        }
+        dqk::LoadTorques r = dqk::load_torques(leader, leader_tool, follower, follower_tool,
+                                               q_l, q_f, gravity, mass, sets, grasp_step,
+                                               fallback_length, rcond_min);
+        return nb::make_tuple(out(std::move(r.tau)), out(std::move(r.D)), out(std::move(r.w)));
+      },
+      "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "q_l"_a, "q_f"_a,
+      "gravity"_a, "mass"_a, "points"_a, "free"_a, "centres"_a, "grasp_step"_a,
+      "fallback_length"_a, "rcond_min"_a,
+      "Both arms' static torques under the minimum-norm split and their derivative over "
+      "(q_l, q_f, grasps): (tau, D, w).");
 }

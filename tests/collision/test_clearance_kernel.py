@@ -88,9 +88,9 @@ def test_measure_places_every_body_and_pair(setup) -> None:
     """The kernel's measure (placing, broad phase off) against coal on the placed shapes.
 
     Coal's capsule distance is an implementation of its own (an iterative one): the
-    distances agree to 1e-8 m (2e-9 m seen). Witness points and normals are compared with the closed form called pair by
-    pair (the same code: this checks the placement and the pairs' order), except for
-    parallel axes, whose witness points are not unique.
+    distances agree to 1e-8 m (2e-9 m seen). Witness points and normals are compared
+    with the closed form called pair by pair on the shapes placed in Python (the same
+    closed form: this checks the kernel's placement and the pairs' order).
     """
     exp, builder, limit = setup
     ctx, _ = builder.context(exp.initial)

@@ -186,3 +186,31 @@ def test_torque_limits_default_to_the_urdf_effort() -> None:
 def test_torque_limits_refused(given: Any, match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         torque_limits_of(puma560(), given, "leader")
+
+
+def test_load_torques_kernel_refuses_malformed_sets() -> None:
+    """The kernel's call takes the state and one set of hands per sliding grasp."""
+    from dualarm_qp._compiled import kernel
+    from dualarm_qp.task.loads import FALLBACK_LENGTH
+    from dualarm_qp.task.torques import GRASP_STEP, RCOND_MIN
+
+    exp = _experiment("puma_beam_limits")
+    torques = LoadTorques(exp.task)
+    s = exp.initial
+    load = exp.task.load
+    hands, T = hand_statics(exp.task, s.q_l, s.sigma)
+    points = np.array([h.point for h in hands])
+    free = [h.free for h in hands]
+    centre = T[:3, :3] @ load.mass_centre + T[:3, 3]
+    args = (torques.leader.chain, torques.leader.frame, torques.follower.chain,
+            torques.follower.frame, s.q_l, s.q_f, load.gravity, load.mass)
+    tail = (GRASP_STEP, FALLBACK_LENGTH, RCOND_MIN)
+    tau, _, w = kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, *tail)
+    np.testing.assert_allclose(tau, torques.torques(s.q_l, s.q_f, s.sigma), atol=1e-9)
+    np.testing.assert_allclose(w, torques.wrenches(s.q_l, s.sigma), atol=1e-9)
+    with pytest.raises(ValueError, match="one set per sliding grasp"):
+        kernel.load_torques(*args, [points], [free], [centre], *tail)
+    with pytest.raises(ValueError, match=r"\(2, 3\)"):
+        kernel.load_torques(*args, [points[:1]] * 2, [free] * 2, [centre] * 2, *tail)
+    with pytest.raises(ValueError, match="one entry per set"):
+        kernel.load_torques(*args, [points] * 2, [free], [centre] * 2, *tail)

@@ -1,0 +1,78 @@
+#include "load_torques.hpp"
+
+#include <stdexcept>
+
+namespace dqk {
+
+namespace {
+
+// Each hand's wrench, w = K g, as rows of (2, 6).
+RowMat split_of(const HandSet& set, const Eigen::Vector3d& g, double mass, double fallback,
+                double rcond) {
+  const Mat K = split_operator(set.points, set.free, set.centre, mass, fallback, rcond);
+  const Vec flat = K * g;
+  RowMat w(2, 6);
+  for (Index i = 0; i < 2; ++i) w.row(i) = flat.segment(6 * i, 6).transpose();
+  return w;
+}
+
+}  // namespace
+
+LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int follower_tool,
+                         const Vec& q_l, const Vec& q_f, const Eigen::Vector3d& gravity,
+                         double mass, const std::vector<HandSet>& sets, double grasp_step,
+                         double fallback_length, double rcond_min) {
+  const Index n_l = leader.nq(), n_f = follower.nq();
+  const auto n_g = static_cast<Index>(sets.size()) - 1;
+  if (n_g < 1 || n_g > 2 || !(grasp_step > 0.0))
+    throw std::invalid_argument("load_torques: the state and one set per sliding grasp");
+  for (const HandSet& s : sets)
+    if (s.points.rows() != 2 || s.free.size() != 2)
+      throw std::invalid_argument("load_torques: two hands per set");
+  const Mat K = split_operator(sets[0].points, sets[0].free, sets[0].centre, mass,
+                               fallback_length, rcond_min);
+  const Vec flat = K * gravity;
+  LoadTorques out;
+  out.w.resize(2, 6);
+  for (Index i = 0; i < 2; ++i) out.w.row(i) = flat.segment(6 * i, 6).transpose();
+  Vec tau_l(n_l), tau_f(n_f);
+  RowMat dl(n_l, n_l), df(n_f, n_f), J_l(6, n_l), J_f(6, n_f);
+  static_torques(leader, q_l, leader_tool, out.w.row(0).transpose(), tau_l, true, dl, J_l);
+  static_torques(follower, q_f, follower_tool, out.w.row(1).transpose(), tau_f, true, df, J_f);
+  out.tau.resize(n_l + n_f);
+  out.tau << tau_l, tau_f;
+  out.D = RowMat::Zero(n_l + n_f, n_l + n_f + n_g);
+  out.D.topLeftCorner(n_l, n_l) = dl;
+  out.D.block(n_l, n_l, n_f, n_f) = df;
+  // The leader's joints turn the whole set-up (not gravity) with the tool's omega_j.
+  Mat turned_g(3, n_l);
+  for (Index j = 0; j < n_l; ++j)
+    turned_g.col(j) = Eigen::Vector3d(J_l.block<3, 1>(3, j)).cross(gravity);
+  const Mat Kg = K * turned_g;  // 12 x n_l
+  for (Index i = 0; i < 2; ++i) {
+    Mat dq(6, n_l);
+    const Eigen::Vector3d f = out.w.row(i).head<3>().transpose();
+    const Eigen::Vector3d m = out.w.row(i).tail<3>().transpose();
+    for (Index j = 0; j < n_l; ++j) {
+      const Eigen::Vector3d omega = J_l.block<3, 1>(3, j);
+      dq.block<3, 1>(0, j) = omega.cross(f);
+      dq.block<3, 1>(3, j) = omega.cross(m);
+    }
+    dq -= Kg.middleRows(6 * i, 6);
+    const RowMat& J = i == 0 ? J_l : J_f;
+    out.D.block(i == 0 ? 0 : n_l, 0, i == 0 ? n_l : n_f, n_l) += J.transpose() * dq;
+  }
+  // The grasps: forward differences of the split.
+  for (Index g = 0; g < n_g; ++g) {
+    const RowMat moved = split_of(sets[static_cast<size_t>(1 + g)], gravity, mass,
+                                  fallback_length, rcond_min);
+    for (Index i = 0; i < 2; ++i) {
+      const Vec ds = (moved.row(i) - out.w.row(i)).transpose() / grasp_step;
+      const RowMat& J = i == 0 ? J_l : J_f;
+      out.D.block(i == 0 ? 0 : n_l, n_l + n_f + g, i == 0 ? n_l : n_f, 1) += J.transpose() * ds;
+    }
+  }
+  return out;
+}
+
+}  // namespace dqk
