@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._compiled import kernel
@@ -134,7 +135,7 @@ class ArmStatics:
         self.n = arm.n
         self.frame = arm.tool_frame_id
         self.gravity = np.array(gravity, dtype=np.float64)
-        self._model = arm.model
+        self._model = pin.Model(arm.model)  # a copy: later edits of the arm do not reach it
         self._chain = self._compiled()
 
     def _compiled(self) -> kernel.Chain:
@@ -150,7 +151,11 @@ class ArmStatics:
 
     @property
     def chain(self) -> kernel.Chain:
-        """The kernel's chain (the arm's model, its inertias and gravity)."""
+        """The kernel's chain of the statics (the arm's model, its inertias and gravity).
+
+        For the kernel's statics calls only: they leave its kinematics at their own
+        joints (read the arm's kinematics from the arm or the step's context).
+        """
         return self._chain
 
     def __getstate__(self) -> dict[str, Any]:

@@ -60,6 +60,7 @@ class Chain {
   // the same model, statics.cpp).
   struct Impl;
   Impl& impl() { return *impl_; }
+  const Impl& impl() const { return *impl_; }
   void check_frame(int f) const;
 
  private:

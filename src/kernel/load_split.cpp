@@ -1,6 +1,8 @@
 #include "load_split.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <cmath>
 #include <stdexcept>
 
 namespace dqk {
@@ -21,8 +23,15 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
   const Index h = points.rows();
   if (h < 1 || static_cast<Index>(free.size()) != h)
     throw std::invalid_argument("split_operator: one free-twist block per hand");
-  for (const Mat& T : free)
+  for (const Mat& T : free) {
     if (T.rows() != 6) throw std::invalid_argument("split_operator: free twists are 6 x k");
+    if (!T.allFinite()) throw std::invalid_argument("split_operator: a free twist is not finite");
+    if (T.cols() > 0 && Eigen::FullPivLU<Mat>(T).rank() < T.cols())
+      throw std::invalid_argument("split_operator: a hand's free twists are not independent");
+  }
+  if (!points.allFinite() || !centre.allFinite() || !std::isfinite(mass))
+    throw std::invalid_argument("split_operator: the hands' points, the centre and the mass "
+                                "must be finite");
   const Eigen::Vector3d about = points.row(0).transpose();
   const double gap = h > 1 ? (points.row(0) - points.row(1)).norm() : 0.0;
   const double L = gap > 1e-9 ? gap : fallback_length;
@@ -46,6 +55,8 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
   B.bottomRows<3>() = skew(centre - about);
   B = (-mass) * (u.cwiseInverse().asDiagonal() * B);
   Eigen::SelfAdjointEigenSolver<Mat> eig(N);
+  if (eig.info() != Eigen::Success)
+    throw std::invalid_argument("split_operator: the balance matrix's eigenvalues failed");
   const Vec& lam = eig.eigenvalues();  // ascending
   Mat scaled;
   if (lam[0] > rcond_min * lam[5]) {

@@ -1,6 +1,9 @@
 #include "load_torques.hpp"
 
+#include <cmath>
 #include <stdexcept>
+
+#include "chain_impl.hpp"
 
 namespace dqk {
 
@@ -24,8 +27,15 @@ LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int fo
                          double fallback_length, double rcond_min) {
   const Index n_l = leader.nq(), n_f = follower.nq();
   const auto n_g = static_cast<Index>(sets.size()) - 1;
-  if (n_g < 1 || n_g > 2 || !(grasp_step > 0.0))
+  if (n_g < 1 || n_g > 2)
     throw std::invalid_argument("load_torques: the state and one set per sliding grasp");
+  if (!(grasp_step > 0.0 && std::isfinite(grasp_step)))
+    throw std::invalid_argument("load_torques: grasp_step must be a positive number [m]");
+  // The arms hold their links under their chains' gravity; the split uses `gravity`.
+  for (const Chain* chain : {&leader, &follower})
+    if (!(chain->impl().model.gravity.linear() - gravity).isZero(0.0))
+      throw std::invalid_argument("load_torques: the chains' gravity (set_gravity) is not the "
+                                  "load's");
   for (const HandSet& s : sets)
     if (s.points.rows() != 2 || s.free.size() != 2)
       throw std::invalid_argument("load_torques: two hands per set");

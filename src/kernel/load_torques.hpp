@@ -1,6 +1,6 @@
 // Both arms' quasi-static joint torques holding a load split by the minimum-norm rule, and
 // their derivative over the decision variables (LoadTorques.linearised for grasps,
-// dualarm_qp/task/torques.py, whose docstrings derive each part).
+// dualarm_qp/task/torques.py; docs/derivation.md, "Joint torques", derives each part).
 #pragma once
 
 #include <vector>

@@ -5,6 +5,8 @@
 #include <pinocchio/algorithm/kinematics.hpp>
 #include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -18,6 +20,10 @@ namespace pin = pinocchio;
 void set_inertia(Chain& chain, int j, double mass, const Eigen::Vector3d& lever,
                  const Eigen::Matrix3d& inertia) {
   if (j < 1 || j >= chain.njoints()) throw std::out_of_range("no joint " + std::to_string(j));
+  if (!(std::isfinite(mass) && mass >= 0.0 && lever.allFinite() && inertia.allFinite() &&
+        (inertia - inertia.transpose()).cwiseAbs().maxCoeff() <=
+            1e-12 * std::max(1.0, inertia.cwiseAbs().maxCoeff())))
+    throw std::invalid_argument("set_inertia: a finite mass >= 0, lever and symmetric inertia");
   chain.impl().model.inertias[static_cast<std::size_t>(j)] =
       pin::Inertia(mass, lever, pin::Symmetric3(inertia));
 }

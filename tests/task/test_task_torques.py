@@ -10,6 +10,7 @@ the full split).
 
 from __future__ import annotations
 
+import dataclasses
 import pickle
 from pathlib import Path
 from typing import Any
@@ -94,16 +95,31 @@ def test_compiled_gravity_is_pinocchios(which: str) -> None:
     model.gravity = pin.Motion(gravity, np.zeros(3))
     data = model.createData()
     rng = np.random.default_rng(9)
+    tool = arm.tool_frame_id
+    joint = model.frames[tool].parentJoint
     for _ in range(5):
         q = rng.uniform(-2.0, 2.0, arm.n)
         expected = pin.computeGeneralizedGravity(model, data, q)
         assert np.abs(expected).max() > 1.0
         np.testing.assert_allclose(statics.torque(q, np.zeros(6)), expected, rtol=0.0,
                                    atol=1e-12 * max(1.0, np.abs(expected).max()))
+        # With a wrench: -w on the hand, about the tool point, world axes.
+        w = rng.normal(0.0, 20.0, 6)
+        pin.forwardKinematics(model, data, q)
+        p = pin.updateFramePlacement(model, data, tool).translation
+        fext = pin.StdVec_Force()
+        for _ in range(model.njoints):
+            fext.append(pin.Force.Zero())
+        fext[joint] = data.oMi[joint].actInv(pin.Force(-w[:3], -w[3:] + np.cross(p, -w[:3])))
+        loaded = pin.computeStaticTorque(model, data, q, fext)
+        np.testing.assert_allclose(statics.torque(q, w), loaded, rtol=0.0,
+                                   atol=1e-12 * max(1.0, np.abs(loaded).max()))
 
 
 def test_load_torques_pickle() -> None:
-    """The statics' compiled chains are rebuilt on unpickling (a sweep's workers)."""
+    """The statics' compiled chains are rebuilt on unpickling (a sweep's workers), from
+    the model they were made of: a later edit of the arm's own model does not reach
+    them."""
     exp = _experiment("puma_beam_limits")
     torques = LoadTorques(exp.task)
     copy = pickle.loads(pickle.dumps(torques))
@@ -112,6 +128,19 @@ def test_load_torques_pickle() -> None:
     again = copy.linearised(s.q_l, s.q_f, s.sigma)
     np.testing.assert_array_equal(first.tau, again.tau)
     np.testing.assert_array_equal(first.D, again.D)
+    arm = exp.task.leader
+    statics = ArmStatics(arm, np.array([0.0, 0.0, -9.81]))
+    q = s.q_l + 0.3
+    before = statics.torque(q, np.zeros(6))
+    kept = arm.model.jointPlacements[1]
+    arm.model.jointPlacements[1] = pin.SE3(pin.rpy.rpyToMatrix(0.3, 0.2, 0.1),
+                                           kept.translation)
+    try:
+        copied = pickle.loads(pickle.dumps(statics))
+    finally:
+        arm.model.jointPlacements[1] = kept
+    np.testing.assert_array_equal(statics.torque(q, np.zeros(6)), before)
+    np.testing.assert_array_equal(copied.torque(q, np.zeros(6)), before)
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -214,3 +243,23 @@ def test_load_torques_kernel_refuses_malformed_sets() -> None:
         kernel.load_torques(*args, [points[:1]] * 2, [free] * 2, [centre] * 2, *tail)
     with pytest.raises(ValueError, match="one entry per set"):
         kernel.load_torques(*args, [points] * 2, [free], [centre] * 2, *tail)
+    with pytest.raises(ValueError, match="grasp_step"):
+        kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, 0.0, *tail[1:])
+    with pytest.raises(ValueError, match="gravity"):
+        kernel.load_torques(*args[:6], 2.0 * load.gravity, load.mass, [points] * 2,
+                            [free] * 2, [centre] * 2, *tail)
+
+
+def test_split_operator_refuses_degenerate_hands() -> None:
+    """Dependent free twists or NaN: an error, not a NaN split."""
+    from dualarm_qp.task.loads import rigid_grasp, sliding_grasp
+
+    rigid = rigid_grasp([0.0, 0.0, 0.0])
+    slide = sliding_grasp([1.0, 0.0, 0.0], [1.0, 0.0, 0.0])
+    K = split_operator([rigid, slide], np.array([0.5, 0.0, 0.0]), 2.0)
+    assert K is not None and np.isfinite(K).all()
+    twice = dataclasses.replace(slide, free=np.column_stack([slide.free, slide.free[:, :1]]))
+    with pytest.raises(ValueError, match="not independent"):
+        split_operator([rigid, twice], np.array([0.5, 0.0, 0.0]), 2.0)
+    with pytest.raises(ValueError, match="finite"):
+        split_operator([rigid, slide], np.array([np.nan, 0.0, 0.0]), 2.0)
