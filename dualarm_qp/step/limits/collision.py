@@ -99,8 +99,8 @@ class CollisionLimit:
         G = kernel.damper_rows(
             ctx.leader_arm.chain, ctx.follower_arm.chain, ctx.carry.J_object,
             ctx.carry.T_object[:3, 3], self._owner[ends].tolist(), self._frame[ends].tolist(),
-            np.ascontiguousarray(prox.point_a[near]), np.ascontiguousarray(prox.point_b[near]),
-            np.ascontiguousarray(prox.normal[near]), lay.n_l, lay.n_f, lay.grasps.start, lay.n)
+            prox.point_a[near], prox.point_b[near], prox.normal[near], lay.n_l, lay.n_f,
+            lay.grasps.start, lay.n)
         h = self._gain * (prox.distance[near] - self._d_s)
         names = [self._names[k] for k in pairs.tolist()]
         # A pair that no variable moves at this state (a sphere on its joint's axis
