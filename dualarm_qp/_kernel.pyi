@@ -37,14 +37,21 @@ def kkt_holds(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
               sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
+_Certificate = tuple[bool, float, float, float, float, int, float, NDArray[np.uint8],
+                     NDArray[np.uint8], list[int]]
 def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                 G: ArrayLike, h: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                 sigma_max: float, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
                 w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
                 center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
-                bounds_tol: float, ask_kkt: bool
-                ) -> tuple[bool, float, float, float, float, int, float,
-                           NDArray[np.uint8], NDArray[np.uint8], list[int]]: ...
+                bounds_tol: float, ask_kkt: bool) -> _Certificate: ...
+def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
+                    G: ArrayLike, h: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
+                    root_full: ArrayLike, center: ArrayLike, feas_tol: float,
+                    max_iter: int, bounds: bool, eq_rtol: float, bounds_tol: float
+                    ) -> tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
+                               tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]],
+                               _Certificate | None]: ...
 def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
                     upper_ids: Sequence[int], n: int, pin_rtol: float
                     ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
@@ -52,6 +59,9 @@ def first_defect(finite: Sequence[ArrayLike], not_nan: Sequence[ArrayLike]) -> i
 def step_kinematics(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int],
                     follower: Chain, q_f: ArrayLike, follower_tool: int, T_D: ArrayLike,
                     n_l: int, T: _F, J: _F, J_f: _F, e: _F, sv: _F) -> None: ...
+def step_errors(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int],
+                follower: Chain, q_f: ArrayLike, follower_tool: int, T_D: ArrayLike,
+                e: _F) -> None: ...
 def pose_error(T_star: ArrayLike, T: ArrayLike, e: _F) -> None: ...
 def range_box(lo: ArrayLike, hi: ArrayLike, rec: ArrayLike, off: ArrayLike
               ) -> tuple[_F, _F]: ...

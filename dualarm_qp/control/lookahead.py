@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..kinematics.arm import SerialArm
-from ..se3 import pose_error
 from ..step.build import StepBuild
+from ..step.kinematics import both_errors
 from ..step.state import DualArmState
 from ..task.carry import CarryModel
 from ..task.scene import DualArmTask
@@ -119,14 +119,10 @@ class Lookahead:
         sigma = state.sigma + dt * float(x[n_l + n_f])
         sigma_l = state.sigma_leader + (dt * float(x[n_l + n_f + 1])
                                         if x.shape[0] > n_l + n_f + 1 else 0.0)
-        kin = self._carry.update(q_l, sigma, sigma_l)
-        e_l = pose_error(self.task.trajectory.pose(state.t + scale * dt), kin.T_object)
-        e_c = pose_error(kin.T_target, self.task.follower.fk(q_f))
-        return Predicted((_norm(e_l[:3]), _norm(e_l[3:])), (_norm(e_c[:3]), _norm(e_c[3:])))
-
-
-def _norm(v: FloatArray) -> float:
-    return math.hypot(*v.tolist())
+        e = both_errors(self._carry, self.task.follower, q_l, q_f, sigma, sigma_l,
+                        self.task.trajectory.pose(state.t + scale * dt)).tolist()
+        return Predicted((math.hypot(*e[0:3]), math.hypot(*e[3:6])),
+                         (math.hypot(*e[6:9]), math.hypot(*e[9:12])))
 
 
 __all__ = ["Lookahead", "Predicted", "chain_length"]

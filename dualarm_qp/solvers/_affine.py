@@ -235,7 +235,12 @@ class NullBasis:
 
 def null_basis(A: FloatArray) -> NullBasis:
     """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
-    P, N, rank, sigma_max, qr = kernel.basis(np.ascontiguousarray(A, dtype=np.float64))
+    return _as_basis(kernel.basis(np.ascontiguousarray(A, dtype=np.float64)))
+
+
+def _as_basis(basis: tuple[FloatArray, FloatArray, int, float, bool]) -> NullBasis:
+    """Return the kernel's ``(P, N, rank, sigma_max, qr)`` as a :class:`NullBasis`."""
+    P, N, rank, sigma_max, qr = basis
     return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
 
 
@@ -253,6 +258,17 @@ def _of_problem(problem: StepProblem, key: str, make: Callable[[FloatArray], _T]
 def problem_basis(problem: StepProblem) -> NullBasis:
     """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
     return _of_problem(problem, "basis", null_basis)
+
+
+def keep_basis(problem: StepProblem, basis: tuple[FloatArray, FloatArray, int, float, bool]
+               ) -> NullBasis:
+    """Keep ``kernel.basis(problem.A)``'s tuple as :func:`problem_basis`'s answer.
+
+    For a kernel call that computed the basis on the way (the exact solver's solve and
+    certificate in one call).
+    """
+    out = problem._cache["basis"] = _as_basis(basis)
+    return out
 
 
 def problem_factor(problem: StepProblem) -> Factor:

@@ -23,7 +23,9 @@ condition on ``x0`` alone: met within ``feasibility_tol`` or the step is infeasi
 The answer is a claim (OPTIMAL or INFEASIBLE); :func:`~.certify.certify` checks it.
 
 The whole method is one call into the compiled kernel (``src/kernel/nullspace.cpp``);
-:meth:`NullspaceSolver.solve` gathers the arrays and names the conflicting rows.
+:meth:`NullspaceSolver.solve` gathers the arrays and names the conflicting rows. In a
+controller the solve and its certificate are one call
+(:meth:`NullspaceSolver.solve_certified`, ``src/kernel/certified_step.cpp``).
 """
 
 from __future__ import annotations
@@ -36,9 +38,10 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import cost_arrays, problem_basis
+from ._affine import cost_arrays, keep_basis, problem_basis
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
+from .certify import certify
 from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
@@ -82,7 +85,40 @@ class NullspaceSolver:
         basis = problem_basis(problem)  # shared with the certificate and scaled copies
         code, x, rows, nullity, iterations = kernel.solve_nullspace(
             problem.A, problem.b, *basis.args(), ineq.C, ineq.e, w_diag, w_full, root_full,
-            problem.center, self.feasibility_tol, -1 if self.max_iter is None else self.max_iter)
+            problem.center, self.feasibility_tol, self._max_iter())
+        return self._claim(problem, code, x, rows, nullity, iterations, start)
+
+    def solve_certified(self, problem: StepProblem, tol: Tolerance,
+                        claims_bounds: bool = True) -> StepSolution:
+        """Solve one step and certify the answer, in one kernel call.
+
+        What :class:`~.registry.CertifiedSolver` calls for this solver: the same
+        solve as :meth:`solve`, and for an optimum the kernel's certificate of its
+        ``x`` (the function :func:`~.certify.certify` calls), computed on the same
+        basis of ``A`` and the same rows; :func:`~.certify.certify` gives the
+        verdict. The basis and the rows are kept in the problem's cache (a scaled copy
+        or a later certificate reuses them).
+        """
+        start = time.perf_counter()
+        empty = empty_box_failure(problem, self.name)
+        if empty is not None:
+            return certify(problem, empty, tol, claims_bounds=claims_bounds)
+        w_diag, w_full, root_full = cost_arrays(problem)
+        code, x, rows, nullity, iterations, basis, ineq, reading = kernel.solve_certified(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            w_diag, w_full, root_full, problem.center, self.feasibility_tol,
+            self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        keep_basis(problem, basis)
+        problem.keep_inequalities(*ineq)
+        claim = self._claim(problem, code, x, rows, nullity, iterations, start)
+        return certify(problem, claim, tol, claims_bounds=claims_bounds, reading=reading)
+
+    def _max_iter(self) -> int:
+        return -1 if self.max_iter is None else self.max_iter
+
+    def _claim(self, problem: StepProblem, code: int, x: FloatArray, rows: list[int],
+               nullity: int, iterations: int, start: float) -> StepSolution:
+        """Return the solver's claim from the kernel's answer (OPTIMAL, or a failure)."""
         if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",
@@ -114,4 +150,4 @@ _INFEASIBLE, _INCONSISTENT, _MAX_ITER = 1, 2, 3
 
 register("nullspace", NullspaceSolver,
          description="exact: null-space parametrisation, interval (d=1) or dual active set",
-         hard_bounds=True, takes_rows=True, dense_cost=True)
+         hard_bounds=True, takes_rows=True, dense_cost=True, certifies_in_kernel=True)

@@ -43,6 +43,11 @@ class SolverInfo:
         limits); a solver that takes boxes only refuses a problem with rows.
     dense_cost : bool
         Whether the solver takes a full (non-diagonal) weighting matrix ``W``.
+    certifies_in_kernel : bool
+        Whether the solver (an instance of ``factory``, a class) has
+        ``solve_certified(problem, tol, claims_bounds)``: its solve and the kernel's
+        certificate of the answer in one call, the verdict given by
+        :func:`~.certify.certify` (the exact ``nullspace`` solver).
     """
 
     name: str
@@ -53,6 +58,7 @@ class SolverInfo:
     factory: Callable[..., StepSolver]
     takes_rows: bool = True
     dense_cost: bool = True
+    certifies_in_kernel: bool = False
 
     @property
     def available(self) -> bool:
@@ -200,6 +206,7 @@ def register(
     takes_rows: bool = True,
     dense_cost: bool = True,
     aliases: tuple[str, ...] = (),
+    certifies_in_kernel: bool = False,
 ) -> None:
     """Add a solver to the registry (one line per solver module).
 
@@ -209,7 +216,7 @@ def register(
     is slow to import is then imported only by a command that asks about it).
     """
     _REGISTRY[name] = SolverInfo(name, description, available, extra, hard_bounds, factory,
-                                 takes_rows, dense_cost)
+                                 takes_rows, dense_cost, certifies_in_kernel)
     for alias in aliases:
         _ALIASES[alias] = name
 
@@ -288,13 +295,23 @@ class CertifiedSolver:
         self.info = info
         self.name = solver.name
         self.tol = tol if tol is not None else getattr(solver, "tol", DEFAULT_TOLERANCE)
+        # The registry's own solver class only (not a user's solver of the same name):
+        # its solve and the kernel's certificate in one call.
+        self._in_kernel: Callable[[StepProblem, Tolerance, bool], StepSolution] | None = (
+            solver.solve_certified  # type: ignore[attr-defined]
+            if info.certifies_in_kernel and type(solver) is info.factory else None)
+        # A solver that takes rows and a full cost refuses no problem.
+        self._may_refuse = not (info.takes_rows and info.dense_cost)
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve ``problem`` and certify the answer against it."""
-        why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
-                                not problem.diagonal_cost)
-        if why is not None:
-            return failed(problem, Status.ERROR, self.name, why)
+        if self._may_refuse:
+            why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
+                                    not problem.diagonal_cost)
+            if why is not None:
+                return failed(problem, Status.ERROR, self.name, why)
+        if self._in_kernel is not None:
+            return self._in_kernel(problem, self.tol, self.info.hard_bounds)
         return certify(problem, self.inner.solve(problem), self.tol,
                        claims_bounds=self.info.hard_bounds)
 

@@ -332,6 +332,7 @@ class StepBuilder:
         upper_ids: list[int] = []
         G_parts: list[FloatArray] = []
         h_parts: list[FloatArray] = []
+        row_ids: list[int] = []
         row_names: list[str] = []
         for k, limit in enumerate(self.limits):
             c = limit.constraint(ctx)
@@ -344,6 +345,7 @@ class StepBuilder:
             if c.G is not None and c.h is not None and len(c.h):
                 G_parts.append(np.atleast_2d(c.G))
                 h_parts.append(np.atleast_1d(c.h))
+                row_ids.append(k)
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                    for i in range(len(c.h))]
         lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(
@@ -352,15 +354,16 @@ class StepBuilder:
         if nan_limit >= 0:
             raise NonFiniteError(f"the bounds of the limit '{self._labels[nan_limit]}'")
         lower_by, upper_by = self._bound_sources(lo_by, up_by)
-        problem = StepProblem(
-            eq.A, eq.b, cost.weights, cost.center, lower, upper,
-            G=np.vstack(G_parts) if G_parts else self._no_rows,
-            h=np.concatenate(h_parts) if h_parts else self._no_rhs,
-            n_grasp=lay.n_grasp, names=lay.names, row_names=tuple(row_names),
-            eq_names=eq.names, x_prev=x_prev, lower_by=lower_by, upper_by=upper_by)
+        G, h = self._rows(G_parts, h_parts, row_ids, len(row_names))
         recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
-        object.__setattr__(problem, "build_time", t2 - t0)
+        # Every part was checked where it was made (the limits' bounds and rows here):
+        # the problem is assembled without a second check.
+        problem = StepProblem.assembled(
+            A=eq.A, b=eq.b, weights=cost.weights, center=cost.center, lower=lower,
+            upper=upper, G=G, h=h, n_grasp=lay.n_grasp, x_prev=x_prev, names=lay.names,
+            row_names=tuple(row_names), eq_names=eq.names, lower_by=lower_by,
+            upper_by=upper_by, build_time=t2 - t0)
         return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, kin,
                          ctx.T_f, ctx.J_f, sigma_min, t1 - t0, t2 - t1, support_force, ctx)
 
@@ -391,6 +394,46 @@ class StepBuilder:
             raise InvalidInputError(f"the limits' {side} bounds do not stack into "
                                     f"({len(bounds)}, {n}) numbers")
         return out
+
+    def _rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int],
+              n_names: int) -> tuple[FloatArray, FloatArray]:
+        """Return the limits' rows stacked, ``G`` (p, n) and ``h`` (p,), checked.
+
+        Raises
+        ------
+        ShapeError
+            A limit's rows are not ``(p, n)`` with ``p`` right-hand sides (and ``p``
+            names, when it names them).
+        InvalidInputError
+            A limit's rows are not numbers.
+        NonFiniteError
+            A limit's rows hold NaN or infinity, or its right-hand sides NaN.
+        """
+        if not G_parts:
+            return self._no_rows, self._no_rhs
+        n = self.layout.n
+        try:
+            G = np.asarray(np.vstack(G_parts), dtype=np.float64, order="C")
+            h = np.asarray(np.concatenate(h_parts), dtype=np.float64, order="C")
+        except (TypeError, ValueError):
+            G = h = np.zeros(0)
+        if G.shape != (h.shape[0], n) or h.ndim != 1 or n_names != h.shape[0]:
+            for Gk, hk, k in zip(G_parts, h_parts, ids, strict=True):
+                name = f"the rows of the limit '{self._labels[k]}'"
+                if hk.ndim != 1 or Gk.shape != (hk.shape[0], n):
+                    raise ShapeError(name, (hk.shape[0] if hk.ndim == 1 else -1, n),
+                                     Gk.shape)
+                try:
+                    np.asarray(Gk, dtype=np.float64), np.asarray(hk, dtype=np.float64)
+                except (TypeError, ValueError) as err:
+                    raise InvalidInputError(f"{name} are not numbers: {err}") from err
+            raise ShapeError("the limits' row names", (h.shape[0],), (n_names,))
+        if kernel.first_defect([G], [h]) >= 0:
+            for Gk, hk, k in zip(G_parts, h_parts, ids, strict=True):
+                if kernel.first_defect([np.ascontiguousarray(Gk, dtype=np.float64)],
+                                       [np.ascontiguousarray(hk, dtype=np.float64)]) >= 0:
+                    raise NonFiniteError(f"the rows of the limit '{self._labels[k]}'")
+        return G, h
 
     def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]
                        ) -> tuple[tuple[str, ...], tuple[str, ...]]:

@@ -6,8 +6,8 @@ the follower's tool pose and Jacobian, the two pose errors of the step (the obje
 ``D(t)``, the follower's tool to its target; the convention of
 :func:`~dualarm_qp.se3.pose_error`) and both arms' smallest singular values. One call
 into the kernel computes all of them (``src/kernel/step_kinematics.cpp``, on Pinocchio's
-C++ kinematics and ``log3``) for the builder's context. (The look-ahead's prediction
-needs the poses only and keeps its own calls.)
+C++ kinematics and ``log3``) for the builder's context; :func:`both_errors` gives the two
+errors alone, from the poses, for the look-ahead's prediction at the next sample.
 """
 
 from __future__ import annotations
@@ -81,4 +81,20 @@ def both_arms(carry: CarryModel, follower: SerialArm, q_l: FloatArray, q_f: Floa
                     (float(sv[0]), float(sv[1])))
 
 
-__all__ = ["BothArms", "both_arms"]
+def both_errors(carry: CarryModel, follower: SerialArm, q_l: FloatArray, q_f: FloatArray,
+                sigma_f: float, sigma_l: float, T_D: FloatArray) -> FloatArray:
+    """Return :func:`both_arms`' two pose errors alone, from the poses (no Jacobians).
+
+    Returns
+    -------
+    ndarray, shape (12,)
+        ``[dp; dw]`` from the object frame to ``T_D``, then from the follower's tool to
+        its target [m, rad].
+    """
+    e = np.empty(12)
+    kernel.step_errors(carry.chain, carry.configuration(q_l, sigma_f, sigma_l), carry.frames,
+                       follower.chain, q_f, follower.tool_frame_id, T_D, e)
+    return e
+
+
+__all__ = ["BothArms", "both_arms", "both_errors"]

@@ -27,7 +27,7 @@ from __future__ import annotations
 import copy
 import math
 import operator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -230,6 +230,26 @@ class StepProblem:
             elif len(given) != n:
                 raise ShapeError(name, (n,), (len(given),))
 
+    @classmethod
+    def assembled(cls, **parts: Any) -> StepProblem:
+        """Return a problem from parts the step builder checked where it made them.
+
+        Every init field is given by keyword. Validation happens once, at the boundary
+        (the parts come from the kernel and from checked settings; a limit's bounds
+        and rows are checked by :class:`~dualarm_qp.step.build.StepBuilder` as it
+        stacks them), so nothing is checked or copied again here: ``A`` and ``b`` are
+        the kernel's equality (finite), the weights the cost's (positive, from
+        :class:`~dualarm_qp.step.options.StepOptions`), the centre and the box the
+        kernel's, and every array a C-ordered float64 of the right shape. Anything
+        else builds a problem with the checking constructor.
+        """
+        self = object.__new__(cls)
+        set_ = object.__setattr__
+        for name in _INIT_FIELDS:
+            set_(self, name, parts[name])
+        set_(self, "_cache", {})
+        return self
+
     # -- sizes ---------------------------------------------------------------------------
     @property
     def n(self) -> int:
@@ -343,7 +363,16 @@ class StepProblem:
         if cached is not None:
             return cached
         # Built by the compiled kernel (src/kernel/rows.cpp), which the exact solver uses.
-        C, e, kind, index = kernel.inequalities(self.lower, self.upper, self.G, self.h)
+        return self.keep_inequalities(*kernel.inequalities(self.lower, self.upper, self.G,
+                                                           self.h))
+
+    def keep_inequalities(self, C: FloatArray, e: FloatArray, kind: NDArray[np.int8],
+                          index: NDArray[np.int64]) -> Inequalities:
+        """Keep the kernel's rows of this problem (``kernel.inequalities``'s tuple).
+
+        For a kernel call that built them on the way (the exact solver's solve and
+        certificate in one call): :meth:`inequalities` then returns them.
+        """
         out = Inequalities(C, e, kind, index,
                            Names(self.names, self.row_names, self.lower_by, self.upper_by))
         self._cache["ineq"] = out
@@ -411,5 +440,8 @@ class StepProblem:
                    h=np.zeros(0) if qp.h is None else np.asarray(qp.h, dtype=float),
                    **fields)
 
+
+#: The fields :meth:`StepProblem.assembled` sets (every init field).
+_INIT_FIELDS = tuple(f.name for f in fields(StepProblem) if f.init)
 
 __all__ = ["Inequalities", "Names", "StepProblem"]

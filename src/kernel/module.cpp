@@ -15,6 +15,7 @@
 
 #include "boxes.hpp"
 #include "capsules.hpp"
+#include "certified_step.hpp"
 #include "certify.hpp"
 #include "clearance.hpp"
 #include "constants.hpp"
@@ -182,6 +183,10 @@ NB_MODULE(_kernel, m) {
         "follower tool's error to the target into e, the leader's and the follower's "
         "smallest singular values into sv.");
 
+  m.def("step_errors", &dqk::step_errors, "carry"_a, "q_carry"_a, "carry_frames"_a,
+        "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
+        "step_kinematics's two pose errors into e (12), from the poses alone.");
+
   m.def("pose_error",
         [](const dqk::Pose& T_star, const dqk::Pose& T, Eigen::Ref<Eigen::VectorXd> e) {
           dqk::pose_error(T_star, T, e);
@@ -255,6 +260,44 @@ NB_MODULE(_kernel, m) {
       "w_full"_a, "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a,
       "The exact step on A's basis (P, N, rank, sigma_max): (code, x, conflicts, "
       "nullity, iterations).");
+
+  m.def(
+      "solve_certified",
+      [](In A_, const Vec& b, const Vec& lower, const Vec& upper, In G_, const Vec& h,
+         const Vec& w_diag, In w_full, In root_full, const Vec& center, double feas_tol,
+         Index max_iter, bool bounds, double eq_rtol, double bounds_tol) {
+        const Mat A(A_), G(G_);
+        const Index n = A.cols();
+        require(b.size() == A.rows() && lower.size() == n && upper.size() == n &&
+                    G.cols() == n && h.size() == G.rows() && center.size() == n,
+                "solve_certified: arguments of inconsistent sizes");
+        const dqk::Cost cost(w_diag, w_full, root_full, center);
+        dqk::CertifiedStep s = dqk::solve_certified(A, b, lower, upper, G, h, cost, feas_tol,
+                                                    max_iter, bounds, eq_rtol, bounds_tol);
+        nb::object cert = nb::none();
+        if (s.certified) {
+          dqk::Certificate& c = s.cert;
+          cert = nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
+                                c.objective, out(std::move(c.active_lower)),
+                                out(std::move(c.active_upper)), c.active_rows);
+        }
+        dqk::Basis& f = s.basis;
+        dqk::Rows& r = s.rows;
+        return nb::make_tuple(
+            static_cast<int>(s.answer.code), out(std::move(s.answer.x)), s.answer.conflicts,
+            s.answer.nullity, s.answer.iterations,
+            nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max, f.qr),
+            nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
+                           out(std::move(r.index))),
+            cert);
+      },
+      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "w_diag"_a, "w_full"_a,
+      "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a, "bounds"_a, "eq_rtol"_a,
+      "bounds_tol"_a,
+      "The exact step and its certificate in one call: (code, x, conflicts, nullity, "
+      "iterations, basis, rows, certificate); basis is basis(A)'s tuple, rows "
+      "inequalities(...)'s, certificate certificate(...)'s (with the KKT test) for an "
+      "optimum, else None.");
 
   m.def(
       "dense_qp",

@@ -36,4 +36,20 @@ void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
   sv(1) = smallest_singular_value(J_f);
 }
 
+void step_errors(Chain& carry, const Eigen::VectorXd& q_carry,
+                 const std::vector<int>& carry_frames, Chain& follower,
+                 const Eigen::VectorXd& q_f, int follower_tool, const Pose& T_D,
+                 Eigen::Ref<Eigen::VectorXd> e) {
+  if (carry_frames.size() != 3 || e.size() != 12) {
+    throw std::invalid_argument("step_errors: three carry frames, e (12)");
+  }
+  RowMat T(16, 4), no_J(0, carry.nq()), no_J_f(0, follower.nq());
+  const std::vector<int> none;
+  carry.compute(q_carry, carry_frames, none, T.topRows(12), no_J);
+  const std::vector<int> tool{follower_tool};
+  follower.compute(q_f, tool, none, T.bottomRows(4), no_J_f);
+  pose_error(T_D, T.middleRows(4, 4), e.head(6));
+  pose_error(T.middleRows(8, 4), T.bottomRows(4), e.tail(6));
+}
+
 }  // namespace dqk

@@ -25,4 +25,11 @@ void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
                      Eigen::Ref<RowMat> J_f, Eigen::Ref<Eigen::VectorXd> e,
                      Eigen::Ref<Eigen::VectorXd> sv);
 
+// The same two pose errors into e (12) from the poses alone (no Jacobians): the
+// look-ahead's prediction at the next sample (dualarm_qp/control/lookahead.py).
+void step_errors(Chain& carry, const Eigen::VectorXd& q_carry,
+                 const std::vector<int>& carry_frames, Chain& follower,
+                 const Eigen::VectorXd& q_f, int follower_tool, const Pose& T_D,
+                 Eigen::Ref<Eigen::VectorXd> e);
+
 }  // namespace dqk

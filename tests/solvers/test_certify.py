@@ -90,3 +90,21 @@ def test_the_reference_step_is_optimal_only_over_its_equality() -> None:
     assert kkt_holds(problem, x, bounds=False)
     N = np.linalg.svd(problem.A)[2][problem.m:].T
     assert not kkt_holds(problem, x + 1e-4 * N[:, 0], bounds=False)
+
+
+def test_certify_carries_every_field_it_does_not_decide() -> None:
+    # certify builds its answer field by field: a field of StepSolution it neither
+    # decides nor carries from the claim would silently fall back to its default.
+    problem = random_problem(np.random.default_rng(11))
+    x = get_solver("nullspace").solve(problem).x
+    claim = StepSolution(x=x, status=Status.OPTIMAL, scale=0.5, solver="mine",
+                         message="a claim", extras={"k": 1}, solve_time=2.0)
+    out = certify(problem, claim)
+    decided = {"x", "status", "objective", "eq_residual", "bound_violation", "active_lower",
+               "active_upper", "solve_time", "build_time", "message", "verified_with",
+               "row_violation", "active_rows"}
+    carried = {f.name for f in dataclasses.fields(StepSolution)} - decided
+    assert carried == {"scale", "solver", "extras"}
+    for name in carried:
+        assert getattr(out, name) == getattr(claim, name)
+    assert out.message == "a claim" and out.solve_time >= 2.0

@@ -1,0 +1,95 @@
+"""The look-ahead's prediction: the errors at the next sample, from one kernel call.
+
+:meth:`Lookahead.predict` reads the object's error to ``D(t + scale dt)`` and the
+grasp's closure error at the predicted joints from ``kernel.step_errors`` (poses only).
+Checked here against the same errors computed the long way, from the carried-object
+model's poses and the follower's forward kinematics with :func:`pose_error`, and
+against the step's own kinematics call at the same state, on the PUMA beam (one sliding
+grasp), both grasps sliding (UR5 pair) and a support (Case 2).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dualarm_qp.control.lookahead import Lookahead
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.se3 import pose_error
+from dualarm_qp.step.kinematics import both_arms, both_errors
+from dualarm_qp.step.state import DualArmState
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+NAMES = ("puma_beam_limits", "both_sliding_bar", "puma_beam_support")
+
+
+def setup(name: str) -> tuple:
+    path = CONFIGS / f"{name}.yaml"
+    exp = build_experiment(load_config(path), str(path))
+    ctrl = exp.controller()
+    b = ctrl.builder
+    return exp, ctrl, Lookahead(exp.task, (1e-3, 1e-3), b.carry, b.n_l, b.n_f)
+
+
+@pytest.fixture(scope="module", params=NAMES)
+def case(request: pytest.FixtureRequest) -> tuple:
+    return setup(request.param)
+
+
+def moved(exp, ctrl, rng: np.random.Generator) -> tuple[DualArmState, np.ndarray]:
+    """A state near the start and a random command of the controller's layout."""
+    s0 = exp.initial
+    q_l = s0.q_l + rng.normal(0.0, 0.05, s0.q_l.shape)
+    q_f = s0.q_f + rng.normal(0.0, 0.05, s0.q_f.shape)
+    state = DualArmState(float(rng.uniform(0.0, exp.duration)), q_l, q_f,
+                         s0.sigma + float(rng.normal(0.0, 0.01)),
+                         s0.sigma_leader + (float(rng.normal(0.0, 0.01))
+                                            if ctrl.layout.n_grasp == 2 else 0.0))
+    return state, rng.normal(0.0, 0.5, ctrl.layout.n)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), scale=st.floats(0.0, 1.0))
+def test_prediction_equals_the_long_way(case: tuple, seed: int, scale: float) -> None:
+    exp, ctrl, la = case
+    rng = np.random.default_rng(seed)
+    state, x = moved(exp, ctrl, rng)
+    dt = ctrl.options.dt
+    pred = la.predict(state, x, scale, dt)
+    n_l, n_f = la.n_l, la.n_f
+    q_l = state.q_l + dt * x[:n_l]
+    q_f = state.q_f + dt * x[n_l:n_l + n_f]
+    sigma = state.sigma + dt * float(x[n_l + n_f])
+    sigma_l = state.sigma_leader + (dt * float(x[n_l + n_f + 1]) if x.shape[0] > n_l + n_f + 1
+                                    else 0.0)
+    kin = ctrl.builder.carry.update(q_l, sigma, sigma_l)
+    e_l = pose_error(exp.task.trajectory.pose(state.t + scale * dt), kin.T_object)
+    e_c = pose_error(kin.T_target, exp.task.follower.fk(q_f))
+    assert pred.tracking == (math.hypot(*e_l[:3]), math.hypot(*e_l[3:]))
+    assert pred.closure == (math.hypot(*e_c[:3]), math.hypot(*e_c[3:]))
+
+
+def test_the_errors_are_the_step_kinematics_errors(case: tuple) -> None:
+    exp, ctrl, _ = case
+    rng = np.random.default_rng(7)
+    carry, follower = ctrl.builder.carry, exp.task.follower
+    for _ in range(20):
+        state, _x = moved(exp, ctrl, rng)
+        T_D = exp.task.trajectory.pose(state.t)
+        e = both_errors(carry, follower, state.q_l, state.q_f, state.sigma,
+                        state.sigma_leader, T_D)
+        arms = both_arms(carry, follower, state.q_l, state.q_f, state.sigma,
+                         state.sigma_leader, T_D)
+        assert np.array_equal(e, np.r_[arms.leader_error, arms.closure_error])
+
+
+def test_a_wrong_joint_vector_is_refused() -> None:
+    exp, ctrl, _ = setup("puma_beam_limits")
+    with pytest.raises(ValueError):
+        both_errors(ctrl.builder.carry, exp.task.follower, exp.initial.q_l,
+                    exp.initial.q_f[:3], 0.0, 0.0, np.eye(4))
