@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import NonFiniteError, ShapeError
 from ..kinematics.arm import SerialArm
 from ..step.build import StepBuild
 from ..step.kinematics import both_errors
@@ -114,13 +115,23 @@ class Lookahead:
                 ) -> Predicted:
         """Errors at the next sample after applying ``x`` for ``dt`` with path rate ``scale``."""
         n_l, n_f = self.n_l, self.n_f
-        q_l = state.q_l + dt * x[:n_l]
-        q_f = state.q_f + dt * x[n_l:n_l + n_f]
+        task = self.task
+        # Checked as every arm's joints are: a vector of the wrong length or a NaN is a
+        # clear error, never a NaN prediction.
+        q_l = task.leader.check_q(state.q_l, "leader joints q_l")
+        q_f = task.follower.check_q(state.q_f, "follower joints q_f")
+        n = n_l + n_f + self._carry.n_grasp
+        if x.shape != (n,):
+            raise ShapeError("the command x", (n,), x.shape)
+        q_l = q_l + dt * x[:n_l]
+        q_f = q_f + dt * x[n_l:n_l + n_f]
         sigma = state.sigma + dt * float(x[n_l + n_f])
         sigma_l = state.sigma_leader + (dt * float(x[n_l + n_f + 1])
                                         if x.shape[0] > n_l + n_f + 1 else 0.0)
-        e = both_errors(self._carry, self.task.follower, q_l, q_f, sigma, sigma_l,
-                        self.task.trajectory.pose(state.t + scale * dt)).tolist()
+        if not (np.isfinite(x).all() and math.isfinite(sigma) and math.isfinite(sigma_l)):
+            raise NonFiniteError("the command x or the grasp coordinates")
+        e = both_errors(self._carry, task.follower, q_l, q_f, sigma, sigma_l,
+                        task.trajectory.pose(state.t + scale * dt)).tolist()
         return Predicted((math.hypot(*e[0:3]), math.hypot(*e[3:6])),
                          (math.hypot(*e[6:9]), math.hypot(*e[9:12])))
 

@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -85,7 +86,7 @@ def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
 
 
 def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_TOLERANCE,
-            *, claims_bounds: bool = True, reading: Reading | None = None) -> StepSolution:
+            *, claims_bounds: bool = True) -> StepSolution:
     """Check a solver's claim against ``problem`` and return what it is worth.
 
     Parameters
@@ -99,12 +100,6 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
     claims_bounds : bool
         False for the paper's reference step, which ignores the limits: its breaches
         are VIOLATION and its optimality is over the equality alone.
-    reading : tuple, optional
-        The kernel's certificate of ``claim.x`` (``kernel.certificate``'s tuple, with
-        the KKT test, for ``problem``, ``tol`` and ``claims_bounds``), when the solver's
-        kernel call computed it with the solve (:meth:`NullspaceSolver.solve_certified
-        <dualarm_qp.solvers.nullspace.NullspaceSolver.solve_certified>`); default:
-        computed here. The verdict below is the same either way.
 
     Returns
     -------
@@ -113,20 +108,42 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         ``verified_with = tol``, and the status the certificate supports.
     """
     start = time.perf_counter()
-    n = problem.n
     x = claim.x
-    status, message = claim.status, claim.message
-    if isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype.kind in "fiu":
+    reading = None
+    if isinstance(x, np.ndarray) and x.shape == (problem.n,) and x.dtype.kind in "fiu":
         x = np.asarray(x, dtype=np.float64)
         ineq = problem.inequalities()
-        if reading is None:
-            w_diag, w_full, root_full = cost_arrays(problem)
-            ask = status is Status.OPTIMAL  # only an optimum needs A's basis (KKT test)
-            reading = kernel.certificate(
-                problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-                *(problem_basis(problem).args() if ask else _NO_BASIS), ineq.C, ineq.e,
-                ineq.kind, w_diag, w_full, root_full,
-                problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
+        w_diag, w_full, root_full = cost_arrays(problem)
+        ask = claim.status is Status.OPTIMAL  # only an optimum needs A's basis (KKT test)
+        reading = kernel.certificate(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            *(problem_basis(problem).args() if ask else _NO_BASIS), ineq.C, ineq.e,
+            ineq.kind, w_diag, w_full, root_full,
+            problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
+    return verdict(problem, claim, x, reading, tol, claims_bounds, start)
+
+
+def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: Reading | None,
+            tol: Tolerance, claims_bounds: bool, start: float) -> StepSolution:
+    """Return what ``claim`` is worth from the kernel's reading of its ``x`` (the rules above).
+
+    :func:`certify`'s decisions, for it and for the one kernel call that solves and
+    certifies a step (:meth:`~.nullspace.NullspaceSolver.solve_certified`, whose
+    ``reading`` is ``kernel.certificate``'s of ``x`` with the KKT test, for ``problem``,
+    ``tol`` and ``claims_bounds``). Private to the solvers: a reading is trusted.
+
+    Parameters
+    ----------
+    x : ndarray
+        ``claim.x`` as float64 (``reading`` not None).
+    reading : tuple or None
+        The kernel's certificate of ``x``; None for a misshaped ``x``.
+    start : float
+        ``time.perf_counter()`` when the certification began.
+    """
+    n = problem.n
+    status, message = claim.status, claim.message
+    if reading is not None:
         (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up,
          active) = reading
     else:
@@ -149,15 +166,18 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
+    fields: dict[str, Any] = dict(x=x, status=status, objective=objective, eq_residual=eq,
+                  bound_violation=box, active_lower=active_lo.view(np.bool_),
+                  active_upper=active_up.view(np.bool_),
+                  solve_time=claim.solve_time + (time.perf_counter() - start),
+                  build_time=problem.build_time, message=message, verified_with=tol,
+                  row_violation=rows,
+                  active_rows=problem.inequalities().labels(active) if active else ())
+    if type(claim) is not StepSolution:  # a subclass keeps its type and its own fields
+        return replace(claim, **fields)
     # Every field: the verdict's, and the claim's scale, solver and extras (a direct
     # construction costs a third of dataclasses.replace, once per step).
-    return StepSolution(x=x, status=status, objective=objective, eq_residual=eq,
-                        bound_violation=box, active_lower=active_lo.view(np.bool_),
-                        active_upper=active_up.view(np.bool_), scale=claim.scale,
-                        solve_time=claim.solve_time + (time.perf_counter() - start),
-                        build_time=problem.build_time, solver=claim.solver, message=message,
-                        extras=claim.extras, verified_with=tol, row_violation=rows,
-                        active_rows=ineq.labels(active) if active else ())
+    return StepSolution(**fields, scale=claim.scale, solver=claim.solver, extras=claim.extras)
 
 
 #: The kernel's certificate of one ``x`` (``kernel.certificate``'s tuple): finite, the

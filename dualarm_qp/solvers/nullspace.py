@@ -41,7 +41,7 @@ from ..step.problem import StepProblem
 from ._affine import cost_arrays, keep_basis, problem_basis
 from ._util import empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
-from .certify import certify
+from .certify import certify, verdict
 from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
@@ -93,13 +93,17 @@ class NullspaceSolver:
         """Solve one step and certify the answer, in one kernel call.
 
         What :class:`~.registry.CertifiedSolver` calls for this solver: the same
-        solve as :meth:`solve`, and for an optimum the kernel's certificate of its
-        ``x`` (the function :func:`~.certify.certify` calls), computed on the same
-        basis of ``A`` and the same rows; :func:`~.certify.certify` gives the
-        verdict. The basis and the rows are kept in the problem's cache (a scaled copy
-        or a later certificate reuses them).
+        solve as :meth:`solve` and, for an optimum, the kernel's certificate of its
+        ``x`` (the function :func:`~.certify.certify` calls) on the same basis of ``A``
+        and the same rows, computed once; :func:`~.certify.verdict` decides, as for
+        every solver. The basis and the rows are kept in the problem's cache. A
+        problem whose cache already holds them (a scaled copy of a solved step) is
+        solved and certified by the two calls, which reuse them.
         """
         start = time.perf_counter()
+        cache = problem._cache
+        if "basis" in cache and "ineq" in cache:
+            return certify(problem, self.solve(problem), tol, claims_bounds=claims_bounds)
         empty = empty_box_failure(problem, self.name)
         if empty is not None:
             return certify(problem, empty, tol, claims_bounds=claims_bounds)
@@ -111,7 +115,9 @@ class NullspaceSolver:
         keep_basis(problem, basis)
         problem.keep_inequalities(*ineq)
         claim = self._claim(problem, code, x, rows, nullity, iterations, start)
-        return certify(problem, claim, tol, claims_bounds=claims_bounds, reading=reading)
+        if reading is None:  # not an optimum: the claim is certified as it is
+            return certify(problem, claim, tol, claims_bounds=claims_bounds)
+        return verdict(problem, claim, x, reading, tol, claims_bounds, time.perf_counter())
 
     def _max_iter(self) -> int:
         return -1 if self.max_iter is None else self.max_iter

@@ -41,6 +41,7 @@ from .cost import CentringCost
 from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
+from .limits.box_form import BoxForm
 from .options import StepOptions
 from .parts import Limit
 from .problem import StepProblem
@@ -90,6 +91,25 @@ class StepBuild:
     assembly_time: float
     support_force: float = math.nan
     context: StepContext | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class _Parts:
+    """What the kernel's standard parts give beside the context (``StepParts.prepare``)."""
+
+    A: FloatArray  # (12, n) the equality
+    b: FloatArray  # (12,)
+    equality_finite: bool
+    center: FloatArray  # (n,) the centring cost's centres
+    lowers: FloatArray  # (forms, n) the compiled limits' bounds, in their order
+    uppers: FloatArray
+    kinematics_time: float  # [s] up to and with the kernel's kinematics
+
+
+def _compiled_form(limit: Limit) -> BoxForm | None:
+    """Return the compiled form a limit declares for its box (``limit.compiled``), or None."""
+    form = getattr(limit, "compiled", None)
+    return form if isinstance(form, BoxForm) else None
 
 
 #: A box that the limits together leave empty by at most this (relative to
@@ -203,6 +223,24 @@ class StepBuilder:
         self._no_bounds = np.zeros((0, lay.n))
         self._labels = tuple(limit.name for limit in self.limits)
         self._sources: dict[bytes, tuple[tuple[str, ...], tuple[str, ...]]] = {}
+        # The limits whose box the kernel computes with the standard parts (a compiled
+        # form, .limits.box_form), and the others, whose constraint(ctx) runs here.
+        forms = [_compiled_form(limit) for limit in self.limits]
+        self._forms = [(k, form) for k, form in enumerate(forms) if form is not None]
+        self._compiled_ids = [k for k, _ in self._forms]
+        self._python_limits = tuple((k, limit) for k, limit in enumerate(self.limits)
+                                    if forms[k] is None)
+        self._parts = self._make_parts()
+
+    def _make_parts(self) -> kernel.StepParts:
+        """Return the kernel's standard parts of this builder's steps (``step_parts.cpp``)."""
+        lay, carry = self.layout, self.carry
+        parts = kernel.StepParts(lay.n_l, lay.n_f, carry.frames, self.task.follower.tool_frame_id,
+                                 carry.columns[0], self._q_min, self._q_max, self.options.dt,
+                                 self.cost.centred, self.cost.shrink)
+        for _, form in self._forms:
+            parts.add_form(form.kind, form.p, form.off)
+        return parts
 
     # -- what the controller and the reports read -----------------------------------------
     @property
@@ -260,38 +298,58 @@ class StepBuilder:
         support_force : float
             Follower push ``h`` [N] of a Case 2 support (NaN for a grasp).
         """
+        ctx, support_force, _ = self._prepared(state, scale_max, x_applied)
+        return ctx, support_force
+
+    def _prepared(self, state: DualArmState, scale_max: float,
+                  x_applied: FloatArray | None) -> tuple[StepContext, float, _Parts]:
+        """Return the context, a support's push and the kernel's standard parts at ``state``.
+
+        One kernel call (``kernel.StepParts.prepare``): both arms' kinematics, the rates
+        to the range ends, the equality, the centres and the compiled limits' boxes.
+        """
+        start = time.perf_counter()
         sigma, sigma_l = state.sigma, state.sigma_leader
-        follower = self.task.follower
+        follower, trajectory, carry = self.task.follower, self.task.trajectory, self.carry
         q_l = self.task.leader.check_q(state.q_l, "q_l")
         q_f = follower.check_q(state.q_f, "q_f")
-        T_D = self.task.trajectory.pose(state.t)
-        arms = both_arms(self.carry, follower, q_l, q_f, sigma, sigma_l, T_D)
+        T_D = trajectory.pose(state.t)
         support_force = math.nan
         if self._contact is not None:
-            moved, support_force = self._support(self._contact, arms.carry, state)
-            if moved:  # the follower's target moved with the support line
-                arms = both_arms(self.carry, follower, q_l, q_f, sigma, sigma_l, T_D)
-        kin = arms.carry
+            # The support line follows the object's orientation at this state: placed
+            # first, from the kinematics at the current placement.
+            kin = both_arms(carry, follower, q_l, q_f, sigma, sigma_l, T_D).carry
+            support_force = self._support(self._contact, kin, state)
         lay, dt = self.layout, self.options.dt
-        positions = lay.join(q_l, q_f, sigma, sigma_l)
-        lo = np.empty(lay.n)
-        hi = np.empty(lay.n)
-        q = positions[lay.joints]  # finite: no inf - inf below
-        lo[lay.joints] = (self._q_min - q) / dt
-        hi[lay.joints] = (self._q_max - q) / dt
-        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:lay.n_grasp],
+        grasp_lo, grasp_hi = self._grasp_rates(sigma, sigma_l)
+        x0 = self._zeros if x_applied is None else x_applied
+        tasks = self.carry_tasks
+        called = time.perf_counter()
+        (T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, finite, center, lowers,
+         uppers, kin_seconds) = self._parts.prepare(
+            carry.chain, carry.configuration(q_l, sigma, sigma_l), carry.columns[1],
+            follower.chain, q_f, T_D, trajectory.twist(state.t), grasp_lo, grasp_hi, x0,
+            scale_max, tasks.leader_gain, tasks.correction_gain, tasks.exact_orientation)
+        kin = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
+        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T[12:16], J_f,
+                          tuple(self._surfaces), lay.join(q_l, q_f, sigma, sigma_l), lo, hi,
+                          x0, e[:6], e[6:], self._leader_arm, self._follower_arm,
+                          (float(sv[0]), float(sv[1])))
+        return ctx, support_force, _Parts(A, b, finite, center, lowers, uppers,
+                                          called - start + kin_seconds)
+
+    def _grasp_rates(self, sigma: float, sigma_l: float) -> tuple[FloatArray, FloatArray]:
+        """Return the grasps' rates to the ends of their ranges (Eqs. 30-33) [m/s]."""
+        n_grasp, dt = self.layout.n_grasp, self.options.dt
+        lo = np.empty(n_grasp)
+        hi = np.empty(n_grasp)
+        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:n_grasp],
                                           strict=True)):
             rho_min, rho_max = grasp_rate_range(surf.point(s), surf.tangent(s), surf.r_min,
                                                 surf.r_max, dt)
-            j = lay.grasps.start + i
-            lo[j] = max(rho_min, (surf.sigma_min - s) / dt)
-            hi[j] = min(rho_max, (surf.sigma_max - s) / dt)
-        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, arms.T_f, arms.J_f,
-                          tuple(self._surfaces), positions, lo, hi,
-                          self._zeros if x_applied is None else x_applied,
-                          arms.leader_error, arms.closure_error,
-                          self._leader_arm, self._follower_arm, arms.sigma_min)
-        return ctx, support_force
+            lo[i] = max(rho_min, (surf.sigma_min - s) / dt)
+            hi[i] = min(rho_max, (surf.sigma_max - s) / dt)
+        return lo, hi
 
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
               x_prev: FloatArray | None = None,
@@ -318,13 +376,9 @@ class StepBuilder:
             A supporting follower (Case 2) would have to pull at this state.
         """
         t0 = time.perf_counter()
-        ctx, support_force = self.context(state, scale_max=scale_max, x_applied=x_applied)
-        kin = ctx.carry
-        sigma_min = ctx.sigma_min
-        t1 = time.perf_counter()
-
-        eq = self.carry_tasks.equality(ctx)  # raises NonFiniteError itself
-        cost = self.cost.quadratic(ctx)
+        ctx, support_force, parts = self._prepared(state, scale_max, x_applied)
+        if not parts.equality_finite:
+            raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
         lay = self.layout
         lowers: list[FloatArray] = []
         lower_ids: list[int] = []
@@ -334,7 +388,7 @@ class StepBuilder:
         h_parts: list[FloatArray] = []
         row_ids: list[int] = []
         row_names: list[str] = []
-        for k, limit in enumerate(self.limits):
+        for k, limit in self._python_limits:
             c = limit.constraint(ctx)
             if c.lower is not None:
                 lowers.append(c.lower)
@@ -343,29 +397,45 @@ class StepBuilder:
                 uppers.append(c.upper)
                 upper_ids.append(k)
             if c.G is not None and c.h is not None and len(c.h):
-                G_parts.append(np.atleast_2d(c.G))
-                h_parts.append(np.atleast_1d(c.h))
+                G_k, h_k = self._checked_rows(k, c.G, c.h, c.row_names)
+                G_parts.append(G_k)
+                h_parts.append(h_k)
                 row_ids.append(k)
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
-                                                   for i in range(len(c.h))]
-        lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(
-            self._stacked(lowers, lower_ids, "lower"), lower_ids,
-            self._stacked(uppers, upper_ids, "upper"), upper_ids, lay.n, PIN_RTOL)
+                                                   for i in range(len(h_k))]
+        L, L_ids = self._with_compiled(parts.lowers, lowers, lower_ids, "lower")
+        U, U_ids = self._with_compiled(parts.uppers, uppers, upper_ids, "upper")
+        lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(L, L_ids, U, U_ids,
+                                                                       lay.n, PIN_RTOL)
         if nan_limit >= 0:
             raise NonFiniteError(f"the bounds of the limit '{self._labels[nan_limit]}'")
         lower_by, upper_by = self._bound_sources(lo_by, up_by)
-        G, h = self._rows(G_parts, h_parts, row_ids, len(row_names))
+        G, h = self._rows(G_parts, h_parts, row_ids)
+        if x_prev is not None:
+            x_prev = self._checked_start(x_prev)
         recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
         # Every part was checked where it was made (the limits' bounds and rows here):
         # the problem is assembled without a second check.
         problem = StepProblem.assembled(
-            A=eq.A, b=eq.b, weights=cost.weights, center=cost.center, lower=lower,
-            upper=upper, G=G, h=h, n_grasp=lay.n_grasp, x_prev=x_prev, names=lay.names,
-            row_names=tuple(row_names), eq_names=eq.names, lower_by=lower_by,
-            upper_by=upper_by, build_time=t2 - t0)
-        return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, kin,
-                         ctx.T_f, ctx.J_f, sigma_min, t1 - t0, t2 - t1, support_force, ctx)
+            A=parts.A, b=parts.b, weights=self.cost.weights, center=parts.center,
+            lower=lower, upper=upper, G=G, h=h, n_grasp=lay.n_grasp, x_prev=x_prev,
+            names=lay.names, row_names=tuple(row_names), eq_names=CarryTasks.row_names,
+            lower_by=lower_by, upper_by=upper_by, build_time=t2 - t0)
+        kin = parts.kinematics_time
+        return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
+                         ctx.T_f, ctx.J_f, ctx.sigma_min, kin, t2 - t0 - kin, support_force,
+                         ctx)
+
+    def _with_compiled(self, compiled: FloatArray, bounds: list[FloatArray], ids: list[int],
+                       side: str) -> tuple[FloatArray, list[int]]:
+        """Return the compiled limits' ``side`` bounds and the others', in the limits' order."""
+        if not bounds:
+            return compiled, self._compiled_ids
+        rows = np.vstack([compiled, self._stacked(bounds, ids, side)])
+        every = self._compiled_ids + ids
+        order = sorted(range(len(every)), key=every.__getitem__)
+        return rows[order], [every[i] for i in order]
 
     def _stacked(self, bounds: list[FloatArray], ids: list[int], side: str) -> FloatArray:
         """Return the limits' ``side`` bounds as rows of one array (k, n).
@@ -395,45 +465,73 @@ class StepBuilder:
                                     f"({len(bounds)}, {n}) numbers")
         return out
 
-    def _rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int],
-              n_names: int) -> tuple[FloatArray, FloatArray]:
-        """Return the limits' rows stacked, ``G`` (p, n) and ``h`` (p,), checked.
+    def _checked_rows(self, k: int, G: object, h: object, names: tuple[str, ...]
+                      ) -> tuple[FloatArray, FloatArray]:
+        """Return limit ``k``'s rows as ``G`` (p, n) and ``h`` (p,) float arrays.
 
         Raises
         ------
         ShapeError
-            A limit's rows are not ``(p, n)`` with ``p`` right-hand sides (and ``p``
-            names, when it names them).
+            The rows are not ``(p, n)`` with ``p`` right-hand sides, or the limit names
+            them with another number of names.
         InvalidInputError
-            A limit's rows are not numbers.
+            The rows are not numbers.
+        """
+        name = f"the rows of the limit '{self._labels[k]}'"
+        try:
+            G_k = np.atleast_2d(np.asarray(G, dtype=np.float64))
+            h_k = np.atleast_1d(np.asarray(h, dtype=np.float64))
+        except (TypeError, ValueError) as err:
+            raise InvalidInputError(f"{name} are not numbers: {err}") from err
+        if h_k.ndim != 1 or G_k.shape != (h_k.shape[0], self.layout.n):
+            raise ShapeError(name, (h_k.shape[0] if h_k.ndim == 1 else -1, self.layout.n),
+                             G_k.shape)
+        if names and len(names) != h_k.shape[0]:
+            raise ShapeError(f"the row names of the limit '{self._labels[k]}'",
+                             (h_k.shape[0],), (len(names),))
+        return G_k, h_k
+
+    def _rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int]
+              ) -> tuple[FloatArray, FloatArray]:
+        """Return the limits' checked rows stacked, ``G`` (p, n) and ``h`` (p,).
+
+        Raises
+        ------
         NonFiniteError
             A limit's rows hold NaN or infinity, or its right-hand sides NaN.
         """
         if not G_parts:
             return self._no_rows, self._no_rhs
-        n = self.layout.n
-        try:
-            G = np.asarray(np.vstack(G_parts), dtype=np.float64, order="C")
-            h = np.asarray(np.concatenate(h_parts), dtype=np.float64, order="C")
-        except (TypeError, ValueError):
-            G = h = np.zeros(0)
-        if G.shape != (h.shape[0], n) or h.ndim != 1 or n_names != h.shape[0]:
-            for Gk, hk, k in zip(G_parts, h_parts, ids, strict=True):
-                name = f"the rows of the limit '{self._labels[k]}'"
-                if hk.ndim != 1 or Gk.shape != (hk.shape[0], n):
-                    raise ShapeError(name, (hk.shape[0] if hk.ndim == 1 else -1, n),
-                                     Gk.shape)
-                try:
-                    np.asarray(Gk, dtype=np.float64), np.asarray(hk, dtype=np.float64)
-                except (TypeError, ValueError) as err:
-                    raise InvalidInputError(f"{name} are not numbers: {err}") from err
-            raise ShapeError("the limits' row names", (h.shape[0],), (n_names,))
+        G = np.vstack(G_parts)
+        h = np.concatenate(h_parts)
         if kernel.first_defect([G], [h]) >= 0:
-            for Gk, hk, k in zip(G_parts, h_parts, ids, strict=True):
-                if kernel.first_defect([np.ascontiguousarray(Gk, dtype=np.float64)],
-                                       [np.ascontiguousarray(hk, dtype=np.float64)]) >= 0:
+            for G_k, h_k, k in zip(G_parts, h_parts, ids, strict=True):
+                if kernel.first_defect([np.ascontiguousarray(G_k)],
+                                       [np.ascontiguousarray(h_k)]) >= 0:
                     raise NonFiniteError(f"the rows of the limit '{self._labels[k]}'")
         return G, h
+
+    def _checked_start(self, x_prev: object) -> FloatArray:
+        """Return the warm start as a C-ordered float array of ``n`` numbers, or raise.
+
+        Raises
+        ------
+        ShapeError
+            Not ``n`` numbers.
+        InvalidInputError
+            Not numbers.
+        """
+        n = self.layout.n
+        if (isinstance(x_prev, np.ndarray) and x_prev.shape == (n,)
+                and x_prev.dtype == np.float64 and x_prev.flags.c_contiguous):
+            return x_prev
+        try:
+            out = np.ascontiguousarray(x_prev, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise InvalidInputError(f"x_prev is not numbers: {err}") from err
+        if out.shape != (n,):
+            raise ShapeError("x_prev", (n,), out.shape)
+        return out
 
     def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]
                        ) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -454,20 +552,18 @@ class StepBuilder:
         return known
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
-                 ) -> tuple[bool, float]:
+                 ) -> float:
         """Case 2: put the follower's path on the support line of this step; its push.
 
         The line is computed for the object's orientation at ``state`` and frozen for
         the step (as the paper freezes the grasp frame, Sec. 3.3). When it moved, the
-        follower's grasp joint is re-placed (the caller recomputes the kinematics); the
+        follower's grasp joint is re-placed (the step's kinematics come after); the
         target then jumps by the line's motion at ``sigma``, which the closure feedback
         removes. The grasp bounds of the step are the line's (``h > 0``).
 
         Returns
         -------
-        moved : bool
-            Whether the line moved (the follower's grasp joint was re-placed).
-        force : float
+        float
             The follower's push ``h`` [N] at ``sigma``.
 
         Raises
@@ -483,11 +579,10 @@ class StepBuilder:
             raise SupportLostError(
                 "support lost: the support line reversed (gravity's component along the "
                 "surface normal changed sign), so the follower would have to pull")
-        moved = not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12)
-        if moved:
+        if not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12):
             self.carry.place_follower(line)
         self._surfaces[0] = line
-        return moved, contact.force(line, state.sigma)
+        return contact.force(line, state.sigma)
 
 
 __all__ = ["StepBuild", "StepBuilder", "smallest_singular_value"]

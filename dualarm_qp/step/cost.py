@@ -49,17 +49,21 @@ class CentringCost:
         w[layout.grasps] = options.grasp_weight
         w.flags.writeable = False  # shared by every problem
         self.weights = w
-        self._centred = np.ones(layout.n, dtype=bool)
+        centred = np.ones(layout.n, dtype=bool)
         if not leader_ranges:
-            self._centred[layout.leader] = False
-        self._shrink = options.dt / (options.centre_horizon or options.dt)
+            centred[layout.leader] = False
+        centred.flags.writeable = False
+        #: Which variables are centred (the others' centre is 0).
+        self.centred = centred
+        #: ``dt`` over the centring horizon: the centres' scale.
+        self.shrink = options.dt / (options.centre_horizon or options.dt)
 
     def quadratic(self, ctx: StepContext) -> Quadratic:
         """Weights ``S`` and centres ``dqhat_c`` [rad/s, m/s] at this step."""
         # The middle of each centred variable's finite rate range, scaled from dt to the
         # centring horizon (one compiled call, src/kernel/boxes.cpp).
-        return Quadratic(self.weights, kernel.centre(ctx.rate_lo, ctx.rate_hi, self._centred,
-                                                     self._shrink))
+        return Quadratic(self.weights, kernel.centre(ctx.rate_lo, ctx.rate_hi, self.centred,
+                                                     self.shrink))
 
 
 __all__ = ["CentringCost"]

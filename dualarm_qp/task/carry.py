@@ -177,6 +177,17 @@ class CarryModel:
         self._col_rate[self.n_l] = joint.rate
 
     @property
+    def columns(self) -> tuple[list[int], FloatArray]:
+        """The chain's column of each of ``[q_l, sigma_f, (sigma_l)]`` and its rate.
+
+        Column ``j`` of the decision-order Jacobians (:meth:`kinematics`) is the chain's
+        column ``cols[j]`` times ``rate[j]`` (1 for a joint; the grasp joint's units per
+        metre for a grasp). The rates are the model's own array: a support re-placing
+        the follower's grasp joint (:meth:`place_follower`) updates it.
+        """
+        return self._cols, self._col_rate
+
+    @property
     def frames(self) -> tuple[int, int, int]:
         """The model's tool, object and target frame indices (the order of :meth:`kinematics`)."""
         return self._frames

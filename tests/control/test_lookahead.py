@@ -19,6 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.control.lookahead import Lookahead
+from dualarm_qp.errors import NonFiniteError, ShapeError
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.kinematics import both_arms, both_errors
@@ -88,8 +89,25 @@ def test_the_errors_are_the_step_kinematics_errors(case: tuple) -> None:
         assert np.array_equal(e, np.r_[arms.leader_error, arms.closure_error])
 
 
-def test_a_wrong_joint_vector_is_refused() -> None:
+def test_a_wrong_joint_vector_is_refused_by_the_kernel() -> None:
     exp, ctrl, _ = setup("puma_beam_limits")
     with pytest.raises(ValueError):
         both_errors(ctrl.builder.carry, exp.task.follower, exp.initial.q_l,
                     exp.initial.q_f[:3], 0.0, 0.0, np.eye(4))
+
+
+@pytest.mark.parametrize("bad", ["nan rate", "short", "nan state"])
+def test_a_bad_prediction_input_is_a_clear_error(bad: str) -> None:
+    exp, ctrl, la = setup("puma_beam_limits")
+    state, x = moved(exp, ctrl, np.random.default_rng(1))
+    if bad == "nan rate":
+        x[la.n_l + 2] = np.nan
+        error: type[Exception] = NonFiniteError
+    elif bad == "short":
+        state = DualArmState(state.t, state.q_l, state.q_f[:4], state.sigma)
+        error = ShapeError
+    else:
+        state = DualArmState(state.t, state.q_l, state.q_f, np.nan)
+        error = NonFiniteError
+    with pytest.raises(error):
+        la.predict(state, x, 1.0, ctrl.options.dt)

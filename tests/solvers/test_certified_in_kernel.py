@@ -140,3 +140,18 @@ class Impostor:
 def test_a_users_solver_of_the_same_name_is_certified_by_certify() -> None:
     out = certified(Impostor()).solve(random_problem(np.random.default_rng(2)))  # type: ignore[arg-type]
     assert out.status is Status.VIOLATION
+
+
+def test_the_kernel_refuses_a_cost_of_the_wrong_size() -> None:
+    from dualarm_qp._compiled import kernel
+
+    p = random_problem(np.random.default_rng(4))
+    n = p.n
+    empty_v, empty_m = np.zeros(0), np.zeros((0, 0))
+    for w_diag, w_full, root in ((np.ones(n - 1), empty_m, empty_m),
+                                 (empty_v, np.eye(n - 1), np.eye(n - 1)),
+                                 (empty_v, np.eye(n), np.eye(n + 1)),
+                                 (np.ones(n), np.eye(n), np.eye(n))):
+        with pytest.raises(ValueError, match="the cost is"):
+            kernel.solve_certified(p.A, p.b, p.lower, p.upper, p.G, p.h, w_diag, w_full,
+                                   root, p.center, 1e-10, -1, True, 1e-9, 1e-7)

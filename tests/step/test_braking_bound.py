@@ -45,12 +45,33 @@ def run_to_the_limit(rule, trials: int = 20_000, steps: int = 300, seed: int = 0
 
 
 def exact(D, delta, dt, x):
-    """The upper end of the acceleration limit's box (the library's own limit object)."""
-    limit = AccelerationLimit(delta / dt, 1.0)
-    limit.delta = delta  # per-trial dt: the box in rate units, delta = a dt
-    ctx = SimpleNamespace(x_applied=x, rate_hi=D / dt, rate_lo=np.full(D.shape, -np.inf),
-                          dt=dt)
-    return limit.constraint(ctx).upper
+    """The upper end of the acceleration limit's box, with a dt per trial.
+
+    The limit's rule with the library's braking bound (the kernel's);
+    ``test_the_limit_object_gives_that_box`` checks the limit object against it.
+    """
+    return np.minimum(x + delta, np.where(D >= 0.0, braking_bound(D, delta, dt), np.inf))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_limit_object_gives_that_box(seed):
+    rng = np.random.default_rng(seed)
+    n, dt = 9, float(rng.uniform(0.001, 0.05))
+    a = rng.uniform(0.5, 50.0, n)
+    a[0] = np.inf  # no acceleration limit on this variable
+    x = rng.uniform(-1.0, 1.0, n)
+    hi = rng.uniform(-0.5, 2.0, n) / dt  # some past the upper end (D < 0)
+    lo = -rng.uniform(-0.5, 2.0, n) / dt
+    hi[1], lo[2] = np.inf, -np.inf  # no range end
+    ctx = SimpleNamespace(x_applied=x, rate_hi=hi, rate_lo=lo, dt=dt)
+    box = AccelerationLimit(a, dt).constraint(ctx)
+    delta = a * dt
+    with np.errstate(invalid="ignore"):
+        up = np.minimum(x + delta, np.where(hi * dt >= 0.0, braking_bound(hi * dt, delta, dt),
+                                            np.inf))
+        down = np.maximum(x - delta, -np.where(-lo * dt >= 0.0,
+                                               braking_bound(-lo * dt, delta, dt), np.inf))
+    assert np.array_equal(box.upper, up) and np.array_equal(box.lower, down)
 
 
 def continuous(D, delta, dt, x):
@@ -93,3 +114,29 @@ def test_the_bound_is_the_position_bound_near_the_end_and_infinite_without_one()
         small / dt)
     assert np.isinf(braking_bound(np.array([np.inf]), np.array([delta]), dt)[0])
     assert np.isinf(braking_bound(np.array([1.0]), np.array([np.inf]), dt)[0])
+
+
+def numpy_braking_bound(D, delta, dt):
+    """The Python-era numpy implementation, kept as the reference of the kernel's."""
+    D = np.asarray(D, dtype=np.float64)
+    delta = np.asarray(delta, dtype=np.float64)
+    finite = np.isfinite(D) & np.isfinite(delta)
+    Dd = np.where(finite, np.maximum(D, 0.0), 0.0)
+    dd = np.where(finite, delta, 1.0)
+    n = np.floor(0.5 * (-1.0 + np.sqrt(1.0 + 8.0 * Dd / (dd * dt))))
+    V = (Dd / dt + dd * n * (n + 1.0) / 2.0) / (n + 1.0)
+    return np.where(finite, V, np.inf)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(min_value=0, max_value=2**32 - 1))
+def test_the_kernel_bound_equals_the_python_era_bound(seed):
+    rng = np.random.default_rng(seed)
+    k = 64
+    D = rng.choice([0.0, 1e-9, 1.0, 3.0], k) * rng.uniform(0.0, 2.0, k)
+    D[rng.random(k) < 0.1] = np.inf
+    D[rng.random(k) < 0.1] *= -1.0
+    delta = rng.uniform(1e-4, 2.0, k)
+    delta[rng.random(k) < 0.1] = np.inf
+    dt = float(rng.uniform(1e-3, 0.05))
+    assert np.array_equal(braking_bound(D, delta, dt), numpy_braking_bound(D, delta, dt))

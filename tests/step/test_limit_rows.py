@@ -69,8 +69,35 @@ def test_a_limits_broken_rows_are_a_clear_error_naming_it(rows, error, words):
 
 
 def test_row_names_of_the_wrong_length_are_refused():
-    with pytest.raises(ShapeError, match="row names"):
+    with pytest.raises(ShapeError, match="row names of the limit 'named'"):
         _build(_Rows("named", _good, names=("only one",)))
+
+
+def test_two_limits_whose_wrong_shapes_cancel_are_refused():
+    # 2 rows with 3 right-hand sides, then 2 rows with 1: the totals match (4, 4).
+    with pytest.raises(ShapeError, match="rows of the limit 'a'"):
+        _build(_Rows("a", lambda n: (np.ones((2, n)), np.zeros(3))),
+               _Rows("b", lambda n: (np.ones((2, n)), np.zeros(1))))
+
+
+@pytest.mark.parametrize(("x_prev", "error"), [(np.zeros(3), ShapeError),
+                                               (np.zeros((13, 1)), ShapeError),
+                                               (["a"] * 13, InvalidInputError)])
+def test_a_bad_warm_start_is_a_clear_error(x_prev, error):
+    rng = np.random.default_rng(3)
+    task, q_l, q_f, sigma = make_task(rng, PlaneBar())
+    builder = StepBuilder(task, options())
+    with pytest.raises(error, match="x_prev"):
+        builder.build(DualArmState(0.0, q_l, q_f, sigma), x_prev=x_prev)
+
+
+def test_a_warm_start_of_ints_is_taken_as_floats():
+    rng = np.random.default_rng(3)
+    task, q_l, q_f, sigma = make_task(rng, PlaneBar())
+    builder = StepBuilder(task, options())
+    n = builder.n
+    p = builder.build(DualArmState(0.0, q_l, q_f, sigma), x_prev=[0] * n).problem
+    assert p.x_prev is not None and p.x_prev.dtype == np.float64 and p.x_prev.shape == (n,)
 
 
 def test_rows_of_integers_and_lists_are_taken_as_floats():
@@ -81,9 +108,11 @@ def test_rows_of_integers_and_lists_are_taken_as_floats():
 
 
 def checked_copy(problem: StepProblem) -> StepProblem:
-    """The same parts through the checking constructor."""
-    parts = {f.name: getattr(problem, f.name) for f in dataclasses.fields(StepProblem)
-             if f.init}
+    """Copies of the same parts through the checking constructor (Fortran-ordered, so
+    that the constructor makes its own C-ordered float arrays)."""
+    parts = {f.name: (np.asfortranarray(np.array(v)) if isinstance(v, np.ndarray) else v)
+             for f in dataclasses.fields(StepProblem) if f.init
+             for v in (getattr(problem, f.name),)}
     return StepProblem(**parts)
 
 
@@ -93,8 +122,10 @@ def test_the_assembled_problem_is_the_checked_one(name):
     path = CONFIGS / f"{name}.yaml"
     exp = build_experiment(load_config(path), str(path))
     ctrl = exp.controller()
-    out = ctrl.step(exp.initial)
+    ctrl.step(exp.initial)
+    out = ctrl.step(exp.initial)  # the second step has a warm start
     problem = out.build.problem
+    assert problem.x_prev is not None
     ref = checked_copy(problem)
     for f in dataclasses.fields(StepProblem):
         if not f.init:

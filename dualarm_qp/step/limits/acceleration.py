@@ -29,15 +29,20 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._compiled import kernel
 from ..context import StepContext
 from ..parts import Constraint
+from .box_form import ACCELERATION, BoxForm
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
 
 
-def braking_bound(D: FloatArray, delta: FloatArray, dt: float) -> FloatArray:
+def braking_bound(D: FloatArray, delta: FloatArray, dt: float | FloatArray) -> FloatArray:
     """Largest rate from which a stop within the distance ``D`` is possible.
+
+    Computed by the kernel (``src/kernel/step_parts.cpp``), the one implementation, which
+    the step's acceleration box uses too.
 
     Parameters
     ----------
@@ -45,22 +50,20 @@ def braking_bound(D: FloatArray, delta: FloatArray, dt: float) -> FloatArray:
         Distance to the end of the range [rad or m], ``>= 0`` (``inf``: no end).
     delta : ndarray
         Largest change of rate per sample, ``a dt`` [rad/s or m/s] (``inf``: none).
-    dt : float
+    dt : float or ndarray
         Sampling interval [s].
 
     Returns
     -------
     ndarray
-        ``V(D)`` [rad/s or m/s]; ``inf`` where ``D`` or ``delta`` is infinite.
+        ``V(D)`` [rad/s or m/s], of the broadcast shape of the arguments; ``inf``
+        where ``D`` or ``delta`` is infinite.
     """
-    D = np.asarray(D, dtype=np.float64)
-    delta = np.asarray(delta, dtype=np.float64)
-    finite = np.isfinite(D) & np.isfinite(delta)
-    Dd = np.where(finite, np.maximum(D, 0.0), 0.0)
-    dd = np.where(finite, delta, 1.0)
-    n = np.floor(0.5 * (-1.0 + np.sqrt(1.0 + 8.0 * Dd / (dd * dt))))
-    V = (Dd / dt + dd * n * (n + 1.0) / 2.0) / (n + 1.0)
-    return np.where(finite, V, np.inf)
+    D_, delta_, dt_ = np.broadcast_arrays(np.asarray(D, dtype=np.float64),
+                                          np.asarray(delta, dtype=np.float64),
+                                          np.asarray(dt, dtype=np.float64))
+    V = kernel.braking_bound(np.ravel(D_), np.ravel(delta_), np.ravel(dt_))
+    return V.reshape(D_.shape)
 
 
 class AccelerationLimit:
@@ -80,20 +83,13 @@ class AccelerationLimit:
     def __init__(self, a_max: FloatArray, dt: float) -> None:
         self.a_max = a_max
         self.delta = a_max * dt
+        #: The box as the kernel computes it (:mod:`.box_form`).
+        self.compiled = BoxForm(ACCELERATION, self.delta)
 
     def constraint(self, ctx: StepContext) -> Constraint:
         """Return the box around the last applied command, cut by the braking bounds."""
-        delta, dt = self.delta, ctx.dt
-        x0 = ctx.x_applied
-        with np.errstate(invalid="ignore"):
-            lower = x0 - delta
-            upper = x0 + delta
-        # Distances to each end of the range, from the rate ranges of Eqs. 30-36.
-        d_up = ctx.rate_hi * dt
-        d_lo = -ctx.rate_lo * dt
-        v_up = np.where(d_up >= 0.0, braking_bound(d_up, delta, dt), np.inf)
-        v_lo = np.where(d_lo >= 0.0, braking_bound(d_lo, delta, dt), np.inf)
-        return Constraint(lower=np.maximum(lower, -v_lo), upper=np.minimum(upper, v_up))
+        # The distances to each end of the range come from the rate ranges of Eqs. 30-36.
+        return self.compiled.box(ctx)
 
 
 def _acceleration(setup: LimitSetup) -> AccelerationLimit | None:

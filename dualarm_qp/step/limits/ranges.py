@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._compiled import kernel
 from ..context import StepContext
 from ..parts import Constraint
+from .box_form import RANGE, BoxForm
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -47,16 +47,16 @@ class RangeLimit:
                  recovery_fraction: float) -> None:
         self.name = name
         self.mask = mask
-        self._rec = (recovery_fraction * np.where(mask, speed, 0.0)
-                     if recovery_fraction > 0.0 else np.zeros(mask.shape))
-        self._off = ~mask
+        rec = (recovery_fraction * np.where(mask, speed, 0.0)
+               if recovery_fraction > 0.0 else np.zeros(mask.shape))
+        #: The box as the kernel computes it (:mod:`.box_form`).
+        self.compiled = BoxForm(RANGE, rec, ~mask)
 
     def constraint(self, ctx: StepContext) -> Constraint:
         """``[rate_lo, rate_hi]``, opened towards the range for a variable outside it."""
-        # Below the range: not further down, back at least at the recovery rate (one
-        # compiled call, src/kernel/boxes.cpp).
-        lower, upper = kernel.range_box(ctx.rate_lo, ctx.rate_hi, self._rec, self._off)
-        return Constraint(lower=lower, upper=upper)
+        # Below the range: not further down, back at least at the recovery rate (the
+        # kernel's range_box, src/kernel/boxes.cpp).
+        return self.compiled.box(ctx)
 
 
 def _speeds(setup: LimitSetup) -> FloatArray:

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from ..context import StepContext
 from ..parts import Constraint
+from .box_form import SPEED, BoxForm
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -33,11 +34,12 @@ class SpeedLimit:
     def __init__(self, name: str, v_max: FloatArray) -> None:
         self.name = name
         self.v_max = v_max
-        self._lower = -v_max
+        #: The box as the kernel computes it (:mod:`.box_form`).
+        self.compiled = BoxForm(SPEED, v_max)
 
     def constraint(self, ctx: StepContext) -> Constraint:
         """Return the same box at every step."""
-        return Constraint(lower=self._lower, upper=self.v_max)
+        return self.compiled.box(ctx)
 
 
 def _joint_speed(setup: LimitSetup) -> SpeedLimit | None:

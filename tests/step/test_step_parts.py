@@ -1,0 +1,182 @@
+"""The step's standard parts in one kernel call equal the parts computed one by one.
+
+``StepBuilder.build`` takes both arms' kinematics, the rates to the range ends, the
+equality, the centres and the boxes of the limits with a compiled form from one kernel
+call (``kernel.StepParts.prepare``). Each part also has its own call: the kinematics
+(:func:`both_arms`), the equality (:meth:`CarryTasks.equality`), the centring
+(:meth:`CentringCost.quadratic`) and every limit's ``constraint(ctx)``. The problem the
+builder assembles must equal, bit for bit, the one those separate calls give, on the
+shipped configurations (one and two sliding grasps, a support, acceleration limits,
+collision and torque rows, the paper's open leader box) at perturbed states with a
+random last command.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dualarm_qp._compiled import kernel
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.step.build import PIN_RTOL, StepBuilder
+from dualarm_qp.step.kinematics import both_arms
+from dualarm_qp.step.limits.box_form import BoxForm
+from dualarm_qp.step.state import DualArmState
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+NAMES = ("puma_beam_limits", "both_sliding_bar", "puma_beam_support", "panda_pair_accel",
+         "ur5_pair_collision", "ur5_pair_heavy_bar", "puma_beam_accel")
+
+
+def _experiment(name: str, solver: str = "nullspace"):
+    path = CONFIGS / f"{name}.yaml"
+    return build_experiment(load_config(path), str(path), solver=solver)
+
+
+@pytest.fixture(scope="module", params=[*NAMES, "puma_beam_limits/reference"])
+def case(request: pytest.FixtureRequest):
+    name, _, solver = request.param.partition("/")
+    exp = _experiment(name, solver or "nullspace")
+    return exp, exp.controller().builder
+
+
+def _state(exp, builder: StepBuilder, rng: np.random.Generator):
+    s0 = exp.initial
+    two = builder.layout.n_grasp == 2
+    return DualArmState(float(rng.uniform(0.0, exp.duration)),
+                        s0.q_l + rng.normal(0.0, 0.02, s0.q_l.shape),
+                        s0.q_f + rng.normal(0.0, 0.02, s0.q_f.shape),
+                        s0.sigma + float(rng.normal(0.0, 0.005)),
+                        s0.sigma_leader + (float(rng.normal(0.0, 0.005)) if two else 0.0))
+
+
+def _equal(a: np.ndarray, b: np.ndarray, what: str) -> None:
+    assert a.shape == b.shape and np.array_equal(a, b), what
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), scale=st.sampled_from([1.0, 0.5]))
+def test_the_one_call_equals_the_parts_one_by_one(case, seed: int, scale: float) -> None:
+    exp, builder = case
+    rng = np.random.default_rng(seed)
+    state = _state(exp, builder, rng)
+    x_applied = rng.normal(0.0, 0.3, builder.n)
+    try:
+        build = builder.build(state, scale_max=scale, x_applied=x_applied)
+    except Exception as err:  # a perturbed support state may lose its support
+        pytest.skip(f"no step at this state: {err}")
+    ctx, problem = build.context, build.problem
+    assert ctx is not None
+    # The kinematics, at the placement the step used.
+    arms = both_arms(builder.carry, exp.task.follower, ctx.state.q_l, ctx.state.q_f,
+                     state.sigma, state.sigma_leader, exp.task.trajectory.pose(state.t))
+    for field in ("T_tool", "J_tool", "T_object", "J_object", "T_target", "J_target"):
+        _equal(getattr(ctx.carry, field), getattr(arms.carry, field), field)
+    _equal(ctx.T_f, arms.T_f, "T_f")
+    _equal(ctx.J_f, arms.J_f, "J_f")
+    _equal(ctx.leader_error, arms.leader_error, "leader_error")
+    _equal(ctx.closure_error, arms.closure_error, "closure_error")
+    assert ctx.sigma_min == arms.sigma_min
+    # The equality and the centres.
+    eq = builder.carry_tasks.equality(ctx)
+    _equal(problem.A, eq.A, "A")
+    _equal(problem.b, eq.b, "b")
+    assert problem.eq_names == eq.names
+    _equal(problem.center, builder.cost.quadratic(ctx).center, "center")
+    # The box: every limit's own constraint(ctx), intersected in the limits' order.
+    lowers, lower_ids, uppers, upper_ids = [], [], [], []
+    for k, limit in enumerate(builder.limits):
+        c = limit.constraint(ctx)
+        if c.lower is not None:
+            lowers.append(np.asarray(c.lower, dtype=float))
+            lower_ids.append(k)
+        if c.upper is not None:
+            uppers.append(np.asarray(c.upper, dtype=float))
+            upper_ids.append(k)
+    n = builder.n
+    lower, upper, lo_by, up_by, bad = kernel.intersect_boxes(
+        np.array(lowers).reshape(-1, n), lower_ids, np.array(uppers).reshape(-1, n),
+        upper_ids, n, PIN_RTOL)
+    assert bad < 0
+    _equal(problem.lower, lower, "lower")
+    _equal(problem.upper, upper, "upper")
+    labels = [limit.name for limit in builder.limits]
+    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
+    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in up_by)
+
+
+def test_the_standard_box_limits_are_compiled_and_the_others_are_not() -> None:
+    builder = _experiment("ur5_pair_collision").controller().builder
+    compiled = [limit.name for limit in builder.limits
+                if isinstance(getattr(limit, "compiled", None), BoxForm)]
+    others = [limit.name for limit in builder.limits if limit.name not in compiled]
+    assert {"joint range", "grasp range", "joint speed", "grasp speed"} <= set(compiled)
+    assert "collision" in others
+
+
+def test_the_kernel_refuses_misshaped_input() -> None:
+    exp = _experiment("puma_beam_limits")
+    builder = exp.controller().builder
+    parts = builder._parts
+    carry, follower = builder.carry, exp.task.follower
+    q = carry.configuration(exp.initial.q_l, exp.initial.sigma)
+    good = dict(carry=carry.chain, q_carry=q, col_rate=carry.columns[1],
+                follower=follower.chain, q_f=exp.initial.q_f, T_D=np.eye(4),
+                twist=np.zeros(6), grasp_lo=np.zeros(1), grasp_hi=np.zeros(1),
+                x_applied=np.zeros(builder.n), scale_max=1.0, leader_gain=1.0,
+                correction_gain=0.0, exact_orientation=False)
+    parts.prepare(**good)
+    for key, bad in (("q_carry", q[:-1]), ("q_f", exp.initial.q_f[:3]),
+                     ("grasp_lo", np.zeros(2)), ("x_applied", np.zeros(3)),
+                     ("col_rate", np.ones(2))):
+        with pytest.raises(ValueError):
+            parts.prepare(**{**good, key: bad})
+    with pytest.raises(ValueError):
+        parts.add_form(7, np.zeros(builder.n), np.zeros(0, dtype=bool))
+    with pytest.raises(ValueError):
+        parts.add_form(kernel.BOX_RANGE, np.zeros(builder.n), np.zeros(2, dtype=bool))
+
+
+class _PythonBox:
+    """A user's box limit in Python (no compiled form)."""
+
+    gives_rows = False
+
+    def __init__(self, name: str, scale: float) -> None:
+        self.name, self.scale = name, scale
+
+    def constraint(self, ctx):
+        from dualarm_qp.step.parts import Constraint
+        n = ctx.layout.n
+        return Constraint(lower=-self.scale * np.ones(n), upper=self.scale * np.ones(n))
+
+
+def test_python_and_compiled_boxes_are_intersected_in_the_limits_order() -> None:
+    from dualarm_qp.step.limits import SpeedLimit
+
+    exp = _experiment("puma_beam_limits")
+    base = exp.controller().builder
+    n = base.n
+    # A Python box between two compiled ones, ties included (the earlier limit names it).
+    extra = (_PythonBox("python box", 0.5), SpeedLimit("user speed", np.full(n, 0.5)),
+             _PythonBox("python box 2", 0.25))
+    builder = StepBuilder(exp.task, base.options, limits=extra)
+    ctx, _ = builder.context(exp.initial)
+    problem = builder.build(exp.initial).problem
+    lowers, uppers = [], []
+    for limit in builder.limits:
+        c = limit.constraint(ctx)
+        lowers.append(np.asarray(c.lower, dtype=float))
+        uppers.append(np.asarray(c.upper, dtype=float))
+    ids = list(range(len(builder.limits)))
+    lower, upper, lo_by, up_by, _ = kernel.intersect_boxes(np.array(lowers), ids,
+                                                           np.array(uppers), ids, n, PIN_RTOL)
+    _equal(problem.lower, lower, "lower")
+    _equal(problem.upper, upper, "upper")
+    labels = [limit.name for limit in builder.limits]
+    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
+    assert "python box 2" in problem.lower_by
