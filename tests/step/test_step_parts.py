@@ -179,4 +179,5 @@ def test_python_and_compiled_boxes_are_intersected_in_the_limits_order() -> None
     _equal(problem.upper, upper, "upper")
     labels = [limit.name for limit in builder.limits]
     assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
+    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in up_by)
     assert "python box 2" in problem.lower_by
