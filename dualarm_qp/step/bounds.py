@@ -32,15 +32,24 @@ def grasp_rate_range(
     arguments are 3-vectors (arrays or lists of floats).
     """
     rho_min, rho_max = -math.inf, math.inf
-    for i in range(3):
-        si = float(s_star[i])
+    # Python floats: for three numbers a list beats numpy's per-element indexing.
+    for r, si, lo, hi in zip(_floats(surface_r), _floats(s_star), _floats(r_min),
+                             _floats(r_max), strict=True):
         if abs(si) < 1e-12:
             continue
-        a = (float(r_min[i]) - float(surface_r[i])) / (si * dt)
-        b = (float(r_max[i]) - float(surface_r[i])) / (si * dt)
+        a = (lo - r) / (si * dt)
+        b = (hi - r) / (si * dt)
         rho_min = max(rho_min, min(a, b))
         rho_max = min(rho_max, max(a, b))
     return rho_min, rho_max
+
+
+def _floats(v: Sequence[float] | FloatArray) -> list[float]:
+    """The three components of ``v`` as Python floats."""
+    out = v.tolist() if isinstance(v, np.ndarray) else [float(x) for x in v]
+    if len(out) != 3:
+        raise ValueError(f"a 3-vector was expected, got {len(out)} components")
+    return out
 
 
 __all__ = ["grasp_rate_range"]
