@@ -45,7 +45,7 @@ def grasp_rate_range(
 
 
 def _floats(v: Sequence[float] | FloatArray) -> list[float]:
-    """The three components of ``v`` as Python floats."""
+    """Return the three components of ``v`` as Python floats."""
     out = v.tolist() if isinstance(v, np.ndarray) else [float(x) for x in v]
     if len(out) != 3:
         raise ValueError(f"a 3-vector was expected, got {len(out)} components")
