@@ -38,7 +38,7 @@ from .plant import Plant
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .torques import TorqueReport, blocked_by_torque, record_torques, torque_at_start
-from .trace import Trace, record, record_state
+from .trace import Trace, record, record_margins, record_state
 
 FloatArray = NDArray[np.float64]
 
@@ -510,6 +510,7 @@ def rollout(
             raise
         interrupted = exc
     trace = tr.truncate(rows)
+    record_margins(trace, task)
     realised = _realised(controller, trace, dt, v_start)
     if interrupted is not None:
         t_last = float(trace.t[-1]) if rows else path_start

@@ -201,41 +201,67 @@ def record_state(tr: Trace, k: int, t: float, state: DualArmState,
 
 def _record_state(tr: Trace, k: int, t: float, state: DualArmState, task: DualArmTask
                   ) -> None:
-    """Write the realised state of sample ``k`` and its margins to the ranges."""
-    leader, follower = task.leader, task.follower
+    """Write the realised state of sample ``k`` (its margins come after the run)."""
     tr.t[k] = t
     tr.tau[k] = state.t
     tr.q_l[k] = state.q_l
     tr.q_f[k] = state.q_f
     tr.grasp[k] = state.sigma
-    tr.margin_qf[k] = np.minimum(state.q_f - follower.q_min, follower.q_max - state.q_f)
-    tr.margin_ql[k] = np.minimum(state.q_l - leader.q_min, leader.q_max - state.q_l)
-    tr.margin_grasp[k] = grasp_margin(task.surface, state.sigma)
     if task.leader_surface is not None:
         tr.grasp_leader[k] = state.sigma_leader
-        tr.margin_grasp_leader[k] = grasp_margin(task.leader_surface, state.sigma_leader)
 
 
-def grasp_margin(surface: GraspSurface, sigma: float) -> float:
-    """Signed distance of the grasp to the nearest end of its range [m].
+def record_margins(tr: Trace, task: DualArmTask) -> None:
+    """Write every recorded sample's margins to the ranges, in one pass over the run.
+
+    The joints' distances to their range ends [rad] and the grasps' (:func:`grasp_margins`)
+    [m], from the recorded positions: the rollout calls it once, on the samples it
+    recorded, instead of once per sample.
+    """
+    leader, follower = task.leader, task.follower
+    tr.margin_qf[:] = np.minimum(tr.q_f - follower.q_min, follower.q_max - tr.q_f)
+    tr.margin_ql[:] = np.minimum(tr.q_l - leader.q_min, leader.q_max - tr.q_l)
+    tr.margin_grasp[:] = grasp_margins(task.surface, tr.grasp)
+    if task.leader_surface is not None:
+        tr.margin_grasp_leader[:] = grasp_margins(task.leader_surface, tr.grasp_leader)
+
+
+def grasp_margins(surface: GraspSurface, sigma: FloatArray) -> FloatArray:
+    """Signed distance of each grasp coordinate to the nearest end of its range [m].
 
     The range along the path, ``[sigma_min, sigma_max]``, intersected with the box of
     Eq. 3 where the surface has one (on a straight path both say the same).
+
+    Parameters
+    ----------
+    surface : GraspSurface
+        The path the grasp slides on.
+    sigma : ndarray, shape (k,)
+        Grasp coordinates [m].
     """
-    lo = surface.sigma_min
-    hi = surface.sigma_max
-    margin = min(sigma - lo, hi - sigma)
+    sigma = np.asarray(sigma, dtype=np.float64)
+    margin = np.minimum(sigma - surface.sigma_min, surface.sigma_max - sigma)
     if not (np.isfinite(surface.r_min).any() or np.isfinite(surface.r_max).any()):
-        return float(margin)
-    r = surface.point(sigma)
-    s = surface.tangent(sigma)
+        return margin
+    r = surface.points(sigma)
+    s = np.abs(surface.tangents(sigma))
     for i in range(3):
-        if abs(s[i]) < 1e-12:
-            continue
+        moving = s[:, i] >= 1e-12  # a coordinate the path does not move along is skipped
+        along = np.where(moving, s[:, i], 1.0)
         for bound, sign in ((surface.r_min[i], 1.0), (surface.r_max[i], -1.0)):
             if math.isfinite(bound):
-                margin = min(margin, sign * (r[i] - bound) / abs(s[i]))
-    return float(margin)
+                margin = np.where(moving, np.minimum(margin, sign * (r[:, i] - bound) / along),
+                                  margin)
+    return margin
 
 
-__all__ = ["Trace", "grasp_margin", "record", "record_state"]
+def grasp_margin(surface: GraspSurface, sigma: float) -> float:
+    """Signed distance of the grasp at ``sigma`` to the nearest end of its range [m].
+
+    :func:`grasp_margins` at one grasp coordinate.
+    """
+    return float(grasp_margins(surface, np.array([float(sigma)]))[0])
+
+
+__all__ = ["Trace", "grasp_margin", "grasp_margins", "record", "record_margins",
+           "record_state"]

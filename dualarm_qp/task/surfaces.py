@@ -193,6 +193,17 @@ class GraspSurface(ABC):
         """Return the sliding path as one joint (see :class:`SlideJoint`)."""
 
     # --- shared helpers --------------------------------------------------------------
+    def points(self, sigmas: FloatArray) -> FloatArray:
+        """Return :meth:`point` at each of ``sigmas`` (k,) [m], shape (k, 3).
+
+        One call per value here; a straight path overrides it with one product.
+        """
+        return np.array([self.point(float(s)) for s in sigmas]).reshape(-1, 3)
+
+    def tangents(self, sigmas: FloatArray) -> FloatArray:
+        """Return :meth:`tangent` at each of ``sigmas`` (k,), shape (k, 3)."""
+        return np.array([self.tangent(float(s)) for s in sigmas]).reshape(-1, 3)
+
     def tangent(self, sigma: float) -> FloatArray:
         """Return the unit sliding vector ``s* = d point / d sigma`` (Eq. 4), object coords."""
         return self.frame(sigma)[:, 0].copy()
@@ -304,6 +315,14 @@ class PlaneBar(GraspSurface):
     def point(self, sigma: float) -> FloatArray:
         """``origin + sigma * s*`` [m]."""
         return self.origin + _as_sigma(sigma) * self._s
+
+    def points(self, sigmas: FloatArray) -> FloatArray:
+        """Return :meth:`point` at each of ``sigmas`` (k,), in one product [m], shape (k, 3)."""
+        return self.origin + np.asarray(sigmas, dtype=np.float64)[:, None] * self._s
+
+    def tangents(self, sigmas: FloatArray) -> FloatArray:
+        """Return the constant ``s*`` for each of ``sigmas`` (k,), shape (k, 3)."""
+        return np.tile(self._s, (np.shape(sigmas)[0], 1))
 
     def frame(self, sigma: float) -> FloatArray:
         """Constant ``[s*, n*, a*]``."""
