@@ -1,17 +1,27 @@
 """Build the one step problem of both arms and every sliding grasp by stacking its parts.
 
 Each step the builder computes the kinematics once (both arms and the carried object,
-:class:`~dualarm_qp.task.carry.CarryModel`, where every sliding grasp is a joint), puts
-them in the step's context (:class:`~dualarm_qp.step.context.StepContext`) and stacks
-the step's parts (:mod:`dualarm_qp.step.parts`):
+:class:`~dualarm_qp.task.carry.CarryModel`, where every sliding grasp is a joint; a Case
+2 support first places its line from the object's pose, then the step's kinematics
+follow), puts them in the step's context (:class:`~dualarm_qp.step.context.StepContext`)
+and stacks the step's parts (:mod:`dualarm_qp.step.parts`):
 
 * the equality tasks, in this order: the object follows ``D(t)``, the grasp stays
-  closed (:mod:`.tasks`, Eqs. 14 and 25-27; one block, assembled by the kernel);
+  closed (:mod:`.tasks`, Eqs. 14 and 25-27);
 * the cost: the paper's centring (:mod:`.cost`, Eqs. 37-40);
 * the limits: joint and grasp ranges (Eqs. 30-36, with recovery), joint and grasp
   speeds, accelerations when asked for (:mod:`.limits`), then any limit of the user's.
   Their boxes are intersected (the largest lower, the smallest upper bound; each bound
   remembers the limit that set it, for messages) and their rows stacked.
+
+The standard parts are computed by one kernel call per step (``kernel.StepParts``,
+``src/kernel/step_parts.cpp``): the kinematics, the rates to the range ends, the
+equality (what :meth:`.tasks.CarryTasks.equality` gives), the centres (what
+:meth:`.cost.CentringCost.quadratic` gives) and the boxes of the limits that declare a
+compiled form (:mod:`.limits.box_form`: ranges, speeds, accelerations). Those are read
+when the builder is made, as the options are: a limit or a setting changed afterwards
+needs a new builder. The other limits (collision, torque, a user's own) run their
+``constraint(ctx)`` on the context each step.
 
 The decision vector's slices are the :class:`~dualarm_qp.step.layout.Layout`'s. ``s``
 is the task scale of the infeasible-step policy (:func:`~dualarm_qp.solvers.solve_step`),
@@ -41,7 +51,7 @@ from .cost import CentringCost
 from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
-from .limits.box_form import BoxForm
+from .limits.box_form import RANGE, BoxForm, compiled_constraint
 from .options import StepOptions
 from .parts import Limit
 from .problem import StepProblem
@@ -107,9 +117,17 @@ class _Parts:
 
 
 def _compiled_form(limit: Limit) -> BoxForm | None:
-    """Return the compiled form a limit declares for its box (``limit.compiled``), or None."""
+    """Return the compiled form of a limit's box, or None (its constraint runs in Python).
+
+    A limit's box is compiled when it declares a :class:`BoxForm` (``limit.compiled``)
+    and its ``constraint`` is :func:`~.limits.box_form.compiled_constraint` (the box of
+    that form): a subclass that overrides ``constraint`` runs its own.
+    """
     form = getattr(limit, "compiled", None)
-    return form if isinstance(form, BoxForm) else None
+    if isinstance(form, BoxForm) and getattr(type(limit), "constraint", None) is \
+            compiled_constraint:
+        return form
+    return None
 
 
 #: A box that the limits together leave empty by at most this (relative to
@@ -170,6 +188,8 @@ class StepBuilder:
     InvalidInputError
         A weight vector of the wrong length, or a limit that is not a
         :class:`~dualarm_qp.step.parts.Limit`.
+    ShapeError
+        A limit's compiled box form does not hold one number per variable.
     """
 
     def __init__(self, task: DualArmTask, options: StepOptions, *,
@@ -233,12 +253,22 @@ class StepBuilder:
         self._parts = self._make_parts()
 
     def _make_parts(self) -> kernel.StepParts:
-        """Return the kernel's standard parts of this builder's steps (``step_parts.cpp``)."""
+        """Return the kernel's standard parts of this builder's steps (``step_parts.cpp``).
+
+        Raises
+        ------
+        ShapeError
+            A limit's compiled form does not hold one number per variable.
+        """
         lay, carry = self.layout, self.carry
         parts = kernel.StepParts(lay.n_l, lay.n_f, carry.frames, self.task.follower.tool_frame_id,
                                  carry.columns[0], self._q_min, self._q_max, self.options.dt,
                                  self.cost.centred, self.cost.shrink)
-        for _, form in self._forms:
+        for k, form in self._forms:
+            for what, values in (("numbers", form.p), ("mask", form.off)):
+                if (what == "numbers" or form.kind == RANGE) and values.shape != (lay.n,):
+                    raise ShapeError(f"the compiled box {what} of the limit "
+                                     f"'{self._labels[k]}'", (lay.n,), values.shape)
             parts.add_form(form.kind, form.p, form.off)
         return parts
 
@@ -322,14 +352,15 @@ class StepBuilder:
             support_force = self._support(self._contact, kin, state)
         lay, dt = self.layout, self.options.dt
         grasp_lo, grasp_hi = self._grasp_rates(sigma, sigma_l)
-        x0 = self._zeros if x_applied is None else x_applied
+        x0 = self._zeros if x_applied is None else self._checked_rates(x_applied, "x_applied")
         tasks = self.carry_tasks
+        q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
         (T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, finite, center, lowers,
          uppers, kin_seconds) = self._parts.prepare(
-            carry.chain, carry.configuration(q_l, sigma, sigma_l), carry.columns[1],
-            follower.chain, q_f, T_D, trajectory.twist(state.t), grasp_lo, grasp_hi, x0,
-            scale_max, tasks.leader_gain, tasks.correction_gain, tasks.exact_orientation)
+            carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
+            grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
+            tasks.exact_orientation)
         kin = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
         ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T[12:16], J_f,
                           tuple(self._surfaces), lay.join(q_l, q_f, sigma, sigma_l), lo, hi,
@@ -412,7 +443,7 @@ class StepBuilder:
         lower_by, upper_by = self._bound_sources(lo_by, up_by)
         G, h = self._rows(G_parts, h_parts, row_ids)
         if x_prev is not None:
-            x_prev = self._checked_start(x_prev)
+            x_prev = self._checked_rates(x_prev, "x_prev", finite=False)
         recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
         # Every part was checked where it was made (the limits' bounds and rows here):
@@ -511,8 +542,10 @@ class StepBuilder:
                     raise NonFiniteError(f"the rows of the limit '{self._labels[k]}'")
         return G, h
 
-    def _checked_start(self, x_prev: object) -> FloatArray:
-        """Return the warm start as a C-ordered float array of ``n`` numbers, or raise.
+    def _checked_rates(self, x: object, name: str, *, finite: bool = True) -> FloatArray:
+        """Return rates of every variable as a C-ordered float array, or raise.
+
+        For a warm start and the last applied command: ``n`` numbers.
 
         Raises
         ------
@@ -520,17 +553,22 @@ class StepBuilder:
             Not ``n`` numbers.
         InvalidInputError
             Not numbers.
+        NonFiniteError
+            With ``finite``: a NaN or an infinity.
         """
         n = self.layout.n
-        if (isinstance(x_prev, np.ndarray) and x_prev.shape == (n,)
-                and x_prev.dtype == np.float64 and x_prev.flags.c_contiguous):
-            return x_prev
-        try:
-            out = np.ascontiguousarray(x_prev, dtype=np.float64)
-        except (TypeError, ValueError) as err:
-            raise InvalidInputError(f"x_prev is not numbers: {err}") from err
-        if out.shape != (n,):
-            raise ShapeError("x_prev", (n,), out.shape)
+        if (isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64
+                and x.flags.c_contiguous):
+            out = x
+        else:
+            try:
+                out = np.ascontiguousarray(x, dtype=np.float64)
+            except (TypeError, ValueError) as err:
+                raise InvalidInputError(f"{name} is not numbers: {err}") from err
+            if out.shape != (n,):
+                raise ShapeError(name, (n,), out.shape)
+        if finite and kernel.first_defect([out], []) >= 0:
+            raise NonFiniteError(name)
         return out
 
     def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]

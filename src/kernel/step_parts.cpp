@@ -15,9 +15,19 @@ namespace {
 
 constexpr double INF = std::numeric_limits<double>::infinity();
 
-// numpy's maximum and minimum on numbers (the first argument on a tie).
-double larger(double a, double b) { return a >= b ? a : b; }
-double smaller(double a, double b) { return a <= b ? a : b; }
+// numpy's maximum and minimum: a NaN in either argument passes through, and on a tie the
+// second argument is returned (which decides the sign of a zero: np.maximum(0.0, -0.0)
+// is -0.0).
+double larger(double a, double b) {
+  if (std::isnan(a)) return a;
+  if (std::isnan(b)) return b;
+  return a > b ? a : b;
+}
+double smaller(double a, double b) {
+  if (std::isnan(a)) return a;
+  if (std::isnan(b)) return b;
+  return a < b ? a : b;
+}
 
 }  // namespace
 

@@ -30,9 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._compiled import kernel
-from ..context import StepContext
-from ..parts import Constraint
-from .box_form import ACCELERATION, BoxForm
+from .box_form import ACCELERATION, BoxForm, compiled_constraint
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -86,10 +84,9 @@ class AccelerationLimit:
         #: The box as the kernel computes it (:mod:`.box_form`).
         self.compiled = BoxForm(ACCELERATION, self.delta)
 
-    def constraint(self, ctx: StepContext) -> Constraint:
-        """Return the box around the last applied command, cut by the braking bounds."""
-        # The distances to each end of the range come from the rate ranges of Eqs. 30-36.
-        return self.compiled.box(ctx)
+    #: The box around the last applied command, cut by the braking bounds (the
+    #: distances to each end of the range come from the rate ranges of Eqs. 30-36).
+    constraint = compiled_constraint
 
 
 def _acceleration(setup: LimitSetup) -> AccelerationLimit | None:

@@ -8,14 +8,18 @@ kinematics, equality and centring in one call (``src/kernel/step_parts.cpp``). T
 limit's own ``constraint(ctx)`` gives the same box from the same compiled function
 (:meth:`BoxForm.box`), so a limit read on its own and the step agree to the bit.
 
-A limit without a compiled form (the collision and torque limits, a user's own) runs
-its Python ``constraint(ctx)`` on the step's context; its boxes and rows join the
-kernel's (``docs/benchmarks.md`` states what that path costs).
+A limit's box is compiled when the limit declares its form (``compiled``) and its
+``constraint`` is :func:`compiled_constraint`; a subclass that overrides ``constraint``
+runs its own. A limit without a compiled form (the collision and torque limits, a
+user's own) runs its Python ``constraint(ctx)`` on the step's context; its boxes and
+rows join the kernel's (``docs/benchmarks.md`` states what that path costs). The form
+is read when the builder is made: a limit changed afterwards needs a new builder.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +38,7 @@ ACCELERATION: int = kernel.BOX_ACCELERATION
 _NO_MASK = np.zeros(0, dtype=bool)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BoxForm:
     """A limit's box as the kernel computes it.
 
@@ -57,13 +61,14 @@ class BoxForm:
     off: NDArray[np.bool_] = field(default_factory=lambda: _NO_MASK)
 
     def __post_init__(self) -> None:
-        p = np.ascontiguousarray(self.p, dtype=np.float64)
+        # Copies, read-only: the form is what the builder hands the kernel once.
+        p = np.array(self.p, dtype=np.float64, order="C", ndmin=1)
         p.flags.writeable = False
         object.__setattr__(self, "p", p)
-        if self.kind == RANGE:
-            off = np.ascontiguousarray(self.off, dtype=bool)
-            off.flags.writeable = False
-            object.__setattr__(self, "off", off)
+        off = np.array(self.off, dtype=bool, order="C", ndmin=1) if self.kind == RANGE \
+            else _NO_MASK
+        off.flags.writeable = False
+        object.__setattr__(self, "off", off)
 
     def box(self, ctx: StepContext) -> Constraint:
         """Return the box at the step's context (the kernel's functions, as in the step).
@@ -81,4 +86,15 @@ class BoxForm:
         return Constraint(lower=lower, upper=upper)
 
 
-__all__ = ["ACCELERATION", "RANGE", "SPEED", "BoxForm"]
+def compiled_constraint(self: Any, ctx: StepContext) -> Constraint:
+    """Return the box of the limit's compiled form at the step's context.
+
+    The ``constraint`` of a limit whose box is its compiled form (``self.compiled``, a
+    :class:`BoxForm`): the builder then computes that box in the kernel with the step's
+    standard parts, and a limit read on its own gives the same box.
+    """
+    form: BoxForm = self.compiled
+    return form.box(ctx)
+
+
+__all__ = ["ACCELERATION", "RANGE", "SPEED", "BoxForm", "compiled_constraint"]

@@ -18,9 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..context import StepContext
-from ..parts import Constraint
-from .box_form import RANGE, BoxForm
+from .box_form import RANGE, BoxForm, compiled_constraint
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -52,11 +50,10 @@ class RangeLimit:
         #: The box as the kernel computes it (:mod:`.box_form`).
         self.compiled = BoxForm(RANGE, rec, ~mask)
 
-    def constraint(self, ctx: StepContext) -> Constraint:
-        """``[rate_lo, rate_hi]``, opened towards the range for a variable outside it."""
-        # Below the range: not further down, back at least at the recovery rate (the
-        # kernel's range_box, src/kernel/boxes.cpp).
-        return self.compiled.box(ctx)
+    #: ``[rate_lo, rate_hi]``, opened towards the range for a variable outside it: below
+    #: the range not further down, back at least at the recovery rate (the kernel's
+    #: ``range_box``, src/kernel/boxes.cpp).
+    constraint = compiled_constraint
 
 
 def _speeds(setup: LimitSetup) -> FloatArray:

@@ -10,9 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..context import StepContext
-from ..parts import Constraint
-from .box_form import SPEED, BoxForm
+from .box_form import SPEED, BoxForm, compiled_constraint
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -37,9 +35,8 @@ class SpeedLimit:
         #: The box as the kernel computes it (:mod:`.box_form`).
         self.compiled = BoxForm(SPEED, v_max)
 
-    def constraint(self, ctx: StepContext) -> Constraint:
-        """Return the same box at every step."""
-        return self.compiled.box(ctx)
+    #: The same box at every step.
+    constraint = compiled_constraint
 
 
 def _joint_speed(setup: LimitSetup) -> SpeedLimit | None:
