@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_braking_bound import numpy_braking_bound
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.experiments import build_experiment, load_config
@@ -189,18 +190,10 @@ def numpy_acceleration_box(a_max, dt, lo, hi, x0):
         lower = x0 - delta
         upper = x0 + delta
 
-    def braking(D):
-        finite = np.isfinite(D) & np.isfinite(delta)
-        Dd = np.where(finite, np.maximum(D, 0.0), 0.0)
-        dd = np.where(finite, delta, 1.0)
-        n = np.floor(0.5 * (-1.0 + np.sqrt(1.0 + 8.0 * Dd / (dd * dt))))
-        V = (Dd / dt + dd * n * (n + 1.0) / 2.0) / (n + 1.0)
-        return np.where(finite, V, np.inf)
-
     d_up = hi * dt
     d_lo = -lo * dt
-    v_up = np.where(d_up >= 0.0, braking(d_up), np.inf)
-    v_lo = np.where(d_lo >= 0.0, braking(d_lo), np.inf)
+    v_up = np.where(d_up >= 0.0, numpy_braking_bound(d_up, delta, dt), np.inf)
+    v_lo = np.where(d_lo >= 0.0, numpy_braking_bound(d_lo, delta, dt), np.inf)
     return np.maximum(lower, -v_lo), np.minimum(upper, v_up)
 
 
