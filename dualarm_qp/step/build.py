@@ -55,6 +55,7 @@ from .limits.box_form import RANGE, BoxForm, compiled_constraint
 from .options import StepOptions
 from .parts import Limit
 from .problem import StepProblem
+from .stacking import LimitStack, checked_rates
 from .state import DualArmState
 from .tasks import CarryTasks
 
@@ -130,33 +131,9 @@ def _compiled_form(limit: Limit) -> BoxForm | None:
     return None
 
 
-#: A box that the limits together leave empty by at most this (relative to
-#: ``max(1, |lower|)``) is rounding, not an infeasible step (on an acceleration limit's
-#: braking profile the box shrinks to one rate, and the distance left is a sum over many
-#: samples): it is pinned at its lower end.
-PIN_RTOL = 1e-9
-
-
-def pin_rounding(lower: FloatArray, upper: FloatArray) -> FloatArray:
-    """Raise ``upper`` to ``lower`` where a box is empty by rounding only.
-
-    See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step). The
-    kernel's box intersection, on one box.
-    """
-    out = kernel.intersect_boxes(lower[None], [0], upper[None], [0], lower.shape[0],
-                                 PIN_RTOL)
-    if out[4] >= 0:
-        raise NonFiniteError("the bounds")
-    return np.asarray(out[1])
-
-
 def smallest_singular_value(J: FloatArray) -> float:
     """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
     return float(kernel.smallest_singular_value(J))
-
-
-#: Patterns of bound sources a builder keeps named (:meth:`StepBuilder._bound_sources`).
-_SOURCE_PATTERNS = 64
 
 
 class StepBuilder:
@@ -238,11 +215,7 @@ class StepBuilder:
         self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l,
                                          self.carry.chain)
         self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
-        self._no_rows = np.zeros((0, lay.n))
-        self._no_rhs = np.zeros(0)
-        self._no_bounds = np.zeros((0, lay.n))
         self._labels = tuple(limit.name for limit in self.limits)
-        self._sources: dict[bytes, tuple[tuple[str, ...], tuple[str, ...]]] = {}
         # The limits whose box the kernel computes with the standard parts (a compiled
         # form, .limits.box_form), and the others, whose constraint(ctx) runs here.
         forms = [_compiled_form(limit) for limit in self.limits]
@@ -250,6 +223,7 @@ class StepBuilder:
         self._compiled_ids = [k for k, _ in self._forms]
         self._python_limits = tuple((k, limit) for k, limit in enumerate(self.limits)
                                     if forms[k] is None)
+        self._stack = LimitStack(self._labels, lay.n, self._compiled_ids)
         self._parts = self._make_parts()
 
     def _make_parts(self) -> kernel.StepParts:
@@ -352,7 +326,8 @@ class StepBuilder:
             support_force = self._support(self._contact, kin, state)
         lay, dt = self.layout, self.options.dt
         grasp_lo, grasp_hi = self._grasp_rates(sigma, sigma_l)
-        x0 = self._zeros if x_applied is None else self._checked_rates(x_applied, "x_applied")
+        x0 = self._zeros if x_applied is None else checked_rates(x_applied, "x_applied",
+                                                                 lay.n)
         tasks = self.carry_tasks
         q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
@@ -410,7 +385,7 @@ class StepBuilder:
         ctx, support_force, parts = self._prepared(state, scale_max, x_applied)
         if not parts.equality_finite:
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
-        lay = self.layout
+        lay, stack = self.layout, self._stack
         lowers: list[FloatArray] = []
         lower_ids: list[int] = []
         uppers: list[FloatArray] = []
@@ -428,22 +403,17 @@ class StepBuilder:
                 uppers.append(c.upper)
                 upper_ids.append(k)
             if c.G is not None and c.h is not None and len(c.h):
-                G_k, h_k = self._checked_rows(k, c.G, c.h, c.row_names)
+                G_k, h_k = stack.checked_rows(k, c.G, c.h, c.row_names)
                 G_parts.append(G_k)
                 h_parts.append(h_k)
                 row_ids.append(k)
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                    for i in range(len(h_k))]
-        L, L_ids = self._with_compiled(parts.lowers, lowers, lower_ids, "lower")
-        U, U_ids = self._with_compiled(parts.uppers, uppers, upper_ids, "upper")
-        lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(L, L_ids, U, U_ids,
-                                                                       lay.n, PIN_RTOL)
-        if nan_limit >= 0:
-            raise NonFiniteError(f"the bounds of the limit '{self._labels[nan_limit]}'")
-        lower_by, upper_by = self._bound_sources(lo_by, up_by)
-        G, h = self._rows(G_parts, h_parts, row_ids)
+        lower, upper, lower_by, upper_by = stack.box(parts.lowers, parts.uppers, lowers,
+                                                     lower_ids, uppers, upper_ids)
+        G, h = stack.rows(G_parts, h_parts, row_ids)
         if x_prev is not None:
-            x_prev = self._checked_rates(x_prev, "x_prev", finite=False)
+            x_prev = checked_rates(x_prev, "x_prev", lay.n, finite=False)
         recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
         # Every part was checked where it was made (the limits' bounds and rows here):
@@ -457,137 +427,6 @@ class StepBuilder:
         return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
                          ctx.T_f, ctx.J_f, ctx.sigma_min, kin, t2 - t0 - kin, support_force,
                          ctx)
-
-    def _with_compiled(self, compiled: FloatArray, bounds: list[FloatArray], ids: list[int],
-                       side: str) -> tuple[FloatArray, list[int]]:
-        """Return the compiled limits' ``side`` bounds and the others', in the limits' order."""
-        if not bounds:
-            return compiled, self._compiled_ids
-        rows = np.vstack([compiled, self._stacked(bounds, ids, side)])
-        every = self._compiled_ids + ids
-        order = sorted(range(len(every)), key=every.__getitem__)
-        return rows[order], [every[i] for i in order]
-
-    def _stacked(self, bounds: list[FloatArray], ids: list[int], side: str) -> FloatArray:
-        """Return the limits' ``side`` bounds as rows of one array (k, n).
-
-        Raises
-        ------
-        ShapeError
-            A limit's bounds are not one number per variable.
-        """
-        n = self.layout.n
-        if not bounds:
-            return self._no_bounds
-        try:
-            out = np.array(bounds, dtype=np.float64)
-        except (TypeError, ValueError):
-            out = np.zeros(0)
-        if out.shape != (len(bounds), n):
-            for bound, k in zip(bounds, ids, strict=True):
-                name = f"the {side} bounds of the limit '{self._labels[k]}'"
-                if np.shape(bound) != (n,):
-                    raise ShapeError(name, (n,), np.shape(bound))
-                try:
-                    np.asarray(bound, dtype=np.float64)
-                except (TypeError, ValueError) as err:
-                    raise InvalidInputError(f"{name} are not numbers: {err}") from err
-            raise InvalidInputError(f"the limits' {side} bounds do not stack into "
-                                    f"({len(bounds)}, {n}) numbers")
-        return out
-
-    def _checked_rows(self, k: int, G: object, h: object, names: tuple[str, ...]
-                      ) -> tuple[FloatArray, FloatArray]:
-        """Return limit ``k``'s rows as ``G`` (p, n) and ``h`` (p,) float arrays.
-
-        Raises
-        ------
-        ShapeError
-            The rows are not ``(p, n)`` with ``p`` right-hand sides, or the limit names
-            them with another number of names.
-        InvalidInputError
-            The rows are not numbers.
-        """
-        name = f"the rows of the limit '{self._labels[k]}'"
-        try:
-            G_k = np.atleast_2d(np.asarray(G, dtype=np.float64))
-            h_k = np.atleast_1d(np.asarray(h, dtype=np.float64))
-        except (TypeError, ValueError) as err:
-            raise InvalidInputError(f"{name} are not numbers: {err}") from err
-        if h_k.ndim != 1 or G_k.shape != (h_k.shape[0], self.layout.n):
-            raise ShapeError(name, (h_k.shape[0] if h_k.ndim == 1 else -1, self.layout.n),
-                             G_k.shape)
-        if names and len(names) != h_k.shape[0]:
-            raise ShapeError(f"the row names of the limit '{self._labels[k]}'",
-                             (h_k.shape[0],), (len(names),))
-        return G_k, h_k
-
-    def _rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int]
-              ) -> tuple[FloatArray, FloatArray]:
-        """Return the limits' checked rows stacked, ``G`` (p, n) and ``h`` (p,).
-
-        Raises
-        ------
-        NonFiniteError
-            A limit's rows hold NaN or infinity, or its right-hand sides NaN.
-        """
-        if not G_parts:
-            return self._no_rows, self._no_rhs
-        G = np.vstack(G_parts)
-        h = np.concatenate(h_parts)
-        if kernel.first_defect([G], [h]) >= 0:
-            for G_k, h_k, k in zip(G_parts, h_parts, ids, strict=True):
-                if kernel.first_defect([np.ascontiguousarray(G_k)],
-                                       [np.ascontiguousarray(h_k)]) >= 0:
-                    raise NonFiniteError(f"the rows of the limit '{self._labels[k]}'")
-        return G, h
-
-    def _checked_rates(self, x: object, name: str, *, finite: bool = True) -> FloatArray:
-        """Return rates of every variable as a C-ordered float array, or raise.
-
-        For a warm start and the last applied command: ``n`` numbers.
-
-        Raises
-        ------
-        ShapeError
-            Not ``n`` numbers.
-        InvalidInputError
-            Not numbers.
-        NonFiniteError
-            With ``finite``: a NaN or an infinity.
-        """
-        n = self.layout.n
-        if (isinstance(x, np.ndarray) and x.shape == (n,) and x.dtype == np.float64
-                and x.flags.c_contiguous):
-            out = x
-        else:
-            try:
-                out = np.ascontiguousarray(x, dtype=np.float64)
-            except (TypeError, ValueError) as err:
-                raise InvalidInputError(f"{name} is not numbers: {err}") from err
-            if out.shape != (n,):
-                raise ShapeError(name, (n,), out.shape)
-        if finite and kernel.first_defect([out], []) >= 0:
-            raise NonFiniteError(name)
-        return out
-
-    def _bound_sources(self, lo_by: NDArray[np.int64], up_by: NDArray[np.int64]
-                       ) -> tuple[tuple[str, ...], tuple[str, ...]]:
-        """Return ``lower_by`` and ``upper_by``: the limit that set each bound (by index).
-
-        The sources rarely change from one step to the next: the names are kept per
-        pattern of indices (a handful of patterns in a run).
-        """
-        key = lo_by.tobytes() + up_by.tobytes()
-        known = self._sources.get(key)
-        if known is None:
-            labels = self._labels
-            known = (tuple(labels[i] if i >= 0 else "" for i in lo_by.tolist()),
-                     tuple(labels[i] if i >= 0 else "" for i in up_by.tolist()))
-            if len(self._sources) >= _SOURCE_PATTERNS:
-                self._sources.clear()
-            self._sources[key] = known
-        return known
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

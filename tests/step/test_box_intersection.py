@@ -16,8 +16,9 @@ from test_step_builder import make_task, options
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
-from dualarm_qp.step.build import PIN_RTOL, StepBuilder, pin_rounding
+from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.parts import Constraint
+from dualarm_qp.step.stacking import PIN_RTOL, pin_rounding
 from dualarm_qp.step.state import DualArmState
 from dualarm_qp.task.surfaces import PlaneBar
 

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dualarm_qp.step.build import pin_rounding
 from dualarm_qp.step.limits import AccelerationLimit, braking_bound
+from dualarm_qp.step.stacking import pin_rounding
 
 
 def run_to_the_limit(rule, trials: int = 20_000, steps: int = 300, seed: int = 0):

@@ -23,9 +23,10 @@ from test_braking_bound import numpy_braking_bound
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.experiments import build_experiment, load_config
-from dualarm_qp.step.build import PIN_RTOL, StepBuilder
+from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.kinematics import both_arms
 from dualarm_qp.step.limits.box_form import BoxForm
+from dualarm_qp.step.stacking import PIN_RTOL
 from dualarm_qp.step.state import DualArmState
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
