@@ -17,13 +17,14 @@ BOXES = {
     # name: (x, y, w, h, colour, text)
     "state": (0.2, 6.2, 2.4, 0.9, "#dbe9f6", "measured state\njoints, grasps, path time"),
     "context": (3.3, 6.2, 3.2, 0.9, "#dbe9f6",
-                "StepContext\nkinematics once: poses, Jacobians,\nrate ranges, last command"),
+                "StepContext\nkinematics once: poses, Jacobians,\nrate ranges, last command\n"
+                "(one kernel call with the standard parts)"),
     "tasks": (0.2, 4.3, 2.4, 1.3, "#e6f4e6",
               "tasks (equality rows)\nobject follows D(t)\ngrasp closure"),
     "cost": (2.8, 4.3, 1.9, 1.3, "#e6f4e6", "cost term\ncentring\n(Eqs. 37-40)"),
     "limits": (4.9, 4.3, 3.8, 1.3, "#e6f4e6",
-               "limits (boxes and rows)\njoint range, joint speed,\ngrasp range, grasp speed,\n"
-               "acceleration, your own (a wall)"),
+               "limits (boxes and rows)\ncompiled boxes: joint and grasp range,\n"
+               "joint and grasp speed, acceleration;\nin Python: collision, torque, your own"),
     "builder": (2.0, 2.9, 4.6, 0.8, "#fff2cc", "StepBuilder: stacks the parts"),
     "problem": (2.0, 1.8, 4.6, 0.8, "#fff2cc",
                 "StepProblem: A x = s b, lower <= x <= upper, G x <= h, cost"),
