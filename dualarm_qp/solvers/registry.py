@@ -47,7 +47,7 @@ class SolverInfo:
         Whether the solver (an instance of ``factory``, a class) has
         ``solve_certified(problem, tol, claims_bounds)``: its solve and the kernel's
         certificate of the answer in one call, the verdict given by
-        :func:`~.certify.certify` (the exact ``nullspace`` solver).
+        :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver).
     """
 
     name: str

@@ -220,10 +220,9 @@ class StepBuilder:
         # form, .limits.box_form), and the others, whose constraint(ctx) runs here.
         forms = [_compiled_form(limit) for limit in self.limits]
         self._forms = [(k, form) for k, form in enumerate(forms) if form is not None]
-        self._compiled_ids = [k for k, _ in self._forms]
         self._python_limits = tuple((k, limit) for k, limit in enumerate(self.limits)
                                     if forms[k] is None)
-        self._stack = LimitStack(self._labels, lay.n, self._compiled_ids)
+        self._stack = LimitStack(self._labels, lay.n, [k for k, _ in self._forms])
         self._parts = self._make_parts()
 
     def _make_parts(self) -> kernel.StepParts:
@@ -239,10 +238,11 @@ class StepBuilder:
                                  carry.columns[0], self._q_min, self._q_max, self.options.dt,
                                  self.cost.centred, self.cost.shrink)
         for k, form in self._forms:
-            for what, values in (("numbers", form.p), ("mask", form.off)):
-                if (what == "numbers" or form.kind == RANGE) and values.shape != (lay.n,):
-                    raise ShapeError(f"the compiled box {what} of the limit "
-                                     f"'{self._labels[k]}'", (lay.n,), values.shape)
+            checked = (form.p, form.off) if form.kind == RANGE else (form.p,)
+            for values in checked:
+                if values.shape != (lay.n,):
+                    raise ShapeError(f"the compiled box of the limit '{self._labels[k]}'",
+                                     (lay.n,), values.shape)
             parts.add_form(form.kind, form.p, form.off)
         return parts
 

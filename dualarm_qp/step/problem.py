@@ -236,8 +236,8 @@ class StepProblem:
 
         Every init field is given by keyword. Validation happens once, at the boundary
         (the parts come from the kernel and from checked settings; a limit's bounds
-        and rows are checked by :class:`~dualarm_qp.step.build.StepBuilder` as it
-        stacks them), so nothing is checked or copied again here: ``A`` and ``b`` are
+        and rows are checked by :class:`~dualarm_qp.step.stacking.LimitStack` as the
+        builder stacks them), so nothing is checked or copied again here: ``A`` and ``b`` are
         the kernel's equality (finite), the weights the cost's (positive, from
         :class:`~dualarm_qp.step.options.StepOptions`), the centre and the box the
         kernel's, and every array a C-ordered float64 of the right shape. Anything

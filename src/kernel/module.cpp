@@ -77,6 +77,24 @@ nb::tuple factor_tuple(const dqk::Factor& f) {
   return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
 }
 
+// basis(A) as Python holds it: (P, N, rank, sigma_max, qr).
+nb::tuple basis_tuple(dqk::Basis&& f) {
+  return nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max, f.qr);
+}
+
+// inequalities(...) as Python holds them: (C, e, kind, index).
+nb::tuple rows_tuple(dqk::Rows&& r) {
+  return nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
+                        out(std::move(r.index)));
+}
+
+// A certificate as dualarm_qp/solvers/certify.py reads it (its Reading).
+nb::tuple certificate_tuple(dqk::Certificate&& c) {
+  return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
+                        c.objective, out(std::move(c.active_lower)),
+                        out(std::move(c.active_upper)), c.active_rows);
+}
+
 void require(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(what);
 }
@@ -288,9 +306,7 @@ NB_MODULE(_kernel, m) {
   m.def(
       "inequalities",
       [](const Vec& lower, const Vec& upper, In G, const Vec& h) {
-        dqk::Rows r = dqk::inequalities(lower, upper, G, h);
-        return nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
-                              out(std::move(r.index)));
+        return rows_tuple(dqk::inequalities(lower, upper, G, h));
       },
       "lower"_a, "upper"_a, "G"_a, "h"_a,
       "Every finite limit as unit-norm rows: (C, e, kind, index).");
@@ -310,9 +326,7 @@ NB_MODULE(_kernel, m) {
   m.def(
       "basis",
       [](In A) {
-        dqk::Basis f = dqk::basis(A);
-        return nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max,
-                              f.qr);
+        return basis_tuple(dqk::basis(A));
       },
       "A"_a,
       "(P, N, rank, sigma_max, qr): the pseudo-inverse of A, a basis of its null space, "
@@ -352,21 +366,11 @@ NB_MODULE(_kernel, m) {
         dqk::CertifiedStep s = dqk::solve_certified(A, b, lower, upper, G, h, cost, feas_tol,
                                                     max_iter, bounds, eq_rtol, bounds_tol);
         nb::object cert = nb::none();
-        if (s.certified) {
-          dqk::Certificate& c = s.cert;
-          cert = nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
-                                c.objective, out(std::move(c.active_lower)),
-                                out(std::move(c.active_upper)), c.active_rows);
-        }
-        dqk::Basis& f = s.basis;
-        dqk::Rows& r = s.rows;
-        return nb::make_tuple(
-            static_cast<int>(s.answer.code), out(std::move(s.answer.x)), s.answer.conflicts,
-            s.answer.nullity, s.answer.iterations,
-            nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max, f.qr),
-            nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
-                           out(std::move(r.index))),
-            cert);
+        if (s.certified) cert = certificate_tuple(std::move(s.cert));
+        return nb::make_tuple(static_cast<int>(s.answer.code), out(std::move(s.answer.x)),
+                              s.answer.conflicts, s.answer.nullity, s.answer.iterations,
+                              basis_tuple(std::move(s.basis)), rows_tuple(std::move(s.rows)),
+                              cert);
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "w_diag"_a, "w_full"_a,
       "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a, "bounds"_a, "eq_rtol"_a,
@@ -436,13 +440,10 @@ NB_MODULE(_kernel, m) {
                     center.size() == n && x.size() == n,
                 "certificate: arguments of inconsistent sizes");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
-        dqk::Certificate c =
+        return certificate_tuple(
             dqk::certificate(A, b, lower, upper, G, h,
                              ask_kkt ? basis_from(A, P, N, rank, sigma_max) : dqk::Basis{}, C, e,
-                             kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
-        return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
-                              c.objective, out(std::move(c.active_lower)),
-                              out(std::move(c.active_upper)), c.active_rows);
+                             kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt));
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "P"_a, "N"_a, "rank"_a,
       "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
