@@ -16,6 +16,7 @@ ROUNDING: float
 TIE_RTOL: float
 PRICE_TOL: float
 PIVOT_TOL: float
+EMPTY_BOX_CODE: int
 BOX_RANGE: int
 BOX_SPEED: int
 BOX_ACCELERATION: int
@@ -135,16 +136,28 @@ def limit_box(kind: int, p: ArrayLike, off: ArrayLike, lo: ArrayLike, hi: ArrayL
 class StepParts:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
-                 centred: ArrayLike, shrink: float) -> None: ...
-    def add_form(self, kind: int, p: ArrayLike, off: ArrayLike) -> None: ...
+                 centred: ArrayLike, shrink: float, ranged: ArrayLike,
+                 pin_rtol: float) -> None: ...
+    def add_form(self, kind: int, p: ArrayLike, off: ArrayLike, limit: int) -> None: ...
+    def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
+                       r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
     @property
     def forms(self) -> int: ...
     @property
     def n(self) -> int: ...
+    @property
+    def grasp_lines(self) -> bool: ...
     def prepare(self, carry: Chain, q_carry: ArrayLike, col_rate: ArrayLike,
                 follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
-                grasp_lo: ArrayLike, grasp_hi: ArrayLike, x_applied: ArrayLike,
-                scale_max: float, leader_gain: float, correction_gain: float,
-                exact_orientation: bool
+                sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
+                x_applied: ArrayLike, scale_max: float, leader_gain: float,
+                correction_gain: float, exact_orientation: bool
                 ) -> tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
-                           float]: ...
+                           tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int],
+                           NDArray[np.bool_], float]: ...
+
+def grasp_rate_range(r: ArrayLike, s_star: ArrayLike, r_min: ArrayLike, r_max: ArrayLike,
+                     dt: float) -> tuple[float, float]: ...
+def grasp_rates(point: ArrayLike, tangent: ArrayLike, sigma: float, r_min: ArrayLike,
+                r_max: ArrayLike, sigma_min: float, sigma_max: float, dt: float
+                ) -> tuple[float, float]: ...

@@ -141,20 +141,49 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
     start : float
         ``time.perf_counter()`` when the certification began.
     """
-    n = problem.n
-    status, message = claim.status, claim.message
-    if reading is not None:
-        (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up,
-         active) = reading
-    else:
-        finite = False
-    if not finite:
+    fields = verdict_fields(problem, claim.status, claim.message, x, reading, tol,
+                            claims_bounds)
+    if fields is None:
+        n = problem.n
         zeros = np.zeros(n, dtype=bool)
-        return replace(claim, x=np.zeros(n), status=Status.ERROR if status.usable else status,
+        return replace(claim, x=np.zeros(n),
+                       status=Status.ERROR if claim.status.usable else claim.status,
                        objective=math.nan, eq_residual=math.nan, bound_violation=math.nan,
                        active_lower=zeros, active_upper=zeros, verified_with=tol,
                        build_time=problem.build_time,
-                       message=message or "solver returned a non-finite or misshaped x")
+                       message=claim.message or "solver returned a non-finite or misshaped x")
+    solve_time = claim.solve_time + (time.perf_counter() - start)
+    if type(claim) is not StepSolution:  # a subclass keeps its type and its own fields
+        return replace(claim, **fields, solve_time=solve_time)
+    # Every field: the verdict's, and the claim's scale, solver and extras (a direct
+    # construction costs a third of dataclasses.replace, once per step).
+    return StepSolution(**fields, solve_time=solve_time, scale=claim.scale,
+                        solver=claim.solver, extras=claim.extras)
+
+
+def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatArray,
+                   reading: Reading | None, tol: Tolerance, claims_bounds: bool
+                   ) -> dict[str, Any] | None:
+    """Return the certified fields of a claim (``status``, ``message``, its ``x``), or None.
+
+    The decisions of :func:`verdict`, on the claim's parts: for a solver that makes its
+    certified answer in one piece (:meth:`~.nullspace.NullspaceSolver.solve_certified`
+    for an optimum), without a claim object first. None: ``x`` is not finite (or
+    ``reading`` is None), which :func:`verdict` answers from the claim.
+
+    Returns
+    -------
+    dict or None
+        ``x``, ``status``, ``objective``, ``eq_residual``, ``bound_violation``,
+        ``active_lower``, ``active_upper``, ``build_time``, ``message``,
+        ``verified_with``, ``row_violation`` and ``active_rows`` of the
+        :class:`~.base.StepSolution`.
+    """
+    if reading is None:
+        return None
+    (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up, active) = reading
+    if not finite:
+        return None
     if status.usable:
         if status is not Status.RELAXED and status is not Status.ESCAPING and eq > limit:
             status = Status.VIOLATION
@@ -166,18 +195,11 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
-    fields: dict[str, Any] = dict(x=x, status=status, objective=objective, eq_residual=eq,
-                  bound_violation=box, active_lower=active_lo.view(np.bool_),
-                  active_upper=active_up.view(np.bool_),
-                  solve_time=claim.solve_time + (time.perf_counter() - start),
-                  build_time=problem.build_time, message=message, verified_with=tol,
-                  row_violation=rows,
-                  active_rows=problem.inequalities().labels(active) if active else ())
-    if type(claim) is not StepSolution:  # a subclass keeps its type and its own fields
-        return replace(claim, **fields)
-    # Every field: the verdict's, and the claim's scale, solver and extras (a direct
-    # construction costs a third of dataclasses.replace, once per step).
-    return StepSolution(**fields, scale=claim.scale, solver=claim.solver, extras=claim.extras)
+    return dict(x=x, status=status, objective=objective, eq_residual=eq,
+                bound_violation=box, active_lower=active_lo.view(np.bool_),
+                active_upper=active_up.view(np.bool_), build_time=problem.build_time,
+                message=message, verified_with=tol, row_violation=rows,
+                active_rows=problem.inequalities().labels(active) if active else ())
 
 
 #: The kernel's certificate of one ``x`` (``kernel.certificate``'s tuple): finite, the

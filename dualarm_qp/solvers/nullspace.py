@@ -39,9 +39,9 @@ from numpy.typing import NDArray
 from .._compiled import kernel
 from ..step.problem import StepProblem
 from ._affine import cost_arrays, keep_basis, problem_basis
-from ._util import empty_box_failure
+from ._util import empty_box_answer, empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
-from .certify import certify, verdict
+from .certify import certify, verdict, verdict_fields
 from .registry import check_number, check_tolerance, register
 
 FloatArray = NDArray[np.float64]
@@ -95,8 +95,10 @@ class NullspaceSolver:
         What :class:`~.registry.CertifiedSolver` calls for this solver: the same
         solve as :meth:`solve` and, for an optimum, the kernel's certificate of its
         ``x`` (the function :func:`~.certify.certify` calls) on the same basis of ``A``
-        and the same rows, computed once; :func:`~.certify.verdict` decides, as for
-        every solver. The basis and the rows are kept in the problem's cache. A
+        and the same rows, computed once; :func:`~.certify.verdict_fields` decides, as
+        for every solver (an optimum's answer is made in one piece, with no claim object
+        first). An empty box is found by the same call, which then does not solve. The
+        basis and the rows are kept in the problem's cache. A
         problem whose cache already holds them (a scaled copy of a solved step) is
         solved and certified by the two calls, which reuse them.
         """
@@ -104,16 +106,26 @@ class NullspaceSolver:
         cache = problem._cache
         if "basis" in cache and "ineq" in cache:
             return certify(problem, self.solve(problem), tol, claims_bounds=claims_bounds)
-        empty = empty_box_failure(problem, self.name)
-        if empty is not None:
-            return certify(problem, empty, tol, claims_bounds=claims_bounds)
         w_diag, w_full, root_full = cost_arrays(problem)
         code, x, rows, nullity, iterations, basis, ineq, reading = kernel.solve_certified(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
             w_diag, w_full, root_full, problem.center, self.feasibility_tol,
             self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        if code == _EMPTY_BOX:  # not solved: the one answer to an empty box
+            return certify(problem, empty_box_answer(problem, self.name,
+                                                     time.perf_counter() - start),
+                           tol, claims_bounds=claims_bounds)
         keep_basis(problem, basis)
         problem.keep_inequalities(*ineq)
+        if code == 0:  # an optimum: certified in one piece, without a claim object first
+            fields = verdict_fields(problem, Status.OPTIMAL, "", x, reading, tol,
+                                    claims_bounds)
+            if fields is not None:
+                extras: dict[str, Any] = {"nullity": nullity}
+                if iterations >= 0:
+                    extras["iterations"] = iterations
+                return StepSolution(**fields, solve_time=time.perf_counter() - start,
+                                    solver=self.name, extras=extras)
         claim = self._claim(problem, code, x, rows, nullity, iterations, start)
         if reading is None:  # not an optimum: the claim is certified as it is
             return certify(problem, claim, tol, claims_bounds=claims_bounds)
@@ -150,8 +162,10 @@ class NullspaceSolver:
                       conflicts=conflicts, **extras)
 
 
-#: The kernel's answer codes (src/kernel/nullspace.hpp); 0 is OPTIMAL.
+#: The kernel's answer codes (src/kernel/nullspace.hpp); 0 is OPTIMAL. An empty box is
+#: ``kernel.EMPTY_BOX_CODE`` (``kernel.solve_certified`` does not solve it).
 _INFEASIBLE, _INCONSISTENT, _MAX_ITER = 1, 2, 3
+_EMPTY_BOX: int = kernel.EMPTY_BOX_CODE
 
 
 register("nullspace", NullspaceSolver,

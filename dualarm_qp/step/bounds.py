@@ -10,11 +10,16 @@ the range is also the surface box ``[r_min, r_max]`` of the hand's point, which
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .._compiled import kernel
+
+if TYPE_CHECKING:
+    from ..task.surfaces import GraspSurface
 
 FloatArray = NDArray[np.float64]
 
@@ -28,28 +33,37 @@ def grasp_rate_range(
 ) -> tuple[float, float]:
     """``(rho_min, rho_max)`` of Eqs. 30-31 [m/s].
 
-    Components with ``s*_i == 0`` do not move along axis i and are skipped. The
-    arguments are 3-vectors (arrays or lists of floats).
+    Components with ``s*_i == 0`` (below 1e-12) do not move along axis i and are
+    skipped. The arguments are 3-vectors. Computed by the kernel
+    (``src/kernel/boxes.cpp``), which the step's grasp rates use.
+
+    Raises
+    ------
+    ValueError
+        An argument is not a 3-vector of numbers.
     """
-    rho_min, rho_max = -math.inf, math.inf
-    # Python floats: for three numbers a list beats numpy's per-element indexing.
-    for r, si, lo, hi in zip(_floats(surface_r), _floats(s_star), _floats(r_min),
-                             _floats(r_max), strict=True):
-        if abs(si) < 1e-12:
-            continue
-        a = (lo - r) / (si * dt)
-        b = (hi - r) / (si * dt)
-        rho_min = max(rho_min, min(a, b))
-        rho_max = min(rho_max, max(a, b))
-    return rho_min, rho_max
+    return kernel.grasp_rate_range(_vector(surface_r), _vector(s_star), _vector(r_min),
+                                   _vector(r_max), float(dt))
 
 
-def _floats(v: Sequence[float] | FloatArray) -> list[float]:
-    """Return the three components of ``v`` as Python floats."""
-    out = v.tolist() if isinstance(v, np.ndarray) else [float(x) for x in v]
-    if len(out) != 3:
-        raise ValueError(f"a 3-vector was expected, got {len(out)} components")
+def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, float]:
+    """Return a grasp's rates to the ends of its range over one sample [m/s].
+
+    Eqs. 30-31 at the surface's point and tangent at ``sigma``, cut by the rates that
+    reach ``sigma_min`` and ``sigma_max`` in one sample. Computed by the kernel, as the
+    step computes the rates of a straight grasp (:attr:`GraspSurface.line`) itself.
+    """
+    return kernel.grasp_rates(surface.point(sigma), surface.tangent(sigma), sigma,
+                              surface.r_min, surface.r_max, surface.sigma_min,
+                              surface.sigma_max, dt)
+
+
+def _vector(v: Sequence[float] | FloatArray) -> FloatArray:
+    """Return ``v`` as a float64 3-vector."""
+    out = np.asarray(v, dtype=np.float64)
+    if out.shape != (3,):
+        raise ValueError(f"a 3-vector was expected, got shape {out.shape}")
     return out
 
 
-__all__ = ["grasp_rate_range"]
+__all__ = ["grasp_rate_range", "grasp_rates"]

@@ -45,7 +45,7 @@ from ..task.contact import SupportContact
 from ..task.scene import DualArmTask
 from ..task.support import SupportLine
 from ..task.surfaces import GraspSurface
-from .bounds import grasp_rate_range
+from .bounds import grasp_rates
 from .context import ArmKinematics, StepContext
 from .cost import CentringCost
 from .kinematics import both_arms
@@ -55,7 +55,7 @@ from .limits.box_form import RANGE, BoxForm, compiled_constraint
 from .options import StepOptions
 from .parts import Limit
 from .problem import StepProblem
-from .stacking import LimitStack, checked_rates
+from .stacking import PIN_RTOL, CompiledBox, LimitStack, checked_rates
 from .state import DualArmState
 from .tasks import CarryTasks
 
@@ -114,6 +114,8 @@ class _Parts:
     center: FloatArray  # (n,) the centring cost's centres
     lowers: FloatArray  # (forms, n) the compiled limits' bounds, in their order
     uppers: FloatArray
+    box: CompiledBox  # the compiled limits' boxes intersected (kernel.intersect_boxes)
+    recovering: NDArray[np.bool_]  # (n) ranged variables outside their range
     kinematics_time: float  # [s] up to and with the kernel's kinematics
 
 
@@ -212,6 +214,7 @@ class StepBuilder:
             [] if task.leader_surface is None else [task.leader_surface])
         self._contact = task.contact
         self._zeros = np.zeros(lay.n)
+        self._no_grasps = np.zeros(0)
         self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l,
                                          self.carry.chain)
         self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
@@ -236,14 +239,22 @@ class StepBuilder:
         lay, carry = self.layout, self.carry
         parts = kernel.StepParts(lay.n_l, lay.n_f, carry.frames, self.task.follower.tool_frame_id,
                                  carry.columns[0], self._q_min, self._q_max, self.options.dt,
-                                 self.cost.centred, self.cost.shrink)
+                                 self.cost.centred, self.cost.shrink, self._ranged, PIN_RTOL)
         for k, form in self._forms:
             checked = (form.p, form.off) if form.kind == RANGE else (form.p,)
             for values in checked:
                 if values.shape != (lay.n,):
                     raise ShapeError(f"the compiled box of the limit '{self._labels[k]}'",
                                      (lay.n,), values.shape)
-            parts.add_form(form.kind, form.p, form.off)
+            parts.add_form(form.kind, form.p, form.off, k)
+        # Straight grasps (and no Case 2 support, whose line moves): the kernel computes
+        # their rates to the range ends from the grasp coordinates.
+        lines = [surf.line for surf in self._surfaces]
+        if self._contact is None and all(line is not None for line in lines):
+            for surf, line in zip(self._surfaces, lines, strict=True):
+                if line is not None:
+                    parts.add_grasp_line(*line, surf.r_min, surf.r_max, surf.sigma_min,
+                                         surf.sigma_max)
         return parts
 
     # -- what the controller and the reports read -----------------------------------------
@@ -325,15 +336,19 @@ class StepBuilder:
             kin = both_arms(carry, follower, q_l, q_f, sigma, sigma_l, T_D).carry
             support_force = self._support(self._contact, kin, state)
         lay, dt = self.layout, self.options.dt
-        grasp_lo, grasp_hi = self._grasp_rates(sigma, sigma_l)
+        sigmas = self._sigmas(sigma, sigma_l)
+        if self._parts.grasp_lines:  # the kernel computes the grasps' rates itself
+            grasp_lo = grasp_hi = self._no_grasps
+        else:
+            grasp_lo, grasp_hi = self._grasp_rates(sigmas)
         x0 = self._zeros if x_applied is None else checked_rates(x_applied, "x_applied",
                                                                  lay.n)
         tasks = self.carry_tasks
         q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
         (T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, finite, center, lowers,
-         uppers, kin_seconds) = self._parts.prepare(
-            carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
+         uppers, box, recovering, kin_seconds) = self._parts.prepare(
+            carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist, sigmas,
             grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
             tasks.exact_orientation)
         kin = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
@@ -341,20 +356,20 @@ class StepBuilder:
                           tuple(self._surfaces), lay.join(q_l, q_f, sigma, sigma_l), lo, hi,
                           x0, e[:6], e[6:], self._leader_arm, self._follower_arm,
                           (float(sv[0]), float(sv[1])))
-        return ctx, support_force, _Parts(A, b, finite, center, lowers, uppers,
-                                          called - start + kin_seconds)
+        return ctx, support_force, _Parts(A, b, finite, center, lowers, uppers, box,
+                                          recovering, called - start + kin_seconds)
 
-    def _grasp_rates(self, sigma: float, sigma_l: float) -> tuple[FloatArray, FloatArray]:
+    def _sigmas(self, sigma: float, sigma_l: float) -> FloatArray:
+        """Return the grasp coordinates, the follower's first [m], shape (n_grasp,)."""
+        return np.array((sigma, sigma_l)[:self.layout.n_grasp])
+
+    def _grasp_rates(self, sigmas: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Return the grasps' rates to the ends of their ranges (Eqs. 30-33) [m/s]."""
         n_grasp, dt = self.layout.n_grasp, self.options.dt
         lo = np.empty(n_grasp)
         hi = np.empty(n_grasp)
-        for i, (surf, s) in enumerate(zip(self._surfaces, (sigma, sigma_l)[:n_grasp],
-                                          strict=True)):
-            rho_min, rho_max = grasp_rate_range(surf.point(s), surf.tangent(s), surf.r_min,
-                                                surf.r_max, dt)
-            lo[i] = max(rho_min, (surf.sigma_min - s) / dt)
-            hi[i] = min(rho_max, (surf.sigma_max - s) / dt)
+        for i, (surf, s) in enumerate(zip(self._surfaces, sigmas.tolist(), strict=True)):
+            lo[i], hi[i] = grasp_rates(surf, s, dt)
         return lo, hi
 
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
@@ -409,12 +424,11 @@ class StepBuilder:
                 row_ids.append(k)
                 row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                    for i in range(len(h_k))]
-        lower, upper, lower_by, upper_by = stack.box(parts.lowers, parts.uppers, lowers,
-                                                     lower_ids, uppers, upper_ids)
+        lower, upper, lower_by, upper_by = stack.box(parts.lowers, parts.uppers, parts.box,
+                                                     lowers, lower_ids, uppers, upper_ids)
         G, h = stack.rows(G_parts, h_parts, row_ids)
         if x_prev is not None:
             x_prev = checked_rates(x_prev, "x_prev", lay.n, finite=False)
-        recovering = ctx.outside & self._ranged
         t2 = time.perf_counter()
         # Every part was checked where it was made (the limits' bounds and rows here):
         # the problem is assembled without a second check.
@@ -424,7 +438,7 @@ class StepBuilder:
             names=lay.names, row_names=tuple(row_names), eq_names=CarryTasks.row_names,
             lower_by=lower_by, upper_by=upper_by, build_time=t2 - t0)
         kin = parts.kinematics_time
-        return StepBuild(problem, recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
+        return StepBuild(problem, parts.recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
                          ctx.T_f, ctx.J_f, ctx.sigma_min, kin, t2 - t0 - kin, support_force,
                          ctx)
 

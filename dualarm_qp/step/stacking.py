@@ -72,6 +72,11 @@ def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> Float
     return out
 
 
+#: ``kernel.intersect_boxes``'s answer: lower, upper, lower_by, upper_by (the index of
+#: the limit that set each bound, -1: none) and the first limit whose bounds hold NaN.
+CompiledBox = tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64], int]
+
+
 class LimitStack:
     """The limits of one builder, by index: their boxes and rows stacked and checked.
 
@@ -96,15 +101,18 @@ class LimitStack:
         self._sources: dict[bytes, tuple[tuple[str, ...], tuple[str, ...]]] = {}
 
     def box(self, compiled_lowers: FloatArray, compiled_uppers: FloatArray,
-            lowers: list[FloatArray], lower_ids: list[int], uppers: list[FloatArray],
-            upper_ids: list[int]) -> tuple[FloatArray, FloatArray, tuple[str, ...],
-                                           tuple[str, ...]]:
+            compiled_box: CompiledBox, lowers: list[FloatArray], lower_ids: list[int],
+            uppers: list[FloatArray], upper_ids: list[int]
+            ) -> tuple[FloatArray, FloatArray, tuple[str, ...], tuple[str, ...]]:
         """Return the step's box and the limit that set each bound.
 
         Parameters
         ----------
         compiled_lowers, compiled_uppers : ndarray, shape (len(compiled_ids), n)
             The kernel's boxes of the compiled limits.
+        compiled_box : tuple
+            Those boxes intersected by the kernel (``kernel.intersect_boxes``'s tuple):
+            the step's box when no other limit gives bounds.
         lowers, uppers : list of array_like
             The other limits' bounds (checked here), of the limits ``lower_ids`` and
             ``upper_ids``.
@@ -122,10 +130,13 @@ class LimitStack:
         NonFiniteError
             A limit's bounds hold NaN (named).
         """
-        L, L_ids = self._with_compiled(compiled_lowers, lowers, lower_ids, "lower")
-        U, U_ids = self._with_compiled(compiled_uppers, uppers, upper_ids, "upper")
-        lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(L, L_ids, U, U_ids,
-                                                                       self.n, PIN_RTOL)
+        if lowers or uppers:
+            L, L_ids = self._with_compiled(compiled_lowers, lowers, lower_ids, "lower")
+            U, U_ids = self._with_compiled(compiled_uppers, uppers, upper_ids, "upper")
+            lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(
+                L, L_ids, U, U_ids, self.n, PIN_RTOL)
+        else:
+            lower, upper, lo_by, up_by, nan_limit = compiled_box
         if nan_limit >= 0:
             raise NonFiniteError(f"the bounds of the limit '{self.labels[nan_limit]}'")
         lower_by, upper_by = self._sources_of(lo_by, up_by)

@@ -208,6 +208,17 @@ class GraspSurface(ABC):
         """Return the unit sliding vector ``s* = d point / d sigma`` (Eq. 4), object coords."""
         return self.frame(sigma)[:, 0].copy()
 
+    @property
+    def line(self) -> tuple[FloatArray, FloatArray] | None:
+        """The straight path's ``(origin, direction)``, or None for another path.
+
+        A straight path has ``point(sigma) = origin + sigma * direction`` (a product, then
+        a sum, as numpy computes it) and the tangent ``direction``: the step's kernel
+        computes the grasp's rates itself from them
+        (:class:`~dualarm_qp.step.build.StepBuilder`).
+        """
+        return None
+
     def normal(self, sigma: float) -> FloatArray:
         """Return the unit approach vector ``a* = grad phi / |grad phi|`` (Eq. 5), object coords."""
         return self.frame(sigma)[:, 2].copy()
@@ -315,6 +326,11 @@ class PlaneBar(GraspSurface):
     def point(self, sigma: float) -> FloatArray:
         """``origin + sigma * s*`` [m]."""
         return self.origin + _as_sigma(sigma) * self._s
+
+    @property
+    def line(self) -> tuple[FloatArray, FloatArray] | None:
+        """``(origin, s*)``: the path is straight (see :attr:`GraspSurface.line`)."""
+        return self.origin, self._s
 
     def points(self, sigmas: FloatArray) -> FloatArray:
         """Return :meth:`point` at each of ``sigmas`` (k,), in one product [m], shape (k, 3)."""

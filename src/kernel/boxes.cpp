@@ -109,6 +109,37 @@ std::int64_t first_defect(const std::vector<Values>& finite,
   return -1;
 }
 
+namespace {
+// Python's builtin min(a, b) and max(a, b): b only when it is strictly smaller (larger).
+double py_min(double a, double b) { return b < a ? b : a; }
+double py_max(double a, double b) { return b > a ? b : a; }
+}  // namespace
+
+std::pair<double, double> grasp_rate_range(const Eigen::Vector3d& r, const Eigen::Vector3d& s_star,
+                                           const Eigen::Vector3d& r_min,
+                                           const Eigen::Vector3d& r_max, double dt) {
+  constexpr double INF = std::numeric_limits<double>::infinity();
+  double rho_min = -INF, rho_max = INF;
+  for (Index i = 0; i < 3; ++i) {
+    const double si = s_star(i);
+    if (std::abs(si) < 1e-12) continue;
+    const double a = (r_min(i) - r(i)) / (si * dt);
+    const double b = (r_max(i) - r(i)) / (si * dt);
+    rho_min = py_max(rho_min, py_min(a, b));
+    rho_max = py_min(rho_max, py_max(a, b));
+  }
+  return {rho_min, rho_max};
+}
+
+std::pair<double, double> grasp_rates(const Eigen::Vector3d& point,
+                                      const Eigen::Vector3d& tangent, double sigma,
+                                      const Eigen::Vector3d& r_min,
+                                      const Eigen::Vector3d& r_max, double sigma_min,
+                                      double sigma_max, double dt) {
+  const auto [rho_min, rho_max] = grasp_rate_range(point, tangent, r_min, r_max, dt);
+  return {py_max(rho_min, (sigma_min - sigma) / dt), py_min(rho_max, (sigma_max - sigma) / dt)};
+}
+
 double smallest_singular_value(const Mat& J) {
   if (!J.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   if (J.rows() == 0) return std::numeric_limits<double>::infinity();  // nothing to reach

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "linalg.hpp"
@@ -40,6 +41,23 @@ void range_box(const Vec& lo, const Vec& hi, const Vec& rec,
 // finite range, 0 otherwise, times shrink (dt over the centring horizon).
 Vec centre(const Vec& lo, const Vec& hi, const Eigen::Matrix<bool, Eigen::Dynamic, 1>& centred,
            double shrink);
+
+// Eqs. 30-31: the sliding rates (rho_min, rho_max) [m/s] over one sample dt that keep
+// the hand's point r (object frame) in the surface box [r_min, r_max] when it slides
+// along s_star; a component with |s*_i| < 1e-12 does not move and is skipped. Python's
+// min and max decide (a tie or a NaN keeps the first argument), as the Python step
+// stated them.
+std::pair<double, double> grasp_rate_range(const Eigen::Vector3d& r, const Eigen::Vector3d& s_star,
+                                           const Eigen::Vector3d& r_min,
+                                           const Eigen::Vector3d& r_max, double dt);
+
+// One grasp's rates to the ends of its range [m/s]: Eqs. 30-31 at its point and tangent,
+// cut by the rates that reach sigma_min and sigma_max from sigma in one sample.
+std::pair<double, double> grasp_rates(const Eigen::Vector3d& point,
+                                      const Eigen::Vector3d& tangent, double sigma,
+                                      const Eigen::Vector3d& r_min,
+                                      const Eigen::Vector3d& r_max, double sigma_min,
+                                      double sigma_max, double dt);
 
 // Index of the first array that holds a value it may not: NaN or infinity in
 // finite[k], NaN in not_nan[k]; the finite arrays are numbered first (-1: none).

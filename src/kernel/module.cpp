@@ -215,6 +215,7 @@ NB_MODULE(_kernel, m) {
         "follower tool's error to the target into e, the leader's and the follower's "
         "smallest singular values into sv.");
 
+  m.attr("EMPTY_BOX_CODE") = dqk::EMPTY_BOX_CODE;
   m.attr("BOX_RANGE") = static_cast<int>(dqk::RANGE);
   m.attr("BOX_SPEED") = static_cast<int>(dqk::SPEED);
   m.attr("BOX_ACCELERATION") = static_cast<int>(dqk::ACCELERATION);
@@ -247,36 +248,67 @@ NB_MODULE(_kernel, m) {
   nb::class_<dqk::StepParts>(m, "StepParts",
                              "The standard parts of one step in one call (StepBuilder).")
       .def(nb::init<Index, Index, std::vector<int>, int, std::vector<int>, Vec, Vec, double,
-                    dqk::BoolVec, double>(),
+                    dqk::BoolVec, double, dqk::BoolVec, double>(),
            "n_l"_a, "n_f"_a, "carry_frames"_a, "follower_tool"_a, "cols"_a, "q_min"_a,
-           "q_max"_a, "dt"_a, "centred"_a, "shrink"_a)
-      .def("add_form", &dqk::StepParts::add_form, "kind"_a, "p"_a, "off"_a)
+           "q_max"_a, "dt"_a, "centred"_a, "shrink"_a, "ranged"_a, "pin_rtol"_a)
+      .def("add_form", &dqk::StepParts::add_form, "kind"_a, "p"_a, "off"_a, "limit"_a)
+      .def("add_grasp_line", &dqk::StepParts::add_grasp_line, "origin"_a, "direction"_a,
+           "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a)
       .def_prop_ro("forms", &dqk::StepParts::forms)
       .def_prop_ro("n", &dqk::StepParts::n)
+      .def_prop_ro("grasp_lines", &dqk::StepParts::grasp_lines)
       .def(
           "prepare",
           [](const dqk::StepParts& self, dqk::Chain& carry, const Eigen::VectorXd& q_carry,
              const Vec& col_rate, dqk::Chain& follower, const Eigen::VectorXd& q_f,
-             const dqk::Pose& T_D, const dqk::Vec6& twist, const Vec& grasp_lo,
-             const Vec& grasp_hi, const Vec& x_applied, double scale_max, double leader_gain,
-             double correction_gain, bool exact_orientation) {
+             const dqk::Pose& T_D, const dqk::Vec6& twist, const Vec& sigmas,
+             const Vec& grasp_lo, const Vec& grasp_hi, const Vec& x_applied, double scale_max,
+             double leader_gain, double correction_gain, bool exact_orientation) {
             dqk::StepPartsOut o =
-                self.prepare(carry, q_carry, col_rate, follower, q_f, T_D, twist, grasp_lo,
-                             grasp_hi, x_applied, scale_max, leader_gain, correction_gain,
-                             exact_orientation);
+                self.prepare(carry, q_carry, col_rate, follower, q_f, T_D, twist, sigmas,
+                             grasp_lo, grasp_hi, x_applied, scale_max, leader_gain,
+                             correction_gain, exact_orientation);
+            dqk::Box& box = o.box;
             return nb::make_tuple(
                 out(std::move(o.T)), out(std::move(o.J_tool)), out(std::move(o.J_object)),
                 out(std::move(o.J_target)), out(std::move(o.J_f)), out(std::move(o.e)),
                 out(std::move(o.sv)), out(std::move(o.lo)), out(std::move(o.hi)),
                 out(std::move(o.A)), out(std::move(o.b)), o.equality_finite,
                 out(std::move(o.center)), out(std::move(o.lowers)), out(std::move(o.uppers)),
-                o.kinematics_seconds);
+                nb::make_tuple(out(std::move(box.lower)), out(std::move(box.upper)),
+                               out(std::move(box.lower_by)), out(std::move(box.upper_by)),
+                               box.nan_limit),
+                out(std::move(o.recovering)), o.kinematics_seconds);
           },
           "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a, "twist"_a,
-          "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a, "leader_gain"_a,
-          "correction_gain"_a, "exact_orientation"_a,
+          "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a,
+          "leader_gain"_a, "correction_gain"_a, "exact_orientation"_a,
           "(T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, equality_finite, "
-          "center, lowers, uppers, kinematics_seconds) at one state.");
+          "center, lowers, uppers, box, recovering, kinematics_seconds) at one state; box is "
+          "intersect_boxes's tuple of the compiled forms' boxes.");
+
+  m.def(
+      "grasp_rate_range",
+      [](const Eigen::Vector3d& r, const Eigen::Vector3d& s_star, const Eigen::Vector3d& r_min,
+         const Eigen::Vector3d& r_max, double dt) {
+        const auto [lo, hi] = dqk::grasp_rate_range(r, s_star, r_min, r_max, dt);
+        return nb::make_tuple(lo, hi);
+      },
+      "r"_a, "s_star"_a, "r_min"_a, "r_max"_a, "dt"_a,
+      "Eqs. 30-31: (rho_min, rho_max) [m/s] keeping r in [r_min, r_max] sliding along s*.");
+
+  m.def(
+      "grasp_rates",
+      [](const Eigen::Vector3d& point, const Eigen::Vector3d& tangent, double sigma,
+         const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max, double sigma_min,
+         double sigma_max, double dt) {
+        const auto [lo, hi] = dqk::grasp_rates(point, tangent, sigma, r_min, r_max, sigma_min,
+                                               sigma_max, dt);
+        return nb::make_tuple(lo, hi);
+      },
+      "point"_a, "tangent"_a, "sigma"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a,
+      "dt"_a,
+      "One grasp's rates to the ends of its range [m/s]: Eqs. 30-31 cut by sigma's range.");
 
   m.def("step_errors", &dqk::step_errors, "carry"_a, "q_carry"_a, "carry_frames"_a,
         "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
@@ -367,7 +399,9 @@ NB_MODULE(_kernel, m) {
                                                     max_iter, bounds, eq_rtol, bounds_tol);
         nb::object cert = nb::none();
         if (s.certified) cert = certificate_tuple(std::move(s.cert));
-        return nb::make_tuple(static_cast<int>(s.answer.code), out(std::move(s.answer.x)),
+        return nb::make_tuple(s.empty_box ? dqk::EMPTY_BOX_CODE
+                                          : static_cast<int>(s.answer.code),
+                              out(std::move(s.answer.x)),
                               s.answer.conflicts, s.answer.nullity, s.answer.iterations,
                               basis_tuple(std::move(s.basis)), rows_tuple(std::move(s.rows)),
                               cert);
@@ -378,7 +412,8 @@ NB_MODULE(_kernel, m) {
       "The exact step and its certificate in one call: (code, x, conflicts, nullity, "
       "iterations, basis, rows, certificate); basis is basis(A)'s tuple, rows "
       "inequalities(...)'s, certificate certificate(...)'s (with the KKT test) for an "
-      "optimum, else None.");
+      "optimum, else None. A problem with an empty box (some lower > upper) is not "
+      "solved: code EMPTY_BOX_CODE, x zero, no conflicts, an empty basis and rows.");
 
   m.def(
       "dense_qp",

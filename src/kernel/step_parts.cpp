@@ -74,7 +74,7 @@ void limit_box(const BoxForm& form, const Vec& lo, const Vec& hi, const Vec& x_a
 
 StepParts::StepParts(Index n_l, Index n_f, std::vector<int> carry_frames, int follower_tool,
                      std::vector<int> cols, Vec q_min, Vec q_max, double dt,
-                     BoolVec centred, double shrink)
+                     BoolVec centred, double shrink, BoolVec ranged, double pin_rtol)
     : n_l_(n_l),
       n_f_(n_f),
       k_(static_cast<Index>(cols.size()) - n_l),
@@ -86,41 +86,55 @@ StepParts::StepParts(Index n_l, Index n_f, std::vector<int> carry_frames, int fo
       q_max_(std::move(q_max)),
       dt_(dt),
       centred_(std::move(centred)),
-      shrink_(shrink) {
+      shrink_(shrink),
+      ranged_(std::move(ranged)),
+      pin_rtol_(pin_rtol) {
   if (n_l < 0 || n_f < 0 || k_ < 0 || carry_frames_.size() != 3 || q_min_.size() != n_l + n_f ||
-      q_max_.size() != n_l + n_f || centred_.size() != n_ || !(dt > 0.0)) {
+      q_max_.size() != n_l + n_f || centred_.size() != n_ || ranged_.size() != n_ ||
+      !(dt > 0.0) || !(pin_rtol >= 0.0)) {
     throw std::invalid_argument(
-        "StepParts: three carry frames, ranges of both arms' joints, one centred flag per "
-        "variable and dt > 0");
+        "StepParts: three carry frames, ranges of both arms' joints, one centred and one "
+        "ranged flag per variable, dt > 0 and pin_rtol >= 0");
   }
   for (int c : cols_) {
     if (c < 0) throw std::invalid_argument("StepParts: a negative column");
   }
 }
 
-void StepParts::add_form(int kind, const Vec& p, const BoolVec& off) {
+void StepParts::add_form(int kind, const Vec& p, const BoolVec& off, std::int64_t limit) {
   if (kind != RANGE && kind != SPEED && kind != ACCELERATION)
     throw std::invalid_argument("StepParts.add_form: kind is RANGE, SPEED or ACCELERATION");
   if (p.size() != n_ || (kind == RANGE && off.size() != n_))
     throw std::invalid_argument("StepParts.add_form: one value per variable");
-  forms_.push_back(BoxForm{kind, p, off});
+  if (limit < 0 || (!forms_.empty() && limit <= forms_.back().limit))
+    throw std::invalid_argument("StepParts.add_form: the limits' indices increase from 0");
+  forms_.push_back(BoxForm{kind, p, off, limit});
+}
+
+void StepParts::add_grasp_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                               const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max,
+                               double sigma_min, double sigma_max) {
+  if (static_cast<Index>(lines_.size()) >= k_)
+    throw std::invalid_argument("StepParts.add_grasp_line: one line per grasp at most");
+  lines_.push_back(GraspLine{origin, direction, r_min, r_max, sigma_min, sigma_max});
 }
 
 StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
                                 const Vec& col_rate, Chain& follower,
                                 const Eigen::VectorXd& q_f, const Pose& T_D, const Vec6& twist,
-                                const Vec& grasp_lo, const Vec& grasp_hi,
+                                const Vec& sigmas, const Vec& grasp_lo, const Vec& grasp_hi,
                                 const Vec& x_applied, double scale_max, double leader_gain,
                                 double correction_gain, bool exact_orientation) const {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   const Index nq = carry.nq();
+  const bool lines = grasp_lines();
   if (q_carry.size() != nq || q_f.size() != n_f_ || follower.nq() != n_f_ ||
-      col_rate.size() != static_cast<Index>(cols_.size()) || grasp_lo.size() != k_ ||
-      grasp_hi.size() != k_ || x_applied.size() != n_) {
+      col_rate.size() != static_cast<Index>(cols_.size()) || sigmas.size() != k_ ||
+      (!lines && (grasp_lo.size() != k_ || grasp_hi.size() != k_)) || x_applied.size() != n_) {
     throw std::invalid_argument(
-        "StepParts.prepare: q_carry, col_rate, q_f, grasp_lo, grasp_hi or x_applied of a "
-        "wrong length");
+        "StepParts.prepare: q_carry, col_rate, q_f, sigmas, grasp_lo, grasp_hi or x_applied "
+        "of a wrong length");
   }
   for (int c : cols_) {
     if (c >= nq) throw std::invalid_argument("StepParts.prepare: a column past the chain's");
@@ -148,8 +162,21 @@ StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
     o.lo(i) = (q_min_(i) - q) / dt_;
     o.hi(i) = (q_max_(i) - q) / dt_;
   }
-  o.lo.tail(k_) = grasp_lo;
-  o.hi.tail(k_) = grasp_hi;
+  if (lines) {
+    for (Index g = 0; g < k_; ++g) {
+      const GraspLine& line = lines_[static_cast<size_t>(g)];
+      const double sigma = sigmas(g);
+      Eigen::Vector3d point;
+      for (Index i = 0; i < 3; ++i) point(i) = line.origin(i) + sigma * line.direction(i);
+      const auto [lo, hi] = grasp_rates(point, line.direction, sigma, line.r_min, line.r_max,
+                                        line.sigma_min, line.sigma_max, dt_);
+      o.lo(n_l_ + n_f_ + g) = lo;
+      o.hi(n_l_ + n_f_ + g) = hi;
+    }
+  } else {
+    o.lo.tail(k_) = grasp_lo;
+    o.hi.tail(k_) = grasp_hi;
+  }
   o.kinematics_seconds = std::chrono::duration<double>(clock::now() - start).count();
 
   o.A.resize(12, n_);
@@ -163,10 +190,18 @@ StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
   o.lowers.resize(m, n_);
   o.uppers.resize(m, n_);
   Vec lower, upper;
+  std::vector<std::int64_t> ids(static_cast<size_t>(m));
   for (Index f = 0; f < m; ++f) {
-    limit_box(forms_[static_cast<size_t>(f)], o.lo, o.hi, x_applied, dt_, lower, upper);
+    const BoxForm& form = forms_[static_cast<size_t>(f)];
+    limit_box(form, o.lo, o.hi, x_applied, dt_, lower, upper);
     o.lowers.row(f) = lower.transpose();
     o.uppers.row(f) = upper.transpose();
+    ids[static_cast<size_t>(f)] = form.limit;
+  }
+  o.box = intersect_boxes(o.lowers, ids, o.uppers, ids, n_, pin_rtol_);
+  o.recovering.resize(n_);
+  for (Index i = 0; i < n_; ++i) {
+    o.recovering(i) = ranged_(i) && (o.lo(i) > 0.0 || o.hi(i) < 0.0);
   }
   return o;
 }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "boxes.hpp"
 #include "equality.hpp"
 #include "kinematics.hpp"
 #include "linalg.hpp"
@@ -28,6 +29,15 @@ struct BoxForm {
   int kind = RANGE;
   Vec p;
   BoolVec off;
+  std::int64_t limit = 0;  // the limit's index in the step's order (what bounds name)
+};
+
+// A grasp whose path is a straight line in the object frame (a PlaneBar): its point is
+// origin + sigma direction, its tangent direction; r_min, r_max its surface box and
+// [sigma_min, sigma_max] its range (dualarm_qp/task/surfaces.py).
+struct GraspLine {
+  Eigen::Vector3d origin, direction, r_min, r_max;
+  double sigma_min = 0.0, sigma_max = 0.0;
 };
 
 // The largest rate from which a stop within the distance D [rad or m] is possible when
@@ -56,6 +66,8 @@ struct StepPartsOut {
   Vec center;       // (n)
   RowMat lowers;    // (forms, n) each compiled form's lower bounds, in the forms' order
   RowMat uppers;    // (forms, n)
+  Box box;          // the compiled forms' boxes intersected (intersect_boxes, pin_rtol)
+  BoolVec recovering;  // (n) ranged variables outside their range (lo > 0 or hi < 0)
   double kinematics_seconds = 0.0;  // the kinematics' share of the call
 };
 
@@ -64,22 +76,31 @@ class StepParts {
   // n_l, n_f joints and k = cols.size() - n_l grasps: column j of the decision-order
   // Jacobians is column cols[j] of the carry chain's (times col_rate[j], given with each
   // state: a support re-places the follower's grasp joint). q_min, q_max: both arms'
-  // joint ranges (n_l + n_f); centred, shrink: the centring cost's.
+  // joint ranges (n_l + n_f); centred, shrink: the centring cost's; ranged: the
+  // variables whose range the step imposes (recovering); pin_rtol: intersect_boxes's.
   StepParts(Index n_l, Index n_f, std::vector<int> carry_frames, int follower_tool,
             std::vector<int> cols, Vec q_min, Vec q_max, double dt, BoolVec centred,
-            double shrink);
+            double shrink, BoolVec ranged, double pin_rtol);
 
-  void add_form(int kind, const Vec& p, const BoolVec& off);
+  // A limit's compiled box form; limit is its index in the step's order (increasing).
+  void add_form(int kind, const Vec& p, const BoolVec& off, std::int64_t limit);
+  // The next grasp's straight path (in the grasps' order). With every grasp's line
+  // given, prepare computes the grasps' rates to their range ends from sigmas itself.
+  void add_grasp_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                      const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max,
+                      double sigma_min, double sigma_max);
   Index forms() const { return static_cast<Index>(forms_.size()); }
   Index n() const { return n_; }
+  bool grasp_lines() const { return static_cast<Index>(lines_.size()) == k_; }
 
   // The parts at one state: q_carry the carry chain's joints, col_rate the columns'
   // rates, q_f the follower's joints, T_D and twist the path's pose and twist at t,
-  // grasp_lo and grasp_hi the grasps' rates to their range ends (k each, from the
-  // surfaces), x_applied the last applied command.
+  // sigmas the grasp coordinates (k), grasp_lo and grasp_hi the grasps' rates to their
+  // range ends (k each, from the surfaces; ignored, and may be empty, when every grasp
+  // has a line), x_applied the last applied command.
   StepPartsOut prepare(Chain& carry, const Eigen::VectorXd& q_carry, const Vec& col_rate,
                        Chain& follower, const Eigen::VectorXd& q_f, const Pose& T_D,
-                       const Vec6& twist,
+                       const Vec6& twist, const Vec& sigmas,
                        const Vec& grasp_lo, const Vec& grasp_hi, const Vec& x_applied,
                        double scale_max, double leader_gain, double correction_gain,
                        bool exact_orientation) const;
@@ -93,7 +114,10 @@ class StepParts {
   double dt_;
   BoolVec centred_;
   double shrink_;
+  BoolVec ranged_;
+  double pin_rtol_;
   std::vector<BoxForm> forms_;
+  std::vector<GraspLine> lines_;
 };
 
 }  // namespace dqk

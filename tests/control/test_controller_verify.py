@@ -12,7 +12,7 @@ from dualarm_qp import puma560
 from dualarm_qp.control.controller import DualArmController
 from dualarm_qp.solvers import get_solver
 from dualarm_qp.solvers.base import Status, StepSolution, Tolerance
-from dualarm_qp.solvers.certify import certify, verdict
+from dualarm_qp.solvers.certify import certify, verdict_fields
 from dualarm_qp.step.options import StepOptions
 from dualarm_qp.step.problem import StepProblem
 from dualarm_qp.step.state import DualArmState
@@ -68,14 +68,16 @@ def test_a_step_is_certified_once(monkeypatch, name):
     controller, state = make_controller(get_solver(name))
     calls = []
 
-    def counting_verdict(*args, **kwargs):
+    def counting_decision(*args, **kwargs):
         calls.append(args)
-        return verdict(*args, **kwargs)
+        return verdict_fields(*args, **kwargs)
 
-    # Every certification ends in the one verdict (certify's, or the kernel call that
-    # solves and certifies the exact step): patched in every module that calls it.
+    # Every certification ends in the one decision (certify's verdict, or the kernel
+    # call that solves and certifies the exact step): patched in every module that
+    # calls it.
     for module in ("dualarm_qp.solvers.certify", "dualarm_qp.solvers.nullspace"):
-        monkeypatch.setattr(importlib.import_module(module), "verdict", counting_verdict)
+        monkeypatch.setattr(importlib.import_module(module), "verdict_fields",
+                            counting_decision)
     out = controller.step(state)
     assert out.applied and out.status in (Status.OPTIMAL, Status.RECOVERING)
     assert out.solution.verified_with == controller.tolerance

@@ -13,6 +13,7 @@ random last command.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ from test_braking_bound import numpy_braking_bound
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.step.bounds import grasp_rate_range
 from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.kinematics import both_arms
 from dualarm_qp.step.limits.box_form import BoxForm
@@ -108,6 +110,82 @@ def test_the_one_call_equals_the_parts_one_by_one(case, seed: int, scale: float)
     labels = [limit.name for limit in builder.limits]
     assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
     assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in up_by)
+    # The grasps' rates to their range ends (the kernel's own for a straight grasp), and
+    # the variables that recover.
+    _equal_grasp_rates(builder, ctx)
+    _equal(build.recovering, ctx.outside & builder._ranged, "recovering")
+
+
+def python_era_grasp_rate_range(r, s_star, r_min, r_max, dt: float) -> tuple[float, float]:
+    """Eqs. 30-31 as the Python step computed them, on Python floats (the reference)."""
+    rho_min, rho_max = -math.inf, math.inf
+    for ri, si, lo, hi in zip(np.asarray(r, dtype=float).tolist(),
+                              np.asarray(s_star, dtype=float).tolist(),
+                              np.asarray(r_min, dtype=float).tolist(),
+                              np.asarray(r_max, dtype=float).tolist(), strict=True):
+        if abs(si) < 1e-12:
+            continue
+        a = (lo - ri) / (si * dt)
+        b = (hi - ri) / (si * dt)
+        rho_min = max(rho_min, min(a, b))
+        rho_max = min(rho_max, max(a, b))
+    return rho_min, rho_max
+
+
+def python_era_grasp_rates(surf, s: float, dt: float) -> tuple[float, float]:
+    """A grasp's rates to its range ends as the Python step computed them."""
+    rho_min, rho_max = python_era_grasp_rate_range(surf.point(s), surf.tangent(s),
+                                                   surf.r_min, surf.r_max, dt)
+    return max(rho_min, (surf.sigma_min - s) / dt), min(rho_max, (surf.sigma_max - s) / dt)
+
+
+def _same_float(a: float, b: float) -> bool:
+    """Bit for bit: equal with the same sign of a zero, or both NaN."""
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+def _equal_grasp_rates(builder: StepBuilder, ctx) -> None:
+    k = builder.layout.n_grasp
+    sigmas = (ctx.state.sigma, ctx.state.sigma_leader)[:k]
+    for g, (surf, s) in enumerate(zip(ctx.surfaces, sigmas, strict=True)):
+        lo, hi = python_era_grasp_rates(surf, s, builder.options.dt)
+        i = builder.layout.n_l + builder.layout.n_f + g
+        assert _same_float(float(ctx.rate_lo[i]), lo), (g, ctx.rate_lo[i], lo)
+        assert _same_float(float(ctx.rate_hi[i]), hi), (g, ctx.rate_hi[i], hi)
+
+
+@settings(max_examples=40, deadline=None)
+@given(name=st.sampled_from(["puma_beam_limits", "both_sliding_bar", "curved_bar_waypoints",
+                             "ur5_pair_sliding_bar"]),
+       offsets=st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6)))
+def test_the_grasp_rates_equal_the_python_era_ones(name: str,
+                                                   offsets: tuple[float, float]) -> None:
+    """Straight grasps (computed in the kernel) and curved ones, inside and outside."""
+    exp = _experiment(name)
+    builder = exp.controller().builder
+    assert builder._parts.grasp_lines == (name != "curved_bar_waypoints")
+    s0 = exp.initial
+    state = DualArmState(s0.t, s0.q_l, s0.q_f, s0.sigma + offsets[0],
+                         s0.sigma_leader + (offsets[1] if builder.layout.n_grasp == 2
+                                            else 0.0))
+    ctx, _ = builder.context(state)
+    _equal_grasp_rates(builder, ctx)
+
+
+@settings(max_examples=300, deadline=None)
+@given(vectors=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64),
+                        min_size=12, max_size=12),
+       tiny=st.sampled_from([0.0, -0.0, 1e-13, -1e-13, 1e-12, 1.0]),
+       dt=st.sampled_from([0.01, 0.001, 1e-6]))
+def test_the_kernel_grasp_rate_range_is_the_python_era_one(vectors: list[float],
+                                                           tiny: float, dt: float) -> None:
+    r, s_star, r_min, r_max = (np.array(vectors[i:i + 3]) for i in range(0, 12, 3))
+    s_star[0] = tiny  # a component below the 1e-12 cut, on it, or above it
+    got = grasp_rate_range(r, s_star, r_min, r_max, dt)
+    want = python_era_grasp_rate_range(r, s_star, r_min, r_max, dt)
+    assert all(_same_float(g, w) for g, w in zip(got, want, strict=True)), (got, want)
 
 
 def test_the_standard_box_limits_are_compiled_and_the_others_are_not() -> None:
@@ -127,19 +205,37 @@ def test_the_kernel_refuses_misshaped_input() -> None:
     q = carry.configuration(exp.initial.q_l, exp.initial.sigma)
     good = dict(carry=carry.chain, q_carry=q, col_rate=carry.columns[1],
                 follower=follower.chain, q_f=exp.initial.q_f, T_D=np.eye(4),
-                twist=np.zeros(6), grasp_lo=np.zeros(1), grasp_hi=np.zeros(1),
-                x_applied=np.zeros(builder.n), scale_max=1.0, leader_gain=1.0,
-                correction_gain=0.0, exact_orientation=False)
+                twist=np.zeros(6), sigmas=np.zeros(1), grasp_lo=np.zeros(0),
+                grasp_hi=np.zeros(0), x_applied=np.zeros(builder.n), scale_max=1.0,
+                leader_gain=1.0, correction_gain=0.0, exact_orientation=False)
+    assert parts.grasp_lines  # the paper's bar is straight: no grasp rates are given
     parts.prepare(**good)
     for key, bad in (("q_carry", q[:-1]), ("q_f", exp.initial.q_f[:3]),
-                     ("grasp_lo", np.zeros(2)), ("x_applied", np.zeros(3)),
+                     ("sigmas", np.zeros(2)), ("x_applied", np.zeros(3)),
                      ("col_rate", np.ones(2))):
         with pytest.raises(ValueError):
             parts.prepare(**{**good, key: bad})
+    last = len(builder.limits) + 1
     with pytest.raises(ValueError):
-        parts.add_form(7, np.zeros(builder.n), np.zeros(0, dtype=bool))
+        parts.add_form(7, np.zeros(builder.n), np.zeros(0, dtype=bool), last)
     with pytest.raises(ValueError):
-        parts.add_form(kernel.BOX_RANGE, np.zeros(builder.n), np.zeros(2, dtype=bool))
+        parts.add_form(kernel.BOX_RANGE, np.zeros(builder.n), np.zeros(2, dtype=bool), last)
+    with pytest.raises(ValueError, match="increase"):  # the limits' order is kept
+        parts.add_form(kernel.BOX_SPEED, np.zeros(builder.n), np.zeros(0, dtype=bool), 0)
+    with pytest.raises(ValueError, match="one line per grasp"):
+        parts.add_grasp_line(np.zeros(3), np.ones(3), np.zeros(3), np.ones(3), 0.0, 1.0)
+    # Without the grasps' lines the rates are given, one per grasp.
+    curved = _experiment("curved_bar_waypoints")
+    loose = curved.controller().builder
+    assert not loose._parts.grasp_lines
+    c_q = loose.carry.configuration(curved.initial.q_l, curved.initial.sigma)
+    given = dict(good, carry=loose.carry.chain, q_carry=c_q, col_rate=loose.carry.columns[1],
+                 follower=curved.task.follower.chain, q_f=curved.initial.q_f,
+                 x_applied=np.zeros(loose.n), grasp_lo=np.zeros(1), grasp_hi=np.zeros(1))
+    loose._parts.prepare(**given)
+    for key in ("grasp_lo", "grasp_hi"):
+        with pytest.raises(ValueError):
+            loose._parts.prepare(**{**given, key: np.zeros(0)})
 
 
 class _PythonBox:
