@@ -152,7 +152,7 @@ class StepParts:
                 sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
                 x_applied: ArrayLike, scale_max: float, leader_gain: float,
                 correction_gain: float, exact_orientation: bool
-                ) -> tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
+                ) -> tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
                            tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int],
                            NDArray[np.bool_], float]: ...
 

@@ -81,7 +81,8 @@ class StepBuild:
     T_f, J_f : ndarray
         Follower tool pose (4, 4) and Jacobian (6, n_f).
     sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's tool Jacobian.
+        Smallest singular value of the leader's and the follower's tool Jacobian
+        (computed when first read: :attr:`.context.StepContext.sigma_min`).
     kinematics_time, assembly_time : float
         Seconds spent in the kinematics and in assembling the problem.
     support_force : float
@@ -97,11 +98,17 @@ class StepBuild:
     carry: CarryKinematics
     T_f: FloatArray
     J_f: FloatArray
-    sigma_min: tuple[float, float]
     kinematics_time: float
     assembly_time: float
     support_force: float = math.nan
     context: StepContext | None = None
+
+    @property
+    def sigma_min(self) -> tuple[float, float]:
+        """Smallest singular value of the leader's and the follower's tool Jacobian."""
+        if self.context is not None:
+            return self.context.sigma_min  # computed once, when first read
+        return (smallest_singular_value(self.carry.J_tool), smallest_singular_value(self.J_f))
 
 
 @dataclass(frozen=True, slots=True)
@@ -346,7 +353,7 @@ class StepBuilder:
         tasks = self.carry_tasks
         q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
-        (T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, finite, center, lowers,
+        (T, J_tool, J_object, J_target, J_f, e, lo, hi, A, b, finite, center, lowers,
          uppers, box, recovering, kin_seconds) = self._parts.prepare(
             carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist, sigmas,
             grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
@@ -354,8 +361,7 @@ class StepBuilder:
         kin = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
         ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T[12:16], J_f,
                           tuple(self._surfaces), lay.join(q_l, q_f, sigma, sigma_l), lo, hi,
-                          x0, e[:6], e[6:], self._leader_arm, self._follower_arm,
-                          (float(sv[0]), float(sv[1])))
+                          x0, e[:6], e[6:], self._leader_arm, self._follower_arm)
         return ctx, support_force, _Parts(A, b, finite, center, lowers, uppers, box,
                                           recovering, called - start + kin_seconds)
 
@@ -439,8 +445,7 @@ class StepBuilder:
             lower_by=lower_by, upper_by=upper_by, build_time=t2 - t0)
         kin = parts.kinematics_time
         return StepBuild(problem, parts.recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
-                         ctx.T_f, ctx.J_f, ctx.sigma_min, kin, t2 - t0 - kin, support_force,
-                         ctx)
+                         ctx.T_f, ctx.J_f, kin, t2 - t0 - kin, support_force, ctx)
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

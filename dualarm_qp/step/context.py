@@ -8,13 +8,14 @@ cost term and limit; none of them computes kinematics of its own.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..task.carry import CarryKinematics
 from ..task.scene import DualArmTask
 from ..task.surfaces import GraspSurface
@@ -141,7 +142,8 @@ class StepContext:
         The arms' models and kinematics at this step (their links, for limits that need
         them).
     sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's tool Jacobian.
+        Smallest singular value of the leader's and the follower's tool Jacobian
+        (computed when first read, from ``carry.J_tool`` and ``J_f``).
     """
 
     state: DualArmState
@@ -161,7 +163,22 @@ class StepContext:
     closure_error: FloatArray
     leader_arm: ArmKinematics
     follower_arm: ArmKinematics
-    sigma_min: tuple[float, float] = (float("nan"), float("nan"))
+    _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
+                                                   compare=False)
+
+    @property
+    def sigma_min(self) -> tuple[float, float]:
+        """Smallest singular value of the leader's and the follower's tool Jacobian.
+
+        Computed when first read (two small SVDs, about a tenth of a step): a loop that
+        never reads them does not pay for them.
+        """
+        sv = self._sigma_min
+        if sv is None:
+            sv = (float(kernel.smallest_singular_value(self.carry.J_tool)),
+                  float(kernel.smallest_singular_value(self.J_f)))
+            object.__setattr__(self, "_sigma_min", sv)  # a cache, on a frozen context
+        return sv
 
     @property
     def outside(self) -> NDArray[np.bool_]:

@@ -272,7 +272,7 @@ NB_MODULE(_kernel, m) {
             return nb::make_tuple(
                 out(std::move(o.T)), out(std::move(o.J_tool)), out(std::move(o.J_object)),
                 out(std::move(o.J_target)), out(std::move(o.J_f)), out(std::move(o.e)),
-                out(std::move(o.sv)), out(std::move(o.lo)), out(std::move(o.hi)),
+                out(std::move(o.lo)), out(std::move(o.hi)),
                 out(std::move(o.A)), out(std::move(o.b)), o.equality_finite,
                 out(std::move(o.center)), out(std::move(o.lowers)), out(std::move(o.uppers)),
                 nb::make_tuple(out(std::move(box.lower)), out(std::move(box.upper)),
@@ -283,7 +283,7 @@ NB_MODULE(_kernel, m) {
           "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a, "twist"_a,
           "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a,
           "leader_gain"_a, "correction_gain"_a, "exact_orientation"_a,
-          "(T, J_tool, J_object, J_target, J_f, e, sv, lo, hi, A, b, equality_finite, "
+          "(T, J_tool, J_object, J_target, J_f, e, lo, hi, A, b, equality_finite, "
           "center, lowers, uppers, box, recovering, kinematics_seconds) at one state; box is "
           "intersect_boxes's tuple of the compiled forms' boxes.");
 

@@ -20,9 +20,9 @@ void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
                      Eigen::Ref<RowMat> J_f, Eigen::Ref<Eigen::VectorXd> e,
                      Eigen::Ref<Eigen::VectorXd> sv) {
   if (carry_frames.size() != 3 || T.rows() != 16 || T.cols() != 4 || e.size() != 12 ||
-      sv.size() != 2 || n_l < 0 || n_l > J.cols()) {
+      (sv.size() != 2 && sv.size() != 0) || n_l < 0 || n_l > J.cols()) {
     throw std::invalid_argument(
-        "step_kinematics: three carry frames, T (16, 4), e (12), sv (2), n_l <= nq");
+        "step_kinematics: three carry frames, T (16, 4), e (12), sv (2 or 0), n_l <= nq");
   }
   carry.compute(q_carry, carry_frames, carry_frames, T.topRows(12), J);
   const std::vector<int> tool{follower_tool};
@@ -32,6 +32,7 @@ void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
   const Pose T_target = T.middleRows(8, 4);
   pose_error(T_D, T_object, e.head(6));
   pose_error(T_target, T_tool_f, e.tail(6));
+  if (sv.size() == 0) return;
   sv(0) = smallest_singular_value(J.topLeftCorner(6, n_l));
   sv(1) = smallest_singular_value(J_f);
 }

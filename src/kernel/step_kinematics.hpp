@@ -16,8 +16,9 @@ void pose_error(const Pose& T_star, const Pose& T, Eigen::Ref<Eigen::VectorXd> e
 // carry.compute(q_carry, carry_frames = {tool, object, target}, the same) into T rows
 // 0-11 and J (18 x nq of carry); follower.compute(q_f, {tool}, {tool}) into T rows
 // 12-15 and J_f (6 x n_f); e rows 0-5 the object's error to T_D, rows 6-11 the
-// follower tool's error to the target; sv the smallest singular value of the leader's
-// tool Jacobian (J rows 0-5, its first n_l columns) and of J_f.
+// follower tool's error to the target; sv (2) the smallest singular value of the
+// leader's tool Jacobian (J rows 0-5, its first n_l columns) and of J_f, or sv empty:
+// not computed (StepParts.prepare: the Python layer computes them when read).
 void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
                      const std::vector<int>& carry_frames, Chain& follower,
                      const Eigen::VectorXd& q_f, int follower_tool, const Pose& T_D,

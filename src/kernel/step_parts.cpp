@@ -144,9 +144,9 @@ StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
   RowMat J(18, nq);
   o.J_f.resize(6, n_f_);
   o.e.resize(12);
-  o.sv.resize(2);
+  Vec no_sv(0);  // the arms' smallest singular values: computed when read (Python)
   step_kinematics(carry, q_carry, carry_frames_, follower, q_f, follower_tool_, T_D, n_l_, o.T,
-                  J, o.J_f, o.e, o.sv);
+                  J, o.J_f, o.e, no_sv);
   const Index nd = static_cast<Index>(cols_.size());
   o.J_tool = J.block(0, 0, 6, n_l_);
   o.J_object.resize(6, nd);

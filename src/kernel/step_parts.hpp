@@ -1,5 +1,6 @@
 // The standard parts of one step in one call (StepBuilder.build): both arms' kinematics
-// (step_kinematics), the Jacobians in decision order, the rates that reach each
+// (step_kinematics, without the smallest singular values: computed when read), the
+// Jacobians in decision order, the rates that reach each
 // variable's range ends, the equality (carry_equality), the centring cost's centres
 // (centre) and the boxes of the standard limits that declare a compiled form (range,
 // speed, acceleration; limit_box). The Python layer wraps the outputs without copies and
@@ -58,7 +59,6 @@ struct StepPartsOut {
   RowMat J_target;  // (6, n_l + k) likewise
   RowMat J_f;       // (6, n_f)
   Vec e;            // (12) the object's error to D(t), the follower tool's to its target
-  Vec sv;           // (2) the smallest singular values of the arms' tool Jacobians
   Vec lo, hi;       // (n) the rates to the ends of each variable's range
   RowMat A;         // (12, n)
   Vec b;            // (12)
