@@ -375,9 +375,15 @@ class DualArmController:
                 f"{err.reason} (smallest singular values of the arms' Jacobians: leader "
                 f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
         t5 = time.perf_counter()
+        # The solve's x clipped to the box, computed once (the look-ahead checks it).
+        clipped: FloatArray | None = None
+        inside: FloatArray | None = None
         if (self._lookahead is not None and solution.status.usable
                 and solution.scale > 0.0 and scale_max > 0.0):
-            solution = self._within_budget(self._lookahead, state, build, solution, scale_max)
+            clipped = solution.x
+            inside = _inside(clipped, problem)
+            solution = self._within_budget(self._lookahead, state, build, solution, inside,
+                                           scale_max)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
@@ -398,7 +404,10 @@ class DualArmController:
         if not usable_x:
             x = np.zeros(problem.n)
         elif self._hard_bounds:
-            x = _inside(solution.x, problem)
+            # The clip of the look-ahead's check holds for the same x (a RECOVERING
+            # status keeps it; a slower or an escape solve does not).
+            x = inside if inside is not None and solution.x is clipped else _inside(
+                solution.x, problem)
         else:
             x = solution.x
         self._x_prev = x if usable_x else None
@@ -420,16 +429,17 @@ class DualArmController:
         ))
 
     def _within_budget(self, la: Lookahead, state: DualArmState, build: StepBuild,
-                       solution: StepSolution, scale_max: float) -> StepSolution:
+                       solution: StepSolution, build_x: FloatArray,
+                       scale_max: float) -> StepSolution:
         """Slow the task until the errors predicted at the next sample fit the budget.
 
+        ``build_x`` is ``solution.x`` clipped to the box (what would be applied).
         Returns ``solution`` when its prediction fits (or is negligible by the bound),
         else the solve of the task scaled by the first halving of the scale whose
         prediction fits, or the one with the smallest prediction (status SCALED).
         """
         dt = self.options.dt
         problem = build.problem
-        build_x = _inside(solution.x, problem)
         if la.negligible(build, build_x, dt):
             return solution
         pred = la.predict(state, build_x, scale_max * solution.scale, dt)

@@ -175,8 +175,7 @@ class StepContext:
         """
         sv = self._sigma_min
         if sv is None:
-            sv = (float(kernel.smallest_singular_value(self.carry.J_tool)),
-                  float(kernel.smallest_singular_value(self.J_f)))
+            sv = kernel.smallest_singular_values(self.carry.J_tool, self.J_f)
             object.__setattr__(self, "_sigma_min", sv)  # a cache, on a frozen context
         return sv
 

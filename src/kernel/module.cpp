@@ -541,9 +541,20 @@ NB_MODULE(_kernel, m) {
       "lo"_a, "hi"_a, "centred"_a, "shrink"_a,
       "The centre rates of Eqs. 38-40 from the rates to the range's ends.");
 
-  m.def("smallest_singular_value", &dqk::smallest_singular_value, "J"_a,
+  m.def("smallest_singular_value", [](In J) { return dqk::smallest_singular_value(Mat(J)); },
+        "J"_a,
         "Smallest singular value of J (0 with fewer columns than rows, inf with no rows, NaN "
         "for a non-finite J).");
+
+  m.def(
+      "smallest_singular_values",
+      [](In J_leader, In J_follower) {
+        return nb::make_tuple(dqk::smallest_singular_value(Mat(J_leader)),
+                              dqk::smallest_singular_value(Mat(J_follower)));
+      },
+      "J_leader"_a, "J_follower"_a,
+      "Both arms' smallest singular values in one call: (leader, follower), as "
+      "smallest_singular_value gives each.");
 
   m.def(
       "scale_lp",

@@ -369,3 +369,34 @@ def test_a_compiled_limit_of_the_wrong_size_is_named() -> None:
     base = exp.controller().builder
     with pytest.raises(ShapeError, match="the limit 'cap'"):
         StepBuilder(exp.task, base.options, limits=(SpeedLimit("cap", np.ones(3)),))
+
+
+def test_the_singular_values_are_computed_when_first_read(monkeypatch) -> None:
+    """A step does not compute them; the first read does (once), with both_arms's values."""
+    import dualarm_qp.step.context as context_module
+
+    exp = _experiment("panda_pair")
+    controller = exp.controller()
+    calls: list[tuple[int, ...]] = []
+    real = kernel.smallest_singular_values
+
+    class Counting:
+        def __getattr__(self, name):
+            return getattr(kernel, name)
+
+        @staticmethod
+        def smallest_singular_values(J_leader, J_follower):
+            calls.extend((np.shape(J_leader), np.shape(J_follower)))
+            return real(J_leader, J_follower)
+
+    monkeypatch.setattr(context_module, "kernel", Counting())
+    out = controller.step(exp.initial)
+    assert out.applied and calls == []
+    sv = out.sigma_min
+    assert calls == [(6, 7), (6, 7)]  # the leader's and the follower's tool Jacobians
+    assert out.build.sigma_min == sv and out.build.context.sigma_min == sv
+    assert len(calls) == 2  # kept
+    s = exp.initial
+    arms = both_arms(controller.builder.carry, exp.task.follower, s.q_l, s.q_f, s.sigma,
+                     s.sigma_leader, exp.task.trajectory.pose(s.t))
+    assert sv == arms.sigma_min  # the same values as the kernel's kinematics call
