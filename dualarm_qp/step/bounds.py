@@ -10,6 +10,7 @@ the range is also the surface box ``[r_min, r_max]`` of the hand's point, which
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -34,36 +35,54 @@ def grasp_rate_range(
     """``(rho_min, rho_max)`` of Eqs. 30-31 [m/s].
 
     Components with ``s*_i == 0`` (below 1e-12) do not move along axis i and are
-    skipped. The arguments are 3-vectors. Computed by the kernel
-    (``src/kernel/boxes.cpp``), which the step's grasp rates use.
+    skipped. The arguments are 3-vectors of numbers (``r_min`` and ``r_max`` may hold
+    infinities) and ``dt > 0`` [s]. Computed by the kernel (``src/kernel/boxes.cpp``),
+    which the step's grasp rates use.
 
     Raises
     ------
     ValueError
-        An argument is not a 3-vector of numbers.
+        An argument is not a 3-vector of numbers, or ``dt`` is not a positive number.
     """
-    return kernel.grasp_rate_range(_vector(surface_r), _vector(s_star), _vector(r_min),
-                                   _vector(r_max), float(dt))
+    return kernel.grasp_rate_range(_vector(surface_r, "r"), _vector(s_star, "s_star"),
+                                   _vector(r_min, "r_min"), _vector(r_max, "r_max"),
+                                   _step(dt))
 
 
 def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, float]:
     """Return a grasp's rates to the ends of its range over one sample [m/s].
 
-    Eqs. 30-31 at the surface's point and tangent at ``sigma``, cut by the rates that
-    reach ``sigma_min`` and ``sigma_max`` in one sample. Computed by the kernel, as the
-    step computes the rates of a straight grasp (:attr:`GraspSurface.line`) itself.
+    Eqs. 30-31 at the surface's point and tangent at ``sigma`` (the surface checks
+    ``sigma``), cut by the rates that reach ``sigma_min`` and ``sigma_max`` in one
+    sample. Computed by the kernel, as the step computes the rates of a straight grasp
+    (:attr:`~dualarm_qp.task.surfaces.GraspSurface.line`) itself.
+
+    Raises
+    ------
+    ValueError
+        The surface's point or tangent is not a 3-vector of numbers, or ``dt`` is not a
+        positive number.
     """
-    return kernel.grasp_rates(surface.point(sigma), surface.tangent(sigma), sigma,
-                              surface.r_min, surface.r_max, surface.sigma_min,
-                              surface.sigma_max, dt)
+    point = _vector(surface.point(sigma), "the surface's point")
+    tangent = _vector(surface.tangent(sigma), "the surface's tangent")
+    return kernel.grasp_rates(point, tangent, float(sigma), surface.r_min, surface.r_max,
+                              surface.sigma_min, surface.sigma_max, _step(dt))
 
 
-def _vector(v: Sequence[float] | FloatArray) -> FloatArray:
-    """Return ``v`` as a float64 3-vector."""
-    out = np.asarray(v, dtype=np.float64)
-    if out.shape != (3,):
-        raise ValueError(f"a 3-vector was expected, got shape {out.shape}")
-    return out
+def _vector(v: Sequence[float] | FloatArray, name: str) -> FloatArray:
+    """Return ``v`` as a float64 3-vector, or raise ValueError naming it."""
+    raw = np.asarray(v)
+    if raw.shape != (3,) or raw.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be a 3-vector of numbers, got {v!r}")
+    return raw.astype(np.float64, copy=False)
+
+
+def _step(dt: float) -> float:
+    """Return ``dt`` as a positive float [s], or raise ValueError."""
+    value = float(dt)
+    if not (value > 0.0 and math.isfinite(value)):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+    return value
 
 
 __all__ = ["grasp_rate_range", "grasp_rates"]

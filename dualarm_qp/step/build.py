@@ -15,13 +15,18 @@ and stacks the step's parts (:mod:`dualarm_qp.step.parts`):
   remembers the limit that set it, for messages) and their rows stacked.
 
 The standard parts are computed by one kernel call per step (``kernel.StepParts``,
-``src/kernel/step_parts.cpp``): the kinematics, the rates to the range ends, the
-equality (what :meth:`.tasks.CarryTasks.equality` gives), the centres (what
-:meth:`.cost.CentringCost.quadratic` gives) and the boxes of the limits that declare a
-compiled form (:mod:`.limits.box_form`: ranges, speeds, accelerations). Those are read
-when the builder is made, as the options are: a limit or a setting changed afterwards
-needs a new builder. The other limits (collision, torque, a user's own) run their
-``constraint(ctx)`` on the context each step.
+``src/kernel/step_parts.cpp``): the kinematics, the rates to the range ends (a straight
+grasp's from its line, :attr:`~dualarm_qp.task.surfaces.GraspSurface.line`, without a
+Case 2 support; another grasp's from its surface, through the same compiled Eqs.
+30-31), the equality (what :meth:`.tasks.CarryTasks.equality` gives), the centres (what
+:meth:`.cost.CentringCost.quadratic` gives), the boxes of the limits that declare a
+compiled form (:mod:`.limits.box_form`: ranges, speeds, accelerations) and their
+intersection, and the variables that recover. The forms and the straight grasps' lines,
+boxes and ranges are read when the builder is made, as the options are: a limit, a
+surface or a setting changed afterwards needs a new builder. The other limits
+(collision, torque, a user's own) run their ``constraint(ctx)`` on the context each
+step. Both arms' smallest singular values are computed when first read
+(:attr:`.context.StepContext.sigma_min`).
 
 The decision vector's slices are the :class:`~dualarm_qp.step.layout.Layout`'s. ``s``
 is the task scale of the infeasible-step policy (:func:`~dualarm_qp.solvers.solve_step`),
@@ -366,8 +371,28 @@ class StepBuilder:
                                           recovering, called - start + kin_seconds)
 
     def _sigmas(self, sigma: float, sigma_l: float) -> FloatArray:
-        """Return the grasp coordinates, the follower's first [m], shape (n_grasp,)."""
-        return np.array((sigma, sigma_l)[:self.layout.n_grasp])
+        """Return the grasp coordinates, the follower's first [m], shape (n_grasp,).
+
+        Raises
+        ------
+        InvalidInputError, NonFiniteError
+            A sliding grasp's coordinate is not a finite number (what the grasp's
+            surface refuses; a straight grasp's rates are the kernel's).
+        """
+        values = (sigma, sigma_l)[:self.layout.n_grasp]
+        if all(type(v) is float for v in values) and math.isfinite(sum(values)):
+            return np.array(values)  # the common case, checked cheaply
+        out = []
+        for value, name in zip(values, ("sigma", "sigma_leader"), strict=False):
+            try:
+                number = float(value)
+            except (TypeError, ValueError) as err:
+                raise InvalidInputError(f"{name} must be a real number, got {value!r}"
+                                        ) from err
+            if not math.isfinite(number):
+                raise NonFiniteError(name)
+            out.append(number)
+        return np.array(out)
 
     def _grasp_rates(self, sigmas: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Return the grasps' rates to the ends of their ranges (Eqs. 30-33) [m/s]."""

@@ -329,7 +329,14 @@ class PlaneBar(GraspSurface):
 
     @property
     def line(self) -> tuple[FloatArray, FloatArray] | None:
-        """``(origin, s*)``: the path is straight (see :attr:`GraspSurface.line`)."""
+        """``(origin, s*)``: the path is straight (see :attr:`GraspSurface.line`).
+
+        None for a subclass with a path of its own (one that overrides :meth:`point`
+        or :meth:`tangent`): the kernel would not see it.
+        """
+        cls = type(self)
+        if cls.point is not PlaneBar.point or cls.tangent is not PlaneBar.tangent:
+            return None
         return self.origin, self._s
 
     def points(self, sigmas: FloatArray) -> FloatArray:

@@ -213,7 +213,7 @@ NB_MODULE(_kernel, m) {
         "poses into T rows 0-11 and their Jacobians into J, the follower's tool pose "
         "into T rows 12-15 and its Jacobian into J_f, the object's error to T_D and the "
         "follower tool's error to the target into e, the leader's and the follower's "
-        "smallest singular values into sv.");
+        "smallest singular values into sv (2), or none with an empty sv.");
 
   m.attr("EMPTY_BOX_CODE") = dqk::EMPTY_BOX_CODE;
   m.attr("BOX_RANGE") = static_cast<int>(dqk::RANGE);

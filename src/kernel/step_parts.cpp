@@ -107,7 +107,8 @@ void StepParts::add_form(int kind, const Vec& p, const BoolVec& off, std::int64_
   if (p.size() != n_ || (kind == RANGE && off.size() != n_))
     throw std::invalid_argument("StepParts.add_form: one value per variable");
   if (limit < 0 || (!forms_.empty() && limit <= forms_.back().limit))
-    throw std::invalid_argument("StepParts.add_form: the limits' indices increase from 0");
+    throw std::invalid_argument(
+        "StepParts.add_form: the limits' indices are >= 0 and increase from form to form");
   forms_.push_back(BoxForm{kind, p, off, limit});
 }
 

@@ -24,7 +24,7 @@ from test_braking_bound import numpy_braking_bound
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.experiments import build_experiment, load_config
-from dualarm_qp.step.bounds import grasp_rate_range
+from dualarm_qp.step.bounds import grasp_rate_range, grasp_rates
 from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.kinematics import both_arms
 from dualarm_qp.step.limits.box_form import BoxForm
@@ -394,9 +394,63 @@ def test_the_singular_values_are_computed_when_first_read(monkeypatch) -> None:
     assert out.applied and calls == []
     sv = out.sigma_min
     assert calls == [(6, 7), (6, 7)]  # the leader's and the follower's tool Jacobians
-    assert out.build.sigma_min == sv and out.build.context.sigma_min == sv
-    assert len(calls) == 2  # kept
+    assert out.build.sigma_min is sv and out.build.context.sigma_min is sv  # kept
+    assert len(calls) == 2
     s = exp.initial
     arms = both_arms(controller.builder.carry, exp.task.follower, s.q_l, s.q_f, s.sigma,
                      s.sigma_leader, exp.task.trajectory.pose(s.t))
     assert sv == arms.sigma_min  # the same values as the kernel's kinematics call
+
+
+@pytest.mark.parametrize("name", ["puma_beam_limits", "both_sliding_bar",
+                                  "curved_bar_waypoints"])
+@pytest.mark.parametrize("bad", [math.nan, math.inf, None, "a"])
+def test_a_bad_grasp_coordinate_is_a_clear_error(name: str, bad) -> None:
+    """Straight grasps too, whose rates the kernel computes without the surface."""
+    from dualarm_qp.errors import InvalidInputError, NonFiniteError
+
+    exp = _experiment(name)
+    builder = exp.controller().builder
+    s0 = exp.initial
+    fields = ["sigma"] + (["sigma_leader"] if builder.layout.n_grasp == 2 else [])
+    for field in fields:
+        values = {"sigma": s0.sigma, "sigma_leader": s0.sigma_leader, field: bad}
+        state = DualArmState(s0.t, s0.q_l, s0.q_f, values["sigma"], values["sigma_leader"])
+        with pytest.raises((InvalidInputError, NonFiniteError), match=field):
+            builder.context(state)
+
+
+def test_a_plane_bar_with_a_path_of_its_own_is_not_a_line() -> None:
+    """A subclass that moves its path is computed from its own point and tangent."""
+    from dualarm_qp.task.surfaces import PlaneBar
+
+    class Shifted(PlaneBar):
+        def point(self, sigma: float) -> np.ndarray:
+            return super().point(sigma) + np.array([0.0, 0.0, 0.05])
+
+    class AsList(PlaneBar):  # a point given as a list of floats
+        def point(self, sigma: float):
+            return super().point(sigma).tolist()
+
+    assert PlaneBar().line is not None
+    for surface in (Shifted(), AsList()):
+        assert surface.line is None
+        for s in (-0.1, 0.0, 0.2, 0.35, 0.5):
+            got = grasp_rates(surface, s, 0.01)
+            want = python_era_grasp_rates(surface, s, 0.01)
+            assert all(_same_float(g, w) for g, w in zip(got, want, strict=True))
+
+
+def test_grasp_rate_range_refuses_what_is_not_numbers() -> None:
+    good = (np.zeros(3), np.array([0.0, 0.0, 1.0]), np.zeros(3), np.ones(3))
+    assert grasp_rate_range(*good, 0.01) == (0.0, 100.0)
+    assert grasp_rate_range(*(v.tolist() for v in good), 0.01) == (0.0, 100.0)
+    for i in range(4):
+        for bad in ([0.0, None, 1.0], [0.0, 1.0], "abc", [[0.0, 0.0, 1.0]]):
+            args = list(good)
+            args[i] = bad
+            with pytest.raises(ValueError, match="3-vector"):
+                grasp_rate_range(*args, 0.01)
+    for dt in (0.0, -0.01, math.nan, math.inf):
+        with pytest.raises(ValueError, match="dt"):
+            grasp_rate_range(*good, dt)
