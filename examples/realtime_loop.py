@@ -12,8 +12,13 @@ rest (the controller's warm start is forgotten), so a 60 s run is about 20 passe
 holds every kind of step the task has: the start, full-speed steps, and the steps the
 scale policy slows (all joints reach their speed limits on this path).
 
-Timing (``time.perf_counter``): tick k is due at ``t0 + k ms``; the loop sleeps, then
-spins, until it is due. A step must finish by the next tick, its deadline. A step that
+Timing (``time.perf_counter``): tick k is due at ``t0 + k ms``. The loop waits for it
+on the core it runs on (``--wait spin``, the default: it checks the clock until the tick
+is due, as a real-time loop on a core of its own does), or sleeps until shortly before
+the tick and spins the rest (``--wait sleep``: the core is free between steps, but the
+operating system wakes the loop late now and then, and a step that follows a sleep runs
+slower: ``benchmarks/step_after_pause.py``). A step must finish by the next tick, its
+deadline. A step that
 finishes later is a miss, and so is every tick it overran: no new step starts for
 those (the arms keep the late command through them, and the plant integrates it); the
 next step starts at the next tick. The miss rate is the share of the ticks that got
@@ -21,7 +26,7 @@ no new command on time.
 
 Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a short
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
-one core; other work on the machine shows as misses.
+one core (all of it with ``--wait spin``); other work on the machine shows as misses.
 """
 
 from __future__ import annotations
@@ -44,6 +49,8 @@ import numpy as np
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "panda_pair.yaml"
 PERIOD = 1e-3  # tick [s]: 1 kHz
 PARTS = ("kinematics", "assembly", "solve", "verify")
+#: How the loop waits for a tick: check the clock until it is due, or sleep first.
+WAITS = ("spin", "sleep")
 
 
 @dataclass
@@ -84,6 +91,8 @@ class LoopReport:
         decision order (``names``).
     names : tuple of str
         The decision variables.
+    wait : str
+        How the loop waited for each tick (:data:`WAITS`).
     """
 
     seconds: float
@@ -100,6 +109,7 @@ class LoopReport:
     slowed: np.ndarray
     rates: np.ndarray
     names: tuple[str, ...]
+    wait: str = "spin"
 
     @property
     def steps(self) -> int:
@@ -133,17 +143,27 @@ def experiment(config: Path = CONFIG) -> dq.Experiment:
     return dq.build_experiment(dq.load_config(config), str(config), dt=PERIOD)
 
 
-def wait_until(t: float) -> None:
-    """Sleep until shortly before ``t`` (perf_counter time [s]), then spin to it."""
-    ahead = t - time.perf_counter() - 2e-4  # sleep wakes up to ~0.1 ms late: spin the rest
-    if ahead > 0:
-        time.sleep(ahead)
+def wait_until(t: float, wait: str = "spin") -> None:
+    """Wait until ``t`` (perf_counter time [s]): check the clock, or sleep first.
+
+    ``"sleep"`` sleeps until shortly before ``t`` (a sleep wakes up about 0.1 ms late,
+    more on a busy machine), then checks the clock for the rest.
+    """
+    if wait == "sleep":
+        ahead = t - time.perf_counter() - 2e-4
+        if ahead > 0:
+            time.sleep(ahead)
     while time.perf_counter() < t:
         pass
 
 
-def run(seconds: float, config: Path = CONFIG) -> LoopReport:
-    """Run the 1 kHz loop for ``seconds`` of ticks and return what it measured."""
+def run(seconds: float, config: Path = CONFIG, wait: str = "spin") -> LoopReport:
+    """Run the 1 kHz loop for ``seconds`` of ticks and return what it measured.
+
+    ``wait`` is how the loop waits for each tick (:data:`WAITS`, :func:`wait_until`).
+    """
+    if wait not in WAITS:
+        raise ValueError(f"wait must be one of {', '.join(WAITS)}, got {wait!r}")
     exp = experiment(config)
     controller = exp.controller()
     dt, path_end = exp.options.dt, exp.initial.t + exp.duration
@@ -162,7 +182,7 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
     k = 0
     while k < ticks:
         due = t0 + k * PERIOD
-        wait_until(due)
+        wait_until(due, wait)
         start, cpu = time.perf_counter(), time.thread_time()
         scale_max = min(1.0, (path_end - state.t) / dt)  # never ask past the path's end
         out = controller.step(state, scale_max=scale_max)
@@ -198,7 +218,7 @@ def run(seconds: float, config: Path = CONFIG) -> LoopReport:
     wall = time.perf_counter() - t0
     return LoopReport(seconds, wall, ticks, passes, stopped, ran, step_time[ran],
                       cpu_time[ran], late_start[ran], finish[ran], split[ran], slowed[ran], rates,
-                      tuple(controller.names))
+                      tuple(controller.names), wait)
 
 
 def why(report: LoopReport) -> str:
@@ -229,8 +249,8 @@ def summary(report: LoopReport) -> str:
     us = report.step_time * 1e6
     late = int(report.late.sum())
     lines = [
-        f"Panda pair at 1 kHz for {report.wall:.3f} s of wall time (passes of the path: "
-        f"{report.passes}, stops: {report.stopped})",
+        f"Panda pair at 1 kHz for {report.wall:.3f} s of wall time, waiting by "
+        f"{report.wait} (passes of the path: {report.passes}, stops: {report.stopped})",
         f"ticks: {report.ticks} ({report.steps} steps, {report.ticks - report.steps} "
         f"skipped while a late step ran)",
         f"misses: {report.misses} ({late} late steps + {report.ticks - report.steps} "
@@ -246,15 +266,18 @@ def summary(report: LoopReport) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: ``--seconds`` of ticks (default 60)."""
+    """Command line: ``--seconds`` of ticks (default 60), ``--wait spin|sleep``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0,
                         help="wall time to run at 1 kHz [s] (default 60)")
+    parser.add_argument("--wait", choices=WAITS, default="spin",
+                        help="check the clock until each tick (spin, the default: the "
+                             "loop keeps its core) or sleep until shortly before it")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         parser.error("--seconds must be a positive number")
     try:
-        report = run(args.seconds)
+        report = run(args.seconds, wait=args.wait)
     except dq.RobotModelError as err:  # the Panda comes from example-robot-data
         print(f"{err}\nInstall it with: pip install 'dualarm-qp[robots]'", file=sys.stderr)
         return 1

@@ -74,3 +74,12 @@ def test_the_integrated_rates_keep_the_speed_limits(loop):
     assert (np.abs(x[:, layout.leader]) <= exp.task.leader.qd_max * (1 + tol)).all()
     assert (np.abs(x[:, layout.follower]) <= exp.task.follower.qd_max * (1 + tol)).all()
     assert (np.abs(x[:, layout.grasps]) <= exp.options.grasp_speed_max * (1 + tol)).all()
+
+
+def test_the_loop_can_sleep_between_ticks_and_refuses_another_wait():
+    example = runpy.run_path(str(ROOT / "examples" / "realtime_loop.py"))
+    report = example["run"](0.2, wait="sleep")
+    assert report.wait == "sleep" and report.ticks == 200 and report.steps >= 1
+    assert "waiting by sleep" in example["summary"](report)
+    with pytest.raises(ValueError, match="spin, sleep"):
+        example["run"](0.2, wait="nap")
