@@ -18,11 +18,10 @@ is due, as a real-time loop on a core of its own does), or sleeps until shortly 
 the tick and spins the rest (``--wait sleep``: the core is free between steps, but the
 operating system wakes the loop late now and then, and a step that follows a sleep runs
 slower: ``benchmarks/step_after_pause.py``). A step must finish by the next tick, its
-deadline. A step that
-finishes later is a miss, and so is every tick it overran: no new step starts for
-those (the arms keep the late command through them, and the plant integrates it); the
-next step starts at the next tick. The miss rate is the share of the ticks that got
-no new command on time.
+deadline. A step that finishes later is a miss, and so is every tick it overran: no new
+step starts for those (the arms keep the late command through them, and the plant
+integrates it); the next step starts at the next tick. The miss rate is the share of the
+ticks that got no new command on time.
 
 Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a short
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
@@ -234,7 +233,8 @@ def why(report: LoopReport) -> str:
     parts = ", ".join(f"{p} {us(report.split[:, i], late):.0f}"
                       for i, p in enumerate(PARTS))
     line = (f"why: a late step took {wall:.0f} us on average, {cpu:.0f} us of it on the "
-            f"CPU ({wall - cpu:.0f} us the process waited while other work had the core); "
+            f"CPU ({max(wall - cpu, 0.0):.0f} us the process waited while other work had "
+            f"the core); "
             f"its split: {parts} us; it started {us(report.late_start, late):.0f} us after "
             f"its tick")
     if (~late).any():

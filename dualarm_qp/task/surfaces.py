@@ -210,12 +210,13 @@ class GraspSurface(ABC):
 
     @property
     def line(self) -> tuple[FloatArray, FloatArray] | None:
-        """The straight path's ``(origin, direction)``, or None for another path.
+        """A straight path's ``(origin, direction)`` (a :class:`PlaneBar`'s), or None.
 
         A straight path has ``point(sigma) = origin + sigma * direction`` (a product, then
-        a sum, as numpy computes it) and the tangent ``direction``: the step's kernel
-        computes the grasp's rates itself from them
-        (:class:`~dualarm_qp.step.build.StepBuilder`).
+        a sum, as numpy computes it) and the tangent ``direction``: when every sliding
+        grasp has a line (and there is no Case 2 support), the step's kernel computes the
+        grasps' rates itself from them (:class:`~dualarm_qp.step.build.StepBuilder`).
+        None here: the surface's own :meth:`point` and :meth:`tangent` are read.
         """
         return None
 

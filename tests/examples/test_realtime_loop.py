@@ -76,10 +76,25 @@ def test_the_integrated_rates_keep_the_speed_limits(loop):
     assert (np.abs(x[:, layout.grasps]) <= exp.options.grasp_speed_max * (1 + tol)).all()
 
 
-def test_the_loop_can_sleep_between_ticks_and_refuses_another_wait():
+def test_the_loop_sleeps_between_ticks_only_when_asked(monkeypatch):
     example = runpy.run_path(str(ROOT / "examples" / "realtime_loop.py"))
+    time_module = example["time"]
+    naps: list[float] = []
+    real_sleep = time_module.sleep
+
+    def counting_sleep(seconds: float) -> None:
+        naps.append(seconds)
+        real_sleep(seconds)
+
+    monkeypatch.setattr(time_module, "sleep", counting_sleep)
+    spin = example["run"](0.2)
+    assert spin.wait == "spin" and spin.ticks == 200 and naps == []
     report = example["run"](0.2, wait="sleep")
     assert report.wait == "sleep" and report.ticks == 200 and report.steps >= 1
+    assert naps and all(0.0 < t < example["PERIOD"] for t in naps)
     assert "waiting by sleep" in example["summary"](report)
     with pytest.raises(ValueError, match="spin, sleep"):
         example["run"](0.2, wait="nap")
+    with pytest.raises(SystemExit) as exit_info:  # the command line refuses it too
+        example["main"](["--wait", "nap", "--seconds", "0.1"])
+    assert exit_info.value.code == 2
