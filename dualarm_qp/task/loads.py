@@ -156,7 +156,16 @@ class GraspStatics:
 
 def rigid_grasp(point: Any) -> GraspStatics:
     """Return a rigid grasp at ``point`` [m]: any wrench (6 dims)."""
-    return GraspStatics(as_array(point, "point", (3,)).copy(), np.zeros((6, 0)))
+    return rigid_statics(as_array(point, "point", (3,)))
+
+
+def rigid_statics(point: FloatArray) -> GraspStatics:
+    """:func:`rigid_grasp` of a float64 (3,) ``point`` computed from checked values.
+
+    What the per-step statics call (:func:`hand_statics`): the point comes from the
+    leader's checked kinematics, so it is not checked again.
+    """
+    return GraspStatics(point.copy(), np.zeros((6, 0)))
 
 
 def sliding_grasp(point: Any, sliding: Any, turn: Any = (0.0, 0.0, 0.0)) -> GraspStatics:
@@ -177,16 +186,32 @@ def sliding_grasp(point: Any, sliding: Any, turn: Any = (0.0, 0.0, 0.0)) -> Gras
     GraspStatics
         Free twists: the slide ``[s*; kappa]`` and the spin ``[0; s*]``.
     """
-    s = as_array(sliding, "sliding", (3,))
-    n = float(np.linalg.norm(s))
+    return sliding_statics(as_array(point, "point", (3,)),
+                           as_array(sliding, "sliding", (3,)), as_array(turn, "turn", (3,)))
+
+
+def sliding_statics(point: FloatArray, sliding: FloatArray, turn: FloatArray) -> GraspStatics:
+    """:func:`sliding_grasp` of float64 (3,) arrays computed from checked values.
+
+    What the per-step statics call (:func:`hand_statics`, the torque rows): the hands'
+    points and directions come from the arms' kinematics and the surfaces at a checked
+    state, so they are not checked again (a step's rows are checked where the builder
+    stacks them).
+
+    Raises
+    ------
+    InvalidInputError
+        ``sliding`` is zero.
+    """
+    n = float(np.linalg.norm(sliding))
     if not n > 0.0:
         raise InvalidInputError("sliding must be a non-zero vector")
-    s = s / n
+    s = sliding / n
     free = np.zeros((6, 2))
     free[:3, 0] = s
-    free[3:, 0] = as_array(turn, "turn", (3,))
+    free[3:, 0] = turn
     free[3:, 1] = s
-    return GraspStatics(as_array(point, "point", (3,)).copy(), free)
+    return GraspStatics(point.copy(), free)
 
 
 def support_push(point: Any, normal: Any, push: float) -> GraspStatics:
@@ -349,8 +374,11 @@ def hand_statics(task: DualArmTask, q_l: Any, sigma: float, sigma_l: float = 0.0
     T_obj = T_tool @ task.H1_at(sigma_l)
     R, p = T_obj[:3, :3], T_obj[:3, 3]
     ls = task.leader_surface
-    leader = (rigid_grasp(T_tool[:3, 3]) if ls is None else
-              sliding_grasp(T_tool[:3, 3], R @ ls.tangent(sigma_l), R @ ls.angular_rate(sigma_l)))
+    # The points and directions come from the leader's checked kinematics and the
+    # surfaces (which check sigma): the grasps are made without a second check.
+    leader = (rigid_statics(T_tool[:3, 3]) if ls is None else
+              sliding_statics(T_tool[:3, 3], R @ ls.tangent(sigma_l),
+                              R @ ls.angular_rate(sigma_l)))
     contact = task.contact
     if contact is not None:
         line = contact.line(R)
@@ -358,8 +386,8 @@ def hand_statics(task: DualArmTask, q_l: Any, sigma: float, sigma_l: float = 0.0
         follower = support_push(R @ line.point(sigma) + p, R @ line.normal(sigma), h)
     else:
         s = task.surface
-        follower = sliding_grasp(R @ s.point(sigma) + p, R @ s.tangent(sigma),
-                                 R @ s.angular_rate(sigma))
+        follower = sliding_statics(R @ s.point(sigma) + p, R @ s.tangent(sigma),
+                                   R @ s.angular_rate(sigma))
     return [leader, follower], T_obj
 
 

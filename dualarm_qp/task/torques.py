@@ -47,7 +47,7 @@ from .loads import (
     ObjectLoad,
     hand_statics,
     hand_wrenches,
-    sliding_grasp,
+    sliding_statics,
 )
 from .scene import DualArmTask
 
@@ -317,8 +317,8 @@ class LoadTorques:
         surf = task.surface
         s1 = sigma + GRASP_STEP
         sets = [(hands, centre),
-                ([hands[0], sliding_grasp(R @ surf.point(s1) + p, R @ surf.tangent(s1),
-                                          R @ surf.angular_rate(s1))], centre)]
+                ([hands[0], sliding_statics(R @ surf.point(s1) + p, R @ surf.tangent(s1),
+                                            R @ surf.angular_rate(s1))], centre)]
         if self.n_grasp == 2:
             moved, T1 = hand_statics(task, q_l, sigma, sigma_l + GRASP_STEP)
             sets.append((moved, T1[:3, :3] @ load.mass_centre + T1[:3, 3]))

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.errors import InvalidInputError, NonFiniteError
 from dualarm_qp.task.loads import (
     ObjectLoad,
     UnbalancedLoadError,
@@ -221,3 +221,22 @@ def test_bad_loads_are_refused_naming_the_value(kwargs, word):
     args = {"mass": 1.0, "mass_centre": [0.0, 0.0, 0.0], "gravity": [0.0, 0.0, -9.81]}
     with pytest.raises(InvalidInputError, match=word):
         ObjectLoad(**{**args, **kwargs})
+
+
+@settings(max_examples=60, deadline=None)
+@given(point=st.lists(st.floats(-10, 10), min_size=3, max_size=3),
+       sliding=st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(
+           lambda v: sum(x * x for x in v) > 1e-6),
+       turn=st.lists(st.floats(-5, 5), min_size=3, max_size=3))
+def test_the_per_step_grasps_equal_the_checked_ones(point, sliding, turn) -> None:
+    """The statics a step makes without a second check equal the public grasps, bit for bit."""
+    from dualarm_qp.task.loads import rigid_statics, sliding_statics
+
+    p, s, k = (np.array(v, dtype=float) for v in (point, sliding, turn))
+    checked, fast = sliding_grasp(p, s, k), sliding_statics(p, s, k)
+    assert np.array_equal(checked.point, fast.point) and np.array_equal(checked.free, fast.free)
+    assert fast.point is not p  # a copy: the caller's array may change
+    assert np.array_equal(rigid_grasp(p).free, rigid_statics(p).free)
+    # The public grasps still refuse what is not finite.
+    with pytest.raises(NonFiniteError):
+        sliding_grasp(p, s, [np.nan, 0.0, 0.0])
