@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -62,6 +63,25 @@ def as_pose(value: Any, name: str) -> FloatArray:
     if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
         raise InvalidInputError(f"{name} must have a proper rotation block (orthonormal, det +1)")
     return T
+
+
+def as_number(value: Any, name: str) -> float:
+    """Return ``value`` as a finite Python float.
+
+    Raises
+    ------
+    InvalidInputError
+        ``value`` is not a real number.
+    NonFiniteError
+        ``value`` is NaN or infinite.
+    """
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as err:
+        raise InvalidInputError(f"{name} must be a real number, got {value!r}") from err
+    if not math.isfinite(number):
+        raise NonFiniteError(name)
+    return number
 
 
 def check_limits(lower: FloatArray, upper: FloatArray, name: str) -> None:

@@ -117,7 +117,7 @@ class NullspaceSolver:
                            tol, claims_bounds=claims_bounds)
         keep_basis(problem, basis)
         problem.keep_inequalities(*ineq)
-        if code == 0:  # an optimum: certified in one piece, without a claim object first
+        if code == _OPTIMAL:  # an optimum: certified in one piece, without a claim object first
             fields = verdict_fields(problem, Status.OPTIMAL, "", x, reading, tol,
                                     claims_bounds)
             if fields is not None:
@@ -164,7 +164,7 @@ class NullspaceSolver:
 
 #: The kernel's answer codes (src/kernel/nullspace.hpp); 0 is OPTIMAL. An empty box is
 #: ``kernel.EMPTY_BOX_CODE`` (``kernel.solve_certified`` does not solve it).
-_INFEASIBLE, _INCONSISTENT, _MAX_ITER = 1, 2, 3
+_OPTIMAL, _INFEASIBLE, _INCONSISTENT, _MAX_ITER = 0, 1, 2, 3
 _EMPTY_BOX: int = kernel.EMPTY_BOX_CODE
 
 

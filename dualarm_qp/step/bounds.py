@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from ..errors import InvalidInputError
 
 if TYPE_CHECKING:
     from ..task.surfaces import GraspSurface
@@ -41,7 +42,7 @@ def grasp_rate_range(
 
     Raises
     ------
-    ValueError
+    InvalidInputError
         An argument is not a 3-vector of numbers, or ``dt`` is not a positive number.
     """
     return kernel.grasp_rate_range(_vector(surface_r, "r"), _vector(s_star, "s_star"),
@@ -59,7 +60,7 @@ def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, 
 
     Raises
     ------
-    ValueError
+    InvalidInputError
         The surface's point or tangent is not a 3-vector of numbers, or ``dt`` is not a
         positive number.
     """
@@ -70,18 +71,21 @@ def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, 
 
 
 def _vector(v: Sequence[float] | FloatArray, name: str) -> FloatArray:
-    """Return ``v`` as a float64 3-vector, or raise ValueError naming it."""
+    """Return ``v`` as a float64 3-vector, or raise InvalidInputError naming it."""
     raw = np.asarray(v)
     if raw.shape != (3,) or raw.dtype.kind not in "iuf":
-        raise ValueError(f"{name} must be a 3-vector of numbers, got {v!r}")
+        raise InvalidInputError(f"{name} must be a 3-vector of numbers, got {v!r}")
     return raw.astype(np.float64, copy=False)
 
 
 def _step(dt: float) -> float:
-    """Return ``dt`` as a positive float [s], or raise ValueError."""
-    value = float(dt)
+    """Return ``dt`` as a positive float [s], or raise InvalidInputError."""
+    try:
+        value = float(dt)
+    except (TypeError, ValueError):
+        value = math.nan
     if not (value > 0.0 and math.isfinite(value)):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+        raise InvalidInputError(f"dt must be a positive number of seconds, got {dt!r}")
     return value
 
 

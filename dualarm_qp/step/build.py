@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._validate import as_number
 from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
 from ..task.carry import CarryKinematics, CarryModel
 from ..task.contact import SupportContact
@@ -113,7 +114,7 @@ class StepBuild:
         """Smallest singular value of the leader's and the follower's tool Jacobian."""
         if self.context is not None:
             return self.context.sigma_min  # computed once, when first read
-        return (smallest_singular_value(self.carry.J_tool), smallest_singular_value(self.J_f))
+        return kernel.smallest_singular_values(self.carry.J_tool, self.J_f)
 
 
 @dataclass(frozen=True, slots=True)
@@ -261,12 +262,11 @@ class StepBuilder:
             parts.add_form(form.kind, form.p, form.off, k)
         # Straight grasps (and no Case 2 support, whose line moves): the kernel computes
         # their rates to the range ends from the grasp coordinates.
-        lines = [surf.line for surf in self._surfaces]
-        if self._contact is None and all(line is not None for line in lines):
+        lines = [line for line in (surf.line for surf in self._surfaces) if line is not None]
+        if self._contact is None and len(lines) == len(self._surfaces):
             for surf, line in zip(self._surfaces, lines, strict=True):
-                if line is not None:
-                    parts.add_grasp_line(*line, surf.r_min, surf.r_max, surf.sigma_min,
-                                         surf.sigma_max)
+                parts.add_grasp_line(*line, surf.r_min, surf.r_max, surf.sigma_min,
+                                     surf.sigma_max)
         return parts
 
     # -- what the controller and the reports read -----------------------------------------
@@ -382,17 +382,8 @@ class StepBuilder:
         values = (sigma, sigma_l)[:self.layout.n_grasp]
         if all(type(v) is float for v in values) and math.isfinite(sum(values)):
             return np.array(values)  # the common case, checked cheaply
-        out = []
-        for value, name in zip(values, ("sigma", "sigma_leader"), strict=False):
-            try:
-                number = float(value)
-            except (TypeError, ValueError) as err:
-                raise InvalidInputError(f"{name} must be a real number, got {value!r}"
-                                        ) from err
-            if not math.isfinite(number):
-                raise NonFiniteError(name)
-            out.append(number)
-        return np.array(out)
+        return np.array([as_number(value, name) for value, name in
+                         zip(values, ("sigma", "sigma_leader"), strict=False)])
 
     def _grasp_rates(self, sigmas: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Return the grasps' rates to the ends of their ranges (Eqs. 30-33) [m/s]."""

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validate import as_array, check_limits
+from .._validate import as_array, as_number, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
 
 FloatArray = NDArray[np.float64]
@@ -55,13 +55,7 @@ __all__ = [
 
 def _as_sigma(sigma: Any, name: str = "sigma") -> float:
     """Return ``sigma`` as a finite Python float [m]."""
-    try:
-        value = float(sigma)
-    except (TypeError, ValueError) as err:
-        raise InvalidInputError(f"{name} must be a real number, got {sigma!r}") from err
-    if not math.isfinite(value):
-        raise NonFiniteError(name)
-    return value
+    return as_number(sigma, name)
 
 
 def _as_bound(value: Any, name: str) -> FloatArray:

@@ -442,6 +442,8 @@ def test_a_plane_bar_with_a_path_of_its_own_is_not_a_line() -> None:
 
 
 def test_grasp_rate_range_refuses_what_is_not_numbers() -> None:
+    from dualarm_qp.errors import InvalidInputError
+
     good = (np.zeros(3), np.array([0.0, 0.0, 1.0]), np.zeros(3), np.ones(3))
     assert grasp_rate_range(*good, 0.01) == (0.0, 100.0)
     assert grasp_rate_range(*(v.tolist() for v in good), 0.01) == (0.0, 100.0)
@@ -449,8 +451,8 @@ def test_grasp_rate_range_refuses_what_is_not_numbers() -> None:
         for bad in ([0.0, None, 1.0], [0.0, 1.0], "abc", [[0.0, 0.0, 1.0]]):
             args = list(good)
             args[i] = bad
-            with pytest.raises(ValueError, match="3-vector"):
+            with pytest.raises(InvalidInputError, match="3-vector"):
                 grasp_rate_range(*args, 0.01)
-    for dt in (0.0, -0.01, math.nan, math.inf):
-        with pytest.raises(ValueError, match="dt"):
+    for dt in (0.0, -0.01, math.nan, math.inf, "abc", None):
+        with pytest.raises(InvalidInputError, match="dt"):
             grasp_rate_range(*good, dt)
