@@ -294,8 +294,8 @@ class DualArmController:
             except DualArmError:
                 sol = None
             if sol is not None and sol.status.usable:
-                share = la.predict(state, _inside(sol.x, problem), sol.scale,
-                                   self.options.dt).share(la.budget)
+                share = la.predict_checked(state, _inside(sol.x, problem), sol.scale,
+                                           self.options.dt).share(la.budget)
         return explain(self._builder, state, budget_share=share,
                        budget=None if la is None else la.budget)
 
@@ -362,8 +362,8 @@ class DualArmController:
         if not 0.0 <= scale_max <= 1.0:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         state = self._checked(state)
-        build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev,
-                                    x_applied=self._x_applied)
+        # Checked once, here: the builder does not check the state or its own rates again.
+        build = self._builder.build_checked(state, scale_max, self._x_prev, self._x_applied)
         problem = build.problem
         t4 = time.perf_counter()
         try:
@@ -442,7 +442,7 @@ class DualArmController:
         problem = build.problem
         if la.negligible(build, build_x, dt):
             return solution
-        pred = la.predict(state, build_x, scale_max * solution.scale, dt)
+        pred = la.predict_checked(state, build_x, scale_max * solution.scale, dt)
         share = pred.share(la.budget)
         if share <= 1.0:
             return solution
@@ -460,7 +460,7 @@ class DualArmController:
                 break
             x = _inside(trial.x, scaled)
             scale = factor * trial.scale
-            trial_share = la.predict(state, x, scale_max * scale, dt).share(la.budget)
+            trial_share = la.predict_checked(state, x, scale_max * scale, dt).share(la.budget)
             if trial_share < best_share:
                 best, best_share = replace(
                     trial, status=Status.SCALED, scale=scale,

@@ -5,9 +5,9 @@ path and the grasp closed to first order. A step that moves the joints far withi
 sample (a fast object, a coarse ``dt``) leaves a second-order error that the linear
 step cannot see: the leader leaves its path, the grasp opens. The scale policy slows
 the path only for the limits; this module lets the same task scale answer for the
-errors too. For a command ``x`` the controller asks :meth:`Lookahead.exceeds`; when
-the errors predicted at the next sample (forward kinematics at ``q + dt x``, the path
-at ``t + scale dt``) pass the budget, it slows the task further
+errors too. For a command ``x`` the controller asks :meth:`Lookahead.predict_checked`;
+when the errors predicted at the next sample (forward kinematics at ``q + dt x``, the
+path at ``t + scale dt``, in one kernel call) pass the budget, it slows the task further
 (:class:`~.controller.DualArmController`).
 
 A cheap bound decides first whether the prediction is needed: a chain of revolute
@@ -25,10 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from ..errors import NonFiniteError, ShapeError
 from ..kinematics.arm import SerialArm
 from ..step.build import StepBuild
-from ..step.kinematics import both_errors
 from ..step.state import DualArmState
 from ..task.carry import CarryModel
 from ..task.scene import DualArmTask
@@ -113,27 +113,50 @@ class Lookahead:
 
     def predict(self, state: DualArmState, x: FloatArray, scale: float, dt: float
                 ) -> Predicted:
-        """Errors at the next sample after applying ``x`` for ``dt`` with path rate ``scale``."""
-        n_l, n_f = self.n_l, self.n_f
+        """Errors at the next sample after applying ``x`` for ``dt`` with path rate ``scale``.
+
+        Raises
+        ------
+        ShapeError, NonFiniteError
+            Joints of the wrong length or with NaN, ``x`` not ``n`` numbers, a NaN in
+            ``x`` or in the grasp coordinates it reaches.
+        """
         task = self.task
         # Checked as every arm's joints are: a vector of the wrong length or a NaN is a
         # clear error, never a NaN prediction.
         q_l = task.leader.check_q(state.q_l, "leader joints q_l")
         q_f = task.follower.check_q(state.q_f, "follower joints q_f")
-        n = n_l + n_f + self._carry.n_grasp
+        n = self.n_l + self.n_f + self._carry.n_grasp
+        x = np.ascontiguousarray(x, dtype=np.float64)
         if x.shape != (n,):
             raise ShapeError("the command x", (n,), x.shape)
-        q_l = q_l + dt * x[:n_l]
-        q_f = q_f + dt * x[n_l:n_l + n_f]
-        sigma = state.sigma + dt * float(x[n_l + n_f])
-        sigma_l = state.sigma_leader + (dt * float(x[n_l + n_f + 1])
-                                        if x.shape[0] > n_l + n_f + 1 else 0.0)
-        if not (np.isfinite(x).all() and math.isfinite(sigma) and math.isfinite(sigma_l)):
+        return self.predict_checked(DualArmState(state.t, q_l, q_f, float(state.sigma),
+                                                 float(state.sigma_leader)), x, scale, dt)
+
+    def predict_checked(self, state: DualArmState, x: FloatArray, scale: float, dt: float
+                        ) -> Predicted:
+        """:meth:`predict` for a caller that checked its inputs (the controller's step).
+
+        ``state``'s joints are finite float64 arrays of the arms' lengths and its grasp
+        coordinates floats; ``x`` is a C-ordered float64 array of the decision's length.
+        One kernel call moves the joints and the grasps by ``dt x`` and computes the two
+        pose errors there (``kernel.predicted_errors``).
+
+        Raises
+        ------
+        NonFiniteError
+            A NaN or an infinity in ``x`` or in the grasp coordinates it reaches.
+        """
+        carry, follower = self._carry, self.task.follower
+        e = np.empty(12)
+        if not kernel.predicted_errors(
+                carry.chain, carry.frames, follower.chain, follower.tool_frame_id,
+                state.q_l, state.q_f, state.sigma, state.sigma_leader, x, carry.columns[1],
+                dt, self.task.trajectory.pose(state.t + scale * dt), e):
             raise NonFiniteError("the command x or the grasp coordinates")
-        e = both_errors(self._carry, task.follower, q_l, q_f, sigma, sigma_l,
-                        task.trajectory.pose(state.t + scale * dt)).tolist()
-        return Predicted((math.hypot(*e[0:3]), math.hypot(*e[3:6])),
-                         (math.hypot(*e[6:9]), math.hypot(*e[9:12])))
+        p = e.tolist()
+        return Predicted((math.hypot(*p[0:3]), math.hypot(*p[3:6])),
+                         (math.hypot(*p[6:9]), math.hypot(*p[9:12])))
 
 
 __all__ = ["Lookahead", "Predicted", "chain_length"]

@@ -589,7 +589,6 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
                     ) -> Failure | None:
     """Return the first criterion sample ``k`` breaks, or None (appends warnings)."""
     t = float(tr.t[k])
-    at = f"step {k} at t = {t:.4f} s"
     checks = (
         ("closure", "grasp closure lost", tr.closure_pos_err[k], tr.closure_rot_err[k],
          limits.closure),
@@ -606,13 +605,13 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
                         "and the joints this far, beyond where the linearised closure "
                         "(Eq. 25) holds: turn the speed limits on")
             return Failure(criterion, k, t, float(amount), limit,
-                           f"{at}: {what}: {pos:.3g} m, {rot:.3g} rad "
+                           f"{_at(k, t)}: {what}: {pos:.3g} m, {rot:.3g} rad "
                            f"(tolerance {tol_pos:g} m, {tol_rot:g} rad){hint}")
     threshold = limits.singular_value_min
     if threshold > 0 and limits.singularity_action != "ignore":
         for arm, sv in (("leader", tr.sigma_min_l[k]), ("follower", tr.sigma_min_f[k])):
             if sv < threshold:
-                text = (f"{at}: the {arm} is near a singularity (smallest singular value "
+                text = (f"{_at(k, t)}: the {arm} is near a singularity (smallest singular value "
                         f"of its Jacobian {sv:.3g}, threshold {threshold:g})")
                 if limits.singularity_action == "stop":
                     return Failure("singularity", k, t, float(sv), threshold, text)
@@ -620,8 +619,13 @@ def _sample_failure(tr: Trace, k: int, applied: bool, status: str, message: str,
                     warnings.append(f"first at {text}")
     if not applied:
         return Failure("solver", k, t, math.nan, math.nan,
-                       f"{at}: solver status {status}: {message}")
+                       f"{_at(k, t)}: solver status {status}: {message}")
     return None
+
+
+def _at(k: int, t: float) -> str:
+    """Where a sample's message happens: ``"step 12 at t = 0.1200 s"`` (made only when needed)."""
+    return f"step {k} at t = {t:.4f} s"
 
 
 def _explained(controller: DualArmController, trace: Trace, failure: Failure) -> Failure:

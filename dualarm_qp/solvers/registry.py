@@ -330,7 +330,7 @@ def certified(solver: StepSolver, tol: Tolerance | None = None) -> CertifiedSolv
     wrapped solver object itself is shared, not copied (its warm starts are kept).
     """
     if isinstance(solver, CertifiedSolver):
-        if tol is None or tol == solver.tol:
+        if tol is None or tol is solver.tol or tol == solver.tol:
             return solver
         return CertifiedSolver(solver.inner, solver.info, tol)
     info = _REGISTRY.get(solver.name) or _REGISTRY.get(_ALIASES.get(solver.name, ""))

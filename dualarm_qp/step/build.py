@@ -37,8 +37,10 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -52,7 +54,7 @@ from ..task.scene import DualArmTask
 from ..task.support import SupportLine
 from ..task.surfaces import GraspSurface
 from .bounds import grasp_rates
-from .context import ArmKinematics, StepContext
+from .context import ArmKinematics, StepContext, smallest_singular_values
 from .cost import CentringCost
 from .kinematics import both_arms
 from .layout import Layout
@@ -61,7 +63,7 @@ from .limits.box_form import RANGE, BoxForm, compiled_constraint
 from .options import StepOptions
 from .parts import Limit
 from .problem import StepProblem
-from .stacking import PIN_RTOL, CompiledBox, LimitStack, checked_rates
+from .stacking import PIN_RTOL, LimitStack, checked_rates
 from .state import DualArmState
 from .tasks import CarryTasks
 
@@ -86,15 +88,16 @@ class StepBuild:
         Leader, object and target poses and Jacobians at this state.
     T_f, J_f : ndarray
         Follower tool pose (4, 4) and Jacobian (6, n_f).
-    sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's tool Jacobian
-        (computed when first read: :attr:`.context.StepContext.sigma_min`).
     kinematics_time, assembly_time : float
         Seconds spent in the kinematics and in assembling the problem.
     support_force : float
         Follower push ``h`` [N] of a Case 2 support at this state (NaN for a grasp).
     context : StepContext or None
-        What the parts read.
+        What the parts read. When no limit read it during the build, the builder
+        gives a function that makes it, and it is made when first read.
+    sigma_min : tuple of float
+        Smallest singular value of the leader's and the follower's tool Jacobian
+        (computed when first read, once, and shared with the context).
     """
 
     problem: StepProblem
@@ -107,29 +110,31 @@ class StepBuild:
     kinematics_time: float
     assembly_time: float
     support_force: float = math.nan
-    context: StepContext | None = None
+    _context: StepContext | Callable[[tuple[float, float] | None], StepContext] | None = (
+        field(default=None, repr=False, compare=False))
+    _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
+                                                   compare=False)
+
+    @property
+    def context(self) -> StepContext | None:
+        """What the parts read (made now if no limit read it during the build)."""
+        ctx = self._context
+        if ctx is None or isinstance(ctx, StepContext):
+            return ctx
+        made = ctx(self._sigma_min)  # the singular values, if read, carry over
+        object.__setattr__(self, "_context", made)  # a cache, on a frozen build
+        return made
 
     @property
     def sigma_min(self) -> tuple[float, float]:
         """Smallest singular value of the leader's and the follower's tool Jacobian."""
-        if self.context is not None:
-            return self.context.sigma_min  # computed once, when first read
-        return kernel.smallest_singular_values(self.carry.J_tool, self.J_f)
-
-
-@dataclass(frozen=True, slots=True)
-class _Parts:
-    """What the kernel's standard parts give beside the context (``StepParts.prepare``)."""
-
-    A: FloatArray  # (12, n) the equality
-    b: FloatArray  # (12,)
-    equality_finite: bool
-    center: FloatArray  # (n,) the centring cost's centres
-    lowers: FloatArray  # (forms, n) the compiled limits' bounds, in their order
-    uppers: FloatArray
-    box: CompiledBox  # the compiled limits' boxes intersected (kernel.intersect_boxes)
-    recovering: NDArray[np.bool_]  # (n) ranged variables outside their range
-    kinematics_time: float  # [s] up to and with the kernel's kinematics
+        sv = self._sigma_min
+        if sv is None:
+            ctx = self._context
+            sv = (ctx.sigma_min if isinstance(ctx, StepContext)  # computed once
+                  else smallest_singular_values(self.carry.J_tool, self.J_f))
+            object.__setattr__(self, "_sigma_min", sv)
+        return sv
 
 
 def _compiled_form(limit: Limit) -> BoxForm | None:
@@ -325,21 +330,39 @@ class StepBuilder:
         support_force : float
             Follower push ``h`` [N] of a Case 2 support (NaN for a grasp).
         """
-        ctx, support_force, _ = self._prepared(state, scale_max, x_applied)
-        return ctx, support_force
+        start = time.perf_counter()
+        q_l, q_f, sigmas, x0 = self._checked(state, x_applied)
+        parts, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, start)
+        return self._context(state, scale_max, q_l, q_f, x0, parts, None), support_force
 
-    def _prepared(self, state: DualArmState, scale_max: float,
-                  x_applied: FloatArray | None) -> tuple[StepContext, float, _Parts]:
-        """Return the context, a support's push and the kernel's standard parts at ``state``.
+    def _checked(self, state: DualArmState, x_applied: object
+                 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Return the state's joints, grasp coordinates and ``x_applied`` checked.
+
+        Raises
+        ------
+        ShapeError, NonFiniteError, InvalidInputError
+            A joint vector of the wrong length or with NaN, a sliding grasp's coordinate
+            that is not a finite number, ``x_applied`` not ``n`` finite numbers.
+        """
+        q_l = self.task.leader.check_q(state.q_l, "q_l")
+        q_f = self.task.follower.check_q(state.q_f, "q_f")
+        sigmas = self._sigmas(state.sigma, state.sigma_leader)
+        x0 = self._zeros if x_applied is None else checked_rates(x_applied, "x_applied",
+                                                                 self.layout.n)
+        return q_l, q_f, sigmas, x0
+
+    def _prepared(self, state: DualArmState, q_l: FloatArray, q_f: FloatArray,
+                  sigmas: FloatArray, scale_max: float, x0: FloatArray, start: float
+                  ) -> tuple[tuple[Any, ...], float]:
+        """Return the kernel's standard parts at ``state`` and a support's push.
 
         One kernel call (``kernel.StepParts.prepare``): both arms' kinematics, the rates
         to the range ends, the equality, the centres and the compiled limits' boxes.
+        Its tuple, with the seconds of the kinematics (from ``start``) last.
         """
-        start = time.perf_counter()
         sigma, sigma_l = state.sigma, state.sigma_leader
         follower, trajectory, carry = self.task.follower, self.task.trajectory, self.carry
-        q_l = self.task.leader.check_q(state.q_l, "q_l")
-        q_f = follower.check_q(state.q_f, "q_f")
         T_D = trajectory.pose(state.t)
         support_force = math.nan
         if self._contact is not None:
@@ -347,28 +370,35 @@ class StepBuilder:
             # first, from the kinematics at the current placement.
             kin = both_arms(carry, follower, q_l, q_f, sigma, sigma_l, T_D).carry
             support_force = self._support(self._contact, kin, state)
-        lay, dt = self.layout, self.options.dt
-        sigmas = self._sigmas(sigma, sigma_l)
         if self._parts.grasp_lines:  # the kernel computes the grasps' rates itself
             grasp_lo = grasp_hi = self._no_grasps
         else:
             grasp_lo, grasp_hi = self._grasp_rates(sigmas)
-        x0 = self._zeros if x_applied is None else checked_rates(x_applied, "x_applied",
-                                                                 lay.n)
         tasks = self.carry_tasks
         q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
-        (T, J_tool, J_object, J_target, J_f, e, lo, hi, A, b, finite, center, lowers,
-         uppers, box, recovering, kin_seconds) = self._parts.prepare(
+        parts = self._parts.prepare(
             carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist, sigmas,
             grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
             tasks.exact_orientation)
-        kin = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
-        ctx = StepContext(state, self.task, lay, dt, scale_max, kin, T[12:16], J_f,
-                          tuple(self._surfaces), lay.join(q_l, q_f, sigma, sigma_l), lo, hi,
-                          x0, e[:6], e[6:], self._leader_arm, self._follower_arm)
-        return ctx, support_force, _Parts(A, b, finite, center, lowers, uppers, box,
-                                          recovering, called - start + kin_seconds)
+        return (*parts[:-1], called - start + parts[-1]), support_force
+
+    def _context(self, state: DualArmState, scale_max: float, q_l: FloatArray,
+                 q_f: FloatArray, x0: FloatArray, parts: tuple[Any, ...],
+                 carry: CarryKinematics | None,
+                 sigma_min: tuple[float, float] | None = None) -> StepContext:
+        """Return the step's context from the kernel's parts (``carry``: made already)."""
+        T, J_tool, J_object, J_target, J_f, e, lo, hi = parts[:8]
+        if carry is None:
+            carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
+        lay = self.layout
+        ctx = StepContext(state, self.task, lay, self.options.dt, scale_max, carry,
+                          T[12:16], J_f, tuple(self._surfaces),
+                          lay.join(q_l, q_f, state.sigma, state.sigma_leader), lo, hi, x0,
+                          e[:6], e[6:], self._leader_arm, self._follower_arm)
+        if sigma_min is not None:  # read from the build first: computed once
+            object.__setattr__(ctx, "_sigma_min", sigma_min)
+        return ctx
 
     def _sigmas(self, sigma: float, sigma_l: float) -> FloatArray:
         """Return the grasp coordinates, the follower's first [m], shape (n_grasp,).
@@ -402,7 +432,7 @@ class StepBuilder:
         Parameters
         ----------
         state : DualArmState
-            Joints [rad], grasp coordinates [m] and path time [s] (checked by the caller).
+            Joints [rad], grasp coordinates [m] and path time [s].
         scale_max : float
             Share in [0, 1] of the path's feed-forward twist (1: full speed).
         x_prev : ndarray, optional
@@ -413,16 +443,45 @@ class StepBuilder:
 
         Raises
         ------
+        ShapeError, NonFiniteError, InvalidInputError
+            A joint vector of the wrong length or with NaN, a sliding grasp's coordinate
+            that is not a finite number, ``x_prev`` or ``x_applied`` not ``n`` numbers.
         NonFiniteError
             The problem would hold NaN or infinity.
         InvalidInputError
             A supporting follower (Case 2) would have to pull at this state.
         """
-        t0 = time.perf_counter()
-        ctx, support_force, parts = self._prepared(state, scale_max, x_applied)
-        if not parts.equality_finite:
+        start = time.perf_counter()
+        q_l, q_f, sigmas, x0 = self._checked(state, x_applied)
+        if x_prev is not None:
+            x_prev = checked_rates(x_prev, "x_prev", self.layout.n, finite=False)
+        return self._build(state, q_l, q_f, sigmas, scale_max, x_prev, x0, start)
+
+    def build_checked(self, state: DualArmState, scale_max: float,
+                      x_prev: FloatArray | None, x_applied: FloatArray) -> StepBuild:
+        """:meth:`build` for a caller that checked its inputs (the controller's step).
+
+        Nothing is checked again: ``state.q_l`` and ``state.q_f`` are finite float64
+        arrays of the arms' lengths, ``state.sigma`` and ``state.sigma_leader`` finite
+        Python floats, ``x_prev`` None or ``n`` float64 numbers and ``x_applied`` ``n``
+        finite float64 numbers, both C-ordered (the controller's own answers).
+        """
+        start = time.perf_counter()
+        sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])
+        return self._build(state, state.q_l, state.q_f, sigmas, scale_max, x_prev,
+                           x_applied, start)
+
+    def _build(self, state: DualArmState, q_l: FloatArray, q_f: FloatArray,
+               sigmas: FloatArray, scale_max: float, x_prev: FloatArray | None,
+               x0: FloatArray, t0: float) -> StepBuild:
+        """Build the step from checked inputs (``t0``: when the build started)."""
+        parts, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, t0)
+        (T, J_tool, J_object, J_target, J_f, e, _, _, A, b, finite, center, compiled_lo,
+         compiled_hi, box, recovering, kinematics_time) = parts
+        if not finite:
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
-        lay, stack = self.layout, self._stack
+        carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
+        stack = self._stack
         lowers: list[FloatArray] = []
         lower_ids: list[int] = []
         uppers: list[FloatArray] = []
@@ -431,37 +490,39 @@ class StepBuilder:
         h_parts: list[FloatArray] = []
         row_ids: list[int] = []
         row_names: list[str] = []
-        for k, limit in self._python_limits:
-            c = limit.constraint(ctx)
-            if c.lower is not None:
-                lowers.append(c.lower)
-                lower_ids.append(k)
-            if c.upper is not None:
-                uppers.append(c.upper)
-                upper_ids.append(k)
-            if c.G is not None and c.h is not None and len(c.h):
-                G_k, h_k = stack.checked_rows(k, c.G, c.h, c.row_names)
-                G_parts.append(G_k)
-                h_parts.append(h_k)
-                row_ids.append(k)
-                row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
-                                                   for i in range(len(h_k))]
-        lower, upper, lower_by, upper_by = stack.box(parts.lowers, parts.uppers, parts.box,
+        context: StepContext | Callable[[tuple[float, float] | None], StepContext]
+        if self._python_limits:
+            ctx = context = self._context(state, scale_max, q_l, q_f, x0, parts, carry)
+            for k, limit in self._python_limits:
+                c = limit.constraint(ctx)
+                if c.lower is not None:
+                    lowers.append(c.lower)
+                    lower_ids.append(k)
+                if c.upper is not None:
+                    uppers.append(c.upper)
+                    upper_ids.append(k)
+                if c.G is not None and c.h is not None and len(c.h):
+                    G_k, h_k = stack.checked_rows(k, c.G, c.h, c.row_names)
+                    G_parts.append(G_k)
+                    h_parts.append(h_k)
+                    row_ids.append(k)
+                    row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
+                                                       for i in range(len(h_k))]
+        else:  # nothing read it: made if and when someone does
+            context = partial(self._context, state, scale_max, q_l, q_f, x0, parts, carry)
+        lower, upper, lower_by, upper_by = stack.box(compiled_lo, compiled_hi, box,
                                                      lowers, lower_ids, uppers, upper_ids)
         G, h = stack.rows(G_parts, h_parts, row_ids)
-        if x_prev is not None:
-            x_prev = checked_rates(x_prev, "x_prev", lay.n, finite=False)
         t2 = time.perf_counter()
         # Every part was checked where it was made (the limits' bounds and rows here):
         # the problem is assembled without a second check.
         problem = StepProblem.assembled(
-            A=parts.A, b=parts.b, weights=self.cost.weights, center=parts.center,
-            lower=lower, upper=upper, G=G, h=h, n_grasp=lay.n_grasp, x_prev=x_prev,
-            names=lay.names, row_names=tuple(row_names), eq_names=CarryTasks.row_names,
-            lower_by=lower_by, upper_by=upper_by, build_time=t2 - t0)
-        kin = parts.kinematics_time
-        return StepBuild(problem, parts.recovering, ctx.closure_error, ctx.leader_error, ctx.carry,
-                         ctx.T_f, ctx.J_f, kin, t2 - t0 - kin, support_force, ctx)
+            A=A, b=b, weights=self.cost.weights, center=center, lower=lower, upper=upper,
+            G=G, h=h, n_grasp=self.layout.n_grasp, x_prev=x_prev, names=self.layout.names,
+            row_names=tuple(row_names), eq_names=CarryTasks.row_names, lower_by=lower_by,
+            upper_by=upper_by, build_time=t2 - t0)
+        return StepBuild(problem, recovering, e[6:], e[:6], carry, T[12:16], J_f,
+                         kinematics_time, t2 - t0 - kinematics_time, support_force, context)
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

@@ -175,7 +175,7 @@ class StepContext:
         """
         sv = self._sigma_min
         if sv is None:
-            sv = kernel.smallest_singular_values(self.carry.J_tool, self.J_f)
+            sv = smallest_singular_values(self.carry.J_tool, self.J_f)
             object.__setattr__(self, "_sigma_min", sv)  # a cache, on a frozen context
         return sv
 
@@ -185,4 +185,15 @@ class StepContext:
         return (self.rate_lo > 0.0) | (self.rate_hi < 0.0)
 
 
-__all__ = ["ArmKinematics", "StepContext"]
+def smallest_singular_values(J_leader: FloatArray, J_follower: FloatArray
+                             ) -> tuple[float, float]:
+    """Smallest singular value of the leader's and the follower's tool Jacobian.
+
+    One kernel call for both (two small SVDs); 0 for a Jacobian with fewer columns than
+    rows, NaN for one that holds NaN or infinity.
+    """
+    sv: tuple[float, float] = kernel.smallest_singular_values(J_leader, J_follower)
+    return sv
+
+
+__all__ = ["ArmKinematics", "StepContext", "smallest_singular_values"]

@@ -243,11 +243,11 @@ class StepProblem:
         kernel's, and every array a C-ordered float64 of the right shape. Anything
         else builds a problem with the checking constructor.
         """
+        if parts.keys() != _INIT_FIELD_SET:
+            raise TypeError(f"StepProblem.assembled takes every init field by keyword: "
+                            f"{', '.join(sorted(_INIT_FIELD_SET ^ parts.keys()))}")
         self = object.__new__(cls)
-        set_ = object.__setattr__
-        for name in _INIT_FIELDS:
-            set_(self, name, parts[name])
-        set_(self, "_cache", {})
+        vars(self).update(parts, _cache={})  # a frozen dataclass's fields, set once
         return self
 
     # -- sizes ---------------------------------------------------------------------------
@@ -442,6 +442,6 @@ class StepProblem:
 
 
 #: The fields :meth:`StepProblem.assembled` sets (every init field).
-_INIT_FIELDS = tuple(f.name for f in fields(StepProblem) if f.init)
+_INIT_FIELD_SET = frozenset(f.name for f in fields(StepProblem) if f.init)
 
 __all__ = ["Inequalities", "Names", "StepProblem"]

@@ -25,6 +25,7 @@
 #include "linalg.hpp"
 #include "load_split.hpp"
 #include "load_torques.hpp"
+#include "lookahead.hpp"
 #include "nnls.hpp"
 #include "nullspace.hpp"
 #include "rows.hpp"
@@ -313,6 +314,12 @@ NB_MODULE(_kernel, m) {
   m.def("step_errors", &dqk::step_errors, "carry"_a, "q_carry"_a, "carry_frames"_a,
         "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
         "step_kinematics's two pose errors into e (12), from the poses alone.");
+
+  m.def("predicted_errors", &dqk::predicted_errors, "carry"_a, "carry_frames"_a,
+        "follower"_a, "follower_tool"_a, "q_l"_a, "q_f"_a, "sigma_f"_a, "sigma_l"_a, "x"_a,
+        "col_rate"_a, "dt"_a, "T_D"_a, "e"_a.noconvert(),
+        "The look-ahead's step_errors one sample after the command x into e (12); False "
+        "(e unwritten) when x or a moved grasp coordinate is not finite.");
 
   m.def("pose_error",
         [](const dqk::Pose& T_star, const dqk::Pose& T, Eigen::Ref<Eigen::VectorXd> e) {

@@ -1,7 +1,8 @@
 """The look-ahead's prediction: the errors at the next sample, from one kernel call.
 
-:meth:`Lookahead.predict` reads the object's error to ``D(t + scale dt)`` and the
-grasp's closure error at the predicted joints from ``kernel.step_errors`` (poses only).
+:meth:`Lookahead.predict` moves the joints and the grasps by ``dt x`` and reads the
+object's error to ``D(t + scale dt)`` and the grasp's closure error there from one kernel
+call (``kernel.predicted_errors``: the moves, then ``kernel.step_errors``, poses only).
 Checked here against the same errors computed the long way, from the carried-object
 model's poses and the follower's forward kinematics with :func:`pose_error`, and
 against the step's own kinematics call at the same state, on the PUMA beam (one sliding
@@ -111,3 +112,27 @@ def test_a_bad_prediction_input_is_a_clear_error(bad: str) -> None:
         error = NonFiniteError
     with pytest.raises(error):
         la.predict(state, x, 1.0, ctrl.options.dt)
+
+
+def test_the_kernel_refuses_a_command_of_another_layout() -> None:
+    """``kernel.predicted_errors`` names what it takes instead of reading past an array."""
+    from dualarm_qp._compiled import kernel
+
+    exp, ctrl, la = setup("puma_beam_limits")
+    state, x = moved(exp, ctrl, np.random.default_rng(2))
+    carry, follower = ctrl.builder.carry, exp.task.follower
+    e = np.empty(12)
+    args = dict(carry=carry.chain, carry_frames=carry.frames, follower=follower.chain,
+                follower_tool=follower.tool_frame_id, q_l=state.q_l, q_f=state.q_f,
+                sigma_f=state.sigma, sigma_l=0.0, x=x, col_rate=carry.columns[1], dt=0.01,
+                T_D=np.eye(4), e=e)
+    assert kernel.predicted_errors(**args)
+    for key, bad in (("x", np.r_[x, 0.0, 0.0]), ("x", x[:-2]), ("q_f", state.q_f[:5]),
+                     ("col_rate", carry.columns[1][:-1]), ("e", np.empty(6))):
+        with pytest.raises(ValueError, match="predicted_errors"):
+            kernel.predicted_errors(**{**args, key: bad})
+    x_nan = x.copy()
+    x_nan[0] = np.nan
+    e[:] = 7.0
+    assert not kernel.predicted_errors(**{**args, "x": x_nan})
+    assert (e == 7.0).all()  # left unwritten

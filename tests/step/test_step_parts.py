@@ -456,3 +456,55 @@ def test_grasp_rate_range_refuses_what_is_not_numbers() -> None:
     for dt in (0.0, -0.01, math.nan, math.inf, "abc", None):
         with pytest.raises(InvalidInputError, match="dt"):
             grasp_rate_range(*good, dt)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_checked_build_is_the_build(name: str) -> None:
+    """What the controller calls (its own checked inputs) builds the same step, bit for bit."""
+    exp = _experiment(name)
+    builder = exp.controller().builder
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        state = _state(exp, builder, rng)
+        x_prev, x_applied = rng.normal(0.0, 0.1, (2, builder.layout.n))
+        a = builder.build(state, scale_max=0.75, x_prev=x_prev, x_applied=x_applied)
+        b = builder.build_checked(state, 0.75, x_prev, x_applied)
+        for field in ("A", "b", "weights", "center", "lower", "upper", "G", "h", "x_prev"):
+            _equal(getattr(a.problem, field), getattr(b.problem, field), field)
+        assert (a.problem.lower_by, a.problem.upper_by, a.problem.row_names) == (
+            b.problem.lower_by, b.problem.upper_by, b.problem.row_names)
+        for field in ("recovering", "closure_error", "leader_error", "T_f", "J_f"):
+            _equal(getattr(a, field), getattr(b, field), field)
+
+
+@pytest.mark.parametrize("name", ["puma_beam_limits", "both_sliding_bar", "ur5_pair_collision"])
+def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
+    """Without a limit that reads it during the build, the context is made on first read:
+    once, equal to the builder's context at the same state, with the build's values."""
+    exp = _experiment(name)
+    builder = exp.controller().builder
+    made: list[object] = []
+    real = StepBuilder._context
+
+    def counting(self, *args, **kwargs):
+        made.append(args)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(StepBuilder, "_context", counting)
+    state = _state(exp, builder, np.random.default_rng(3))
+    build = builder.build(state)
+    reads_it = any(not getattr(limit, "compiled", None) for limit in builder.limits)
+    assert len(made) == (1 if reads_it else 0)
+    sv = build.sigma_min  # read before the context: computed once and handed over
+    ctx = build.context
+    assert build.context is ctx and len(made) == 1
+    assert ctx.sigma_min is sv and ctx.carry is build.carry
+    monkeypatch.undo()
+    ref, _ = builder.context(state)
+    for field in ("positions", "rate_lo", "rate_hi", "x_applied", "leader_error",
+                  "closure_error", "T_f", "J_f"):
+        _equal(getattr(ctx, field), getattr(ref, field), field)
+    for field in ("T_tool", "J_tool", "T_object", "J_object", "T_target", "J_target"):
+        _equal(getattr(ctx.carry, field), getattr(ref.carry, field), field)
+    assert (ctx.state, ctx.dt, ctx.scale_max, ctx.surfaces) == (
+        ref.state, ref.dt, ref.scale_max, ref.surfaces)

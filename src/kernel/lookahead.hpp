@@ -1,0 +1,26 @@
+// The look-ahead's prediction (dualarm_qp/control/lookahead.py): the two pose errors one
+// sample after a command, from the poses at the joints and grasp coordinates it reaches.
+#pragma once
+
+#include <vector>
+
+#include "kinematics.hpp"
+
+namespace dqk {
+
+// Moves q_l, q_f and the grasp coordinates by dt x (x: the leader's joint rates, the
+// follower's, the follower's grasp speed, then the leader's if it slides), puts the
+// carried-object chain's joints at the result (the leader's joints, then each grasp's
+// coordinate times its rate: the leader's grasp joint first when both slide, as
+// CarryModel.configuration does; col_rate holds the follower's grasp rate at n_l and the
+// leader's at n_l + 1, CarryModel.columns) and writes step_errors' twelve errors at
+// those poses against T_D into e. Returns false, leaving e unwritten, when x or a moved
+// grasp coordinate is not finite (as the Python layer checked before). Every sum is a product then a sum, rounded
+// as numpy rounds `q + dt * x` (the file is compiled without fused multiply-adds).
+bool predicted_errors(Chain& carry, const std::vector<int>& carry_frames, Chain& follower,
+                      int follower_tool, const Eigen::VectorXd& q_l,
+                      const Eigen::VectorXd& q_f, double sigma_f, double sigma_l,
+                      const Eigen::VectorXd& x, const Eigen::VectorXd& col_rate, double dt,
+                      const Pose& T_D, Eigen::Ref<Eigen::VectorXd> e);
+
+}  // namespace dqk
