@@ -332,8 +332,10 @@ class StepBuilder:
         """
         start = time.perf_counter()
         q_l, q_f, sigmas, x0 = self._checked(state, x_applied)
-        parts, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, start)
-        return self._context(state, scale_max, q_l, q_f, x0, parts, None), support_force
+        parts, _, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, start)
+        positions = self.layout.join(q_l, q_f, state.sigma, state.sigma_leader)
+        return self._context(state, scale_max, positions, tuple(self._surfaces), x0, parts,
+                             None), support_force
 
     def _checked(self, state: DualArmState, x_applied: object
                  ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -354,12 +356,13 @@ class StepBuilder:
 
     def _prepared(self, state: DualArmState, q_l: FloatArray, q_f: FloatArray,
                   sigmas: FloatArray, scale_max: float, x0: FloatArray, start: float
-                  ) -> tuple[tuple[Any, ...], float]:
-        """Return the kernel's standard parts at ``state`` and a support's push.
+                  ) -> tuple[tuple[Any, ...], float, float]:
+        """Return the kernel's standard parts at ``state``, their seconds and a support's push.
 
         One kernel call (``kernel.StepParts.prepare``): both arms' kinematics, the rates
-        to the range ends, the equality, the centres and the compiled limits' boxes.
-        Its tuple, with the seconds of the kinematics (from ``start``) last.
+        to the range ends, the equality, the centres and the compiled limits' boxes. The
+        seconds are those of the kinematics from ``start`` (the kernel's own, last in
+        its tuple, and the Python before the call).
         """
         sigma, sigma_l = state.sigma, state.sigma_leader
         follower, trajectory, carry = self.task.follower, self.task.trajectory, self.carry
@@ -381,20 +384,23 @@ class StepBuilder:
             carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist, sigmas,
             grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
             tasks.exact_orientation)
-        return (*parts[:-1], called - start + parts[-1]), support_force
+        return parts, called - start + parts[-1], support_force
 
-    def _context(self, state: DualArmState, scale_max: float, q_l: FloatArray,
-                 q_f: FloatArray, x0: FloatArray, parts: tuple[Any, ...],
+    def _context(self, state: DualArmState, scale_max: float, positions: FloatArray,
+                 surfaces: tuple[GraspSurface, ...], x0: FloatArray, parts: tuple[Any, ...],
                  carry: CarryKinematics | None,
                  sigma_min: tuple[float, float] | None = None) -> StepContext:
-        """Return the step's context from the kernel's parts (``carry``: made already)."""
+        """Return the step's context from the kernel's parts (``carry``: made already).
+
+        Everything it holds was taken at the step (the kernel's arrays are the step's
+        own, the positions a copy, the surfaces those of the step: a Case 2 support's
+        line moves), so a context made later reads the same.
+        """
         T, J_tool, J_object, J_target, J_f, e, lo, hi = parts[:8]
         if carry is None:
             carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
-        lay = self.layout
-        ctx = StepContext(state, self.task, lay, self.options.dt, scale_max, carry,
-                          T[12:16], J_f, tuple(self._surfaces),
-                          lay.join(q_l, q_f, state.sigma, state.sigma_leader), lo, hi, x0,
+        ctx = StepContext(state, self.task, self.layout, self.options.dt, scale_max, carry,
+                          T[12:16], J_f, surfaces, positions, lo, hi, x0,
                           e[:6], e[6:], self._leader_arm, self._follower_arm)
         if sigma_min is not None:  # read from the build first: computed once
             object.__setattr__(ctx, "_sigma_min", sigma_min)
@@ -475,9 +481,10 @@ class StepBuilder:
                sigmas: FloatArray, scale_max: float, x_prev: FloatArray | None,
                x0: FloatArray, t0: float) -> StepBuild:
         """Build the step from checked inputs (``t0``: when the build started)."""
-        parts, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, t0)
+        parts, kinematics_time, support_force = self._prepared(state, q_l, q_f, sigmas,
+                                                               scale_max, x0, t0)
         (T, J_tool, J_object, J_target, J_f, e, _, _, A, b, finite, center, compiled_lo,
-         compiled_hi, box, recovering, kinematics_time) = parts
+         compiled_hi, box, recovering, _) = parts
         if not finite:
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
         carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
@@ -491,8 +498,12 @@ class StepBuilder:
         row_ids: list[int] = []
         row_names: list[str] = []
         context: StepContext | Callable[[tuple[float, float] | None], StepContext]
+        # Taken now: the caller may move its joints in place, and a support's line moves.
+        positions = self.layout.join(q_l, q_f, state.sigma, state.sigma_leader)
+        surfaces = tuple(self._surfaces)
         if self._python_limits:
-            ctx = context = self._context(state, scale_max, q_l, q_f, x0, parts, carry)
+            ctx = context = self._context(state, scale_max, positions, surfaces, x0, parts,
+                                          carry)
             for k, limit in self._python_limits:
                 c = limit.constraint(ctx)
                 if c.lower is not None:
@@ -509,7 +520,8 @@ class StepBuilder:
                     row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
                                                        for i in range(len(h_k))]
         else:  # nothing read it: made if and when someone does
-            context = partial(self._context, state, scale_max, q_l, q_f, x0, parts, carry)
+            context = partial(self._context, state, scale_max, positions, surfaces, x0, parts,
+                              carry)
         lower, upper, lower_by, upper_by = stack.box(compiled_lo, compiled_hi, box,
                                                      lowers, lower_ids, uppers, upper_ids)
         G, h = stack.rows(G_parts, h_parts, row_ids)

@@ -27,7 +27,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from .._signals import SignalHold
+from .._signals import SignalHold, raise_if_interrupted
 from ..errors import DualArmError
 from .claims import PointStore, claims_cap
 from .cluster import open_client, quiet_dask_logs, worker_count
@@ -194,6 +194,9 @@ class Driver:
                 looked = time.monotonic()
                 said = False
                 while queue or others or remote.pending:
+                    # A Ctrl-C whose KeyboardInterrupt something on the way swallowed (a
+                    # call into Dask's client when it came) still stops the sweep here.
+                    raise_if_interrupted()
                     if remote.client is None and any(t.start_failure is None for t in queue):
                         remote.open(sum(t.start_failure is None for t in queue))
                     while queue and remote.has_room():

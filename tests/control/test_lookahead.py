@@ -118,7 +118,7 @@ def test_the_kernel_refuses_a_command_of_another_layout() -> None:
     """``kernel.predicted_errors`` names what it takes instead of reading past an array."""
     from dualarm_qp._compiled import kernel
 
-    exp, ctrl, la = setup("puma_beam_limits")
+    exp, ctrl, _ = setup("puma_beam_limits")
     state, x = moved(exp, ctrl, np.random.default_rng(2))
     carry, follower = ctrl.builder.carry, exp.task.follower
     e = np.empty(12)

@@ -477,12 +477,20 @@ def test_the_checked_build_is_the_build(name: str) -> None:
             _equal(getattr(a, field), getattr(b, field), field)
 
 
-@pytest.mark.parametrize("name", ["puma_beam_limits", "both_sliding_bar", "ur5_pair_collision"])
+@pytest.mark.parametrize("name", ["puma_beam_limits", "both_sliding_bar", "ur5_pair_collision",
+                                  "puma_beam_support"])
 def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
     """Without a limit that reads it during the build, the context is made on first read:
-    once, equal to the builder's context at the same state, with the build's values."""
+    once, equal to the builder's context at the same state, with the build's values,
+    even when read after later steps at other states and after the caller moved its
+    joint arrays in place (the positions are a copy taken at the step)."""
     exp = _experiment(name)
     builder = exp.controller().builder
+    rng = np.random.default_rng(3)
+    state = _state(exp, builder, rng)
+    ref, _ = builder.context(DualArmState(state.t, state.q_l.copy(), state.q_f.copy(),
+                                          state.sigma, state.sigma_leader))
+    ref_surfaces = [surf.pose(state.sigma) for surf in ref.surfaces]
     made: list[object] = []
     real = StepBuilder._context
 
@@ -491,20 +499,24 @@ def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
         return real(self, *args, **kwargs)
 
     monkeypatch.setattr(StepBuilder, "_context", counting)
-    state = _state(exp, builder, np.random.default_rng(3))
     build = builder.build(state)
     reads_it = any(not getattr(limit, "compiled", None) for limit in builder.limits)
     assert len(made) == (1 if reads_it else 0)
     sv = build.sigma_min  # read before the context: computed once and handed over
+    for _ in range(2):  # later steps elsewhere; the caller's arrays moved in place
+        builder.build(_state(exp, builder, rng))
+    state.q_l[:] += 0.1
+    state.q_f[:] -= 0.1
+    before = len(made)
     ctx = build.context
-    assert build.context is ctx and len(made) == 1
+    assert build.context is ctx and len(made) == before + (0 if reads_it else 1)
     assert ctx.sigma_min is sv and ctx.carry is build.carry
-    monkeypatch.undo()
-    ref, _ = builder.context(state)
     for field in ("positions", "rate_lo", "rate_hi", "x_applied", "leader_error",
                   "closure_error", "T_f", "J_f"):
         _equal(getattr(ctx, field), getattr(ref, field), field)
     for field in ("T_tool", "J_tool", "T_object", "J_object", "T_target", "J_target"):
         _equal(getattr(ctx.carry, field), getattr(ref.carry, field), field)
-    assert (ctx.state, ctx.dt, ctx.scale_max, ctx.surfaces) == (
-        ref.state, ref.dt, ref.scale_max, ref.surfaces)
+    assert ctx.state is state and (ctx.dt, ctx.scale_max) == (ref.dt, ref.scale_max)
+    assert len(ctx.surfaces) == len(ref_surfaces)
+    for mine, pose in zip(ctx.surfaces, ref_surfaces, strict=True):
+        _equal(mine.pose(state.sigma), pose, "a surface")

@@ -241,6 +241,40 @@ def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
     assert all(r["status"] != "interrupted" for r in _rows(out))
 
 
+@pytest.mark.sigint
+def test_a_ctrl_c_that_something_swallowed_still_stops_the_sweep(
+        tmp_path, in_process_cluster, monkeypatch, capsys):
+    """A SIGINT whose KeyboardInterrupt never reached the driver (caught on the way, in
+    a call into Dask's client) is recorded by the command's handlers: the sweep stops at
+    its next poll, as for any Ctrl-C. (The rollouts' own check is turned off here: in
+    this in-process cluster they would otherwise see the record first.)"""
+    from dualarm_qp import _signals
+    from dualarm_qp.experiments import run as run_module
+    from dualarm_qp.sweep import worker
+
+    monkeypatch.setattr(run_module, "raise_if_interrupted", lambda: None)
+
+    real, calls = worker.run_point, []
+
+    def swallowed(task):
+        calls.append(task)
+        if len(calls) == 3:  # what the handler records, without the exception
+            _signals._ACTIVE[-1]._record(signal.SIGINT)
+        elif len(calls) > 3:
+            time.sleep(1.0)
+        return real(task)
+
+    monkeypatch.setattr(worker, "run_point", swallowed)
+    sweep = write_sweep(tmp_path)
+    out = tmp_path / "out"
+    argv = ["sweep", str(sweep), "--out", str(out), "--scheduler",
+            in_process_cluster.scheduler_address, "--quiet", "--batch", "1"]
+    assert main(argv) == 130
+    assert "interrupted (SIGINT)" in capsys.readouterr().err
+    rows = _rows(out)
+    assert len(rows) == 6 and any(r["status"] == "interrupted" for r in rows)
+
+
 def test_the_embedded_cluster_has_the_workers_asked_for_and_closes():
     """``--workers``' cluster of worker processes (the sweeps above run on other ones)."""
     from dualarm_qp.sweep.cluster import open_client, worker_count
