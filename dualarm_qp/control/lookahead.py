@@ -26,9 +26,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from ..errors import NonFiniteError, ShapeError
+from .._validate import as_number
+from ..errors import NonFiniteError
 from ..kinematics.arm import SerialArm
 from ..step.build import StepBuild
+from ..step.stacking import checked_rates
 from ..step.state import DualArmState
 from ..task.carry import CarryModel
 from ..task.scene import DualArmTask
@@ -117,21 +119,21 @@ class Lookahead:
 
         Raises
         ------
-        ShapeError, NonFiniteError
-            Joints of the wrong length or with NaN, ``x`` not ``n`` numbers, a NaN in
-            ``x`` or in the grasp coordinates it reaches.
+        ShapeError, NonFiniteError, InvalidInputError
+            Joints of the wrong length or with NaN, ``x`` not ``n`` real numbers, a NaN
+            in ``x``, a grasp coordinate that is not a finite number, or a NaN in the
+            grasp coordinates ``x`` reaches.
         """
         task = self.task
-        # Checked as every arm's joints are: a vector of the wrong length or a NaN is a
-        # clear error, never a NaN prediction.
+        # Checked as the controller checks a state: a vector of the wrong length or a NaN
+        # is a clear error, never a NaN prediction.
         q_l = task.leader.check_q(state.q_l, "leader joints q_l")
         q_f = task.follower.check_q(state.q_f, "follower joints q_f")
-        n = self.n_l + self.n_f + self._carry.n_grasp
-        x = np.ascontiguousarray(x, dtype=np.float64)
-        if x.shape != (n,):
-            raise ShapeError("the command x", (n,), x.shape)
-        return self.predict_checked(DualArmState(state.t, q_l, q_f, float(state.sigma),
-                                                 float(state.sigma_leader)), x, scale, dt)
+        x = checked_rates(x, "the command x", self.n_l + self.n_f + self._carry.n_grasp)
+        sigma = as_number(state.sigma, "sigma")
+        sigma_l = as_number(state.sigma_leader, "sigma_leader")
+        return self.predict_checked(DualArmState(state.t, q_l, q_f, sigma, sigma_l), x,
+                                    scale, dt)
 
     def predict_checked(self, state: DualArmState, x: FloatArray, scale: float, dt: float
                         ) -> Predicted:

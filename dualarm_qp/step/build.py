@@ -469,8 +469,8 @@ class StepBuilder:
 
         Nothing is checked again: ``state.q_l`` and ``state.q_f`` are finite float64
         arrays of the arms' lengths, ``state.sigma`` and ``state.sigma_leader`` finite
-        Python floats, ``x_prev`` None or ``n`` float64 numbers and ``x_applied`` ``n``
-        finite float64 numbers, both C-ordered (the controller's own answers).
+        Python floats, ``x_prev`` None or a float64 array of ``n`` numbers and
+        ``x_applied`` one of ``n`` finite numbers (the controller's own answers).
         """
         start = time.perf_counter()
         sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])

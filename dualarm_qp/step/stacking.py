@@ -53,7 +53,8 @@ def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> Float
     ShapeError
         Not ``n`` numbers.
     InvalidInputError
-        Not numbers.
+        Not real numbers (complex numbers included: their imaginary part is never
+        dropped silently).
     NonFiniteError
         With ``finite``: a NaN or an infinity.
     """
@@ -62,9 +63,13 @@ def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> Float
         out = x
     else:
         try:
-            out = np.ascontiguousarray(x, dtype=np.float64)
+            given = np.asarray(x)
+            if not np.iscomplexobj(given):
+                out = np.ascontiguousarray(given, dtype=np.float64)
         except (TypeError, ValueError) as err:
             raise InvalidInputError(f"{name} is not numbers: {err}") from err
+        if np.iscomplexobj(given):
+            raise InvalidInputError(f"{name} is not real numbers (complex)")
         if out.shape != (n,):
             raise ShapeError(name, (n,), out.shape)
     if finite and kernel.first_defect([out], []) >= 0:

@@ -20,7 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dualarm_qp.control.lookahead import Lookahead
-from dualarm_qp.errors import NonFiniteError, ShapeError
+from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.se3 import pose_error
 from dualarm_qp.step.kinematics import both_arms, both_errors
@@ -97,21 +97,45 @@ def test_a_wrong_joint_vector_is_refused_by_the_kernel() -> None:
                     exp.initial.q_f[:3], 0.0, 0.0, np.eye(4))
 
 
-@pytest.mark.parametrize("bad", ["nan rate", "short", "nan state"])
+@pytest.mark.parametrize("bad", ["nan rate", "short", "nan state", "short x", "complex x",
+                                 "text x", "text sigma", "nan sigma_leader"])
 def test_a_bad_prediction_input_is_a_clear_error(bad: str) -> None:
     exp, ctrl, la = setup("puma_beam_limits")
     state, x = moved(exp, ctrl, np.random.default_rng(1))
+    s = state
+    error: type[Exception] = NonFiniteError
     if bad == "nan rate":
         x[la.n_l + 2] = np.nan
-        error: type[Exception] = NonFiniteError
     elif bad == "short":
-        state = DualArmState(state.t, state.q_l, state.q_f[:4], state.sigma)
+        state = DualArmState(s.t, s.q_l, s.q_f[:4], s.sigma)
         error = ShapeError
-    else:
-        state = DualArmState(state.t, state.q_l, state.q_f, np.nan)
-        error = NonFiniteError
+    elif bad == "nan state":
+        state = DualArmState(s.t, s.q_l, s.q_f, np.nan)
+    elif bad == "short x":
+        x, error = x[:-1], ShapeError
+    elif bad == "complex x":
+        x, error = x + 1j, InvalidInputError
+    elif bad == "text x":
+        x, error = ["a"] * x.shape[0], InvalidInputError
+    elif bad == "text sigma":
+        state, error = DualArmState(s.t, s.q_l, s.q_f, "a"), InvalidInputError
+    else:  # a rigid leader's grasp coordinate is checked too, as the controller does
+        state = DualArmState(s.t, s.q_l, s.q_f, s.sigma, np.nan)
     with pytest.raises(error):
         la.predict(state, x, 1.0, ctrl.options.dt)
+
+
+def test_a_prediction_takes_what_the_controller_takes() -> None:
+    """A list, a float32 array and a NumPy float state: the same numbers as float64."""
+    exp, ctrl, la = setup("both_sliding_bar")
+    state, x = moved(exp, ctrl, np.random.default_rng(4))
+    x = x.astype(np.float32).astype(np.float64)  # representable in float32
+    dt = ctrl.options.dt
+    ref = la.predict(state, x, 0.5, dt)
+    same = DualArmState(state.t, list(state.q_l), state.q_f, np.float64(state.sigma),
+                        np.float64(state.sigma_leader))
+    for command in (list(x), x.astype(np.float32)):
+        assert la.predict(same, command, 0.5, dt) == ref
 
 
 def test_the_kernel_refuses_a_command_of_another_layout() -> None:

@@ -320,7 +320,7 @@ def test_the_acceleration_box_equals_the_python_era_box(seed: int) -> None:
 
 
 def test_a_bad_last_command_is_a_clear_error() -> None:
-    from dualarm_qp.errors import NonFiniteError, ShapeError
+    from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
 
     exp = _experiment("puma_beam_accel")
     builder = exp.controller().builder
@@ -331,6 +331,9 @@ def test_a_bad_last_command_is_a_clear_error() -> None:
         builder.build(exp.initial, x_applied=bad)
     with pytest.raises(ShapeError, match="x_applied"):
         builder.context(exp.initial, x_applied=np.zeros(3))
+    for name in ("x_applied", "x_prev"):  # never a silently dropped imaginary part
+        with pytest.raises(InvalidInputError, match=f"{name} is not real numbers"):
+            builder.build(exp.initial, **{name: np.zeros(n) + 1e-3j})
     ok = builder.build(exp.initial, x_applied=[0.0] * n).problem  # a list is numbers
     _equal(ok.lower, builder.build(exp.initial, x_applied=np.zeros(n)).problem.lower, "lower")
 

@@ -200,6 +200,32 @@ def test_a_sweep_stores_every_point_once_and_a_rerun_computes_none(
     assert len(_store_keys(out)) == 6
 
 
+def _third_point_interrupts(monkeypatch, interrupt):
+    """Make the third point's run call ``interrupt()`` first; return the real run."""
+    from dualarm_qp.sweep import worker
+
+    real, calls = worker.run_point, []
+
+    def run(task):
+        calls.append(task)
+        if len(calls) == 3:
+            interrupt()
+        elif len(calls) > 3:  # the points after the Ctrl-C cannot all finish before the
+            time.sleep(1.0)   # driver sees it (the compiled step made a point fast)
+        return real(task)
+
+    monkeypatch.setattr(worker, "run_point", run)
+    return real
+
+
+def _sweep_argv(tmp_path, cluster) -> tuple:
+    """The small sweep's folder and command line, one point per batch on ``cluster``."""
+    sweep = write_sweep(tmp_path)
+    out = tmp_path / "out"
+    return out, ["sweep", str(sweep), "--out", str(out), "--scheduler",
+                 cluster.scheduler_address, "--quiet", "--batch", "1"]
+
+
 @pytest.mark.sigint
 def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
         tmp_path, in_process_cluster, monkeypatch, capsys):
@@ -207,21 +233,8 @@ def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
     test above sends it to a real process)."""
     from dualarm_qp.sweep import worker
 
-    real, calls = worker.run_point, []
-
-    def interrupting(task):
-        calls.append(task)
-        if len(calls) == 3:
-            os.kill(os.getpid(), signal.SIGINT)
-        elif len(calls) > 3:  # the points after the Ctrl-C cannot all finish before the
-            time.sleep(1.0)   # driver sees it (the compiled step made a point fast)
-        return real(task)
-
-    monkeypatch.setattr(worker, "run_point", interrupting)
-    sweep = write_sweep(tmp_path)
-    out = tmp_path / "out"
-    argv = ["sweep", str(sweep), "--out", str(out), "--scheduler",
-            in_process_cluster.scheduler_address, "--quiet", "--batch", "1"]
+    real = _third_point_interrupts(monkeypatch, lambda: os.kill(os.getpid(), signal.SIGINT))
+    out, argv = _sweep_argv(tmp_path, in_process_cluster)
     assert main(argv) == 130
     err = capsys.readouterr().err
     assert "Traceback" not in err and "interrupted (SIGINT)" in err
@@ -250,25 +263,11 @@ def test_a_ctrl_c_that_something_swallowed_still_stops_the_sweep(
     this in-process cluster they would otherwise see the record first.)"""
     from dualarm_qp import _signals
     from dualarm_qp.experiments import run as run_module
-    from dualarm_qp.sweep import worker
 
     monkeypatch.setattr(run_module, "raise_if_interrupted", lambda: None)
-
-    real, calls = worker.run_point, []
-
-    def swallowed(task):
-        calls.append(task)
-        if len(calls) == 3:  # what the handler records, without the exception
-            _signals._ACTIVE[-1]._record(signal.SIGINT)
-        elif len(calls) > 3:
-            time.sleep(1.0)
-        return real(task)
-
-    monkeypatch.setattr(worker, "run_point", swallowed)
-    sweep = write_sweep(tmp_path)
-    out = tmp_path / "out"
-    argv = ["sweep", str(sweep), "--out", str(out), "--scheduler",
-            in_process_cluster.scheduler_address, "--quiet", "--batch", "1"]
+    # What the command's handler records, without the exception it raises.
+    _third_point_interrupts(monkeypatch, lambda: _signals._ACTIVE[-1]._record(signal.SIGINT))
+    out, argv = _sweep_argv(tmp_path, in_process_cluster)
     assert main(argv) == 130
     assert "interrupted (SIGINT)" in capsys.readouterr().err
     rows = _rows(out)
