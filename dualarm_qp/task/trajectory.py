@@ -16,7 +16,6 @@ from inside (so a :class:`LinearTrajectory` has its full velocity at ``t = tf``)
 from __future__ import annotations
 
 import bisect
-import math
 from abc import ABC, abstractmethod
 from typing import Any
 
@@ -24,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validate import as_array, as_pose
+from .._validate import as_array, as_number, as_pose
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
 FloatArray = NDArray[np.float64]
@@ -49,16 +48,6 @@ PAPER_VELOCITY = np.array([1.0 / 31.0, 0.0, 0.0])
 
 for _a in (PAPER_R0, PAPER_P0, PAPER_VELOCITY):
     _a.setflags(write=False)
-
-
-def _time(t: Any, name: str) -> float:
-    try:
-        value = float(t)
-    except (TypeError, ValueError) as err:
-        raise InvalidInputError(f"{name} must be a real number, got {t!r}") from err
-    if not math.isfinite(value):
-        raise NonFiniteError(name)
-    return value
 
 
 def min_jerk(tau: float) -> tuple[float, float, float]:
@@ -142,8 +131,8 @@ class LinearTrajectory(Trajectory):
         v = as_array(velocity, "velocity", (3,))
         R = np.eye(3) if R0 is None else as_array(R0, "R0", (3, 3))
         T0 = as_pose(_pose_from(R, p), "R0")
-        self.t0 = _time(t0, "t0")
-        self.tf = _time(tf, "tf")
+        self.t0 = as_number(t0, "t0")
+        self.tf = as_number(tf, "tf")
         if not self.tf > self.t0:
             raise InvalidInputError(f"tf ({self.tf:g} s) must be greater than t0 ({self.t0:g} s)")
         self._T0 = T0
@@ -207,9 +196,9 @@ def paper_trajectory(*, duration: float, t0: float = 0.0) -> LinearTrajectory:
     t0 : float, keyword-only
         Start time [s] (``D(t0)`` has ``d_x = -0.3`` mm).
     """
-    start = _time(t0, "t0")
+    start = as_number(t0, "t0")
     return LinearTrajectory(
-        PAPER_P0, PAPER_VELOCITY, R0=PAPER_R0, t0=start, tf=start + _time(duration, "duration")
+        PAPER_P0, PAPER_VELOCITY, R0=PAPER_R0, t0=start, tf=start + as_number(duration, "duration")
     )
 
 
@@ -309,7 +298,7 @@ class WaypointTrajectory(Trajectory):
 
     def pose(self, t: float) -> FloatArray:
         """``T_world_object(t)``, clamped to the first / last waypoint outside."""
-        tt = _time(t, "t")
+        tt = as_number(t, "t")
         loc = self._locate(tt)
         if loc is None:
             return (self._poses[0] if tt < self.t0 else self._poses[-1]).copy()
@@ -331,7 +320,7 @@ class WaypointTrajectory(Trajectory):
 
     def _derivative(self, t: float, order: int) -> FloatArray:
         """Return the ``order``-th time derivative (1 or 2) of the pose as a 6-vector."""
-        loc = self._locate(_time(t, "t"))
+        loc = self._locate(as_number(t, "t"))
         out = np.zeros(6)
         if loc is None:
             return out
