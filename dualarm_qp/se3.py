@@ -13,7 +13,6 @@ frame b to frame a. The error of a pose ``T`` to a target ``T*`` is the 6-vector
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
 from ._compiled import kernel
@@ -35,18 +34,6 @@ def pose_error(T_target: FloatArray, T_actual: FloatArray) -> FloatArray:
     return e
 
 
-def pose_error_rows(target: Rows, actual: Rows) -> list[float]:
-    """:func:`pose_error` on the rows of two poses (3x4 or 4x4), as six Python floats.
-
-    The per-step code keeps its small matrices as lists: for one pose numpy's per-call
-    overhead costs more than the arithmetic. The rotation log is ``pinocchio.log3``.
-    """
-    a0, a1, a2 = target[0], target[1], target[2]
-    b0, b1, b2 = actual[0], actual[1], actual[2]
-    return [a0[3] - b0[3], a1[3] - b1[3], a2[3] - b2[3],
-            *pin.log3(np.array(_mul_transposed(a0, a1, a2, b0, b1, b2))).tolist()]
-
-
 def compose_rows(a: Rows, b: Rows) -> Rows:
     """Rows 0-2 of the pose ``A B``, for poses given by their rows (3x4 or 4x4) [m].
 
@@ -62,13 +49,3 @@ def compose_rows(a: Rows, b: Rows) -> Rows:
                     r0 * b02 + r1 * b12 + r2 * b22, r0 * b03 + r1 * b13 + r2 * b23 + r3])
     return out
 
-
-def _mul_transposed(a0: list[float], a1: list[float], a2: list[float],
-                    b0: list[float], b1: list[float], b2: list[float]) -> Rows:
-    """Rows of ``A B^T`` for the 3x3 blocks of ``A`` and ``B`` given by their rows."""
-    out = []
-    for x in (a0, a1, a2):
-        x0, x1, x2 = x[0], x[1], x[2]
-        out.append([x0 * b0[0] + x1 * b0[1] + x2 * b0[2], x0 * b1[0] + x1 * b1[1] + x2 * b1[2],
-                    x0 * b2[0] + x1 * b2[1] + x2 * b2[2]])
-    return out

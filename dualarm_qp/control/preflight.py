@@ -12,10 +12,11 @@ waypoint path; the end of any other path) asks:
   coordinate in the grasp's range (the grasp may slide there during the run).
 
 Joint ranges are kept only for a solver that claims hard limits (the paper's methods
-ignore them). A waypoint that fails both the seeded solve and a few other starts is
-reported as :class:`Unreachable`; the run then fails on criterion ``"unreachable"``
-before its first sample. A Case 2 support (the follower's path follows gravity) is
-checked for the leader only.
+ignore them). A waypoint that fails the seeded solve and the other starts (the seed
+nudged by :data:`SEED_NUDGE` on every joint, which leaves an exact singularity, and the
+range's middle when the ranges are kept) is reported as :class:`Unreachable`; the run
+then fails on criterion ``"unreachable"`` before its first sample. A Case 2 support
+(the follower's path follows gravity) is checked for the leader only.
 """
 
 from __future__ import annotations
@@ -41,6 +42,9 @@ SEEDS_PER_SEGMENT = 8
 
 #: Grasp coordinates tried across the grasp's range when the current one fails.
 GRASP_CANDIDATES = 9
+
+#: Added to every joint of a seed that fails, for a second try [rad].
+SEED_NUDGE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -171,10 +175,15 @@ def _candidates(current: float, lo: float, hi: float) -> list[float]:
 
 def _reach(arm: SerialArm, T: FloatArray, seed: FloatArray, within: bool
            ) -> FloatArray | tuple[float, float]:
-    """Joints reaching ``T`` from ``seed`` (or from the range's middle), else the errors."""
+    """Joints reaching ``T`` from ``seed``, from it nudged or from the range's middle.
+
+    Else the smallest errors reached [m], [rad].
+    """
     tol_p, tol_r = REACH_TOLERANCE
     best = (np.inf, np.inf)
-    starts = [seed]
+    # A seed at an exact singularity gives no first-order descent along the direction
+    # the arm lost: the nudged seed leaves it deterministically (not by rounding).
+    starts = [seed, seed + SEED_NUDGE]
     if within and np.isfinite(arm.q_min).all() and np.isfinite(arm.q_max).all():
         starts.append(0.5 * (arm.q_min + arm.q_max))
     for q0 in starts:

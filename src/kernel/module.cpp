@@ -21,6 +21,7 @@
 #include "constants.hpp"
 #include "dense_qp.hpp"
 #include "equality.hpp"
+#include "ik.hpp"
 #include "kinematics.hpp"
 #include "linalg.hpp"
 #include "load_split.hpp"
@@ -320,6 +321,23 @@ NB_MODULE(_kernel, m) {
         "col_rate"_a, "dt"_a, "T_D"_a, "e"_a.noconvert(),
         "The look-ahead's step_errors one sample after the command x into e (12); False "
         "(e unwritten) when x or a moved grasp coordinate is not finite.");
+
+  m.def(
+      "ik_dls",
+      [](dqk::Chain& chain, int tool, const dqk::Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
+         const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos, double tol_rot,
+         int max_iter, double damping, double mu_min, double mu_max) {
+        const dqk::IKAnswer a = dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot,
+                                            max_iter, damping, mu_min, mu_max);
+        return nb::make_tuple(a.iterations, a.position_error, a.rotation_error,
+                              static_cast<int>(a.stop));
+      },
+      "chain"_a, "tool"_a, "T_target"_a, "q"_a.noconvert(), "lo"_a, "hi"_a, "tol_pos"_a,
+      "tol_rot"_a, "max_iter"_a, "damping"_a, "mu_min"_a, "mu_max"_a,
+      "Damped least squares of the pose of frame tool toward T_target, from q (clipped "
+      "into [lo, hi]); the best iterate is written into q. Returns (iterations, position "
+      "error [m], rotation error [rad], stop: 0 converged, 1 iteration limit, 2 local "
+      "minimum, 3 no descent).");
 
   m.def("pose_error",
         [](const dqk::Pose& T_star, const dqk::Pose& T, Eigen::Ref<Eigen::VectorXd> e) {
