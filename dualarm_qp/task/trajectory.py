@@ -15,14 +15,13 @@ from inside (so a :class:`LinearTrajectory` has its full velocity at ``t = tf``)
 
 from __future__ import annotations
 
-import bisect
 from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from .._validate import as_array, as_number, as_pose
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
@@ -56,11 +55,8 @@ def min_jerk(tau: float) -> tuple[float, float, float]:
     ``s = 10 tau^3 - 15 tau^4 + 6 tau^5`` on ``[0, 1]``: ``s(0) = 0``, ``s(1) = 1`` and
     zero first and second derivatives at both ends. Returns ``(s, ds/dtau, d2s/dtau2)``.
     """
-    t2 = tau * tau
-    s = t2 * tau * (10.0 + tau * (-15.0 + 6.0 * tau))
-    ds = t2 * (30.0 + tau * (-60.0 + 30.0 * tau))
-    dds = tau * (60.0 + tau * (-180.0 + 120.0 * tau))
-    return s, ds, dds
+    out: tuple[float, float, float] = kernel.min_jerk(as_number(tau, "tau"))
+    return out
 
 
 class Trajectory(ABC):
@@ -263,20 +259,8 @@ class WaypointTrajectory(Trajectory):
         self.t0 = self._times[0]
         self.tf = self._times[-1]
         self._poses = Ts
-        self._segments = []
-        for k in range(ts.size - 1):
-            Rk, Rn = Ts[k][:3, :3], Ts[k + 1][:3, :3]
-            w = pin.log3(Rk.T @ Rn)
-            self._segments.append(
-                (
-                    Ts[k][:3, 3].copy(),  # p_k
-                    Ts[k + 1][:3, 3] - Ts[k][:3, 3],  # delta p
-                    Rk.copy(),
-                    w,  # body-frame rotation vector of the segment
-                    Rk @ w,  # the same in world coordinates
-                    self._times[k + 1] - self._times[k],
-                )
-            )
+        # Every evaluation runs in the kernel, with one fixed order of every sum.
+        self._path = kernel.WaypointPath(self._times, np.concatenate(Ts))
 
     @property
     def times(self) -> FloatArray:
@@ -288,26 +272,10 @@ class WaypointTrajectory(Trajectory):
         """Copies of the waypoint poses."""
         return [T.copy() for T in self._poses]
 
-    def _locate(self, t: float) -> tuple[int, float, float] | None:
-        """Segment index, tau and segment duration, or None when outside [t0, tf]."""
-        if not self.t0 <= t <= self.tf:
-            return None
-        k = min(bisect.bisect_right(self._times, t) - 1, len(self._segments) - 1)
-        dt = self._segments[k][5]
-        return k, (t - self._times[k]) / dt, dt
-
     def pose(self, t: float) -> FloatArray:
         """``T_world_object(t)``, clamped to the first / last waypoint outside."""
-        tt = as_number(t, "t")
-        loc = self._locate(tt)
-        if loc is None:
-            return (self._poses[0] if tt < self.t0 else self._poses[-1]).copy()
-        k, tau, _ = loc
-        p, dp, Rk, w, _, _ = self._segments[k]
-        s = min_jerk(tau)[0]
-        T = np.eye(4)
-        T[:3, :3] = Rk @ pin.exp3(s * w)
-        T[:3, 3] = p + s * dp
+        T = np.empty((4, 4))
+        self._path.pose(as_number(t, "t"), T)
         return T
 
     def twist(self, t: float) -> FloatArray:
@@ -320,13 +288,6 @@ class WaypointTrajectory(Trajectory):
 
     def _derivative(self, t: float, order: int) -> FloatArray:
         """Return the ``order``-th time derivative (1 or 2) of the pose as a 6-vector."""
-        loc = self._locate(as_number(t, "t"))
-        out = np.zeros(6)
-        if loc is None:
-            return out
-        k, tau, dt = loc
-        _, dp, _, _, w_world, _ = self._segments[k]
-        rate = min_jerk(tau)[order] / dt**order
-        out[:3] = rate * dp
-        out[3:] = rate * w_world
+        out = np.empty(6)
+        self._path.derivative(as_number(t, "t"), order, out)
         return out

@@ -173,6 +173,55 @@ def test_waypoint_properties(
     np.testing.assert_allclose(traj.twist(t), fd_twist(traj, t, h), atol=2e-5, rtol=1e-5)
 
 
+@settings(max_examples=40, deadline=None)
+@given(w=st.lists(st.tuples(*[st.floats(-0.5, 0.5)] * 3), min_size=2, max_size=4),
+       p=st.lists(position, min_size=4, max_size=4),
+       dts=st.lists(st.floats(0.05, 3.0), min_size=3, max_size=3),
+       fracs=st.lists(st.floats(-0.2, 1.2), min_size=5, max_size=5))
+def test_the_compiled_path_is_its_formula(
+    w: list[tuple[float, float, float]],
+    p: list[tuple[float, float, float]],
+    dts: list[float],
+    fracs: list[float],
+) -> None:
+    """The kernel's path against the class docstring's formula, written here in numpy:
+    ``p_k + s dp`` and ``R_k exp(s w_k)`` with ``w_k = log(R_k^T R_k+1)``, their rates by
+    ``s_dot`` and ``s_ddot``, the end waypoints outside (rotations well away from pi)."""
+    n = len(w)
+    poses = [pin.SE3(pin.exp3(np.array(w[i])), np.array(p[i])).homogeneous for i in range(n)]
+    times = np.concatenate([[0.0], np.cumsum(dts[: n - 1])])
+    traj = WaypointTrajectory(times, poses)
+    for frac in fracs:
+        t = frac * float(times[-1])
+        if t <= times[0] or t >= times[-1]:
+            end = poses[0] if t <= times[0] else poses[-1]
+            np.testing.assert_allclose(traj.pose(t), end, rtol=0, atol=1e-15)
+            continue
+        k = int(np.searchsorted(times, t, side="right")) - 1
+        span = times[k + 1] - times[k]
+        tau = (t - times[k]) / span
+        s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+        ds = (30 * tau**2 - 60 * tau**3 + 30 * tau**4) / span
+        dds = (60 * tau - 180 * tau**2 + 120 * tau**3) / span**2
+        Rk, dp = poses[k][:3, :3], poses[k + 1][:3, 3] - poses[k][:3, 3]
+        wk = pin.log3(Rk.T @ poses[k + 1][:3, :3])
+        T = traj.pose(t)
+        np.testing.assert_allclose(T[:3, 3], poses[k][:3, 3] + s * dp, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(T[:3, :3], Rk @ pin.exp3(s * wk), rtol=0, atol=1e-14)
+        np.testing.assert_array_equal(T[3], [0.0, 0.0, 0.0, 1.0])
+        np.testing.assert_allclose(traj.twist(t), np.r_[ds * dp, ds * (Rk @ wk)],
+                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(traj.acceleration(t), np.r_[dds * dp, dds * (Rk @ wk)],
+                                   rtol=1e-12, atol=1e-11)
+
+
+def test_a_time_that_is_not_a_number_is_refused() -> None:
+    traj = _three_waypoints()
+    for f in (traj.pose, traj.twist, traj.acceleration, min_jerk):
+        with pytest.raises(NonFiniteError):
+            f(math.nan)
+
+
 def test_waypoint_bad_inputs() -> None:
     T = np.eye(4)
     with pytest.raises(InvalidInputError, match="strictly increasing"):
