@@ -97,21 +97,19 @@ class Lookahead:
         self._length = (chain_length(task.leader), chain_length(task.follower))
 
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:
-        """Whether the bound alone keeps the command's error under a tenth of the budget."""
-        n_l, n_f = self.n_l, self.n_f
-        rates = x.tolist()  # a handful of numbers: Python floats beat numpy's calls
-        turn_l = dt * sum(map(abs, rates[:n_l]))
-        turn_f = dt * sum(map(abs, rates[n_l:n_l + n_f]))
-        lever = math.dist(build.carry.T_target[:3, 3].tolist(),
-                          build.carry.T_tool[:3, 3].tolist())
-        grasps = dt * sum(map(abs, rates[n_l + n_f:]))
-        pos = 0.5 * (turn_l ** 2 * (self._length[0] + lever) + turn_f ** 2 * self._length[1])
-        rot = 0.5 * (turn_l ** 2 + turn_f ** 2)
-        # A grasp sliding on a curved path turns with it: count its travel as a turn of
-        # the object's length (a straight path adds nothing at second order but is
-        # counted too, cheaply and safely).
-        pos += 0.5 * grasps ** 2 + turn_l * grasps
-        return pos <= SKIP_SHARE * self.budget[0] and rot <= SKIP_SHARE * self.budget[1]
+        """Whether the bound alone keeps the command's error under a tenth of the budget.
+
+        The bound of the module docstring, one kernel call (``kernel.negligible``): the
+        leader's turn counts with its chain's length plus the lever from its tool to the
+        follower's target, and a grasp's travel as a turn of the object's length (a grasp
+        sliding on a curved path turns with it; a straight path adds nothing at second
+        order but is counted too, cheaply and safely).
+        """
+        carry = build.carry
+        negligible: bool = kernel.negligible(
+            x, self.n_l, self.n_f, dt, carry.T_tool, carry.T_target, self._length[0],
+            self._length[1], self.budget[0], self.budget[1], SKIP_SHARE)
+        return negligible
 
     def predict(self, state: DualArmState, x: FloatArray, scale: float, dt: float
                 ) -> Predicted:

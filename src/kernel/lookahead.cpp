@@ -49,4 +49,29 @@ bool predicted_errors(Chain& carry, const std::vector<int>& carry_frames, Chain&
   return true;
 }
 
+bool negligible(const Eigen::VectorXd& x, Eigen::Index n_l, Eigen::Index n_f, double dt,
+                const Pose& T_tool, const Pose& T_target,
+                double length_l, double length_f, double budget_pos, double budget_rot,
+                double share) {
+  if (n_l < 0 || n_f < 0 || n_l + n_f > x.size()) {
+    throw std::invalid_argument("negligible: x holds the leader's and the follower's rates");
+  }
+  const auto travel = [&x](Eigen::Index from, Eigen::Index to) {
+    double sum = 0.0;
+    for (Eigen::Index i = from; i < to; ++i) sum += std::abs(x(i));
+    return sum;
+  };
+  const double turn_l = dt * travel(0, n_l);
+  const double turn_f = dt * travel(n_l, n_l + n_f);
+  const double grasps = dt * travel(n_l + n_f, x.size());
+  const Eigen::Vector3d d = T_target.block<3, 1>(0, 3) - T_tool.block<3, 1>(0, 3);
+  const double lever = std::sqrt(d(0) * d(0) + d(1) * d(1) + d(2) * d(2));
+  double pos = 0.5 * (turn_l * turn_l * (length_l + lever) + turn_f * turn_f * length_f);
+  const double rot = 0.5 * (turn_l * turn_l + turn_f * turn_f);
+  // A grasp sliding on a curved path turns with it: its travel counts as a turn of the
+  // object's length (a straight path adds nothing at second order but is counted too).
+  pos += 0.5 * grasps * grasps + turn_l * grasps;
+  return pos <= share * budget_pos && rot <= share * budget_rot;
+}
+
 }  // namespace dqk

@@ -23,4 +23,15 @@ bool predicted_errors(Chain& carry, const std::vector<int>& carry_frames, Chain&
                       const Eigen::VectorXd& x, const Eigen::VectorXd& col_rate, double dt,
                       const Pose& T_D, Eigen::Ref<Eigen::VectorXd> e);
 
+// Whether the bound alone keeps a command's second-order error under share times the
+// budget (dualarm_qp/control/lookahead.py, Lookahead.negligible): with the turns
+// a = dt sum|x_leader|, b = dt sum|x_follower| and the grasps' travel g = dt sum|x_grasps|,
+// 0.5 (a^2 (length_l + lever) + b^2 length_f) + 0.5 g^2 + a g <= share budget_pos and
+// 0.5 (a^2 + b^2) <= share budget_rot, the lever being the distance from the leader's
+// tool to the follower's target. Sums run left to right, as the Python bound summed.
+bool negligible(const Eigen::VectorXd& x, Eigen::Index n_l, Eigen::Index n_f, double dt,
+                const Pose& T_tool, const Pose& T_target,
+                double length_l, double length_f, double budget_pos, double budget_rot,
+                double share);
+
 }  // namespace dqk

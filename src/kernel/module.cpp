@@ -356,6 +356,11 @@ NB_MODULE(_kernel, m) {
           return nb::make_tuple(s(0), s(1), s(2));
         }, "tau"_a, "The minimum-jerk scaling s(tau) and its first two derivatives.");
 
+  m.def("negligible", &dqk::negligible, "x"_a, "n_l"_a, "n_f"_a, "dt"_a, "T_tool"_a,
+        "T_target"_a, "length_l"_a, "length_f"_a, "budget_pos"_a, "budget_rot"_a, "share"_a,
+        "Whether the look-ahead's bound keeps the command x's second-order error under "
+        "share times the budget (the prediction is then skipped).");
+
   m.def("pose_error",
         [](const dqk::Pose& T_star, const dqk::Pose& T, Eigen::Ref<Eigen::VectorXd> e) {
           dqk::pose_error(T_star, T, e);

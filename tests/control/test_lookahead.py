@@ -160,3 +160,33 @@ def test_the_kernel_refuses_a_command_of_another_layout() -> None:
     e[:] = 7.0
     assert not kernel.predicted_errors(**{**args, "x": x_nan})
     assert (e == 7.0).all()  # left unwritten
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), share=st.sampled_from([0.3, 0.9, 0.999, 1.001, 1.1, 3.0]))
+def test_the_bound_is_the_module_docstrings(case: tuple, seed: int, share: float) -> None:
+    """``Lookahead.negligible`` (one kernel call) against the bound written here in Python:
+    the turns' squares times the chains' lengths (the leader's plus the lever from its
+    tool to the follower's target) and the grasps' travel, against a tenth of the budget.
+    The bound is quadratic in the command: each command is scaled to ``share`` times the
+    threshold, on both sides of it."""
+    from dualarm_qp.control.lookahead import SKIP_SHARE, chain_length
+
+    exp, ctrl, la = case
+    rng = np.random.default_rng(seed)
+    state, x = moved(exp, ctrl, rng)
+    build = ctrl.builder.build(state)
+    dt, n_l, n_f = ctrl.options.dt, la.n_l, la.n_f
+    lever = np.linalg.norm(build.carry.T_target[:3, 3] - build.carry.T_tool[:3, 3])
+    lengths = chain_length(exp.task.leader) + lever, chain_length(exp.task.follower)
+
+    def shares(x: np.ndarray) -> tuple[float, float]:
+        a, b = dt * np.abs(x[:n_l]).sum(), dt * np.abs(x[n_l:n_l + n_f]).sum()
+        g = dt * np.abs(x[n_l + n_f:]).sum()
+        pos = 0.5 * (a**2 * lengths[0] + b**2 * lengths[1]) + 0.5 * g**2 + a * g
+        rot = 0.5 * (a**2 + b**2)
+        return pos / (SKIP_SHARE * la.budget[0]), rot / (SKIP_SHARE * la.budget[1])
+
+    x = x * math.sqrt(share / max(shares(x)))
+    assert max(shares(x)) == pytest.approx(share, rel=1e-9)
+    assert la.negligible(build, x, dt) == (share < 1.0)
