@@ -13,10 +13,11 @@ waypoint path; the end of any other path) asks:
 
 Joint ranges are kept only for a solver that claims hard limits (the paper's methods
 ignore them). A waypoint that fails the seeded solve and the other starts (the seed
-nudged by :data:`SEED_NUDGE` on every joint, which leaves an exact singularity, and the
-range's middle when the ranges are kept) is reported as :class:`Unreachable`; the run
-then fails on criterion ``"unreachable"`` before its first sample. A Case 2 support
-(the follower's path follows gravity) is checked for the leader only.
+nudged by :data:`SEED_NUDGE` on every joint, down for a joint at its upper limit, which
+leaves an exact singularity, and the range's middle when the ranges are kept) is
+reported as :class:`Unreachable`; the run then fails on criterion ``"unreachable"``
+before its first sample. A Case 2 support (the follower's path follows gravity) is
+checked for the leader only.
 """
 
 from __future__ import annotations
@@ -183,7 +184,10 @@ def _reach(arm: SerialArm, T: FloatArray, seed: FloatArray, within: bool
     best = (np.inf, np.inf)
     # A seed at an exact singularity gives no first-order descent along the direction
     # the arm lost: the nudged seed leaves it deterministically (not by rounding).
-    starts = [seed, seed + SEED_NUDGE]
+    nudged = seed + SEED_NUDGE
+    if within:  # a joint on its upper limit is nudged the other way (not clipped back)
+        nudged = np.where(nudged <= arm.q_max, nudged, seed - SEED_NUDGE)
+    starts = [seed, nudged]
     if within and np.isfinite(arm.q_min).all() and np.isfinite(arm.q_max).all():
         starts.append(0.5 * (arm.q_min + arm.q_max))
     for q0 in starts:

@@ -37,6 +37,9 @@ from .arm import FloatArray, SerialArm, checked_pose
 #: Bounds on the adaptive damping factor ``mu`` (see the module docstring).
 _MU_MIN, _MU_MAX = 1e-12, 1e16
 
+#: Largest iteration budget handed to the kernel (a 64-bit count; never reached).
+_ITERATIONS_CAP = 2**62
+
 #: The kernel's reasons to stop (``kernel.ik_dls``'s last answer), for the error message.
 _CONVERGED = 0
 _STOPS = ("converged", "maximum number of iterations reached",
@@ -133,7 +136,7 @@ def ik_dls(
     hi = arm.q_max if respect_limits else np.full(arm.n, math.inf)
     iterations, ep, er, stop = kernel.ik_dls(
         arm.chain, arm.tool_frame_id, target, q, lo, hi, float(tol_pos), float(tol_rot),
-        max_iter, float(damping), _MU_MIN, _MU_MAX)
+        min(max_iter, _ITERATIONS_CAP), float(damping), _MU_MIN, _MU_MAX)
     success = stop == _CONVERGED
     result = IKResult(q, success, iterations, ep, er)
     if not success and raise_on_failure:

@@ -44,6 +44,9 @@ PAPER_R0 = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 PAPER_P0 = np.array([-0.3e-3, 0.690, 0.2604])
 #: Velocity of D(t) [m/s]: d_x(t) = t/31 - 0.3 with t in ms and d_x in mm, 1 mm per 31 ms.
 PAPER_VELOCITY = np.array([1.0 / 31.0, 0.0, 0.0])
+#: Shortest time between two waypoints [s] (a rest-to-rest segment shorter than this has
+#: no meaningful rates: its acceleration would overflow).
+MIN_SEGMENT = 1e-9
 
 for _a in (PAPER_R0, PAPER_P0, PAPER_VELOCITY):
     _a.setflags(write=False)
@@ -53,10 +56,15 @@ def min_jerk(tau: float) -> tuple[float, float, float]:
     """Quintic minimum-jerk time scaling and its derivatives in ``tau`` (dimensionless).
 
     ``s = 10 tau^3 - 15 tau^4 + 6 tau^5`` on ``[0, 1]``: ``s(0) = 0``, ``s(1) = 1`` and
-    zero first and second derivatives at both ends. Returns ``(s, ds/dtau, d2s/dtau2)``.
+    zero first and second derivatives at both ends. Returns ``(s, ds/dtau, d2s/dtau2)``,
+    for a number or elementwise for an array. A :class:`WaypointTrajectory` evaluates the
+    same polynomials, in the same order, in the kernel.
     """
-    out: tuple[float, float, float] = kernel.min_jerk(as_number(tau, "tau"))
-    return out
+    t2 = tau * tau
+    s = t2 * tau * (10.0 + tau * (-15.0 + 6.0 * tau))
+    ds = t2 * (30.0 + tau * (-60.0 + 30.0 * tau))
+    dds = tau * (60.0 + tau * (-180.0 + 120.0 * tau))
+    return s, ds, dds
 
 
 class Trajectory(ABC):
@@ -248,6 +256,12 @@ class WaypointTrajectory(Trajectory):
                 f"times must be strictly increasing: times[{k}] = {ts[k]:g} s, "
                 f"times[{k + 1}] = {ts[k + 1]:g} s"
             )
+        if np.any(np.diff(ts) < MIN_SEGMENT):
+            k = int(np.flatnonzero(np.diff(ts) < MIN_SEGMENT)[0])
+            raise InvalidInputError(
+                f"waypoints must be at least {MIN_SEGMENT:g} s apart: times[{k}] = "
+                f"{ts[k]:.17g} s, times[{k + 1}] = {ts[k + 1]:.17g} s"
+            )
         try:
             Ps = np.asarray(poses, dtype=np.float64)
         except (TypeError, ValueError) as err:
@@ -261,6 +275,16 @@ class WaypointTrajectory(Trajectory):
         self._poses = Ts
         # Every evaluation runs in the kernel, with one fixed order of every sum.
         self._path = kernel.WaypointPath(self._times, np.concatenate(Ts))
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The kernel's path is rebuilt from the times and the poses on unpickling.
+        state = self.__dict__.copy()
+        del state["_path"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._path = kernel.WaypointPath(self._times, np.concatenate(self._poses))
 
     @property
     def times(self) -> FloatArray:

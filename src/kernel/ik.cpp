@@ -30,7 +30,8 @@ Error error_at(const Pose& T_target, const Pose& T) {
 
 IKAnswer ik_dls(Chain& chain, int tool, const Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
                 const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos,
-                double tol_rot, int max_iter, double damping, double mu_min, double mu_max) {
+                double tol_rot, std::int64_t max_iter, double damping, double mu_min,
+                double mu_max) {
   const Eigen::Index n = chain.nq();
   if (q.size() != n || lo.size() != n || hi.size() != n) {
     throw std::invalid_argument("ik_dls: q, lo and hi hold one number per joint of the chain");

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cstdint>
 
 #include "kinematics.hpp"
 
@@ -18,7 +19,7 @@ enum IKStop : int {
 };
 
 struct IKAnswer {
-  int iterations;         // linear solves performed
+  std::int64_t iterations;  // linear solves performed
   double position_error;  // |p* - p(q)| [m]
   double rotation_error;  // angle of R* R(q)^T [rad]
   IKStop stop;
@@ -32,6 +33,7 @@ struct IKAnswer {
 // (x10 after a rejected step, x2 below 0.25, /3 above 0.75, within [mu_min, mu_max]).
 IKAnswer ik_dls(Chain& chain, int tool, const Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
                 const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos,
-                double tol_rot, int max_iter, double damping, double mu_min, double mu_max);
+                double tol_rot, std::int64_t max_iter, double damping, double mu_min,
+                double mu_max);
 
 }  // namespace dqk

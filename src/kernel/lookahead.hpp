@@ -28,7 +28,9 @@ bool predicted_errors(Chain& carry, const std::vector<int>& carry_frames, Chain&
 // a = dt sum|x_leader|, b = dt sum|x_follower| and the grasps' travel g = dt sum|x_grasps|,
 // 0.5 (a^2 (length_l + lever) + b^2 length_f) + 0.5 g^2 + a g <= share budget_pos and
 // 0.5 (a^2 + b^2) <= share budget_rot, the lever being the distance from the leader's
-// tool to the follower's target. Sums run left to right, as the Python bound summed.
+// tool to the follower's target. Sums run left to right; the lever is the square root of
+// its squares' sum (Python's math.dist, used before, may differ from it in the last
+// place: only a command at the threshold itself can be decided differently).
 bool negligible(const Eigen::VectorXd& x, Eigen::Index n_l, Eigen::Index n_f, double dt,
                 const Pose& T_tool, const Pose& T_target,
                 double length_l, double length_f, double budget_pos, double budget_rot,

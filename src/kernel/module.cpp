@@ -368,7 +368,7 @@ NB_MODULE(_kernel, m) {
       "ik_dls",
       [](dqk::Chain& chain, int tool, const dqk::Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
          const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos, double tol_rot,
-         int max_iter, double damping, double mu_min, double mu_max) {
+         std::int64_t max_iter, double damping, double mu_min, double mu_max) {
         const dqk::IKAnswer a = dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot,
                                             max_iter, damping, mu_min, mu_max);
         return nb::make_tuple(a.iterations, a.position_error, a.rotation_error,
@@ -392,10 +392,6 @@ NB_MODULE(_kernel, m) {
            "out"_a.noconvert(),
            "The twist (order 1) or the acceleration (order 2) at t into out (6); zero "
            "outside [t0, tf].");
-  m.def("min_jerk", [](double tau) {
-          const Eigen::Vector3d s = dqk::min_jerk(tau);
-          return nb::make_tuple(s(0), s(1), s(2));
-        }, "tau"_a, "The minimum-jerk scaling s(tau) and its first two derivatives.");
 
   m.def("negligible", &dqk::negligible, "x"_a, "n_l"_a, "n_f"_a, "dt"_a, "T_tool"_a,
         "T_target"_a, "length_l"_a, "length_f"_a, "budget_pos"_a, "budget_rot"_a, "share"_a,

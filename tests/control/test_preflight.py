@@ -16,7 +16,6 @@ from dualarm_qp.control.preflight import _reach, checkpoints, unreachable_waypoi
 from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.experiments.config import parse_config
-from dualarm_qp.kinematics import ik_dls
 from dualarm_qp.kinematics.robots import example_robot_arm
 from dualarm_qp.se3 import pose_error
 
@@ -85,8 +84,9 @@ def test_the_command_line_exits_1_with_the_criterion(tmp_path: Path) -> None:
 
 def test_a_seed_at_an_exact_singularity_is_nudged_off_it() -> None:
     """A UR5 stretched (elbow at 0, an exact singularity) asked to move along the direction
-    it lost: from the exact seed the solve has no first-order descent and stalls where it
-    starts, in both directions; the nudged seed reaches the one inside the workspace."""
+    it lost: from the exact seed the solve has no first-order descent (here it stalls
+    where it starts in both directions; elsewhere rounding may let it escape), and the
+    nudged seed reaches the one direction inside the workspace."""
     arm = example_robot_arm("ur5", "base_link", "tool0")
     seed = np.deg2rad([-15.8, -101.1, 0.0, -108.4, -90.0, -105.8])
     u = np.linalg.svd(arm.jacobian(seed))[0][:, -1]
@@ -95,8 +95,6 @@ def test_a_seed_at_an_exact_singularity_is_nudged_off_it() -> None:
         T = arm.fk(seed)
         T[:3, :3] = pin.exp3(sign * 0.02 * u[3:]) @ T[:3, :3]
         T[:3, 3] += sign * 0.02 * u[:3]
-        stalled = ik_dls(arm, T, seed, tol_pos=1e-6, tol_rot=1e-6, raise_on_failure=False)
-        assert not stalled.success and stalled.position_error > 0.01
         found = _reach(arm, T, seed, False)
         if isinstance(found, np.ndarray):
             np.testing.assert_allclose(pose_error(T, arm.fk(found)), 0.0, atol=1e-6)

@@ -163,24 +163,48 @@ def _oracle_dls(arm: SerialArm, T: np.ndarray, q0: np.ndarray, tol: float, max_i
 def test_the_kernel_iterates_as_the_method_states(limits: bool) -> None:
     """The compiled iterations against a plain numpy implementation of the same method.
 
-    On a non-redundant arm both reach the same joints (only rounding differs), succeed
-    together and take nearly the same number of iterations, from near and far starts.
+    From near and far starts, to targets inside the ranges and (with the ranges kept)
+    beyond them, where joints rest on their limits and are frozen and the solve fails
+    at the closest point it can reach. Only rounding differs: both succeed or fail
+    together at the same joints; a success takes the same number of iterations (save a
+    few cases where rounding decides the way); a failure creeps to its point in a number
+    of iterations that rounding moves by a few, the same in total.
     """
     rng = np.random.default_rng(7)
     arm = puma560(base=random_pose(rng), tool=random_pose(rng, 0.1))
     inf = np.full(6, np.inf)
     lo, hi = (arm.q_min, arm.q_max) if limits else (-inf, inf)
-    for k in range(60):
+    counted, differ, failed, failed_ref, frozen = 0, 0, 0, 0, 0
+    for k in range(90):
         q = interior(arm, rng)
+        if limits and k % 2:  # a target beyond a joint's range: that joint ends on it
+            i = int(rng.integers(6))
+            q[i] = arm.q_max[i] + 0.2 if k % 4 == 1 else arm.q_min[i] - 0.2
         T = arm.fk(q)
         q0 = q + rng.normal(scale=(0.02, 0.2, 0.6)[k % 3], size=6)
         res = ik_dls(arm, T, q0, tol_pos=1e-10, tol_rot=1e-10, respect_limits=limits,
                      raise_on_failure=False)
         q_ref, ok_ref, k_ref = _oracle_dls(arm, T, q0, 1e-10, 200, lo, hi)
         assert res.success == ok_ref
-        assert abs(res.iterations - k_ref) <= 2
+        np.testing.assert_allclose(res.q, q_ref, rtol=0, atol=1e-7)
         if ok_ref:
-            np.testing.assert_allclose(res.q, q_ref, rtol=0, atol=1e-9)
+            counted += 1
+            differ += res.iterations != k_ref
+        else:
+            failed += res.iterations
+            failed_ref += k_ref
+            frozen += bool(np.any((res.q == lo) | (res.q == hi)))
+    assert counted >= 40 and differ <= 3
+    assert abs(failed - failed_ref) <= 0.1 * failed_ref
+    assert frozen >= (40 if limits else 0)
+
+
+def test_a_large_iteration_budget_is_taken() -> None:
+    arm = puma560()
+    q = np.full(6, 0.3)
+    res = ik_dls(arm, arm.fk(q), q + 0.05, max_iter=2**40)
+    assert res.success and res.iterations < 20
+    assert ik_dls(arm, arm.fk(q), q + 0.05, max_iter=10**30).success
 
 
 def test_a_joint_resting_on_a_limit_that_the_error_pushes_past_stays_there() -> None:

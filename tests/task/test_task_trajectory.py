@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dualarm_qp._compiled import kernel
 from dualarm_qp.errors import InvalidInputError, NonFiniteError, ShapeError
 from dualarm_qp.task import (
     PAPER_R0,
@@ -216,10 +217,47 @@ def test_the_compiled_path_is_its_formula(
 
 
 def test_a_time_that_is_not_a_number_is_refused() -> None:
+    """By the class (the library's error) and, under it, by the kernel's path itself."""
     traj = _three_waypoints()
-    for f in (traj.pose, traj.twist, traj.acceleration, min_jerk):
+    for f in (traj.pose, traj.twist, traj.acceleration):
         with pytest.raises(NonFiniteError):
             f(math.nan)
+    path = kernel.WaypointPath([0.0, 1.0], np.concatenate([np.eye(4), np.eye(4)]))
+    with pytest.raises(ValueError, match="NaN"):
+        path.pose(math.nan, np.empty((4, 4)))
+    with pytest.raises(ValueError, match="NaN"):
+        path.derivative(math.nan, 1, np.empty(6))
+
+
+def test_min_jerk_takes_arrays() -> None:
+    tau = np.linspace(0.0, 1.0, 7)
+    s, ds, dds = min_jerk(tau)
+    for i, t in enumerate(tau.tolist()):
+        assert (s[i], ds[i], dds[i]) == min_jerk(t)
+
+
+def test_waypoints_too_close_in_time_are_refused() -> None:
+    T = np.eye(4)
+    with pytest.raises(InvalidInputError, match="at least 1e-09 s apart"):
+        WaypointTrajectory([0.0, 1e-170, 1.0], [T, T, T])
+
+
+def test_a_waypoint_path_survives_pickling_and_copying() -> None:
+    import copy
+    import pickle
+    from pathlib import Path
+
+    from dualarm_qp.experiments import build_experiment, load_config
+
+    traj = _three_waypoints()
+    for other in (pickle.loads(pickle.dumps(traj)), copy.deepcopy(traj)):
+        for t in (0.2, 0.7, 1.5, 2.9, 4.0):
+            np.testing.assert_array_equal(other.pose(t), traj.pose(t))
+            np.testing.assert_array_equal(other.acceleration(t), traj.acceleration(t))
+    path = Path(__file__).resolve().parents[2] / "configs" / "curved_bar_waypoints.yaml"
+    exp = build_experiment(load_config(path), str(path))  # an experiment holding one
+    again = pickle.loads(pickle.dumps(exp))
+    np.testing.assert_array_equal(again.task.trajectory.pose(2.3), exp.task.trajectory.pose(2.3))
 
 
 def test_waypoint_bad_inputs() -> None:
