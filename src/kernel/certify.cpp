@@ -50,6 +50,7 @@ bool kkt_holds(const Mat& A, const Vec& b, const Basis& fa, const Mat& C, const 
   const Index d = Z.cols();
   const Vec x0 = fa.solve(b);  // the minimum-norm solution of the equality
   std::vector<Index> act;
+  act.reserve(static_cast<std::size_t>(C.rows()));
   if (bounds) {
     const Vec gap = C * x - e;
     for (Index i = 0; i < C.rows(); ++i) {

@@ -31,6 +31,8 @@ DenseQPResult solve_dense_qp(const Mat& R, const Vec& t_free, const Mat& M, cons
   Vec t = t_free;
   std::vector<Index> active;
   std::vector<double> u;
+  active.reserve(static_cast<std::size_t>(k));
+  u.reserve(static_cast<std::size_t>(k));
   Index iterations = 0;
   Mat J1, J2, Ra;
   while (k > 0) {

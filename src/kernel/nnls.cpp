@@ -59,6 +59,7 @@ NNLSResult nnls(const Mat& A, const Vec& b, Index max_iter) {
     passive[j_max] = true;
     while (true) {
       std::vector<Index> P;
+      P.reserve(static_cast<std::size_t>(n));
       for (Index j = 0; j < n; ++j) {
         if (passive[j]) P.push_back(j);
       }

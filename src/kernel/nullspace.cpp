@@ -57,6 +57,7 @@ StepAnswer solve_nullspace(const Mat& A, const Vec& b, const Basis& fa, const Ma
   const Mat M = C * N;
   const Vec f = e - C * x0;
   std::vector<Index> rows;
+  rows.reserve(static_cast<std::size_t>(C.rows()));
   for (Index i = 0; i < C.rows(); ++i) {
     const double size = d ? M.row(i).cwiseAbs().maxCoeff() : 0.0;
     if (size > RANK_RTOL) {

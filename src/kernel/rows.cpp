@@ -7,7 +7,10 @@ namespace dqk {
 
 Rows inequalities(const Vec& lower, const Vec& upper, const Mat& G, const Vec& h) {
   const Index n = lower.size();
-  std::vector<Index> up, lo, gen;
+  std::vector<Index> up, lo, gen;  // reserved: no reallocation while they fill
+  up.reserve(static_cast<std::size_t>(n));
+  lo.reserve(static_cast<std::size_t>(n));
+  gen.reserve(static_cast<std::size_t>(h.size()));
   for (Index i = 0; i < n; ++i) {
     if (std::isfinite(upper(i))) up.push_back(i);
   }

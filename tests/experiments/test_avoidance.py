@@ -172,10 +172,11 @@ def test_no_zoom_when_no_run_comes_within_the_influence_distance():
 def test_an_interrupt_in_the_second_run_records_what_was_done(tmp_path):
     """SIGINT while the second run rolls out: exit 130, the first run whole, the second
     written as interrupted, no figure, collisions.json saying so."""
-    # 3,000 samples a run: the second run's rollout must outlast the wait below by far
-    # (at 1,500 samples a faster step let it finish first, and the signal then came
-    # while its outputs were written, which discards them).
-    config = _pillar(tmp_path, duration=6.0, dt=0.002, correction_gain=250,
+    # 12,000 samples a run: the second run's rollout must outlast the wait below by far
+    # (at 1,500 and then at 3,000 samples a faster step let it finish first, and the
+    # signal then came while its outputs were written, which discards them). The second
+    # run has no collision rows: about 1 s of rollout at 80 us a step.
+    config = _pillar(tmp_path, duration=6.0, dt=0.0005, correction_gain=250,
                      leader_gain=250)
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", "collisions", str(config),
@@ -187,7 +188,7 @@ def test_an_interrupt_in_the_second_run_records_what_was_done(tmp_path):
         first = out / "avoiding" / "summary.json"
         while not first.exists() and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.005)
-        time.sleep(0.3)
+        time.sleep(0.15)
         assert proc.poll() is None, "the second run ended before the signal"
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
