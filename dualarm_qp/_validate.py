@@ -79,6 +79,8 @@ def as_number(value: Any, name: str) -> float:
         number = float(value)
     except (TypeError, ValueError) as err:
         raise InvalidInputError(f"{name} must be a real number, got {value!r}") from err
+    except OverflowError as err:  # an integer beyond the largest float
+        raise NonFiniteError(name) from err
     if not math.isfinite(number):
         raise NonFiniteError(name)
     return number

@@ -62,6 +62,8 @@ class Unreachable:
         Path time of that point [s].
     position_error, rotation_error : float
         The smallest errors inverse kinematics reached [m], [rad].
+    within_ranges : bool
+        Whether the arm's joint ranges were kept (for a solver that claims hard limits).
     """
 
     arm: str
@@ -69,12 +71,14 @@ class Unreachable:
     t: float
     position_error: float
     rotation_error: float
+    within_ranges: bool = True
 
     @property
     def message(self) -> str:
         """One line for a person."""
-        return (f"the {self.arm} cannot reach {self.waypoint} (t = {self.t:.4g} s)"
-                f" within its joint ranges: the closest it gets is {self.position_error:.3g} m"
+        ranges = " within its joint ranges" if self.within_ranges else ""
+        return (f"the {self.arm} cannot reach {self.waypoint} (t = {self.t:.4g} s){ranges}:"
+                f" the closest it gets is {self.position_error:.3g} m"
                 f", {self.rotation_error:.3g} rad away")
 
 
@@ -121,7 +125,7 @@ def unreachable_waypoint(task: DualArmTask, initial: DualArmState, t_end: float,
             if isinstance(reached_l, Unreachable):
                 if last:
                     return Unreachable("leader", name, t, reached_l.position_error,
-                                       reached_l.rotation_error)
+                                       reached_l.rotation_error, within_ranges)
                 continue
             q_l, sigma_l = reached_l
             if task.contact is not None:
@@ -130,7 +134,7 @@ def unreachable_waypoint(task: DualArmTask, initial: DualArmState, t_end: float,
             if isinstance(reached_f, Unreachable):
                 if last:
                     return Unreachable("follower", name, t, reached_f.position_error,
-                                       reached_f.rotation_error)
+                                       reached_f.rotation_error, within_ranges)
                 continue
             q_f, sigma = reached_f
         t_prev = t_check

@@ -100,3 +100,12 @@ def test_a_seed_at_an_exact_singularity_is_nudged_off_it() -> None:
             np.testing.assert_allclose(pose_error(T, arm.fk(found)), 0.0, atol=1e-6)
             reached.append(sign)
     assert len(reached) == 1
+
+
+def test_the_message_says_within_the_ranges_only_when_they_were_kept() -> None:
+    exp = build_experiment(load_config(CONFIGS / "puma_beam_leader_near_singular.yaml"))
+    kept = unreachable_waypoint(exp.task, exp.initial, 15.5, within_ranges=True)
+    free = unreachable_waypoint(exp.task, exp.initial, 15.5, within_ranges=False)
+    assert kept is not None and free is not None  # out of reach either way: too far
+    assert "cannot reach the end of the path (t = 15.5 s) within its joint ranges:" in kept.message
+    assert "cannot reach the end of the path (t = 15.5 s): the closest" in free.message

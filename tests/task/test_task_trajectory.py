@@ -222,6 +222,8 @@ def test_a_time_that_is_not_a_number_is_refused() -> None:
     for f in (traj.pose, traj.twist, traj.acceleration):
         with pytest.raises(NonFiniteError):
             f(math.nan)
+        with pytest.raises(NonFiniteError):  # an integer beyond the largest float
+            f(10**400)
     path = kernel.WaypointPath([0.0, 1.0], np.concatenate([np.eye(4), np.eye(4)]))
     with pytest.raises(ValueError, match="NaN"):
         path.pose(math.nan, np.empty((4, 4)))
