@@ -38,6 +38,8 @@ def as_array(value: Any, name: str, shape: tuple[int, ...]) -> FloatArray:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise InvalidInputError(f"{name} must be an array of numbers: {err}") from err
+    except OverflowError as err:  # an integer beyond the largest float
+        raise NonFiniteError(name) from err
     if arr.ndim != len(shape) or any(
         s not in (-1, g) for s, g in zip(shape, arr.shape, strict=True)
     ):

@@ -23,14 +23,6 @@ step starts for those (the arms keep the late command through them, and the plan
 integrates it); the next step starts at the next tick. The miss rate is the share of the
 ticks that got no new command on time.
 
-Python's garbage collector: by default (``--gc frozen``) the loop collects once before
-the clock starts, freezes what exists then (the models, the controller: the collector
-never walks them again) and keeps the collector off while it runs, as a real-time loop
-in Python does. A step makes no reference cycles (the library's tests check that), so
-nothing is left for a collector to find. With ``--gc on`` the collector runs as usual:
-its passes over the objects alive take up to about 1 ms and make some ticks late. The
-report counts the collections during the loop.
-
 Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a short
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
 one core (all of it with ``--wait spin``); other work on the machine shows as misses.
@@ -39,7 +31,6 @@ one core (all of it with ``--wait spin``); other work on the machine shows as mi
 from __future__ import annotations
 
 import argparse
-import gc
 import math
 import sys
 import time
@@ -59,8 +50,6 @@ PERIOD = 1e-3  # tick [s]: 1 kHz
 PARTS = ("kinematics", "assembly", "solve", "verify")
 #: How the loop waits for a tick: check the clock until it is due, or sleep first.
 WAITS = ("spin", "sleep")
-#: What Python's garbage collector does during the loop: frozen and off, or as usual.
-COLLECTORS = ("frozen", "on")
 
 
 @dataclass
@@ -103,10 +92,6 @@ class LoopReport:
         The decision variables.
     wait : str
         How the loop waited for each tick (:data:`WAITS`).
-    collector : str
-        What the garbage collector did during the loop (:data:`COLLECTORS`).
-    collections : tuple of int
-        The garbage collections during the loop, per generation (0, 1, 2).
     """
 
     seconds: float
@@ -124,8 +109,6 @@ class LoopReport:
     rates: np.ndarray
     names: tuple[str, ...]
     wait: str = "spin"
-    collector: str = "frozen"
-    collections: tuple[int, int, int] = (0, 0, 0)
 
     @property
     def steps(self) -> int:
@@ -173,40 +156,13 @@ def wait_until(t: float, wait: str = "spin") -> None:
         pass
 
 
-def run(seconds: float, config: Path = CONFIG, wait: str = "spin",
-        collector: str = "frozen") -> LoopReport:
+def run(seconds: float, config: Path = CONFIG, wait: str = "spin") -> LoopReport:
     """Run the 1 kHz loop for ``seconds`` of ticks and return what it measured.
 
-    ``wait`` is how the loop waits for each tick (:data:`WAITS`, :func:`wait_until`);
-    ``collector`` what the garbage collector does meanwhile (:data:`COLLECTORS`). The
-    collector's state is restored when the loop ends.
+    ``wait`` is how the loop waits for each tick (:data:`WAITS`, :func:`wait_until`).
     """
     if wait not in WAITS:
         raise ValueError(f"wait must be one of {', '.join(WAITS)}, got {wait!r}")
-    if collector not in COLLECTORS:
-        raise ValueError(f"collector must be one of {', '.join(COLLECTORS)}, "
-                         f"got {collector!r}")
-    enabled = gc.isenabled()
-    if collector == "frozen":
-        gc.collect()
-        gc.freeze()
-        gc.disable()
-    before = [stats["collections"] for stats in gc.get_stats()]
-    try:
-        report = _loop(seconds, config, wait)
-    finally:
-        after = [stats["collections"] for stats in gc.get_stats()]
-        if collector == "frozen":
-            gc.unfreeze()
-            if enabled:
-                gc.enable()
-    report.collector = collector
-    report.collections = (after[0] - before[0], after[1] - before[1], after[2] - before[2])
-    return report
-
-
-def _loop(seconds: float, config: Path, wait: str) -> LoopReport:
-    """Run :func:`run`'s loop, the collector already set."""
     exp = experiment(config)
     controller = exp.controller()
     dt, path_end = exp.options.dt, exp.initial.t + exp.duration
@@ -304,30 +260,24 @@ def summary(report: LoopReport) -> str:
         f"step time: median {np.median(us):.0f} us, p99 {np.percentile(us, 99):.0f} us, "
         f"max {us.max():.0f} us",
         f"slowed steps (scale policy): {int(report.slowed.sum())} of {report.steps}",
-        f"garbage collector: {'frozen and off' if report.collector == 'frozen' else 'on'} "
-        f"during the loop (collections by generation: "
-        f"{', '.join(str(c) for c in report.collections)})",
         why(report),
     ]
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line: ``--seconds``, ``--wait spin|sleep``, ``--gc frozen|on``."""
+    """Command line: ``--seconds`` of ticks (default 60), ``--wait spin|sleep``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0,
                         help="wall time to run at 1 kHz [s] (default 60)")
     parser.add_argument("--wait", choices=WAITS, default="spin",
                         help="check the clock until each tick (spin, the default: the "
                              "loop keeps its core) or sleep until shortly before it")
-    parser.add_argument("--gc", choices=COLLECTORS, default="frozen",
-                        help="Python's garbage collector during the loop: frozen and off "
-                             "(the default) or on, as usual")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         parser.error("--seconds must be a positive number")
     try:
-        report = run(args.seconds, wait=args.wait, collector=args.gc)
+        report = run(args.seconds, wait=args.wait)
     except dq.RobotModelError as err:  # the Panda comes from example-robot-data
         print(f"{err}\nInstall it with: pip install 'dualarm-qp[robots]'", file=sys.stderr)
         return 1

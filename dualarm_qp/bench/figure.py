@@ -41,7 +41,7 @@ def _num(row: dict[str, Any], col: str) -> float:
     v = row.get(col)
     try:
         return float(v) if v is not None else float("nan")
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return float("nan")
 
 

@@ -329,6 +329,8 @@ class DualArmController:
             sigma_l = float(state.sigma_leader)
         except (TypeError, ValueError) as err:
             raise InvalidInputError(f"state t and sigma must be numbers: {err}") from err
+        except OverflowError as err:  # an integer beyond the largest float
+            raise NonFiniteError("state t, sigma or sigma_leader") from err
         if not (math.isfinite(t) and math.isfinite(sigma) and math.isfinite(sigma_l)):
             raise NonFiniteError("state t, sigma or sigma_leader")
         if (q_l is state.q_l and q_f is state.q_f and t is state.t and sigma is state.sigma

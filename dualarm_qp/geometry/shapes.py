@@ -249,6 +249,9 @@ def _positive(value: Any, name: str) -> float:
         x = float(value)
     except (TypeError, ValueError) as err:
         raise InvalidInputError(f"{name} must be a number [m], got {value!r}") from err
+    except OverflowError as err:  # an integer beyond the largest float
+        raise InvalidInputError(f"{name} must be finite and positive [m], got an integer "
+                                "beyond the largest float") from err
     if not np.isfinite(x) or x <= 0.0:
         raise InvalidInputError(f"{name} must be finite and positive [m], got {x!r}")
     return x

@@ -621,7 +621,7 @@ def _limit(value: Any, name: str, n: int) -> FloatArray:
     """Limits may be infinite but not NaN; a scalar is broadcast to all joints."""
     try:
         arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:
         raise InvalidInputError(f"{name} must be numbers: {err}") from err
     if arr.ndim == 0:
         arr = np.full(n, float(arr))

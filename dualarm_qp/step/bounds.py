@@ -82,7 +82,7 @@ def _step(dt: float) -> float:
     """Return ``dt`` as a positive float [s], or raise InvalidInputError."""
     try:
         value = float(dt)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         value = math.nan
     if not (value > 0.0 and math.isfinite(value)):
         raise InvalidInputError(f"dt must be a positive number of seconds, got {dt!r}")

@@ -66,7 +66,7 @@ def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> Float
             given = np.asarray(x)
             if not np.iscomplexobj(given):
                 out = np.ascontiguousarray(given, dtype=np.float64)
-        except (TypeError, ValueError) as err:
+        except (TypeError, ValueError, OverflowError) as err:
             raise InvalidInputError(f"{name} is not numbers: {err}") from err
         if np.iscomplexobj(given):
             raise InvalidInputError(f"{name} is not real numbers (complex)")
@@ -163,7 +163,7 @@ class LimitStack:
         try:
             G_k = np.atleast_2d(np.asarray(G, dtype=np.float64))
             h_k = np.atleast_1d(np.asarray(h, dtype=np.float64))
-        except (TypeError, ValueError) as err:
+        except (TypeError, ValueError, OverflowError) as err:
             raise InvalidInputError(f"{name} are not numbers: {err}") from err
         if h_k.ndim != 1 or G_k.shape != (h_k.shape[0], self.n):
             raise ShapeError(name, (h_k.shape[0] if h_k.ndim == 1 else -1, self.n),
@@ -216,7 +216,7 @@ class LimitStack:
             return self._no_bounds
         try:
             out = np.array(bounds, dtype=np.float64)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             out = np.zeros(0)
         if out.shape != (len(bounds), n):
             for bound, k in zip(bounds, ids, strict=True):
@@ -225,7 +225,7 @@ class LimitStack:
                     raise ShapeError(name, (n,), np.shape(bound))
                 try:
                     np.asarray(bound, dtype=np.float64)
-                except (TypeError, ValueError) as err:
+                except (TypeError, ValueError, OverflowError) as err:
                     raise InvalidInputError(f"{name} are not numbers: {err}") from err
             raise InvalidInputError(f"the limits' {side} bounds do not stack into "
                                     f"({len(bounds)}, {n}) numbers")

@@ -114,7 +114,7 @@ class ObjectLoad:
     def __post_init__(self) -> None:
         try:
             m = float(self.mass)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             m = math.nan
         if not (math.isfinite(m) and m > 0.0):
             raise InvalidInputError(f"mass must be a finite number > 0 kg, got {self.mass!r}")

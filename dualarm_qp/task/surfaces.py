@@ -62,7 +62,7 @@ def _as_bound(value: Any, name: str) -> FloatArray:
     """Return a (3,) box bound [m]; +-inf allowed, NaN not."""
     try:
         arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError) as err:
         raise InvalidInputError(f"{name} must be an array of numbers: {err}") from err
     if arr.shape != (3,):
         raise ShapeError(name, (3,), arr.shape)

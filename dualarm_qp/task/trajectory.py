@@ -264,7 +264,7 @@ class WaypointTrajectory(Trajectory):
             )
         try:
             Ps = np.asarray(poses, dtype=np.float64)
-        except (TypeError, ValueError) as err:
+        except (TypeError, ValueError, OverflowError) as err:
             raise InvalidInputError(f"poses must be an (N, 4, 4) array: {err}") from err
         if Ps.shape != (ts.size, 4, 4):
             raise ShapeError("poses", (ts.size, 4, 4), Ps.shape)

@@ -16,8 +16,11 @@
 #include <cstdint>
 #include <type_traits>
 
-// NumPy's C API, for the arrays the kernel returns (out() below).
-#define NPY_NO_DEPRECATED_API NPY_1_19_API_VERSION
+// NumPy's C API, for the arrays the kernel returns (out() below). Built with NumPy 2's
+// headers (CMakeLists.txt checks), for NumPy 1.23 and later at run time (the project
+// requires 1.24 or later): a later default of the headers would refuse NumPy 1.x.
+#define NPY_NO_DEPRECATED_API NPY_1_23_API_VERSION
+#define NPY_TARGET_VERSION NPY_1_23_API_VERSION
 #include <numpy/arrayobject.h>
 
 #include "boxes.hpp"
@@ -66,12 +69,20 @@ namespace {
 // NumPy's type number of an output's scalar.
 template <typename S>
 constexpr int numpy_type() {
-  if constexpr (std::is_same_v<S, double>) return NPY_DOUBLE;
-  if constexpr (std::is_same_v<S, bool>) return NPY_BOOL;
-  if constexpr (std::is_same_v<S, std::int8_t>) return NPY_INT8;
-  if constexpr (std::is_same_v<S, std::uint8_t>) return NPY_UINT8;
-  if constexpr (std::is_same_v<S, std::int64_t>) return NPY_INT64;
-  if constexpr (std::is_same_v<S, int>) return NPY_INT32;
+  if constexpr (std::is_same_v<S, double>) {
+    return NPY_DOUBLE;
+  } else if constexpr (std::is_same_v<S, bool>) {
+    return NPY_BOOL;
+  } else if constexpr (std::is_same_v<S, std::int8_t>) {
+    return NPY_INT8;
+  } else if constexpr (std::is_same_v<S, std::uint8_t>) {
+    return NPY_UINT8;
+  } else if constexpr (std::is_same_v<S, std::int64_t>) {
+    return NPY_INT64;
+  } else {
+    static_assert(std::is_same_v<S, std::int32_t>, "out(): a scalar type NumPy is not told");
+    return NPY_INT32;
+  }
 }
 
 // A result handed to Python without a copy: the Eigen value is moved to the heap and a
@@ -87,7 +98,9 @@ nb::object out(M&& value) {
   npy_intp shape[2] = {static_cast<npy_intp>(nd == 1 ? value.size() : value.rows()),
                        static_cast<npy_intp>(nd == 1 ? 1 : value.cols())};
   if (value.size() == 0) {  // nothing to view: NumPy's own empty array
-    return nb::steal(PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0));
+    PyObject* empty = PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0);
+    if (empty == nullptr) throw nb::python_error();
+    return nb::steal(empty);
   }
   T* heap = new T(std::forward<M>(value));
   PyObject* owner = PyCapsule_New(heap, nullptr, [](PyObject* capsule) {

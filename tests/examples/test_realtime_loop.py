@@ -98,29 +98,3 @@ def test_the_loop_sleeps_between_ticks_only_when_asked(monkeypatch):
     with pytest.raises(SystemExit) as exit_info:  # the command line refuses it too
         example["main"](["--wait", "nap", "--seconds", "0.1"])
     assert exit_info.value.code == 2
-
-
-def test_the_collector_is_frozen_and_off_during_the_loop_and_restored_after() -> None:
-    import gc
-
-    example = runpy.run_path(str(ROOT / "examples" / "realtime_loop.py"))
-    assert gc.isenabled()
-    frozen_before = gc.get_freeze_count()
-    report = example["run"](0.3)
-    assert report.collector == "frozen" and report.collections == (0, 0, 0)
-    assert gc.isenabled() and gc.get_freeze_count() == frozen_before
-    assert ("garbage collector: frozen and off during the loop (collections by generation: "
-            "0, 0, 0)") in example["summary"](report)
-    gc.disable()  # a caller's choice is kept too
-    try:
-        example["run"](0.1)
-        assert not gc.isenabled()
-    finally:
-        gc.enable()
-    on = example["run"](0.3, collector="on")
-    assert on.collector == "on" and "garbage collector: on during" in example["summary"](on)
-    with pytest.raises(ValueError, match="frozen, on"):
-        example["run"](0.1, collector="off")
-    with pytest.raises(SystemExit) as exit_info:
-        example["main"](["--gc", "off", "--seconds", "0.1"])
-    assert exit_info.value.code == 2
