@@ -397,8 +397,6 @@ NB_MODULE(_kernel, m) {
   nb::class_<dqk::WaypointPath>(m, "WaypointPath",
                                 "A waypoint path with minimum-jerk timing (WaypointTrajectory).")
       .def(nb::init<const std::vector<double>&, const dqk::RowMat&>(), "times"_a, "poses"_a)
-      .def_prop_ro("t0", &dqk::WaypointPath::t0)
-      .def_prop_ro("tf", &dqk::WaypointPath::tf)
       .def("pose", &dqk::WaypointPath::pose, "t"_a, "T"_a.noconvert(),
            "T_world_object(t) into T (4, 4); the first or last waypoint outside [t0, tf].")
       .def("derivative", &dqk::WaypointPath::derivative, "t"_a, "order"_a,

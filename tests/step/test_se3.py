@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from dualarm_qp.se3 import compose_rows, pose_error
+from dualarm_qp.se3 import pose_error
 
 
 def unit(rng: np.random.Generator) -> np.ndarray:
@@ -98,8 +98,6 @@ def test_se3_composition_and_inverse_match_matrices() -> None:
         np.testing.assert_allclose((sA * sA.inverse()).homogeneous, np.eye(4),
                                    rtol=0, atol=1e-12)
         np.testing.assert_allclose(pin.exp6(pin.log6(sA)).homogeneous, A, rtol=0, atol=1e-10)
-        np.testing.assert_allclose(compose_rows(A.tolist(), B[:3].tolist()), (A @ B)[:3],
-                                   rtol=0, atol=1e-12)
 
 
 def test_pose_error_convention() -> None:
