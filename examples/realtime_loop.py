@@ -26,12 +26,24 @@ ticks that got no new command on time.
 Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a short
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
 one core (all of it with ``--wait spin``); other work on the machine shows as misses.
+
+``--realtime`` (Linux) runs the loop as a real-time control process is run: on one core
+of its own choosing (the last), with its memory locked in RAM (no page faults in a
+step) and at a real-time priority (``SCHED_FIFO``), so that ordinary processes no longer
+take its core when its tick comes. It needs the right to do so (root, or the
+``CAP_SYS_NICE`` and ``CAP_IPC_LOCK`` capabilities, or an ``rtprio`` limit); without it
+the example says what was refused and stops. It waits by sleeping: Linux lets
+real-time processes have at most ``kernel.sched_rt_runtime_us`` of every second
+(950,000 us by default), and a loop that spins through every tick would be stopped for
+the remaining 50 ms of each second.
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -50,6 +62,11 @@ PERIOD = 1e-3  # tick [s]: 1 kHz
 PARTS = ("kinematics", "assembly", "solve", "verify")
 #: How the loop waits for a tick: check the clock until it is due, or sleep first.
 WAITS = ("spin", "sleep")
+#: The real-time priority of ``--realtime`` (SCHED_FIFO, 1 to 99; below the kernel's own
+#: interrupt threads, at 50).
+PRIORITY = 40
+#: mlockall's flags: the pages mapped now and those mapped later (Linux).
+MCL_CURRENT, MCL_FUTURE = 1, 2
 
 
 @dataclass
@@ -156,14 +173,52 @@ def wait_until(t: float, wait: str = "spin") -> None:
         pass
 
 
-def run(seconds: float, config: Path = CONFIG, wait: str = "spin") -> LoopReport:
+def rt_throttled() -> bool:
+    """Whether Linux limits real-time processes to a share of each second (the default)."""
+    try:
+        runtime = Path("/proc/sys/kernel/sched_rt_runtime_us").read_text().strip()
+    except OSError:
+        return True
+    return runtime != "-1"
+
+
+def go_realtime(priority: int = PRIORITY) -> str:
+    """Put this process on one core, lock its memory and give it a real-time priority.
+
+    Returns one line saying what was set. Raises OSError (``PermissionError`` without
+    the right to do it) naming the step that was refused; nothing before it is undone
+    (the process ends).
+    """
+    if not hasattr(os, "sched_setscheduler"):
+        raise OSError("real-time scheduling needs Linux (os.sched_setscheduler)")
+    core = max(os.sched_getaffinity(0))
+    try:
+        os.sched_setaffinity(0, {core})
+    except OSError as err:
+        raise OSError(err.errno, f"the core (sched_setaffinity {core}): {err.strerror}"
+                      ) from None
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
+        err = ctypes.get_errno()
+        raise OSError(err, f"locking the memory (mlockall): {os.strerror(err)}")
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except OSError as err:
+        raise OSError(err.errno, f"the real-time priority (SCHED_FIFO {priority}): "
+                                 f"{err.strerror}") from None
+    return f"real time: core {core} alone, memory locked, SCHED_FIFO priority {priority}"
+
+
+def run(seconds: float, config: Path = CONFIG, wait: str = "spin",
+        exp: dq.Experiment | None = None) -> LoopReport:
     """Run the 1 kHz loop for ``seconds`` of ticks and return what it measured.
 
-    ``wait`` is how the loop waits for each tick (:data:`WAITS`, :func:`wait_until`).
+    ``wait`` is how the loop waits for each tick (:data:`WAITS`, :func:`wait_until`);
+    ``exp`` the experiment of ``config`` made already (:func:`experiment`).
     """
     if wait not in WAITS:
         raise ValueError(f"wait must be one of {', '.join(WAITS)}, got {wait!r}")
-    exp = experiment(config)
+    exp = experiment(config) if exp is None else exp
     controller = exp.controller()
     dt, path_end = exp.options.dt, exp.initial.t + exp.duration
     ticks = max(1, round(seconds / PERIOD))
@@ -266,22 +321,37 @@ def summary(report: LoopReport) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: ``--seconds`` of ticks (default 60), ``--wait spin|sleep``."""
+    """Command line: ``--seconds`` of ticks (default 60), ``--wait spin|sleep``, ``--realtime``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0,
                         help="wall time to run at 1 kHz [s] (default 60)")
-    parser.add_argument("--wait", choices=WAITS, default="spin",
+    parser.add_argument("--wait", choices=WAITS, default=None,
                         help="check the clock until each tick (spin, the default: the "
-                             "loop keeps its core) or sleep until shortly before it")
+                             "loop keeps its core) or sleep until shortly before it "
+                             "(the default with --realtime)")
+    parser.add_argument("--realtime", action="store_true",
+                        help="run on one core with locked memory at a real-time priority "
+                             "(Linux; needs root or CAP_SYS_NICE and CAP_IPC_LOCK)")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         parser.error("--seconds must be a positive number")
+    wait = args.wait or ("sleep" if args.realtime else "spin")
+    if args.realtime and wait == "spin" and rt_throttled():
+        parser.error("--realtime waits by sleep: Linux gives real-time processes at most "
+                     "kernel.sched_rt_runtime_us of each second, and a loop spinning "
+                     "through every tick would be stopped for the rest of each second")
     try:
-        report = run(args.seconds, wait=args.wait)
+        exp = experiment()  # before the real-time set-up: the model loads normally
     except dq.RobotModelError as err:  # the Panda comes from example-robot-data
         print(f"{err}\nInstall it with: pip install 'dualarm-qp[robots]'", file=sys.stderr)
         return 1
-    print(summary(report))
+    if args.realtime:
+        try:
+            print(go_realtime())
+        except OSError as err:
+            print(f"--realtime: refused: {err.strerror or err}", file=sys.stderr)
+            return 1
+    print(summary(run(args.seconds, wait=wait, exp=exp)))
     return 0
 
 

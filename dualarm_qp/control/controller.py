@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from .._frozen import made
 from ..errors import (
     DualArmError,
     InfeasibleStepError,
@@ -417,18 +418,19 @@ class DualArmController:
             self._x_applied = x
         scale = scale_max * min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
         ql_dot, qf_dot, m, m_leader = self._builder.layout.split(x)
-        return self._done(ControlOutput(
-            ql_dot=ql_dot,
-            qf_dot=qf_dot,
-            m=m,
-            m_leader=m_leader,
-            scale=scale,
-            status=status,
-            solution=solution,
-            build=build,
-            times=StepTimes(build.kinematics_time, build.assembly_time, t5 - t4, t6 - t5),
-            applied=usable_x,
-        ))
+        # Every field is the step's own, of its documented type: made unchecked.
+        return self._done(made(ControlOutput, {
+            "ql_dot": ql_dot,
+            "qf_dot": qf_dot,
+            "m": m,
+            "m_leader": m_leader,
+            "scale": scale,
+            "status": status,
+            "solution": solution,
+            "build": build,
+            "times": StepTimes(build.kinematics_time, build.assembly_time, t5 - t4, t6 - t5),
+            "applied": usable_x,
+        }))
 
     def _within_budget(self, la: Lookahead, state: DualArmState, build: StepBuild,
                        solution: StepSolution, build_x: FloatArray,

@@ -257,18 +257,24 @@ def _of_problem(problem: StepProblem, key: str, make: Callable[[FloatArray], _T]
 
 def problem_basis(problem: StepProblem) -> NullBasis:
     """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
-    return _of_problem(problem, "basis", null_basis)
+    value = problem._cache.get("basis")
+    if type(value) is NullBasis:
+        return value
+    basis = null_basis(problem.A) if value is None else _as_basis(value)
+    problem._cache["basis"] = basis
+    return basis
 
 
 def keep_basis(problem: StepProblem, basis: tuple[FloatArray, FloatArray, int, float, bool]
-               ) -> NullBasis:
+               ) -> None:
     """Keep ``kernel.basis(problem.A)``'s tuple as :func:`problem_basis`'s answer.
 
     For a kernel call that computed the basis on the way (the exact solver's solve and
-    certificate in one call).
+    certificate in one call). The tuple is kept as it is and made a :class:`NullBasis`
+    when first read: a step whose answer needs no second look at the basis (most of
+    them) does not pay for the object.
     """
-    out = problem._cache["basis"] = _as_basis(basis)
-    return out
+    problem._cache["basis"] = basis
 
 
 def problem_factor(problem: StepProblem) -> Factor:

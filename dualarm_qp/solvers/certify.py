@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._frozen import made
 from ..step.problem import StepProblem
 from ._affine import cost_arrays, problem_basis
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
@@ -157,8 +158,9 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
         return replace(claim, **fields, solve_time=solve_time)
     # Every field: the verdict's, and the claim's scale, solver and extras (a direct
     # construction costs a third of dataclasses.replace, once per step).
-    return StepSolution(**fields, solve_time=solve_time, scale=claim.scale,
-                        solver=claim.solver, extras=claim.extras)
+    fields.update(solve_time=solve_time, scale=claim.scale, solver=claim.solver,
+                  extras=claim.extras)
+    return made(StepSolution, fields)
 
 
 def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatArray,

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._frozen import made
 from ..step.problem import StepProblem
 from ._affine import cost_arrays, keep_basis, problem_basis
 from ._util import empty_box_answer, empty_box_failure
@@ -124,8 +125,9 @@ class NullspaceSolver:
                 extras: dict[str, Any] = {"nullity": nullity}
                 if iterations >= 0:
                     extras["iterations"] = iterations
-                return StepSolution(**fields, solve_time=time.perf_counter() - start,
-                                    solver=self.name, extras=extras)
+                fields.update(scale=1.0, solve_time=time.perf_counter() - start,
+                              solver=self.name, extras=extras)
+                return made(StepSolution, fields)  # every field checked: made unchecked
         claim = self._claim(problem, code, x, rows, nullity, iterations, start)
         if reading is None:  # not an optimum: the claim is certified as it is
             return certify(problem, claim, tol, claims_bounds=claims_bounds)

@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._frozen import made
 from .._validate import as_number
 from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
 from ..task.carry import CarryKinematics, CarryModel
@@ -533,8 +534,11 @@ class StepBuilder:
             G=G, h=h, n_grasp=self.layout.n_grasp, x_prev=x_prev, names=self.layout.names,
             row_names=tuple(row_names), eq_names=CarryTasks.row_names, lower_by=lower_by,
             upper_by=upper_by, build_time=t2 - t0)
-        return StepBuild(problem, recovering, e[6:], e[:6], carry, T[12:16], J_f,
-                         kinematics_time, t2 - t0 - kinematics_time, support_force, context)
+        return made(StepBuild, {
+            "problem": problem, "recovering": recovering, "closure_error": e[6:],
+            "leader_error": e[:6], "carry": carry, "T_f": T[12:16], "J_f": J_f,
+            "kinematics_time": kinematics_time, "assembly_time": t2 - t0 - kinematics_time,
+            "support_force": support_force, "_context": context})
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

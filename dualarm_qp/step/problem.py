@@ -27,13 +27,14 @@ from __future__ import annotations
 import copy
 import math
 import operator
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._frozen import made
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
 if TYPE_CHECKING:
@@ -243,12 +244,7 @@ class StepProblem:
         kernel's, and every array a C-ordered float64 of the right shape. Anything
         else builds a problem with the checking constructor.
         """
-        if parts.keys() != _INIT_FIELD_SET:
-            raise TypeError(f"StepProblem.assembled takes every init field by keyword: "
-                            f"{', '.join(sorted(_INIT_FIELD_SET ^ parts.keys()))}")
-        self = object.__new__(cls)
-        vars(self).update(parts, _cache={})  # a frozen dataclass's fields, set once
-        return self
+        return made(cls, parts)
 
     # -- sizes ---------------------------------------------------------------------------
     @property
@@ -360,23 +356,25 @@ class StepProblem:
     def inequalities(self) -> Inequalities:
         """Every finite inequality as unit-norm rows ``C x <= e`` (computed once)."""
         cached = self._cache.get("ineq")
-        if cached is not None:
+        if type(cached) is Inequalities:
             return cached
         # Built by the compiled kernel (src/kernel/rows.cpp), which the exact solver uses.
-        return self.keep_inequalities(*kernel.inequalities(self.lower, self.upper, self.G,
-                                                           self.h))
-
-    def keep_inequalities(self, C: FloatArray, e: FloatArray, kind: NDArray[np.int8],
-                          index: NDArray[np.int64]) -> Inequalities:
-        """Keep the kernel's rows of this problem (``kernel.inequalities``'s tuple).
-
-        For a kernel call that built them on the way (the exact solver's solve and
-        certificate in one call): :meth:`inequalities` then returns them.
-        """
+        C, e, kind, index = (kernel.inequalities(self.lower, self.upper, self.G, self.h)
+                             if cached is None else cached)
         out = Inequalities(C, e, kind, index,
                            Names(self.names, self.row_names, self.lower_by, self.upper_by))
         self._cache["ineq"] = out
         return out
+
+    def keep_inequalities(self, C: FloatArray, e: FloatArray, kind: NDArray[np.int8],
+                          index: NDArray[np.int64]) -> None:
+        """Keep the kernel's rows of this problem (``kernel.inequalities``'s tuple).
+
+        For a kernel call that built them on the way (the exact solver's solve and
+        certificate in one call): :meth:`inequalities` then returns them, made an
+        :class:`Inequalities` when first read.
+        """
+        self._cache["ineq"] = (C, e, kind, index)
 
     def row_violation(self, x: FloatArray) -> float:
         """Largest violation of a general row, ``max((G x - h) / |G_i|, 0)`` [units of x]."""
@@ -440,8 +438,5 @@ class StepProblem:
                    h=np.zeros(0) if qp.h is None else np.asarray(qp.h, dtype=float),
                    **fields)
 
-
-#: The fields :meth:`StepProblem.assembled` sets (every init field).
-_INIT_FIELD_SET = frozenset(f.name for f in fields(StepProblem) if f.init)
 
 __all__ = ["Inequalities", "Names", "StepProblem"]

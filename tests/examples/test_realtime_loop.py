@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import re
 import runpy
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -97,4 +99,42 @@ def test_the_loop_sleeps_between_ticks_only_when_asked(monkeypatch):
         example["run"](0.2, wait="nap")
     with pytest.raises(SystemExit) as exit_info:  # the command line refuses it too
         example["main"](["--wait", "nap", "--seconds", "0.1"])
+    assert exit_info.value.code == 2
+
+
+def _example_main(*args: str, refuse: bool = False) -> subprocess.CompletedProcess[str]:
+    """Run the example's command line in a process of its own (it may go real-time)."""
+    code = ("import os, runpy, sys\n"
+            + ("def refused(*a):\n    raise PermissionError(1, 'Operation not permitted')\n"
+               "os.sched_setscheduler = refused\n" if refuse else "")
+            + f"ex = runpy.run_path({str(ROOT / 'examples' / 'realtime_loop.py')!r})\n"
+            + f"sys.exit(ex['main']({list(args)!r}))\n")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=False)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="real-time scheduling is Linux's")
+def test_realtime_runs_the_loop_or_says_what_was_refused():
+    done = _example_main("--realtime", "--seconds", "0.3")
+    if done.returncode == 0:  # allowed here (root, or the capabilities)
+        first = done.stdout.splitlines()[0]
+        assert re.fullmatch(r"real time: core \d+ alone, memory locked, SCHED_FIFO "
+                            r"priority \d+", first), done.stdout
+        assert "ticks: 300 (" in done.stdout and "waiting by sleep" in done.stdout
+    else:
+        assert done.returncode == 1, done.stderr
+        assert done.stderr.startswith("--realtime: refused: "), done.stderr
+    refused = _example_main("--realtime", "--seconds", "0.3", refuse=True)
+    assert refused.returncode == 1 and "Traceback" not in refused.stderr
+    assert re.match(r"--realtime: refused: (the real-time priority \(SCHED_FIFO \d+\): "
+                    r"Operation not permitted|.+)", refused.stderr), refused.stderr
+    assert "ticks:" not in refused.stdout  # no loop ran
+
+
+def test_realtime_will_not_spin_through_the_throttle():
+    example = runpy.run_path(str(ROOT / "examples" / "realtime_loop.py"))
+    if not example["rt_throttled"]():
+        pytest.skip("real-time throttling is off on this machine")
+    with pytest.raises(SystemExit) as exit_info:
+        example["main"](["--realtime", "--wait", "spin", "--seconds", "0.1"])
     assert exit_info.value.code == 2

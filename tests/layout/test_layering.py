@@ -13,6 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "dualarm_qp"
 LAYERS = {
     "errors": 0, "_validate": 0, "se3": 0, "poses": 0, "_io": 0, "_signals": 0,
     "_compiled": 0, "_kernel": 0,  # the compiled kernel and its loader (numbers only)
+    "_frozen": 0,  # frozen dataclasses made from checked values
     "kinematics": 1,
     "task": 2, "geometry": 2,  # shapes, distances, capsules fitted to arms (kinematics)
     "collision": 2,  # the bodies and pairs of a task, their clearance (geometry)

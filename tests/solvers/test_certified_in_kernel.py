@@ -99,14 +99,34 @@ def test_an_empty_box_gives_the_two_calls_answer() -> None:
     assert one.status is Status.INFEASIBLE
 
 
-def test_the_call_keeps_the_basis_and_rows_it_computed() -> None:
+def test_the_call_keeps_the_basis_and_rows_it_computed(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from dualarm_qp.solvers import _affine
+    from dualarm_qp.step import problem as problem_module
+
     problem = random_problem(np.random.default_rng(5))
     NullspaceSolver().solve_certified(problem, DEFAULT_TOLERANCE)
-    cached = problem._cache
     ref = fresh(problem)
-    assert np.array_equal(cached["ineq"].C, ref.inequalities().C)
-    from dualarm_qp.solvers._affine import problem_basis
-    assert np.array_equal(cached["basis"].N, problem_basis(ref).N)
+    rows, basis = ref.inequalities(), _affine.problem_basis(ref)
+
+    def computed_again(*_: object) -> None:
+        raise AssertionError("computed again: the call's own was not kept")
+
+    # Kept as the kernel gave them, made objects when first read, never computed again.
+    monkeypatch.setattr(problem_module.kernel, "inequalities", computed_again)
+    monkeypatch.setattr(_affine.kernel, "basis", computed_again)
+    for _ in range(2):
+        kept = problem.inequalities()
+        assert kept is problem.inequalities()
+        for name in ("C", "e", "kind", "index"):
+            assert np.array_equal(getattr(kept, name), getattr(rows, name))
+        assert kept.labels(list(range(len(kept.e)))) == rows.labels(list(range(len(rows.e))))
+        kept_basis = _affine.problem_basis(problem)
+        assert kept_basis is _affine.problem_basis(problem)
+        assert np.array_equal(kept_basis.N, basis.N) and np.array_equal(kept_basis.P, basis.P)
+        assert (kept_basis.rank, kept_basis.sigma_max, kept_basis.qr) == (
+            basis.rank, basis.sigma_max, basis.qr)
+        problem = problem.scaled(0.5)  # a scaled copy carries them over
 
 
 def test_the_registry_solver_takes_the_kernel_call(monkeypatch: pytest.MonkeyPatch) -> None:
