@@ -109,6 +109,10 @@ class LoopReport:
         The decision variables.
     wait : str
         How the loop waited for each tick (:data:`WAITS`).
+    steal : ndarray or None, shape (cores,)
+        Per core, the time the host gave to other virtual machines while this one
+        wanted to run, during the loop [s] (Linux's steal time, counted in 10 ms
+        units); None where the system does not say.
     """
 
     seconds: float
@@ -126,6 +130,7 @@ class LoopReport:
     rates: np.ndarray
     names: tuple[str, ...]
     wait: str = "spin"
+    steal: np.ndarray | None = None
 
     @property
     def steps(self) -> int:
@@ -157,6 +162,18 @@ class LoopReport:
 def experiment(config: Path = CONFIG) -> dq.Experiment:
     """Return the experiment of ``config`` sampled at the loop's 1 ms."""
     return dq.build_experiment(dq.load_config(config), str(config), dt=PERIOD)
+
+
+def steal_times() -> np.ndarray | None:
+    """Each core's steal time so far [s] (``/proc/stat``), or None where there is none."""
+    try:
+        lines = Path("/proc/stat").read_text().splitlines()
+        ticks = [int(line.split()[8]) for line in lines
+                 if line.startswith("cpu") and line[3:4].isdigit()]
+        hz = os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, AttributeError):
+        return None
+    return np.array(ticks, dtype=float) / hz if ticks else None
 
 
 def wait_until(t: float, wait: str = "spin") -> None:
@@ -232,6 +249,7 @@ def run(seconds: float, config: Path = CONFIG, wait: str = "spin",
     state = exp.initial
     controller.step(state)  # one step before the clock starts (first-call set-ups)
     controller.reset()
+    steal_before = steal_times()
     t0 = time.perf_counter() + PERIOD
     k = 0
     while k < ticks:
@@ -270,9 +288,12 @@ def run(seconds: float, config: Path = CONFIG, wait: str = "spin",
             if k >= ticks or t0 + k * PERIOD >= end:
                 break
     wall = time.perf_counter() - t0
+    steal_after = steal_times()
+    steal = (steal_after - steal_before if steal_before is not None and steal_after is not None
+             and steal_after.shape == steal_before.shape else None)
     return LoopReport(seconds, wall, ticks, passes, stopped, ran, step_time[ran],
                       cpu_time[ran], late_start[ran], finish[ran], split[ran], slowed[ran], rates,
-                      tuple(controller.names), wait)
+                      tuple(controller.names), wait, steal)
 
 
 def why(report: LoopReport) -> str:
@@ -317,6 +338,11 @@ def summary(report: LoopReport) -> str:
         f"slowed steps (scale policy): {int(report.slowed.sum())} of {report.steps}",
         why(report),
     ]
+    if report.steal is not None:
+        per_core = ", ".join(f"{1e3 * v:.0f}" for v in report.steal)
+        lines.append(f"steal: the host gave {1e3 * report.steal.sum():.0f} ms of this "
+                     f"machine's cores to other virtual machines during the loop (per core: "
+                     f"{per_core} ms; counted in 10 ms units)")
     return "\n".join(lines)
 
 

@@ -61,7 +61,19 @@ def test_the_printed_report_is_the_measured_one(loop):
     median = re.search(r"step time: median (\d+) us", text)
     assert median is not None
     assert float(median.group(1)) == pytest.approx(np.median(report.step_time) * 1e6, abs=0.5)
-    assert text.splitlines()[-1].startswith("why: ")
+    lines = text.splitlines()
+    assert sum(line.startswith("why: ") for line in lines) == 1
+    if report.steal is None:
+        assert lines[-1].startswith("why: ")
+    else:  # Linux: the host's steal time per core, from /proc/stat
+        assert report.steal.ndim == 1 and len(report.steal) >= 1
+        assert (report.steal >= 0).all()
+        steal = re.fullmatch(r"steal: the host gave (\d+) ms .*\(per core: ([\d, ]+) ms; "
+                             r"counted in 10 ms units\)", lines[-1])
+        assert steal is not None, lines[-1]
+        assert float(steal.group(1)) == pytest.approx(1e3 * report.steal.sum(), abs=0.5)
+        assert [float(v) for v in steal.group(2).split(", ")] == pytest.approx(
+            1e3 * report.steal, abs=0.5)
 
 
 def test_the_integrated_rates_keep_the_speed_limits(loop):
