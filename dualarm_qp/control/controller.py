@@ -394,7 +394,7 @@ class DualArmController:
         t6 = time.perf_counter()
 
         status = solution.status
-        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovering.any():
+        if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovers:
             status = Status.RECOVERING
             solution = replace(solution, status=status)
         # Every answer was certified once, in the solve: nothing here checks it again.

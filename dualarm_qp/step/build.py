@@ -81,6 +81,8 @@ class StepBuild:
         The problem handed to the solver (rows: leader task, then closure).
     recovering : ndarray of bool, shape (n,)
         Variables that start outside their range (the box forces them back).
+    recovers : bool
+        Whether any does (the kernel says so with the array).
     closure_error : ndarray, shape (6,)
         ``[dp; dw]`` from the follower's tool to its target [m, rad].
     leader_error : ndarray, shape (6,)
@@ -113,6 +115,7 @@ class StepBuild:
     support_force: float = math.nan
     _context: StepContext | Callable[[tuple[float, float] | None], StepContext] | None = (
         field(default=None, repr=False, compare=False))
+    _recovers: bool | None = field(default=None, repr=False, compare=False)
     _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
                                                    compare=False)
 
@@ -125,6 +128,12 @@ class StepBuild:
         made = ctx(self._sigma_min)  # the singular values, if read, carry over
         object.__setattr__(self, "_context", made)  # a cache, on a frozen build
         return made
+
+    @property
+    def recovers(self) -> bool:
+        """Whether some variable starts outside its range (``recovering.any()``)."""
+        flag = self._recovers  # the kernel's, given with the array
+        return bool(self.recovering.any()) if flag is None else flag
 
     @property
     def sigma_min(self) -> tuple[float, float]:
@@ -485,7 +494,7 @@ class StepBuilder:
         parts, kinematics_time, support_force = self._prepared(state, q_l, q_f, sigmas,
                                                                scale_max, x0, t0)
         (T, J_tool, J_object, J_target, J_f, e, _, _, A, b, finite, center, compiled_lo,
-         compiled_hi, box, recovering, _) = parts
+         compiled_hi, box, recovering, recovers, _) = parts
         if not finite:
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
         carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
@@ -538,7 +547,7 @@ class StepBuilder:
             "problem": problem, "recovering": recovering, "closure_error": e[6:],
             "leader_error": e[:6], "carry": carry, "T_f": T[12:16], "J_f": J_f,
             "kinematics_time": kinematics_time, "assembly_time": t2 - t0 - kinematics_time,
-            "support_force": support_force, "_context": context})
+            "support_force": support_force, "_context": context, "_recovers": recovers})
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

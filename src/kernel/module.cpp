@@ -335,13 +335,14 @@ NB_MODULE(_kernel, m) {
                 nb::make_tuple(out(std::move(box.lower)), out(std::move(box.upper)),
                                out(std::move(box.lower_by)), out(std::move(box.upper_by)),
                                box.nan_limit),
-                out(std::move(o.recovering)), o.kinematics_seconds);
+                out(std::move(o.recovering)), o.any_recovering, o.kinematics_seconds);
           },
           "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a, "twist"_a,
           "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a,
           "leader_gain"_a, "correction_gain"_a, "exact_orientation"_a,
           "(T, J_tool, J_object, J_target, J_f, e, lo, hi, A, b, equality_finite, "
-          "center, lowers, uppers, box, recovering, kinematics_seconds) at one state; box is "
+          "center, lowers, uppers, box, recovering, any_recovering, kinematics_seconds) at one "
+          "state; box is "
           "intersect_boxes's tuple of the compiled forms' boxes.");
 
   m.def(

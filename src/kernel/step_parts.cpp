@@ -203,6 +203,7 @@ StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
   o.recovering.resize(n_);
   for (Index i = 0; i < n_; ++i) {
     o.recovering(i) = ranged_(i) && (o.lo(i) > 0.0 || o.hi(i) < 0.0);
+    o.any_recovering = o.any_recovering || o.recovering(i);
   }
   return o;
 }

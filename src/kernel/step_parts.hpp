@@ -68,6 +68,7 @@ struct StepPartsOut {
   RowMat uppers;    // (forms, n)
   Box box;          // the compiled forms' boxes intersected (intersect_boxes, pin_rtol)
   BoolVec recovering;  // (n) ranged variables outside their range (lo > 0 or hi < 0)
+  bool any_recovering = false;  // recovering holds a true
   double kinematics_seconds = 0.0;  // the kinematics' share of the call
 };
 

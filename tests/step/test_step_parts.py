@@ -13,6 +13,7 @@ random last command.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -114,6 +115,9 @@ def test_the_one_call_equals_the_parts_one_by_one(case, seed: int, scale: float)
     # the variables that recover.
     _equal_grasp_rates(builder, ctx)
     _equal(build.recovering, ctx.outside & builder._ranged, "recovering")
+    assert build.recovers is bool((ctx.outside & builder._ranged).any())  # the kernel's flag
+    remade = dataclasses.replace(build, _recovers=None)  # a build made without the flag
+    assert remade.recovers is build.recovers
 
 
 def python_era_grasp_rate_range(r, s_star, r_min, r_max, dt: float) -> tuple[float, float]:
@@ -523,3 +527,16 @@ def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
     assert len(ctx.surfaces) == len(ref_surfaces)
     for mine, pose in zip(ctx.surfaces, ref_surfaces, strict=True):
         _equal(mine.pose(state.sigma), pose, "a surface")
+
+
+@pytest.mark.parametrize("name", ["puma_beam_limits", "panda_pair"])
+def test_the_kernel_says_whether_a_variable_recovers(name: str) -> None:
+    exp = _experiment(name)
+    builder = exp.controller().builder
+    s0 = exp.initial
+    start = builder.build(s0)  # the PUMA beam's starts outside two ranges (the paper's)
+    assert start.recovers is bool(start.recovering.any()) is (name == "puma_beam_limits")
+    q_f = s0.q_f.copy()
+    q_f[1] = exp.task.follower.q_max[1] + 0.01  # past its range: it recovers
+    outside = builder.build(dataclasses.replace(s0, q_f=q_f))
+    assert outside.recovering[builder.layout.follower][1] and outside.recovers is True
