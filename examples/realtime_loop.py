@@ -27,15 +27,17 @@ Run it with ``python examples/realtime_loop.py`` (60 s; ``--seconds 5`` for a sh
 run). Needs the robots extra: ``pip install "dualarm-qp[robots]"``. The loop runs on
 one core (all of it with ``--wait spin``); other work on the machine shows as misses.
 
-``--realtime`` (Linux) runs the loop as a real-time control process is run: on one core
-of its own choosing (the last), with its memory locked in RAM (no page faults in a
-step) and at a real-time priority (``SCHED_FIFO``), so that ordinary processes no longer
-take its core when its tick comes. It needs the right to do so (root, or the
-``CAP_SYS_NICE`` and ``CAP_IPC_LOCK`` capabilities, or an ``rtprio`` limit); without it
-the example says what was refused and stops. It waits by sleeping: Linux lets
-real-time processes have at most ``kernel.sched_rt_runtime_us`` of every second
-(950,000 us by default), and a loop that spins through every tick would be stopped for
-the remaining 50 ms of each second.
+``--realtime`` (Linux) runs the loop as a real-time control process is run: pinned to
+one core (the last it may use), with its memory locked in RAM (no page faults in a
+step) and at a real-time priority (``SCHED_FIFO`` 40), so that ordinary processes wait
+when its tick comes (interrupt threads, at 50, still come first). It needs the rights
+to do so: root, or the ``CAP_SYS_NICE`` and ``CAP_IPC_LOCK`` capabilities, or limits
+that allow both (an ``rtprio`` limit of at least 40, and a locked-memory limit,
+``ulimit -l``, above the process's size, a few hundred MB). Without them the example
+says which step was refused and stops. It waits by sleeping: a loop spinning at a
+real-time priority would keep its core from everything else, and Linux stops real-time
+processes for the rest of each second once they have had
+``kernel.sched_rt_runtime_us`` of it (950,000 us by default).
 """
 
 from __future__ import annotations
@@ -190,15 +192,6 @@ def wait_until(t: float, wait: str = "spin") -> None:
         pass
 
 
-def rt_throttled() -> bool:
-    """Whether Linux limits real-time processes to a share of each second (the default)."""
-    try:
-        runtime = Path("/proc/sys/kernel/sched_rt_runtime_us").read_text().strip()
-    except OSError:
-        return True
-    return runtime != "-1"
-
-
 def go_realtime(priority: int = PRIORITY) -> str:
     """Put this process on one core, lock its memory and give it a real-time priority.
 
@@ -217,13 +210,16 @@ def go_realtime(priority: int = PRIORITY) -> str:
     libc = ctypes.CDLL(None, use_errno=True)
     if libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
         err = ctypes.get_errno()
-        raise OSError(err, f"locking the memory (mlockall): {os.strerror(err)}")
+        raise OSError(err, f"locking the memory (mlockall): {os.strerror(err)} (it needs "
+                           "CAP_IPC_LOCK, or a locked-memory limit, ulimit -l, above the "
+                           "process's size)")
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     except OSError as err:
         raise OSError(err.errno, f"the real-time priority (SCHED_FIFO {priority}): "
-                                 f"{err.strerror}") from None
-    return f"real time: core {core} alone, memory locked, SCHED_FIFO priority {priority}"
+                                 f"{err.strerror} (it needs CAP_SYS_NICE, or an rtprio limit "
+                                 f"of at least {priority})") from None
+    return f"real time: pinned to core {core}, memory locked, SCHED_FIFO priority {priority}"
 
 
 def run(seconds: float, config: Path = CONFIG, wait: str = "spin",
@@ -362,10 +358,10 @@ def main(argv: list[str] | None = None) -> int:
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         parser.error("--seconds must be a positive number")
     wait = args.wait or ("sleep" if args.realtime else "spin")
-    if args.realtime and wait == "spin" and rt_throttled():
-        parser.error("--realtime waits by sleep: Linux gives real-time processes at most "
-                     "kernel.sched_rt_runtime_us of each second, and a loop spinning "
-                     "through every tick would be stopped for the rest of each second")
+    if args.realtime and wait == "spin":
+        parser.error("--realtime waits by sleep: a loop spinning at a real-time priority "
+                     "keeps its core from everything else, and Linux stops it for the rest "
+                     "of each second once it has had kernel.sched_rt_runtime_us of it")
     try:
         exp = experiment()  # before the real-time set-up: the model loads normally
     except dq.RobotModelError as err:  # the Panda comes from example-robot-data

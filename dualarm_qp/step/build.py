@@ -115,7 +115,7 @@ class StepBuild:
     support_force: float = math.nan
     _context: StepContext | Callable[[tuple[float, float] | None], StepContext] | None = (
         field(default=None, repr=False, compare=False))
-    _recovers: bool | None = field(default=None, repr=False, compare=False)
+    _recovers: bool | None = field(default=None, init=False, repr=False, compare=False)
     _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
                                                    compare=False)
 
@@ -132,7 +132,7 @@ class StepBuild:
     @property
     def recovers(self) -> bool:
         """Whether some variable starts outside its range (``recovering.any()``)."""
-        flag = self._recovers  # the kernel's, given with the array
+        flag = self._recovers  # the kernel's, set with the array it made
         return bool(self.recovering.any()) if flag is None else flag
 
     @property
@@ -543,11 +543,15 @@ class StepBuilder:
             G=G, h=h, n_grasp=self.layout.n_grasp, x_prev=x_prev, names=self.layout.names,
             row_names=tuple(row_names), eq_names=CarryTasks.row_names, lower_by=lower_by,
             upper_by=upper_by, build_time=t2 - t0)
-        return made(StepBuild, {
+        build = made(StepBuild, {
             "problem": problem, "recovering": recovering, "closure_error": e[6:],
             "leader_error": e[:6], "carry": carry, "T_f": T[12:16], "J_f": J_f,
             "kinematics_time": kinematics_time, "assembly_time": t2 - t0 - kinematics_time,
-            "support_force": support_force, "_context": context, "_recovers": recovers})
+            "support_force": support_force, "_context": context})
+        # The kernel's flag of this very array: not an init field, so that a build made
+        # again with another array (dataclasses.replace) computes its own.
+        object.__setattr__(build, "_recovers", recovers)
+        return build
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

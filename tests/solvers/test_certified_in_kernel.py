@@ -104,9 +104,10 @@ def test_the_call_keeps_the_basis_and_rows_it_computed(
     from dualarm_qp.solvers import _affine
     from dualarm_qp.step import problem as problem_module
 
-    problem = random_problem(np.random.default_rng(5))
-    NullspaceSolver().solve_certified(problem, DEFAULT_TOLERANCE)
-    ref = fresh(problem)
+    solved = random_problem(np.random.default_rng(5))
+    NullspaceSolver().solve_certified(solved, DEFAULT_TOLERANCE)
+    copy = solved.scaled(0.5)  # taken before anything read them: the kernel's tuples
+    ref = fresh(solved)
     rows, basis = ref.inequalities(), _affine.problem_basis(ref)
 
     def computed_again(*_: object) -> None:
@@ -115,7 +116,7 @@ def test_the_call_keeps_the_basis_and_rows_it_computed(
     # Kept as the kernel gave them, made objects when first read, never computed again.
     monkeypatch.setattr(problem_module.kernel, "inequalities", computed_again)
     monkeypatch.setattr(_affine.kernel, "basis", computed_again)
-    for _ in range(2):
+    for problem in (copy, solved, copy, solved.scaled(0.25)):  # first reads, then again
         kept = problem.inequalities()
         assert kept is problem.inequalities()
         for name in ("C", "e", "kind", "index"):
@@ -126,7 +127,6 @@ def test_the_call_keeps_the_basis_and_rows_it_computed(
         assert np.array_equal(kept_basis.N, basis.N) and np.array_equal(kept_basis.P, basis.P)
         assert (kept_basis.rank, kept_basis.sigma_max, kept_basis.qr) == (
             basis.rank, basis.sigma_max, basis.qr)
-        problem = problem.scaled(0.5)  # a scaled copy carries them over
 
 
 def test_the_registry_solver_takes_the_kernel_call(monkeypatch: pytest.MonkeyPatch) -> None:

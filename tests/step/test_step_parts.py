@@ -116,8 +116,10 @@ def test_the_one_call_equals_the_parts_one_by_one(case, seed: int, scale: float)
     _equal_grasp_rates(builder, ctx)
     _equal(build.recovering, ctx.outside & builder._ranged, "recovering")
     assert build.recovers is bool((ctx.outside & builder._ranged).any())  # the kernel's flag
-    remade = dataclasses.replace(build, _recovers=None)  # a build made without the flag
-    assert remade.recovers is build.recovers
+    remade = dataclasses.replace(build)  # made again: no kernel flag, the array's own
+    assert remade._recovers is None and remade.recovers is build.recovers
+    flipped = dataclasses.replace(build, recovering=~build.recovering)
+    assert flipped.recovers is bool((~build.recovering).any())  # never the stale flag
 
 
 def python_era_grasp_rate_range(r, s_star, r_min, r_max, dt: float) -> tuple[float, float]:
