@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 namespace dqk {
 
@@ -142,10 +143,61 @@ std::pair<double, double> grasp_rates(const Eigen::Vector3d& point,
 
 double smallest_singular_value(const Mat& J) {
   if (!J.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  if (J.rows() == 0) return std::numeric_limits<double>::infinity();  // nothing to reach
-  if (J.cols() < J.rows()) return 0.0;
-  const Eigen::JacobiSVD<Mat> svd(J);
-  return svd.singularValues()(svd.singularValues().size() - 1);
+  const Index m = J.rows(), n = J.cols();
+  if (m == 0) return std::numeric_limits<double>::infinity();  // nothing to reach
+  if (n < m) return 0.0;
+  const double peak = J.cwiseAbs().maxCoeff();
+  if (peak == 0.0) return 0.0;
+  // A J of extreme size is scaled by a power of two (exact) so that no product of two
+  // rows' squared norms below overflows (peak^4 n^2) nor a significant one underflows;
+  // any other is taken as it is.
+  int exponent = 0;
+  if (peak > 0x1p250 || peak < 0x1p-250) std::frexp(peak, &exponent);
+  std::vector<double> w(static_cast<size_t>(m * n));  // row-major copy
+  for (Index i = 0; i < m; ++i) {
+    for (Index k = 0; k < n; ++k) {
+      w[static_cast<size_t>(i * n + k)] = exponent ? std::ldexp(J(i, k), -exponent) : J(i, k);
+    }
+  }
+  // One-sided (Hestenes) Jacobi on the rows: plane rotations from the left make every
+  // pair of rows orthogonal, sweep after sweep; the rows' norms are then the singular
+  // values. A pair counts as orthogonal when |r_p . r_q| <= JACOBI_TOL |r_p| |r_q|.
+  constexpr double JACOBI_TOL = 1e-15;
+  constexpr int MAX_SWEEPS = 64;
+  for (int sweep = 0; sweep < MAX_SWEEPS; ++sweep) {
+    bool rotated = false;
+    for (Index p = 0; p + 1 < m; ++p) {
+      double* rp = &w[static_cast<size_t>(p * n)];
+      for (Index q = p + 1; q < m; ++q) {
+        double* rq = &w[static_cast<size_t>(q * n)];
+        double a = 0.0, b = 0.0, c = 0.0;
+        for (Index k = 0; k < n; ++k) {
+          a += rp[k] * rp[k];
+          b += rq[k] * rq[k];
+          c += rp[k] * rq[k];
+        }
+        if (!(std::abs(c) > JACOBI_TOL * std::sqrt(a * b))) continue;
+        rotated = true;
+        const double zeta = (b - a) / (2.0 * c);
+        const double t = std::copysign(1.0, zeta) / (std::abs(zeta) + std::hypot(1.0, zeta));
+        const double cs = 1.0 / std::sqrt(1.0 + t * t), sn = cs * t;
+        for (Index k = 0; k < n; ++k) {
+          const double x = rp[k], y = rq[k];
+          rp[k] = cs * x - sn * y;
+          rq[k] = sn * x + cs * y;
+        }
+      }
+    }
+    if (!rotated) break;
+  }
+  double least = std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < m; ++i) {
+    const double* r = &w[static_cast<size_t>(i * n)];
+    double s = 0.0;
+    for (Index k = 0; k < n; ++k) s += r[k] * r[k];
+    least = std::min(least, s);
+  }
+  return std::ldexp(std::sqrt(least), exponent);
 }
 
 }  // namespace dqk

@@ -159,6 +159,28 @@ def test_the_smallest_singular_value_equals_numpys(seed, drop):
     assert smallest_singular_value(J[:, :5]) == 0.0  # fewer joints than task rows
 
 
+@settings(max_examples=300, deadline=None)
+@given(seeds, st.integers(min_value=1, max_value=6), st.integers(min_value=0, max_value=3),
+       st.sampled_from([1e-300, 1e-150, 1e-3, 1.0, 1e150, 1e300]),
+       st.sampled_from(["random", "dependent", "zero row", "graded"]))
+def test_the_smallest_singular_value_holds_at_any_scale_and_rank(seed, m, extra, scale, kind):
+    # The kernel's one-sided Jacobi against numpy's SVD (LAPACK), within a few rounding
+    # errors of the largest singular value, from 1e-300 to 1e300 (scaled exactly inside).
+    rng = np.random.default_rng(seed)
+    J0 = rng.normal(size=(m, m + extra))
+    if kind == "dependent" and m > 1:
+        J0[0] = rng.normal(size=m - 1) @ J0[1:]
+    elif kind == "zero row":
+        J0[int(rng.integers(m))] = 0.0
+    elif kind == "graded":
+        J0 *= (10.0 ** -np.arange(m))[:, None]
+    s = np.linalg.svd(J0, compute_uv=False)
+    got = smallest_singular_value(J0 * scale)
+    assert abs(got / scale - s[-1]) <= 8 * np.finfo(float).eps * s[0]
+    if s[-1] > 1e-6 * s[0]:  # well conditioned: to a relative error of cond(J) * eps
+        assert got / scale == pytest.approx(s[-1], rel=64 * np.finfo(float).eps * s[0] / s[-1])
+
+
 def test_the_smallest_singular_value_of_no_rows_and_of_nan():
     assert smallest_singular_value(np.zeros((0, 3))) == np.inf
     J = np.eye(6)
