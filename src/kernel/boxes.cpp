@@ -148,9 +148,9 @@ double smallest_singular_value(const Mat& J) {
   if (n < m) return 0.0;
   const double peak = J.cwiseAbs().maxCoeff();
   if (peak == 0.0) return 0.0;
-  // A J of extreme size is scaled by a power of two (exact) so that no product of two
-  // rows' squared norms below overflows (peak^4 n^2) nor a significant one underflows;
-  // any other is taken as it is.
+  // A J of extreme size is scaled by a power of two (exact) so that no squared norm or
+  // dot product below overflows, nor the squares of its largest rows underflow; any
+  // other is taken as it is.
   int exponent = 0;
   if (peak > 0x1p250 || peak < 0x1p-250) std::frexp(peak, &exponent);
   std::vector<double> w(static_cast<size_t>(m * n));  // row-major copy
@@ -161,7 +161,8 @@ double smallest_singular_value(const Mat& J) {
   }
   // One-sided (Hestenes) Jacobi on the rows: plane rotations from the left make every
   // pair of rows orthogonal, sweep after sweep; the rows' norms are then the singular
-  // values. A pair counts as orthogonal when |r_p . r_q| <= JACOBI_TOL |r_p| |r_q|.
+  // values. A pair counts as orthogonal when |r_p . r_q| <= JACOBI_TOL |r_p| |r_q|, or
+  // when either row is zero (or its squared norm underflows).
   constexpr double JACOBI_TOL = 1e-15;
   constexpr int MAX_SWEEPS = 64;
   for (int sweep = 0; sweep < MAX_SWEEPS; ++sweep) {
@@ -176,7 +177,12 @@ double smallest_singular_value(const Mat& J) {
           b += rq[k] * rq[k];
           c += rp[k] * rq[k];
         }
-        if (!(std::abs(c) > JACOBI_TOL * std::sqrt(a * b))) continue;
+        // sqrt(a) sqrt(b), not sqrt(a b): the product of two small squared norms may
+        // underflow to 0, and a zero tolerance would rotate the pair sweep after sweep.
+        if (a == 0.0 || b == 0.0 ||
+            !(std::abs(c) > JACOBI_TOL * (std::sqrt(a) * std::sqrt(b)))) {
+          continue;
+        }
         rotated = true;
         const double zeta = (b - a) / (2.0 * c);
         const double t = std::copysign(1.0, zeta) / (std::abs(zeta) + std::hypot(1.0, zeta));

@@ -181,6 +181,18 @@ def test_the_smallest_singular_value_holds_at_any_scale_and_rank(seed, m, extra,
         assert got / scale == pytest.approx(s[-1], rel=64 * np.finfo(float).eps * s[0] / s[-1])
 
 
+def test_rows_of_very_different_sizes_are_orthogonal_when_their_product_underflows():
+    # The squared norms' product underflows to 0 here (a tolerance of 0 would rotate the
+    # pair for ever): the test takes the norms' product, and the answer is LAPACK's.
+    J = np.array([[-7.82e-76, -2.57e-76, 8.14e-78], [-2.76e-96, 1.29e-95, 1.01e-95]])
+    want = np.linalg.svd(J, compute_uv=False)
+    assert abs(smallest_singular_value(J) - want[-1]) <= 4 * np.finfo(float).eps * want[-1]
+    graded = np.random.default_rng(1).normal(size=(6, 7)) * 1e-75
+    graded *= (10.0 ** -np.arange(0, 48, 8))[:, None]
+    want = np.linalg.svd(graded, compute_uv=False)
+    assert abs(smallest_singular_value(graded) - want[-1]) <= 8 * np.finfo(float).eps * want[0]
+
+
 def test_the_smallest_singular_value_of_no_rows_and_of_nan():
     assert smallest_singular_value(np.zeros((0, 3))) == np.inf
     J = np.eye(6)
