@@ -24,9 +24,8 @@ rounding (about 1e-15 relative) of the cut-off.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TypeVar, cast
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -244,17 +243,6 @@ def _as_basis(basis: tuple[FloatArray, FloatArray, int, float, bool]) -> NullBas
     return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
 
 
-_T = TypeVar("_T")
-
-
-def _of_problem(problem: StepProblem, key: str, make: Callable[[FloatArray], _T]) -> _T:
-    """``make(problem.A)``, computed once per problem (kept in its cache) and shared."""
-    value = problem._cache.get(key)
-    if value is None:
-        value = problem._cache[key] = make(problem.A)
-    return cast(_T, value)
-
-
 def problem_basis(problem: StepProblem) -> NullBasis:
     """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
     value = problem._cache.get("basis")
@@ -279,7 +267,10 @@ def keep_basis(problem: StepProblem, basis: tuple[FloatArray, FloatArray, int, f
 
 def problem_factor(problem: StepProblem) -> Factor:
     """:func:`factor` of ``problem.A``, computed once per problem and shared."""
-    return _of_problem(problem, "factor", factor)
+    value = problem._cache.get("factor")
+    if value is None:
+        value = problem._cache["factor"] = factor(problem.A)
+    return cast(Factor, value)
 
 
 @dataclass(frozen=True, slots=True)
