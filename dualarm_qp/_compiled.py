@@ -6,13 +6,19 @@ module imports the extension once and refuses it, with a
 :class:`~dualarm_qp.errors.KernelError` that says what to do, when it is missing or was
 built from other sources than those next to the package (an editable install whose C++
 was edited since the last build). :func:`check_pinocchio` refuses an installed
-Pinocchio of another release than the kernel's.
+Pinocchio of another release than the kernel's, :func:`check_coal` a coal of another
+release.
 """
 
 from __future__ import annotations
 
 import hashlib
 from pathlib import Path
+
+# The kernel links coal's library (libcoal.so) and finds it next to the package
+# (site-packages/cmeel.prefix/lib); coal's Python package loads that same library, so
+# importing it first lets the kernel find it wherever pip put it.
+import coal  # type: ignore[import-untyped]  # noqa: F401
 
 from .errors import KernelError
 
@@ -71,6 +77,22 @@ def check_pinocchio(installed: str, built: str = kernel.PINOCCHIO_VERSION) -> No
             f"(`pip install pin=={built}`) or rebuild the kernel for this one: {REBUILD}")
 
 
+def check_coal(installed: str, built: str = kernel.COAL_VERSION) -> None:
+    """Raise :class:`KernelError` unless the installed coal is the kernel's.
+
+    The kernel links the coal library of the ``pin`` wheel present at build time (its
+    collision scene measures the pairs with a box with it) and calls it with coal's C++
+    types, whose layout may change between releases: the installed ``coal`` must be the
+    same release (``pyproject.toml`` pins it). ``installed`` is ``coal.__version__``.
+    """
+    if installed.split("+")[0] != built:
+        raise KernelError(
+            f"the compiled kernel dualarm_qp._kernel was built with coal {built}, but "
+            f"coal {installed} is installed; install the pinned version "
+            f"(`pip install coal=={built}`) or rebuild the kernel for this one: {REBUILD}")
+
+
 check_fresh()
 
-__all__ = ["KernelError", "check_fresh", "check_pinocchio", "kernel", "source_hash"]
+__all__ = ["KernelError", "check_coal", "check_fresh", "check_pinocchio", "kernel",
+           "source_hash"]

@@ -94,10 +94,19 @@ def segment_closest_points(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: Arra
                            ) -> tuple[_F, _F, _F, _F]: ...
 def capsule_proximities(a0: ArrayLike, a1: ArrayLike, ra: ArrayLike, b0: ArrayLike,
                         b1: ArrayLike, rb: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
+class CoalPairs:
+    def __init__(self, kinds: Sequence[int], params: ArrayLike, local: ArrayLike,
+                 ia: Sequence[int], ib: Sequence[int], boxed: Sequence[bool],
+                 gjk_tolerance: float, epa_tolerance: float) -> None: ...
+    @property
+    def n_pairs(self) -> int: ...
+    def measure(self, pair: int, frame_a: ArrayLike, frame_b: ArrayLike
+                ) -> tuple[float, _F, _F, _F]: ...
 def scene_proximities(frames: ArrayLike, body_frame: Sequence[int], a_local: ArrayLike,
                       b_local: ArrayLike, r: ArrayLike, sphere: ArrayLike,
-                      ia: Sequence[int], ib: Sequence[int], within: float
-                      ) -> tuple[NDArray[np.int64], _F, _F, _F, _F]: ...
+                      ia: Sequence[int], ib: Sequence[int], within: float,
+                      exact: CoalPairs | None = None
+                      ) -> tuple[bool, NDArray[np.int64], _F, _F, _F, _F]: ...
 def damper_rows(leader: Chain, follower: Chain, J_object: ArrayLike,
                 object_origin: ArrayLike, owners: Sequence[int], frames: Sequence[int],
                 point_a: ArrayLike, point_b: ArrayLike, normal: ArrayLike, n_l: int,
@@ -113,6 +122,7 @@ def load_torques(leader: Chain, leader_tool: int, follower: Chain, follower_tool
                  rcond_min: float) -> tuple[_F, _F, _F]: ...
 
 PINOCCHIO_VERSION: str
+COAL_VERSION: str
 
 class Chain:
     def __init__(self, parents: list[int], kinds: list[int], axes: ArrayLike,

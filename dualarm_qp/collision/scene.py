@@ -27,14 +27,14 @@ Every body's pose is read from one stack of frames (:meth:`CollisionScene.frames
 the leader's link frames, the follower's, the object frame and the world. Distances
 come from :mod:`dualarm_qp.geometry.distance`: the closed form for capsule pairs (one
 compiled call places the bodies, skips the far pairs and measures the others), and coal
-for pairs with a box. :meth:`measure` can skip
+for pairs with a box, measured in the same call (``src/kernel/coal_pairs.cpp``, with
+coal's own C++ library). :meth:`measure` can skip
 the pairs whose bounding spheres are already farther apart than a given distance (the
 rows only need the pairs within the influence distance).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..errors import InvalidInputError, NonFiniteError
-from ..geometry.distance import Proximities, coal_proximity, coal_shape, coal_solver
+from ..geometry.distance import EPA_TOLERANCE, GJK_TOLERANCE, Proximities, coal_parts
 from ..geometry.links import arm_capsules
 from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
 from ..kinematics.arm import SerialArm
@@ -167,8 +167,6 @@ class CollisionScene:
         self._b = np.array([c[1] for c in bounds]).reshape(-1, 3)
         self._r = np.array([c[2] for c in bounds])
         self._sphere = 0.5 * np.linalg.norm(self._b - self._a, axis=1) + self._r
-        self._coal = [coal_shape(b.shape) if isinstance(b.shape, Box) else None
-                      for b in self.bodies]
         self._ia = np.array([p.a for p in self.pairs], dtype=np.intp)
         self._ib = np.array([p.b for p in self.pairs], dtype=np.intp)
         # What the kernel's measure reads (src/kernel/clearance.cpp).
@@ -176,9 +174,19 @@ class CollisionScene:
         self._ia_list = self._ia.tolist()
         self._ib_list = self._ib.tolist()
         boxed = [isinstance(b.shape, Box) for b in self.bodies]
-        self._boxed = np.array([boxed[p.a] or boxed[p.b] for p in self.pairs], dtype=bool)
+        self._boxed = [boxed[p.a] or boxed[p.b] for p in self.pairs]
         self.group_of = np.array([GROUPS.index(p.group) for p in self.pairs], dtype=np.intp)
-        self._solvers: dict[tuple[int, int], Any] = {}
+        self._exact = self._coal_pairs()
+
+    def _coal_pairs(self) -> Any:
+        """Return the kernel's coal geometries and solvers of the pairs with a box, or None."""
+        if not any(self._boxed):
+            return None
+        parts = [coal_parts(b.shape) for b in self.bodies]
+        return kernel.CoalPairs(
+            [p[0] for p in parts], np.array([p[1] for p in parts]).reshape(-1, 3),
+            np.concatenate([p[2] for p in parts]).reshape(-1, 4), self._ia_list,
+            self._ib_list, self._boxed, GJK_TOLERANCE, EPA_TOLERANCE)
 
     # -- names -------------------------------------------------------------------------
     @property
@@ -238,59 +246,22 @@ class CollisionScene:
         Measured
             The measured pairs (in the order of :attr:`pairs`) and their proximities.
         """
-        keep, *near = kernel.scene_proximities(
+        finite, keep, *near = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
             self._a, self._b, self._r, self._sphere, self._ia_list, self._ib_list,
-            float(within))
-        prox = Proximities(*near)
-        if not math.isfinite(float(prox.distance.sum())):
+            float(within), self._exact)
+        if not finite:
             raise NonFiniteError("the collision scene's frames")
-        a, b = self._ia[keep], self._ib[keep]
-        boxed = np.flatnonzero(self._boxed[keep])
-        if boxed.size == 0:
-            return Measured(keep, prox)
-        # Pairs with a box: the capsule distance is a lower bound; coal where it matters.
-        exact = boxed[prox.distance[boxed] < within]
-        dist, pa, pb, normal = (prox.distance.copy(), prox.point_a.copy(),
-                                prox.point_b.copy(), prox.normal.copy())
-        for j in exact.tolist():
-            i_a, i_b = int(a[j]), int(b[j])
-            one = coal_proximity(*self._coal_at(i_a, frames), *self._coal_at(i_b, frames),
-                                 solver=self._coal_solver(i_a, i_b))
-            dist[j], pa[j], pb[j], normal[j] = one.distance, one.point_a, one.point_b, one.normal
-        if np.isfinite(within):  # pairs with a box left at their lower bound: drop them
-            kept = np.ones(keep.size, dtype=bool)
-            kept[boxed] = False
-            kept[exact] = True
-            return Measured(keep[kept], Proximities(dist[kept], pa[kept], pb[kept],
-                                                    normal[kept]))
-        return Measured(keep, Proximities(dist, pa, pb, normal))
-
-    def _coal_at(self, body: int, frames: FloatArray) -> tuple[object, FloatArray]:
-        """Coal geometry of ``body`` and its world pose."""
-        geom, local = self._geometry(body)
-        return geom, frames[self._frame[body]] @ local
-
-    def _geometry(self, body: int) -> tuple[object, FloatArray]:
-        """Coal geometry of ``body`` and its pose in the body's frame (made once)."""
-        cached = self._coal[body]
-        if cached is None:
-            cached = self._coal[body] = coal_shape(self.bodies[body].shape)
-        return cached
-
-    def _coal_solver(self, a: int, b: int) -> Any:
-        """Coal's solver of the bodies ``a`` and ``b`` (kept per pair; not pickled)."""
-        key = (a, b)
-        solver = self._solvers.get(key)
-        if solver is None:
-            solver = self._solvers[key] = coal_solver(self._geometry(a)[0],
-                                                      self._geometry(b)[0])
-        return solver
+        return Measured(keep, Proximities(*near))
 
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)
-        state["_solvers"] = {}
+        state["_exact"] = None  # the kernel's object: made again where it is unpickled
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._exact = self._coal_pairs()
 
     def nearest(self, frames: FloatArray) -> tuple[FloatArray, list[str]]:
         """Smallest distance of each group [m] (``inf`` for an empty group) and its pair."""

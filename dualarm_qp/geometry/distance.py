@@ -57,7 +57,7 @@ import coal  # type: ignore[import-untyped]
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compiled import kernel
+from .._compiled import check_coal, kernel
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 from .shapes import Box, Capsule
 
@@ -275,45 +275,24 @@ def _coal_proximity(shape_a: Capsule | Box, shape_b: Capsule | Box) -> Proximity
 
 #: The request of every coal call: GJK's and EPA's tolerances tightened to 1e-10. Shared
 #: and never changed (a request is read-only to coal).
+check_coal(str(coal.__version__))
+
+#: Coal's GJK and EPA tolerances [m] of every distance measured with coal (here and in
+#: the kernel's collision scene, ``kernel.CoalPairs``).
+GJK_TOLERANCE = 1e-10
+EPA_TOLERANCE = 1e-10
+
 _REQUEST = coal.DistanceRequest()
-_REQUEST.gjk_tolerance = 1e-10
-_REQUEST.epa_tolerance = 1e-10
+_REQUEST.gjk_tolerance = GJK_TOLERANCE
+_REQUEST.epa_tolerance = EPA_TOLERANCE
 
 
-@dataclass(frozen=True, eq=False)
-class CoalPair:
-    """Coal's distance solver of one pair of geometries, with the geometries themselves.
-
-    Coal's solver keeps bare pointers to its geometries: this keeps them alive as long
-    as the solver.
-
-    Attributes
-    ----------
-    geom_a, geom_b : coal.CollisionGeometry
-        The pair's geometries.
-    solver : coal.ComputeDistance
-        Their solver.
-    """
-
-    geom_a: Any
-    geom_b: Any
-    solver: Any
-
-
-def coal_solver(geom_a: Any, geom_b: Any) -> CoalPair:
-    """Coal's distance solver of one pair of geometries, for repeated :func:`coal_proximity`.
-
-    It is ``coal.distance`` with the pair's function looked up once (the same answer).
-    """
-    return CoalPair(geom_a, geom_b, coal.ComputeDistance(geom_a, geom_b))
-
-
-def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray,
-                   solver: CoalPair | None = None) -> Proximity:
+def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray) -> Proximity:
     """Signed distance, witness points and normal of two coal geometries.
 
-    The same conventions as :func:`proximity` (which calls it for pairs with a box);
-    for callers that keep their coal geometries across calls (the collision scene).
+    The same conventions as :func:`proximity` (which calls it for pairs with a box).
+    The collision scene measures its pairs with a box by the same rules in the kernel,
+    with coal's C++ library (``kernel.CoalPairs``).
 
     Parameters
     ----------
@@ -321,24 +300,11 @@ def coal_proximity(geom_a: Any, T_a: FloatArray, geom_b: Any, T_b: FloatArray,
         The geometries, in their own frames (:func:`coal_shape`).
     T_a, T_b : ndarray, shape (4, 4)
         Their poses in the world [m].
-    solver : CoalPair, optional
-        The pair's solver (:func:`coal_solver` of ``geom_a, geom_b``); default: look it
-        up in this call.
-
-    Raises
-    ------
-    InvalidInputError
-        A solver of other geometries.
     """
-    if solver is not None and (solver.geom_a is not geom_a or solver.geom_b is not geom_b):
-        raise InvalidInputError("the coal solver belongs to another pair of geometries")
     result = coal.DistanceResult()
     tf_a = coal.Transform3s(T_a[:3, :3], T_a[:3, 3])
     tf_b = coal.Transform3s(T_b[:3, :3], T_b[:3, 3])
-    if solver is None:
-        distance = float(coal.distance(geom_a, tf_a, geom_b, tf_b, _REQUEST, result))
-    else:
-        distance = float(solver.solver(tf_a, tf_b, _REQUEST, result))
+    distance = float(coal.distance(geom_a, tf_a, geom_b, tf_b, _REQUEST, result))
     point_a = np.array(result.getNearestPoint1(), dtype=np.float64)
     point_b = np.array(result.getNearestPoint2(), dtype=np.float64)
     normal = np.array(result.normal, dtype=np.float64)
@@ -363,18 +329,45 @@ def coal_shape(shape: Capsule | Box) -> tuple[Any, FloatArray]:
     """Coal geometry of a shape and the pose (4, 4) of that geometry in the shape's frame.
 
     Coal's capsule lies along its local z axis, centred on its origin; a zero-length
-    capsule is a coal sphere; a box is centred on its pose.
+    capsule is a coal sphere; a box is centred on its pose (:func:`coal_parts`).
+    """
+    kind, numbers, T = coal_parts(shape)
+    if kind == COAL_BOX:
+        return coal.Box(*numbers.tolist()), T
+    if kind == COAL_SPHERE:
+        return coal.Sphere(float(numbers[0])), T
+    return coal.Capsule(float(numbers[0]), float(numbers[1])), T
+
+
+#: The kinds of :func:`coal_parts` (``kernel.CoalPairs`` reads the same numbers).
+COAL_BOX, COAL_CAPSULE, COAL_SPHERE = 1, 2, 3
+
+
+def coal_parts(shape: Capsule | Box) -> tuple[int, FloatArray, FloatArray]:
+    """Return the coal geometry of a shape as numbers: its kind, sizes and pose.
+
+    Returns
+    -------
+    kind : int
+        :data:`COAL_BOX`, :data:`COAL_CAPSULE` or :data:`COAL_SPHERE` (a zero-length
+        capsule).
+    numbers : ndarray, shape (3,)
+        A box's side lengths [m]; a capsule's radius and length [m] (then 0); a
+        sphere's radius [m] (then 0, 0).
+    pose : ndarray, shape (4, 4)
+        The geometry's pose in the shape's frame: a box's own pose; a capsule's centre,
+        with its axis as the local z axis.
     """
     if isinstance(shape, Box):
-        return coal.Box(*shape.size.tolist()), np.array(shape.pose)
+        return COAL_BOX, np.array(shape.size, dtype=np.float64), np.array(shape.pose)
     axis = shape.b - shape.a
     length = float(np.linalg.norm(axis))
     T = np.eye(4)
     T[:3, 3] = (shape.a + shape.b) / 2.0
     if length == 0.0:
-        return coal.Sphere(shape.radius), T
+        return COAL_SPHERE, np.array([shape.radius, 0.0, 0.0]), T
     T[:3, :3] = _frame_with_z(axis / length)
-    return coal.Capsule(shape.radius, length), T
+    return COAL_CAPSULE, np.array([shape.radius, length, 0.0]), T
 
 
 def _frame_with_z(z: FloatArray) -> FloatArray:

@@ -12,10 +12,12 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const Eigen::Ref<const Eigen::VectorXd>& r,
                               const Eigen::Ref<const Eigen::VectorXd>& sphere,
                               const std::vector<int>& ia, const std::vector<int>& ib,
-                              double within) {
+                              double within, const CoalPairs* exact) {
   const auto nb = static_cast<Eigen::Index>(body_frame.size());
   if (frames.cols() != 4 || frames.rows() % 4 != 0 || a_local.rows() != nb ||
-      b_local.rows() != nb || r.size() != nb || sphere.size() != nb || ia.size() != ib.size())
+      b_local.rows() != nb || r.size() != nb || sphere.size() != nb || ia.size() != ib.size() ||
+      (exact != nullptr &&
+       (exact->n_bodies() != size_t(nb) || exact->n_pairs() != ia.size())))
     throw std::invalid_argument("scene_proximities: arrays of inconsistent shapes");
   const Eigen::Index n_frames = frames.rows() / 4;
   // Every body's axis in the world.
@@ -56,6 +58,40 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
     out.point_b.row(j) = p.point_b.transpose();
     out.normal.row(j) = p.normal.transpose();
   }
+  out.finite = std::isfinite(out.distance.sum());
+  if (exact == nullptr || !out.finite) return out;
+  // The pairs with a box: coal where the bound is below within, else dropped.
+  Eigen::Index kept = 0;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const size_t k = static_cast<size_t>(out.pairs[static_cast<size_t>(j)]);
+    if (exact->boxed(k)) {
+      if (!(out.distance[j] < within)) {
+        if (!all) continue;
+      } else {
+        const int fa = body_frame[size_t(ia[k])], fb = body_frame[size_t(ib[k])];
+        const Eigen::Matrix4d T_a = frames.block<4, 4>(4 * fa, 0);
+        const Eigen::Matrix4d T_b = frames.block<4, 4>(4 * fb, 0);
+        const CapsuleProximity p = exact->measure(k, T_a, T_b);
+        out.distance[j] = p.distance;
+        out.point_a.row(j) = p.point_a.transpose();
+        out.point_b.row(j) = p.point_b.transpose();
+        out.normal.row(j) = p.normal.transpose();
+      }
+    }
+    if (kept != j) {
+      out.pairs[static_cast<size_t>(kept)] = out.pairs[static_cast<size_t>(j)];
+      out.distance[kept] = out.distance[j];
+      out.point_a.row(kept) = out.point_a.row(j);
+      out.point_b.row(kept) = out.point_b.row(j);
+      out.normal.row(kept) = out.normal.row(j);
+    }
+    ++kept;
+  }
+  out.pairs.resize(static_cast<size_t>(kept));
+  out.distance.conservativeResize(kept);
+  out.point_a.conservativeResize(kept, 3);
+  out.point_b.conservativeResize(kept, 3);
+  out.normal.conservativeResize(kept, 3);
   return out;
 }
 

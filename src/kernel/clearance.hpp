@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "capsules.hpp"
+#include "coal_pairs.hpp"
 #include "kinematics.hpp"
 
 namespace dqk {
@@ -15,6 +16,7 @@ enum Owner : int { LEADER = 0, FOLLOWER = 1, OBJECT = 2, WORLD = 3 };
 
 struct Proximities {
   std::vector<int> pairs;  // indices of the measured pairs
+  bool finite = true;      // every capsule distance was finite (their sum is)
   Eigen::VectorXd distance;
   Points point_a, point_b, normal;
 };
@@ -23,7 +25,10 @@ struct Proximities {
 // (4F x 4, the frames' world poses); sphere is the radius of its bounding sphere about
 // the axis' midpoint. Pairs (ia[k], ib[k]) whose bounding spheres are at least within
 // apart are skipped (within = inf measures every pair); the others get their capsule
-// proximity, in the pairs' order.
+// proximity, in the pairs' order. With exact (the same bodies and pairs), a pair with a
+// box (whose capsule contains the box: its distance is a lower bound) is measured by
+// coal when its capsule distance is below within, and dropped otherwise (kept at its
+// bound when within = inf, which only a non-finite distance is not below).
 Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const std::vector<int>& body_frame,
                               const Eigen::Ref<const Points>& a_local,
@@ -31,7 +36,7 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const Eigen::Ref<const Eigen::VectorXd>& r,
                               const Eigen::Ref<const Eigen::VectorXd>& sphere,
                               const std::vector<int>& ia, const std::vector<int>& ib,
-                              double within);
+                              double within, const CoalPairs* exact = nullptr);
 
 // The damper's rows: row k is n_k^T (J_a(p_a,k) - J_b(p_b,k)) over the decision vector
 // (n entries: the leader's n_l joints, the follower's n_f, then the sliding grasps from

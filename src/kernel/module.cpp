@@ -28,6 +28,7 @@
 #include "certified_step.hpp"
 #include "certify.hpp"
 #include "clearance.hpp"
+#include "coal_pairs.hpp"
 #include "constants.hpp"
 #include "dense_qp.hpp"
 #include "equality.hpp"
@@ -219,6 +220,7 @@ NB_MODULE(_kernel, m) {
   m.attr("PRICE_TOL") = dqk::PRICE_TOL;
   m.attr("PIVOT_TOL") = dqk::PIVOT_TOL;
   m.attr("PINOCCHIO_VERSION") = dqk::pinocchio_version();
+  m.attr("COAL_VERSION") = COAL_VERSION;
 
   nb::class_<dqk::Chain>(m, "Chain",
                          "A chain of one-dof joints with frames, rebuilt as a pinocchio::Model.")
@@ -708,24 +710,60 @@ NB_MODULE(_kernel, m) {
       "Signed distances, witness points and unit normals of k capsule pairs: "
       "(distance, point_a, point_b, normal).");
 
+  nb::class_<dqk::CoalPairs>(
+      m, "CoalPairs",
+      "The collision scene's bodies as coal geometries, with one coal solver per pair "
+      "that has a box (what scene_proximities measures them with).")
+      .def(
+          "__init__",
+          [](dqk::CoalPairs* self, const std::vector<int>& kinds, const CArray& params,
+             const CArray& local, const std::vector<int>& ia, const std::vector<int>& ib,
+             const std::vector<bool>& boxed, double gjk_tolerance, double epa_tolerance) {
+            new (self) dqk::CoalPairs(kinds, points(params, "params"),
+                                      c_matrix(local, 4, "local"), ia, ib, boxed,
+                                      gjk_tolerance, epa_tolerance);
+          },
+          "kinds"_a, "params"_a, "local"_a, "ia"_a, "ib"_a, "boxed"_a, "gjk_tolerance"_a,
+          "epa_tolerance"_a,
+          "Body i: kinds[i] (0 none, 1 box of sizes params[i], 2 capsule of radius and "
+          "length params[i, :2] along its z axis, 3 sphere of radius params[i, 0]) posed "
+          "by local[4i:4i+4] in its frame; pair k is (ia[k], ib[k]), measured by coal when "
+          "boxed[k].")
+      .def_prop_ro("n_pairs", &dqk::CoalPairs::n_pairs)
+      .def(
+          "measure",
+          [](const dqk::CoalPairs& self, size_t pair, const CArray& frame_a,
+             const CArray& frame_b) {
+            const Eigen::Matrix4d T_a = c_matrix(frame_a, 4, "frame_a");
+            const Eigen::Matrix4d T_b = c_matrix(frame_b, 4, "frame_b");
+            const dqk::CapsuleProximity p = self.measure(pair, T_a, T_b);
+            return nb::make_tuple(p.distance, out(Vec(p.point_a)), out(Vec(p.point_b)),
+                                  out(Vec(p.normal)));
+          },
+          "pair"_a, "frame_a"_a, "frame_b"_a,
+          "Coal's proximity of pair k, its bodies in the frames (4, 4) frame_a and "
+          "frame_b: (distance, point_a, point_b, normal).");
+
   m.def(
       "scene_proximities",
       [](const CArray& frames, const std::vector<int>& body_frame, const CArray& a_local,
          const CArray& b_local, const Vec& r, const Vec& sphere, const std::vector<int>& ia,
-         const std::vector<int>& ib, double within) {
+         const std::vector<int>& ib, double within, const dqk::CoalPairs* exact) {
         dqk::Proximities p = dqk::scene_proximities(
             c_matrix(frames, 4, "frames"), body_frame, points(a_local, "a_local"),
-            points(b_local, "b_local"), r, sphere, ia, ib, within);
+            points(b_local, "b_local"), r, sphere, ia, ib, within, exact);
         dqk::IndexVec pairs(static_cast<Index>(p.pairs.size()));
         for (size_t k = 0; k < p.pairs.size(); ++k) pairs[static_cast<Index>(k)] = p.pairs[k];
-        return nb::make_tuple(out(std::move(pairs)), out(std::move(p.distance)),
+        return nb::make_tuple(p.finite, out(std::move(pairs)), out(std::move(p.distance)),
                               out(std::move(p.point_a)), out(std::move(p.point_b)),
                               out(std::move(p.normal)));
       },
       "frames"_a, "body_frame"_a, "a_local"_a, "b_local"_a, "r"_a, "sphere"_a, "ia"_a, "ib"_a,
-      "within"_a,
-      "The collision scene's capsule proximities of the pairs whose bounding spheres are "
-      "closer than within: (pairs, distance, point_a, point_b, normal).");
+      "within"_a, "exact"_a = nb::none(),
+      "The collision scene's proximities of the pairs whose bounding spheres are closer "
+      "than within, by their capsules, and by coal for a pair with a box when exact (a "
+      "CoalPairs) is given: (finite, pairs, distance, point_a, point_b, normal); finite "
+      "is False when a capsule distance is not finite (nothing measured by coal then).");
 
   m.def(
       "damper_rows",

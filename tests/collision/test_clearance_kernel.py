@@ -4,17 +4,14 @@
   out here with Pinocchio's Python API (each arm's model, its frame Jacobian and the point
   offset), for both set-ups of ``test_collision_rows`` at seeded random states;
 * the kernel's measure of every capsule pair equals coal's distance of the placed shapes;
-* coal's per-pair solver gives the same answer, bit for bit, as ``coal.distance``;
-* a scene with box pairs pickles after measuring (its solvers stay behind) and measures
-  the same after;
-* coal's solver keeps its geometries alive and refuses another pair's;
+* a scene with box pairs pickles after measuring (the kernel's coal solvers stay behind
+  and are made again) and measures the same after;
 * arrays of inconsistent shapes and unknown owners or frames are errors, not crashes;
   broadcast (zero-stride) and Fortran-ordered arrays are read as their values.
 """
 
 from __future__ import annotations
 
-import gc
 import pickle
 
 import numpy as np
@@ -24,9 +21,8 @@ from collision_setups import experiment
 from test_collision_rows import BOTH_SLIDING, PUMA, _random_state, needs_robots
 
 from dualarm_qp._compiled import kernel
-from dualarm_qp.errors import InvalidInputError
-from dualarm_qp.geometry import Box, Capsule, capsule_proximities
-from dualarm_qp.geometry.distance import coal_proximity, coal_shape, coal_solver
+from dualarm_qp.geometry import Capsule, capsule_proximities
+from dualarm_qp.geometry.distance import coal_proximity, coal_shape
 from dualarm_qp.step.limits.collision import CollisionLimit
 
 
@@ -117,47 +113,12 @@ def test_measure_places_every_body_and_pair(setup) -> None:
     assert capsules > 10
 
 
-def test_coal_solver_is_coal_distance() -> None:
-    rng = np.random.default_rng(7)
-    box = coal_shape(Box(np.array([0.3, 0.2, 0.1])))[0]
-    capsule = coal_shape(Capsule(np.zeros(3), np.array([0.0, 0.0, 0.4]), 0.05))[0]
-    solver = coal_solver(box, capsule)
-    for _ in range(50):
-        T_a, T_b = (pin.SE3.Random().homogeneous for _ in range(2))
-        T_b[:3, 3] = T_a[:3, 3] + rng.normal(0.0, 0.3, 3)
-        fresh = coal_proximity(box, T_a, capsule, T_b)
-        kept = coal_proximity(box, T_a, capsule, T_b, solver=solver)
-        assert kept.distance == fresh.distance
-        for u, v in ((kept.point_a, fresh.point_a), (kept.point_b, fresh.point_b),
-                     (kept.normal, fresh.normal)):
-            assert np.array_equal(u, v)
-
-
-def test_coal_solver_keeps_its_geometries_alive() -> None:
-    """Coal's solver holds bare pointers: the pair keeps the geometries it was made of."""
-    solver = coal_solver(coal_shape(Box(np.array([0.3, 0.2, 0.1])))[0],
-                         coal_shape(Capsule(np.zeros(3), np.array([0.0, 0.0, 0.4]), 0.05))[0])
-    gc.collect()
-    T_b = np.eye(4)
-    T_b[:3, 3] = [0.0, 0.0, 1.0]
-    one = coal_proximity(solver.geom_a, np.eye(4), solver.geom_b, T_b, solver=solver)
-    assert one.distance == pytest.approx(1.0 - 0.05 - 0.05 - 0.2, abs=1e-9)
-
-
-def test_coal_solver_of_other_geometries_is_an_error() -> None:
-    box = coal_shape(Box(np.array([0.3, 0.2, 0.1])))[0]
-    capsule = coal_shape(Capsule(np.zeros(3), np.array([0.0, 0.0, 0.4]), 0.05))[0]
-    other = coal_shape(Box(np.array([0.3, 0.2, 0.1])))[0]
-    with pytest.raises(InvalidInputError, match="another pair"):
-        coal_proximity(other, np.eye(4), capsule, np.eye(4), solver=coal_solver(box, capsule))
-
-
 def test_scene_with_box_pairs_pickles_after_measuring(setup) -> None:
     exp, builder, limit = setup
     ctx, _ = builder.context(exp.initial)
     frames = limit.frames(ctx)
     before = limit.scene.measure(frames)
-    assert limit.scene._solvers  # the box pairs' solvers were made
+    assert limit.scene._exact is not None  # the box pairs' kernel solvers
     copy = pickle.loads(pickle.dumps(limit.scene))
     after = copy.measure(frames)
     assert np.array_equal(before.pairs, after.pairs)
