@@ -107,6 +107,15 @@ def scene_proximities(frames: ArrayLike, body_frame: Sequence[int], a_local: Arr
                       ia: Sequence[int], ib: Sequence[int], within: float,
                       exact: CoalPairs | None = None
                       ) -> tuple[bool, NDArray[np.int64], _F, _F, _F, _F]: ...
+class DamperScene:
+    def __init__(self, body_frame: Sequence[int], a_local: ArrayLike, b_local: ArrayLike,
+                 r: ArrayLike, sphere: ArrayLike, ia: Sequence[int], ib: Sequence[int],
+                 exact: CoalPairs | None, owner: Sequence[int], model_frame: Sequence[int],
+                 leader_frames: Sequence[int], follower_frames: Sequence[int], d_i: float,
+                 d_s: float, gain: float, zero_row: float, n_l: int, n_f: int,
+                 grasp_start: int, n: int) -> None: ...
+    def rows(self, leader: Chain, follower: Chain, J_object: ArrayLike, T_object: ArrayLike
+             ) -> tuple[bool, NDArray[np.int64], _F, _F]: ...
 def damper_rows(leader: Chain, follower: Chain, J_object: ArrayLike,
                 object_origin: ArrayLike, owners: Sequence[int], frames: Sequence[int],
                 point_a: ArrayLike, point_b: ArrayLike, normal: ArrayLike, n_l: int,

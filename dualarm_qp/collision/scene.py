@@ -245,6 +245,12 @@ class CollisionScene:
         -------
         Measured
             The measured pairs (in the order of :attr:`pairs`) and their proximities.
+
+        Raises
+        ------
+        NonFiniteError
+            A frame gives a distance that is not a number (such a pair is never skipped
+            as far).
         """
         finite, keep, *near = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
@@ -253,6 +259,18 @@ class CollisionScene:
         if not finite:
             raise NonFiniteError("the collision scene's frames")
         return Measured(keep, Proximities(*near))
+
+    def measured_as(self) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray,
+                                   list[int], list[int], Any]:
+        """Return the bodies and pairs as the kernel measures them (``scene_proximities``).
+
+        Each body's frame in the stack, its capsule's ends and radius in that frame, its
+        bounding sphere's radius, the pairs' bodies, and the kernel's coal geometries
+        (None when no pair has a box); the kernel's damper (``kernel.DamperScene``)
+        reads the same.
+        """
+        return (self._frame_list, self._a, self._b, self._r, self._sphere, self._ia_list,
+                self._ib_list, self._exact)
 
     def __getstate__(self) -> dict[str, Any]:
         state = dict(self.__dict__)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace dqk {
 
@@ -38,7 +39,8 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
       throw std::invalid_argument("scene_proximities: no such body");
     if (!all) {
       const Point gap = 0.5 * (A.row(a) + B.row(a) - A.row(b) - B.row(b)).transpose();
-      if (!(gap.norm() - sphere[a] - sphere[b] < within)) continue;
+      // A NaN gap is measured (and its NaN distance reported), never skipped.
+      if (gap.norm() - sphere[a] - sphere[b] >= within) continue;
     }
     out.pairs.push_back(static_cast<int>(k));
   }
@@ -162,6 +164,79 @@ RowMat damper_rows(const Chain& leader, const Chain& follower,
     }
   }
   return G;
+}
+
+DamperScene::DamperScene(std::vector<int> body_frame, Points a_local, Points b_local,
+                         Eigen::VectorXd r, Eigen::VectorXd sphere, std::vector<int> ia,
+                         std::vector<int> ib, const CoalPairs* exact, std::vector<int> owner,
+                         std::vector<int> model_frame, std::vector<int> leader_frames,
+                         std::vector<int> follower_frames, double d_i, double d_s,
+                         double gain, double zero_row, Eigen::Index n_l, Eigen::Index n_f,
+                         Eigen::Index grasp_start, Eigen::Index n)
+    : body_frame_(std::move(body_frame)), a_local_(std::move(a_local)),
+      b_local_(std::move(b_local)), r_(std::move(r)), sphere_(std::move(sphere)),
+      ia_(std::move(ia)), ib_(std::move(ib)), exact_(exact), owner_(std::move(owner)),
+      model_frame_(std::move(model_frame)), leader_frames_(std::move(leader_frames)),
+      follower_frames_(std::move(follower_frames)), d_i_(d_i), d_s_(d_s), gain_(gain),
+      zero_row_(zero_row), n_l_(n_l), n_f_(n_f), grasp_start_(grasp_start), n_(n) {
+  if (owner_.size() != body_frame_.size() || model_frame_.size() != body_frame_.size())
+    throw std::invalid_argument("DamperScene: arrays of inconsistent shapes");
+  for (int o : owner_)
+    if (o < LEADER || o > WORLD) throw std::invalid_argument("DamperScene: an owner is 0 to 3");
+}
+
+DamperRows DamperScene::rows(const Chain& leader, const Chain& follower,
+                             const Eigen::Ref<const RowMat>& J_object,
+                             const Eigen::Ref<const RowMat>& T_object) const {
+  if (T_object.rows() != 4 || T_object.cols() != 4)
+    throw std::invalid_argument("DamperScene: T_object must be (4, 4)");
+  const auto n_lf = static_cast<Eigen::Index>(leader_frames_.size());
+  const auto n_ff = static_cast<Eigen::Index>(follower_frames_.size());
+  RowMat frames(4 * (n_lf + n_ff + 2), 4);
+  leader.frame_poses(leader_frames_, frames.middleRows(0, 4 * n_lf));
+  follower.frame_poses(follower_frames_, frames.middleRows(4 * n_lf, 4 * n_ff));
+  frames.middleRows<4>(4 * (n_lf + n_ff)) = T_object;
+  frames.middleRows<4>(4 * (n_lf + n_ff + 1)).setIdentity();
+  Proximities p = scene_proximities(frames, body_frame_, a_local_, b_local_, r_, sphere_, ia_,
+                                    ib_, d_i_, exact_);
+  DamperRows out;
+  out.finite = p.finite;
+  if (!p.finite) return out;
+  std::vector<Eigen::Index> near;
+  for (Eigen::Index j = 0; j < p.distance.size(); ++j)
+    if (p.distance[j] < d_i_) near.push_back(j);
+  const auto k = static_cast<Eigen::Index>(near.size());
+  Points pa(k, 3), pb(k, 3), nrm(k, 3);
+  std::vector<int> owners(2 * near.size()), model_frames(2 * near.size());
+  for (Eigen::Index row = 0; row < k; ++row) {
+    const Eigen::Index j = near[size_t(row)];
+    const size_t pair = static_cast<size_t>(p.pairs[size_t(j)]);
+    pa.row(row) = p.point_a.row(j);
+    pb.row(row) = p.point_b.row(j);
+    nrm.row(row) = p.normal.row(j);
+    const int a = ia_[pair], b = ib_[pair];
+    owners[2 * size_t(row)] = owner_[size_t(a)];
+    owners[2 * size_t(row) + 1] = owner_[size_t(b)];
+    model_frames[2 * size_t(row)] = model_frame_[size_t(a)];
+    model_frames[2 * size_t(row) + 1] = model_frame_[size_t(b)];
+  }
+  const RowMat G = damper_rows(leader, follower, J_object, T_object.block<3, 1>(0, 3), owners,
+                               model_frames, pa, pb, nrm, n_l_, n_f_, grasp_start_, n_);
+  // Only the rows that move: n^T (J_a - J_b) x <= gain (d - d_s).
+  std::vector<Eigen::Index> moving;
+  for (Eigen::Index row = 0; row < k; ++row)
+    if (G.row(row).cwiseAbs().maxCoeff() > zero_row_) moving.push_back(row);
+  const auto m = static_cast<Eigen::Index>(moving.size());
+  out.G.resize(m, n_);
+  out.h.resize(m);
+  out.pairs.resize(moving.size());
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::Index row = moving[size_t(i)], j = near[size_t(row)];
+    out.G.row(i) = G.row(row);
+    out.h[i] = gain_ * (p.distance[j] - d_s_);
+    out.pairs[size_t(i)] = p.pairs[size_t(j)];
+  }
+  return out;
 }
 
 }  // namespace dqk

@@ -24,11 +24,12 @@ struct Proximities {
 // Every body is a capsule (a_local, b_local, r) in frame body_frame of the stack frames
 // (4F x 4, the frames' world poses); sphere is the radius of its bounding sphere about
 // the axis' midpoint. Pairs (ia[k], ib[k]) whose bounding spheres are at least within
-// apart are skipped (within = inf measures every pair); the others get their capsule
-// proximity, in the pairs' order. With exact (the same bodies and pairs), a pair with a
-// box (whose capsule contains the box: its distance is a lower bound) is measured by
-// coal when its capsule distance is below within, and dropped otherwise (kept at its
-// bound when within = inf, which only a non-finite distance is not below).
+// apart are skipped (within = inf measures every pair; a NaN bound is measured); the
+// others get their capsule proximity, in the pairs' order. With exact (the same bodies
+// and pairs), a pair with a box (whose capsule contains the box: its distance is a lower
+// bound) is measured by coal when its capsule distance is below within, and dropped
+// otherwise (kept at its bound when within = inf, which only a non-finite distance is
+// not below).
 Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const std::vector<int>& body_frame,
                               const Eigen::Ref<const Points>& a_local,
@@ -52,5 +53,48 @@ RowMat damper_rows(const Chain& leader, const Chain& follower,
                    const Eigen::Ref<const Points>& point_b,
                    const Eigen::Ref<const Points>& normal, Eigen::Index n_l, Eigen::Index n_f,
                    Eigen::Index grasp_start, Eigen::Index n);
+
+// The velocity damper of a collision scene at one step (CollisionLimit.constraint): the
+// frame stack (the leader's link frames, the follower's, the object frame, the world),
+// the proximities of the pairs within d_i (scene_proximities), and for each pair closer
+// than d_i the row n^T (J_a - J_b) (damper_rows) and its bound gain (d - d_s); a row
+// whose largest entry is at most zero_row is left out (no variable moves the pair).
+struct DamperRows {
+  bool finite = true;      // the scene's frames gave finite distances (else nothing else)
+  std::vector<int> pairs;  // the scene's pair of each row
+  RowMat G;
+  Eigen::VectorXd h;
+};
+
+class DamperScene {
+ public:
+  // Bodies and pairs as scene_proximities reads them (exact: null, or the scene's
+  // CoalPairs, which must outlive this); per body its owner (Owner) and model frame
+  // (an arm's link; -1 for the object and the world); the arms' link frames in the
+  // order of the stack; the damper's numbers and the decision vector's layout.
+  DamperScene(std::vector<int> body_frame, Points a_local, Points b_local,
+              Eigen::VectorXd r, Eigen::VectorXd sphere, std::vector<int> ia,
+              std::vector<int> ib, const CoalPairs* exact, std::vector<int> owner,
+              std::vector<int> model_frame, std::vector<int> leader_frames,
+              std::vector<int> follower_frames, double d_i, double d_s, double gain,
+              double zero_row, Eigen::Index n_l, Eigen::Index n_f, Eigen::Index grasp_start,
+              Eigen::Index n);
+
+  // The rows at this step: the chains hold its kinematics, J_object (6 x (n_l +
+  // grasps)) and T_object (4 x 4) are the carried object's.
+  DamperRows rows(const Chain& leader, const Chain& follower,
+                  const Eigen::Ref<const RowMat>& J_object,
+                  const Eigen::Ref<const RowMat>& T_object) const;
+
+ private:
+  std::vector<int> body_frame_;
+  Points a_local_, b_local_;
+  Eigen::VectorXd r_, sphere_;
+  std::vector<int> ia_, ib_;
+  const CoalPairs* exact_;
+  std::vector<int> owner_, model_frame_, leader_frames_, follower_frames_;
+  double d_i_, d_s_, gain_, zero_row_;
+  Eigen::Index n_l_, n_f_, grasp_start_, n_;
+};
 
 }  // namespace dqk

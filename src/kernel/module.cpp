@@ -765,6 +765,47 @@ NB_MODULE(_kernel, m) {
       "CoalPairs) is given: (finite, pairs, distance, point_a, point_b, normal); finite "
       "is False when a capsule distance is not finite (nothing measured by coal then).");
 
+  nb::class_<dqk::DamperScene>(
+      m, "DamperScene",
+      "A collision scene's velocity damper (CollisionLimit): rows(...) gives a step's rows.")
+      .def(
+          "__init__",
+          [](dqk::DamperScene* self, const std::vector<int>& body_frame, const CArray& a_local,
+             const CArray& b_local, const Vec& r, const Vec& sphere, const std::vector<int>& ia,
+             const std::vector<int>& ib, const dqk::CoalPairs* exact,
+             const std::vector<int>& owner, const std::vector<int>& model_frame,
+             const std::vector<int>& leader_frames, const std::vector<int>& follower_frames,
+             double d_i, double d_s, double gain, double zero_row, Index n_l, Index n_f,
+             Index grasp_start, Index n) {
+            new (self) dqk::DamperScene(
+                body_frame, points(a_local, "a_local"), points(b_local, "b_local"), r, sphere,
+                ia, ib, exact, owner, model_frame, leader_frames, follower_frames, d_i, d_s,
+                gain, zero_row, n_l, n_f, grasp_start, n);
+          },
+          "body_frame"_a, "a_local"_a, "b_local"_a, "r"_a, "sphere"_a, "ia"_a, "ib"_a,
+          "exact"_a.none(), "owner"_a, "model_frame"_a, "leader_frames"_a,
+          "follower_frames"_a, "d_i"_a, "d_s"_a, "gain"_a, "zero_row"_a, "n_l"_a, "n_f"_a,
+          "grasp_start"_a, "n"_a, nb::keep_alive<1, 9>(),
+          "The scene's bodies and pairs (as scene_proximities reads them, exact the scene's "
+          "CoalPairs or None), each body's owner and model frame, the arms' link frames, "
+          "the damper's distances d_i and d_s [m], its gain [1/s], the zero-row threshold "
+          "and the decision vector's layout.")
+      .def(
+          "rows",
+          [](const dqk::DamperScene& self, const dqk::Chain& leader, const dqk::Chain& follower,
+             const CArray& J_object, const CArray& T_object) {
+            dqk::DamperRows d = self.rows(leader, follower, c_matrix(J_object, -1, "J_object"),
+                                          c_matrix(T_object, 4, "T_object"));
+            dqk::IndexVec pairs(static_cast<Index>(d.pairs.size()));
+            for (size_t k = 0; k < d.pairs.size(); ++k)
+              pairs[static_cast<Index>(k)] = d.pairs[k];
+            return nb::make_tuple(d.finite, out(std::move(pairs)), out(std::move(d.G)),
+                                  out(std::move(d.h)));
+          },
+          "leader"_a, "follower"_a, "J_object"_a, "T_object"_a,
+          "This step's rows: (finite, pairs, G, h); finite is False when the scene's "
+          "frames gave a non-finite distance (nothing else is computed then).");
+
   m.def(
       "damper_rows",
       [](const dqk::Chain& leader, const dqk::Chain& follower, const CArray& J_object,

@@ -1,9 +1,13 @@
-"""The compiled collision parts: the scene's measure, the damper's rows and coal's solver.
+"""The compiled collision parts: the scene's measure and the damper's rows.
 
 * the rows from the kernel (``damper_rows``) equal ``n^T (J_a(p_a) - J_b(p_b))`` written
   out here with Pinocchio's Python API (each arm's model, its frame Jacobian and the point
   offset), for both set-ups of ``test_collision_rows`` at seeded random states;
 * the kernel's measure of every capsule pair equals coal's distance of the placed shapes;
+* the limit's one kernel call (``DamperScene.rows``) equals its steps called one by one
+  (the frame stack, the measure within ``d_i``, the pairs closer than ``d_i``, their rows
+  and bounds, the rows that move), bit for bit; a non-finite frame is an error, and the
+  limit pickles and copies;
 * a scene with box pairs pickles after measuring (the kernel's coal solvers stay behind
   and are made again) and measures the same after;
 * arrays of inconsistent shapes and unknown owners or frames are errors, not crashes;
@@ -12,7 +16,9 @@
 
 from __future__ import annotations
 
+import copy
 import pickle
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -21,9 +27,11 @@ from collision_setups import experiment
 from test_collision_rows import BOTH_SLIDING, PUMA, _random_state, needs_robots
 
 from dualarm_qp._compiled import kernel
+from dualarm_qp.collision.scene import OWNERS
+from dualarm_qp.errors import NonFiniteError
 from dualarm_qp.geometry import Capsule, capsule_proximities
 from dualarm_qp.geometry.distance import coal_proximity, coal_shape
-from dualarm_qp.step.limits.collision import CollisionLimit
+from dualarm_qp.step.limits.collision import ZERO_ROW, CollisionLimit
 
 
 @pytest.fixture(scope="module", params=[
@@ -111,6 +119,75 @@ def test_measure_places_every_body_and_pair(setup) -> None:
                      (got.normal, one.normal)):
             np.testing.assert_allclose(u, v, rtol=0.0, atol=1e-13)
     assert capsules > 10
+
+
+def _rows_one_by_one(limit: CollisionLimit, ctx) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """The damper's rows by the kernel's separate calls, as the limit once made them."""
+    scene, lay = limit.scene, limit.layout
+    measured = scene.measure(limit.frames(ctx), within=limit._d_i)
+    prox = measured.prox
+    near = np.flatnonzero(prox.distance < limit._d_i)
+    pairs = measured.pairs[near]
+    owner = [OWNERS.index(b.owner) for b in scene.bodies]
+    frame = [limit._frames[OWNERS.index(b.owner)][b.link]
+             if b.owner in ("leader", "follower") else -1 for b in scene.bodies]
+    ends = [i for k in pairs.tolist() for i in (scene.pairs[k].a, scene.pairs[k].b)]
+    G = kernel.damper_rows(
+        ctx.leader_arm.chain, ctx.follower_arm.chain, ctx.carry.J_object,
+        ctx.carry.T_object[:3, 3], [owner[i] for i in ends], [frame[i] for i in ends],
+        prox.point_a[near], prox.point_b[near], prox.normal[near], lay.n_l, lay.n_f,
+        lay.grasps.start, lay.n)
+    h = limit._gain * (prox.distance[near] - limit._d_s)
+    moving = np.abs(G).max(axis=1) > ZERO_ROW
+    names = [f"clearance {scene.pairs[k].name}" for k in pairs.tolist()]
+    return [n for n, m in zip(names, moving.tolist(), strict=True) if m], G[moving], h[moving]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_one_call_is_the_steps_one_by_one(setup, seed: int) -> None:
+    exp, builder, limit = setup
+    ctx, _ = builder.context(_random_state(exp, builder.layout, np.random.default_rng(seed)))
+    got = limit.constraint(ctx)
+    names, G, h = _rows_one_by_one(limit, ctx)
+    assert list(got.row_names) == names
+    assert got.G is not None and got.h is not None
+    np.testing.assert_array_equal(got.G, G)
+    np.testing.assert_array_equal(got.h, h)
+
+
+def test_unmoved_pairs_leave_no_row() -> None:
+    """The PUMA set-up's ball lies on the leader's first joint axis: zero rows are left out."""
+    exp = experiment(*PUMA)
+    builder = exp.controller().builder
+    limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
+    ctx, _ = builder.context(exp.initial)
+    names, _, _ = _rows_one_by_one(limit, ctx)
+    within = [p.name for p in limit.scene.pairs]
+    got = limit.constraint(ctx).row_names
+    assert list(got) == names and len(got) < len(within)
+
+
+def test_a_non_finite_frame_is_an_error(setup) -> None:
+    exp, builder, limit = setup
+    ctx, _ = builder.context(exp.initial)
+    T = ctx.carry.T_object.copy()
+    T[0, 3] = np.nan
+    bad = SimpleNamespace(leader_arm=ctx.leader_arm, follower_arm=ctx.follower_arm,
+                          carry=SimpleNamespace(J_object=ctx.carry.J_object, T_object=T))
+    with pytest.raises(NonFiniteError, match="collision scene's frames"):
+        limit.constraint(bad)
+
+
+def test_the_limit_pickles_and_copies(setup) -> None:
+    exp, builder, limit = setup
+    ctx, _ = builder.context(exp.initial)
+    before = limit.constraint(ctx)
+    for other in (pickle.loads(pickle.dumps(limit)), copy.deepcopy(limit)):
+        assert other._damper is not limit._damper
+        after = other.constraint(ctx)
+        assert after.row_names == before.row_names
+        np.testing.assert_array_equal(after.G, before.G)
+        np.testing.assert_array_equal(after.h, before.h)
 
 
 def test_scene_with_box_pairs_pickles_after_measuring(setup) -> None:

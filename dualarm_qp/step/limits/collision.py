@@ -23,11 +23,14 @@ origin ``o``, ``n^T J(p) = n^T J_v + ((p - o) x n)^T J_w``.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..._compiled import kernel
 from ...collision.scene import OWNERS, CollisionScene
+from ...errors import NonFiniteError
 from ..context import StepContext
 from ..layout import Layout
 from ..parts import Constraint
@@ -68,14 +71,31 @@ class CollisionLimit:
         self._d_s = s.safety_distance
         self._d_i = s.influence_distance
         self._names = [ROW_PREFIX + p.name for p in scene.pairs]
-        # Per body, what the kernel's rows read: its owner's index in OWNERS (the kernel's
-        # codes) and its model frame (an arm's link; -1 for the object and the world).
-        self._owner = np.array([OWNERS.index(b.owner) for b in scene.bodies], dtype=np.intp)
-        self._frame = np.array([self._frames[OWNERS.index(b.owner)][b.link]
-                                if b.owner in ("leader", "follower") else -1
-                                for b in scene.bodies], dtype=np.intp)
-        self._ia = np.array([p.a for p in scene.pairs], dtype=np.intp)
-        self._ib = np.array([p.b for p in scene.pairs], dtype=np.intp)
+        self._damper = self._kernel_damper()
+
+    def _kernel_damper(self) -> Any:
+        """Return the kernel's damper of this scene (``src/kernel/clearance.cpp``).
+
+        It reads, per body, its owner's index in ``OWNERS`` (the kernel's codes) and its
+        model frame (an arm's link; -1 for the object and the world).
+        """
+        scene, lay = self.scene, self.layout
+        owner = [OWNERS.index(b.owner) for b in scene.bodies]
+        model_frame = [self._frames[OWNERS.index(b.owner)][b.link]
+                       if b.owner in ("leader", "follower") else -1 for b in scene.bodies]
+        return kernel.DamperScene(
+            *scene.measured_as(), owner, model_frame, list(self._frames[0]),
+            list(self._frames[1]), self._d_i, self._d_s, self._gain, ZERO_ROW, lay.n_l,
+            lay.n_f, lay.grasps.start, lay.n)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["_damper"] = None  # the kernel's object: made again where it is unpickled
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._damper = self._kernel_damper()
 
     def frames(self, ctx: StepContext) -> FloatArray:
         """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
@@ -85,33 +105,30 @@ class CollisionLimit:
         return self.scene.frames(leader, follower, ctx.carry.T_object)
 
     def constraint(self, ctx: StepContext) -> Constraint:
-        """Return one row per pair closer than ``d_i`` (none when every pair is farther)."""
-        frames = self.frames(ctx)
-        measured = self.scene.measure(frames, within=self._d_i)
-        prox = measured.prox
-        near = np.flatnonzero(prox.distance < self._d_i)
-        if near.size == 0:
+        """Return one row per pair closer than ``d_i`` (none when every pair is farther).
+
+        One kernel call (``kernel.DamperScene.rows``): the frame stack of
+        :meth:`frames`, the scene's :meth:`~CollisionScene.measure` within ``d_i``, and
+        for each pair closer than ``d_i`` the row ``n^T (J_a - J_b)`` and its bound. A
+        pair that no variable moves at this state (a sphere on its joint's axis against
+        an obstacle) has a zero row (largest entry at most :data:`ZERO_ROW`): no step
+        changes its distance to first order, so the row is left out (with ``h < 0`` it
+        would only make the step infeasible; the recorded clearance still judges the
+        run).
+
+        Raises
+        ------
+        NonFiniteError
+            The scene's frames give a distance that is not a number.
+        """
+        finite, pairs, G, h = self._damper.rows(ctx.leader_arm.chain, ctx.follower_arm.chain,
+                                                ctx.carry.J_object, ctx.carry.T_object)
+        if not finite:
+            raise NonFiniteError("the collision scene's frames")
+        if not len(h):
             return Constraint()
-        lay = self.layout
-        pairs = measured.pairs[near]
-        # n^T (J_a - J_b) x <= h: one kernel call for the rows (src/kernel/clearance.cpp).
-        ends = np.column_stack([self._ia[pairs], self._ib[pairs]]).ravel()
-        G = kernel.damper_rows(
-            ctx.leader_arm.chain, ctx.follower_arm.chain, ctx.carry.J_object,
-            ctx.carry.T_object[:3, 3], self._owner[ends].tolist(), self._frame[ends].tolist(),
-            prox.point_a[near], prox.point_b[near], prox.normal[near], lay.n_l, lay.n_f,
-            lay.grasps.start, lay.n)
-        h = self._gain * (prox.distance[near] - self._d_s)
-        names = [self._names[k] for k in pairs.tolist()]
-        # A pair that no variable moves at this state (a sphere on its joint's axis
-        # against an obstacle) has a zero row: no step changes its distance to first
-        # order, so the row is left out (with h < 0 it would only make the step
-        # infeasible; the recorded clearance still judges the run).
-        moving = np.abs(G).max(axis=1) > ZERO_ROW
-        if not moving.all():
-            G, h = G[moving], h[moving]
-            names = [n for n, m in zip(names, moving.tolist(), strict=True) if m]
-        return Constraint(G=G, h=h, row_names=tuple(names))
+        names = self._names
+        return Constraint(G=G, h=h, row_names=tuple([names[k] for k in pairs.tolist()]))
 
 
 def _collision(setup: LimitSetup) -> CollisionLimit | None:
