@@ -15,11 +15,6 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-# The kernel links coal's library (libcoal.so) and finds it next to the package
-# (site-packages/cmeel.prefix/lib); coal's Python package loads that same library, so
-# importing it first lets the kernel find it wherever pip put it.
-import coal  # type: ignore[import-untyped]  # noqa: F401
-
 from .errors import KernelError
 
 #: What to run when the kernel is missing or stale.
@@ -27,6 +22,19 @@ REBUILD = "run `pip install -e .` (or `pip install .`) in the project folder aga
 
 #: The kernel's sources, when the package runs from a source tree.
 SOURCES = Path(__file__).resolve().parents[1] / "src" / "kernel"
+
+# The kernel links coal's library (libcoal.so, whose name carries no version). Its
+# RUNPATH names the cmeel prefix next to the package (site-packages/cmeel.prefix/lib,
+# where the libcoal wheel puts it); coal's Python package loads that same library, and
+# importing it first is what lets the kernel find it in any other layout (a --target
+# folder, a build tree): the loader reuses a library already loaded under that name.
+try:
+    import coal  # type: ignore[import-untyped]
+except ImportError as err:  # pragma: no cover - depends on the installation
+    raise KernelError(
+        f"coal, the collision library the compiled kernel links, cannot be imported "
+        f"({err}); it comes with pin: install the pinned pin and coal "
+        f"(`pip install -e .` installs them)") from err
 
 try:
     from . import _kernel as kernel
@@ -93,6 +101,7 @@ def check_coal(installed: str, built: str = kernel.COAL_VERSION) -> None:
 
 
 check_fresh()
+check_coal(str(coal.__version__))
 
 __all__ = ["KernelError", "check_coal", "check_fresh", "check_pinocchio", "kernel",
            "source_hash"]

@@ -249,8 +249,7 @@ class CollisionScene:
         Raises
         ------
         NonFiniteError
-            A frame gives a distance that is not a number (such a pair is never skipped
-            as far).
+            A body's frame is not finite (its pairs are never skipped as far).
         """
         finite, keep, *near = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
@@ -264,10 +263,23 @@ class CollisionScene:
                                    list[int], list[int], Any]:
         """Return the bodies and pairs as the kernel measures them (``scene_proximities``).
 
-        Each body's frame in the stack, its capsule's ends and radius in that frame, its
-        bounding sphere's radius, the pairs' bodies, and the kernel's coal geometries
-        (None when no pair has a box); the kernel's damper (``kernel.DamperScene``)
-        reads the same.
+        The kernel's damper (``kernel.DamperScene``) reads the same.
+
+        Returns
+        -------
+        body_frame : list of int
+            Each body's frame in the stack of :meth:`frames`.
+        a_local, b_local : ndarray, shape (n_bodies, 3)
+            The ends of each body's capsule (a box's bounding capsule) in its frame [m].
+        r : ndarray, shape (n_bodies,)
+            Their radii [m].
+        sphere : ndarray, shape (n_bodies,)
+            The radius of each body's bounding sphere about its axis' midpoint [m].
+        ia, ib : list of int
+            The bodies of each pair.
+        exact : kernel.CoalPairs or None
+            The kernel's coal geometries and solvers of the pairs with a box (None when
+            no pair has one).
         """
         return (self._frame_list, self._a, self._b, self._r, self._sphere, self._ia_list,
                 self._ib_list, self._exact)

@@ -57,7 +57,7 @@ import coal  # type: ignore[import-untyped]
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compiled import check_coal, kernel
+from .._compiled import kernel
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 from .shapes import Box, Capsule
 
@@ -273,15 +273,13 @@ def _coal_proximity(shape_a: Capsule | Box, shape_b: Capsule | Box) -> Proximity
     return coal_proximity(geom_a, T_a, geom_b, T_b)
 
 
-#: The request of every coal call: GJK's and EPA's tolerances tightened to 1e-10. Shared
-#: and never changed (a request is read-only to coal).
-check_coal(str(coal.__version__))
-
 #: Coal's GJK and EPA tolerances [m] of every distance measured with coal (here and in
 #: the kernel's collision scene, ``kernel.CoalPairs``).
 GJK_TOLERANCE = 1e-10
 EPA_TOLERANCE = 1e-10
 
+#: The request of every coal call here: GJK's and EPA's tolerances tightened to 1e-10.
+#: Shared and never changed (a request is read-only to coal).
 _REQUEST = coal.DistanceRequest()
 _REQUEST.gjk_tolerance = GJK_TOLERANCE
 _REQUEST.epa_tolerance = EPA_TOLERANCE

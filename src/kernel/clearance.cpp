@@ -1,5 +1,7 @@
 #include "clearance.hpp"
 
+#include "coal_pairs.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -32,6 +34,10 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
     B.row(i) = (R * b_local.row(i).transpose() + p).transpose();
   }
   Proximities out;
+  if (!A.allFinite() || !B.allFinite()) {  // a body off the numbers: nothing is measured
+    out.finite = false;
+    return out;
+  }
   const bool all = !std::isfinite(within);
   for (size_t k = 0; k < ia.size(); ++k) {
     const int a = ia[k], b = ib[k];
@@ -39,8 +45,7 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
       throw std::invalid_argument("scene_proximities: no such body");
     if (!all) {
       const Point gap = 0.5 * (A.row(a) + B.row(a) - A.row(b) - B.row(b)).transpose();
-      // A NaN gap is measured (and its NaN distance reported), never skipped.
-      if (gap.norm() - sphere[a] - sphere[b] >= within) continue;
+      if (!(gap.norm() - sphere[a] - sphere[b] < within)) continue;
     }
     out.pairs.push_back(static_cast<int>(k));
   }
@@ -222,6 +227,10 @@ DamperRows DamperScene::rows(const Chain& leader, const Chain& follower,
   }
   const RowMat G = damper_rows(leader, follower, J_object, T_object.block<3, 1>(0, 3), owners,
                                model_frames, pa, pb, nrm, n_l_, n_f_, grasp_start_, n_);
+  if (!G.allFinite()) {  // a non-finite Jacobian: no row can be judged
+    out.finite = false;
+    return out;
+  }
   // Only the rows that move: n^T (J_a - J_b) x <= gain (d - d_s).
   std::vector<Eigen::Index> moving;
   for (Eigen::Index row = 0; row < k; ++row)

@@ -6,17 +6,19 @@
 #include <vector>
 
 #include "capsules.hpp"
-#include "coal_pairs.hpp"
 #include "kinematics.hpp"
 
 namespace dqk {
+
+class CoalPairs;  // coal_pairs.hpp
 
 // Owners of a body, in the order of the scene's frame stack.
 enum Owner : int { LEADER = 0, FOLLOWER = 1, OBJECT = 2, WORLD = 3 };
 
 struct Proximities {
   std::vector<int> pairs;  // indices of the measured pairs
-  bool finite = true;      // every capsule distance was finite (their sum is)
+  bool finite = true;      // every body's axis and every capsule distance was finite (when
+                           // false nothing else is filled in)
   Eigen::VectorXd distance;
   Points point_a, point_b, normal;
 };
@@ -24,8 +26,9 @@ struct Proximities {
 // Every body is a capsule (a_local, b_local, r) in frame body_frame of the stack frames
 // (4F x 4, the frames' world poses); sphere is the radius of its bounding sphere about
 // the axis' midpoint. Pairs (ia[k], ib[k]) whose bounding spheres are at least within
-// apart are skipped (within = inf measures every pair; a NaN bound is measured); the
-// others get their capsule proximity, in the pairs' order. With exact (the same bodies
+// apart are skipped (within = inf measures every pair); the others get their capsule
+// proximity, in the pairs' order. A body placed off the finite numbers makes the
+// answer not finite, whatever within (its pairs are never skipped as far). With exact (the same bodies
 // and pairs), a pair with a box (whose capsule contains the box: its distance is a lower
 // bound) is measured by coal when its capsule distance is below within, and dropped
 // otherwise (kept at its bound when within = inf, which only a non-finite distance is
@@ -60,12 +63,14 @@ RowMat damper_rows(const Chain& leader, const Chain& follower,
 // than d_i the row n^T (J_a - J_b) (damper_rows) and its bound gain (d - d_s); a row
 // whose largest entry is at most zero_row is left out (no variable moves the pair).
 struct DamperRows {
-  bool finite = true;      // the scene's frames gave finite distances (else nothing else)
+  bool finite = true;      // the scene and the rows were finite (else nothing else)
   std::vector<int> pairs;  // the scene's pair of each row
   RowMat G;
   Eigen::VectorXd h;
 };
 
+// Not to be used from two threads at once (coal's solvers keep a mutable state): the
+// bindings hold the GIL.
 class DamperScene {
  public:
   // Bodies and pairs as scene_proximities reads them (exact: null, or the scene's

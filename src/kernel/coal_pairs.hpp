@@ -19,7 +19,9 @@ namespace dqk {
 // axis centred on its origin, or a sphere of (radius).
 enum CoalKind : int { COAL_NONE = 0, COAL_BOX = 1, COAL_CAPSULE = 2, COAL_SPHERE = 3 };
 
-// The bodies' coal geometries and one coal solver per pair that has a box.
+// The bodies' coal geometries and one coal solver per pair that has a box. Not to be
+// used from two threads at once: coal's solver keeps a mutable state (its GJK solver)
+// behind a const call; the bindings hold the GIL, and must keep holding it.
 class CoalPairs {
  public:
   // Body i is kinds[i] with the numbers params.row(i) (unused ones ignored), posed by

@@ -162,20 +162,51 @@ def test_unmoved_pairs_leave_no_row() -> None:
     limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
     ctx, _ = builder.context(exp.initial)
     names, _, _ = _rows_one_by_one(limit, ctx)
-    within = [p.name for p in limit.scene.pairs]
+    measured = limit.scene.measure(limit.frames(ctx), within=limit._d_i)
+    near = int(np.count_nonzero(measured.prox.distance < limit._d_i))
     got = limit.constraint(ctx).row_names
-    assert list(got) == names and len(got) < len(within)
+    assert list(got) == names and 0 < len(got) < near
 
 
-def test_a_non_finite_frame_is_an_error(setup) -> None:
+def test_a_scene_without_boxes() -> None:
+    """No pair with a box: the scene has no coal objects and the rows are the same."""
+    name, extra = PUMA
+    obstacles = [o for o in extra["scene"]["obstacles"] if "box" not in o]
+    exp = experiment(name, {**extra, "scene": {"obstacles": obstacles}})
+    builder = exp.controller().builder
+    limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
+    assert limit.scene._exact is None
+    for seed in range(3):
+        ctx, _ = builder.context(_random_state(exp, builder.layout,
+                                               np.random.default_rng(seed)))
+        got = limit.constraint(ctx)
+        names, G, h = _rows_one_by_one(limit, ctx)
+        assert list(got.row_names) == names and names
+        np.testing.assert_array_equal(got.G, G)
+        np.testing.assert_array_equal(got.h, h)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_a_non_finite_frame_or_jacobian_is_an_error(setup, bad: float) -> None:
     exp, builder, limit = setup
     ctx, _ = builder.context(exp.initial)
     T = ctx.carry.T_object.copy()
-    T[0, 3] = np.nan
-    bad = SimpleNamespace(leader_arm=ctx.leader_arm, follower_arm=ctx.follower_arm,
-                          carry=SimpleNamespace(J_object=ctx.carry.J_object, T_object=T))
-    with pytest.raises(NonFiniteError, match="collision scene's frames"):
-        limit.constraint(bad)
+    T[0, 3] = bad
+    for T_object, J_object in ((T, ctx.carry.J_object), (ctx.carry.T_object, None)):
+        if J_object is None:  # every column in turn (the object's rows read them all)
+            for col in range(ctx.carry.J_object.shape[1]):
+                J = ctx.carry.J_object.copy()
+                J[0, col] = bad
+                off = SimpleNamespace(leader_arm=ctx.leader_arm,
+                                      follower_arm=ctx.follower_arm,
+                                      carry=SimpleNamespace(J_object=J, T_object=T_object))
+                with pytest.raises(NonFiniteError, match="collision rows"):
+                    limit.constraint(off)
+            continue
+        off = SimpleNamespace(leader_arm=ctx.leader_arm, follower_arm=ctx.follower_arm,
+                              carry=SimpleNamespace(J_object=J_object, T_object=T_object))
+        with pytest.raises(NonFiniteError, match="collision rows"):
+            limit.constraint(off)
 
 
 def test_the_limit_pickles_and_copies(setup) -> None:

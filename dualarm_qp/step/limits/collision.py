@@ -119,12 +119,12 @@ class CollisionLimit:
         Raises
         ------
         NonFiniteError
-            The scene's frames give a distance that is not a number.
+            A body's frame or a Jacobian the rows read is not finite.
         """
         finite, pairs, G, h = self._damper.rows(ctx.leader_arm.chain, ctx.follower_arm.chain,
                                                 ctx.carry.J_object, ctx.carry.T_object)
         if not finite:
-            raise NonFiniteError("the collision scene's frames")
+            raise NonFiniteError("the collision rows (the scene's frames or the Jacobians)")
         if not len(h):
             return Constraint()
         names = self._names
