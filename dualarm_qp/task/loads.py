@@ -203,7 +203,7 @@ def sliding_statics(point: FloatArray, sliding: FloatArray, turn: FloatArray) ->
     InvalidInputError
         ``sliding`` is zero.
     """
-    n = float(np.linalg.norm(sliding))
+    n = math.sqrt(float(sliding.dot(sliding)))  # np.linalg.norm's own sum, without its call
     if not n > 0.0:
         raise InvalidInputError("sliding must be a non-zero vector")
     s = sliding / n

@@ -55,6 +55,8 @@ class TorqueLimit:
         self.tau_max = np.asarray(tau_max, dtype=np.float64)
         self.layout = layout
         self._rows = np.flatnonzero(np.isfinite(self.tau_max))
+        # Every joint limited (the common case): the rows are the arrays themselves.
+        self._every = self._rows.size == self.tau_max.size
         names = layout.names
         joints = [names[j] for j in self._rows.tolist()]
         self.row_names = (tuple(f"{ROW_PREFIX}{j} max" for j in joints)
@@ -67,9 +69,12 @@ class TorqueLimit:
             return Constraint()
         s = ctx.state
         st = self.torques.linearised(s.q_l, s.q_f, s.sigma, s.sigma_leader)
-        D = ctx.dt * st.D[rows]
-        tau, lim = st.tau[rows], self.tau_max[rows]
-        return Constraint(G=np.vstack([D, -D]), h=np.r_[lim - tau, lim + tau],
+        if self._every:
+            D, tau, lim = ctx.dt * st.D, st.tau, self.tau_max
+        else:
+            D = ctx.dt * st.D[rows]
+            tau, lim = st.tau[rows], self.tau_max[rows]
+        return Constraint(G=np.concatenate((D, -D)), h=np.concatenate((lim - tau, lim + tau)),
                           row_names=self.row_names)
 
 
