@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._remade import KernelHolder
 from ..errors import InvalidInputError, NonFiniteError
 from ..geometry.distance import EPA_TOLERANCE, GJK_TOLERANCE, Proximities, coal_parts
 from ..geometry.links import arm_capsules
@@ -130,7 +131,7 @@ class Measured:
 
 
 @dataclass
-class CollisionScene:
+class CollisionScene(KernelHolder):
     """Bodies, pairs and settings of a task's collision avoidance.
 
     Attributes
@@ -147,6 +148,8 @@ class CollisionScene:
     excluded : list of (str, str)
         Pairs left out, with the reason.
     """
+
+    _kernel_attributes = ("_exact",)  # made again when unpickled (_remake)
 
     bodies: list[Body]
     pairs: list[Pair]
@@ -176,7 +179,7 @@ class CollisionScene:
         boxed = [isinstance(b.shape, Box) for b in self.bodies]
         self._boxed = [boxed[p.a] or boxed[p.b] for p in self.pairs]
         self.group_of = np.array([GROUPS.index(p.group) for p in self.pairs], dtype=np.intp)
-        self._exact = self._coal_pairs()
+        self._remake()
 
     def _coal_pairs(self) -> Any:
         """Return the kernel's coal geometries and solvers of the pairs with a box, or None."""
@@ -284,13 +287,7 @@ class CollisionScene:
         return (self._frame_list, self._a, self._b, self._r, self._sphere, self._ia_list,
                 self._ib_list, self._exact)
 
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        state["_exact"] = None  # the kernel's object: made again where it is unpickled
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+    def _remake(self) -> None:
         self._exact = self._coal_pairs()
 
     def nearest(self, frames: FloatArray) -> tuple[FloatArray, list[str]]:

@@ -46,6 +46,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from .._remade import KernelHolder
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
 from .compiled import compiled_chain, set_frame_placement, set_joint_placement
@@ -125,7 +126,7 @@ class DHTable:
 
 
 
-class SerialArm:
+class SerialArm(KernelHolder):
     """A revolute serial arm: a Pinocchio model, joint limits, base and tool poses.
 
     Parameters
@@ -168,6 +169,8 @@ class SerialArm:
     ShapeError, NonFiniteError, LimitsError, InvalidInputError
         Malformed parameters, or a model that is not one chain of revolute joints.
     """
+
+    _kernel_attributes = ("_chain",)  # made again when unpickled (_remake)
 
     def __init__(
         self,
@@ -251,15 +254,8 @@ class SerialArm:
         self.base = base  # validated by the property setters
         self.tool = tool
 
-    def __getstate__(self) -> dict[str, Any]:
-        # The kernel's copy is no Python object: a pickle holds the Pinocchio model,
-        # from which it is rebuilt.
-        state = self.__dict__.copy()
-        del state["_chain"]
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+    def _remake(self) -> None:
+        # The kernel's copy of the Pinocchio model (a pickle holds the model).
         self._chain = compiled_chain(self._model)
 
     # ------------------------------------------------------------------ basics

@@ -23,12 +23,12 @@ trace and the checks.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain, set_frame_placement, set_joint_placement
@@ -73,7 +73,7 @@ class CarryKinematics:
     J_target: FloatArray
 
 
-class CarryModel:
+class CarryModel(KernelHolder):
     """Leader arm, object and sliding grasps as one Pinocchio model.
 
     Parameters
@@ -96,6 +96,8 @@ class CarryModel:
     n_grasp : int
         Sliding grasps: 1 (follower) or 2 (follower, then leader).
     """
+
+    _kernel_attributes = ("chain",)  # made again when unpickled (_remake)
 
     def __init__(self, leader: SerialArm, surface: GraspSurface, H1: FloatArray,
                  leader_surface: GraspSurface | None = None) -> None:
@@ -141,14 +143,8 @@ class CarryModel:
         self._frames = (int(self._tool), int(self._object), int(self._target))
         self._q = np.zeros(model.nq)
 
-    def __getstate__(self) -> dict[str, Any]:
-        # The kernel's copy is rebuilt from the Pinocchio model on unpickling.
-        state = self.__dict__.copy()
-        del state["chain"]
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+    def _remake(self) -> None:
+        # The kernel's copy of the Pinocchio model.
         self.chain = compiled_chain(self.model)
 
     def place_follower(self, surface: GraspSurface) -> None:

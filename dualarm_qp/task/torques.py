@@ -31,13 +31,13 @@ one call into the compiled kernel.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
@@ -115,7 +115,7 @@ def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> Flo
     return tau
 
 
-class ArmStatics:
+class ArmStatics(KernelHolder):
     """One arm's quasi-static joint torques ``g(q) + J(q)^T w``, compiled.
 
     The kernel's copy of the arm's model (:func:`~dualarm_qp.kinematics.compiled.compiled_chain`)
@@ -130,6 +130,8 @@ class ArmStatics:
     gravity : array_like, shape (3,)
         Gravity [m/s^2], world frame.
     """
+
+    _kernel_attributes = ("_chain",)  # made again when unpickled (_remake)
 
     def __init__(self, arm: SerialArm, gravity: FloatArray) -> None:
         self.n = arm.n
@@ -158,13 +160,7 @@ class ArmStatics:
         """
         return self._chain
 
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        del state["_chain"]  # the kernel's object: rebuilt on unpickling
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+    def _remake(self) -> None:
         self._chain = self._compiled()
 
     def torque(self, q: FloatArray, wrench: FloatArray) -> FloatArray:

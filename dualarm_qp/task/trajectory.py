@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._remade import KernelHolder
 from .._validate import as_array, as_number, as_pose
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
@@ -213,7 +214,7 @@ def _pose_from(R: FloatArray, p: FloatArray) -> FloatArray:
     return T
 
 
-class WaypointTrajectory(Trajectory):
+class WaypointTrajectory(KernelHolder, Trajectory):
     """Rest-to-rest motion through SE(3) waypoints with minimum-jerk timing.
 
     On segment ``k`` (``t_k <= t <= t_{k+1}``), with ``tau = (t - t_k) / (t_{k+1} - t_k)``
@@ -246,6 +247,8 @@ class WaypointTrajectory(Trajectory):
         Fewer than two waypoints, times not strictly increasing, or an improper rotation.
     """
 
+    _kernel_attributes = ("_path",)  # made again when unpickled (_remake)
+
     def __init__(self, times: Any, poses: Any) -> None:
         ts = as_array(times, "times", (-1,))
         if ts.size < 2:
@@ -273,17 +276,10 @@ class WaypointTrajectory(Trajectory):
         self.t0 = self._times[0]
         self.tf = self._times[-1]
         self._poses = Ts
+        self._remake()
+
+    def _remake(self) -> None:
         # Every evaluation runs in the kernel, with one fixed order of every sum.
-        self._path = kernel.WaypointPath(self._times, np.concatenate(Ts))
-
-    def __getstate__(self) -> dict[str, Any]:
-        # The kernel's path is rebuilt from the times and the poses on unpickling.
-        state = self.__dict__.copy()
-        del state["_path"]
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
         self._path = kernel.WaypointPath(self._times, np.concatenate(self._poses))
 
     @property

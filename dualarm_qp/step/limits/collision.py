@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._compiled import kernel
+from ..._remade import KernelHolder
 from ...collision.scene import OWNERS, CollisionScene
 from ...errors import NonFiniteError
 from ..context import StepContext
@@ -45,7 +46,7 @@ ROW_PREFIX = "clearance "
 ZERO_ROW = 1e-12
 
 
-class CollisionLimit:
+class CollisionLimit(KernelHolder):
     """The velocity damper of every pair of a collision scene within ``d_i``.
 
     Parameters
@@ -57,6 +58,8 @@ class CollisionLimit:
     leader_frames, follower_frames : sequence of int
         Model frame ids of each arm's link frames (``SerialArm.link_frame_ids``).
     """
+
+    _kernel_attributes = ("_damper",)  # made again when unpickled (_remake)
 
     name = "collision"
     gives_rows = True
@@ -71,7 +74,7 @@ class CollisionLimit:
         self._d_s = s.safety_distance
         self._d_i = s.influence_distance
         self._names = [ROW_PREFIX + p.name for p in scene.pairs]
-        self._damper = self._kernel_damper()
+        self._remake()
 
     def _kernel_damper(self) -> Any:
         """Return the kernel's damper of this scene (``src/kernel/clearance.cpp``).
@@ -88,13 +91,7 @@ class CollisionLimit:
             list(self._frames[1]), self._d_i, self._d_s, self._gain, ZERO_ROW, lay.n_l,
             lay.n_f, lay.grasps.start, lay.n)
 
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        state["_damper"] = None  # the kernel's object: made again where it is unpickled
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
+    def _remake(self) -> None:
         self._damper = self._kernel_damper()
 
     def frames(self, ctx: StepContext) -> FloatArray:
