@@ -1,4 +1,4 @@
-"""Type stub of the compiled kernel (src/kernel/module.cpp)."""
+"""Type stub of the compiled kernel (src/kernel/module.cpp and the bind_*.cpp it calls)."""
 
 from collections.abc import Sequence
 

@@ -27,12 +27,11 @@ struct Proximities {
 // (4F x 4, the frames' world poses); sphere is the radius of its bounding sphere about
 // the axis' midpoint. Pairs (ia[k], ib[k]) whose bounding spheres are at least within
 // apart are skipped (within = inf measures every pair); the others get their capsule
-// proximity, in the pairs' order. A body placed off the finite numbers makes the
-// answer not finite, whatever within (its pairs are never skipped as far). With exact (the same bodies
-// and pairs), a pair with a box (whose capsule contains the box: its distance is a lower
-// bound) is measured by coal when its capsule distance is below within, and dropped
-// otherwise (kept at its bound when within = inf, which only a non-finite distance is
-// not below).
+// proximity, in the pairs' order. A body placed off the finite numbers makes the answer
+// not finite, whatever within (its pairs are never skipped as far). With exact (the same
+// bodies and pairs), a pair with a box (whose capsule contains the box: its distance is
+// a lower bound) is measured by coal when its capsule distance is below within, and
+// dropped otherwise (kept at its bound when within = inf).
 Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const std::vector<int>& body_frame,
                               const Eigen::Ref<const Points>& a_local,
