@@ -3,8 +3,8 @@
 A kernel object (a ``dualarm_qp._kernel`` class: a chain, a waypoint path, the collision
 scene's coal solvers) is no Python object that a pickle can hold. A class that holds
 some names them in ``_kernel_attributes`` and makes them in ``_remake``: its pickles
-(Dask sends tasks and controllers to its workers; ``copy.deepcopy`` pickles too) leave
-them out, and unpickling makes them again from the rest of the state.
+(of an arm, a task or a collision scene; ``copy.deepcopy`` pickles too) leave them out,
+and unpickling makes them again from the rest of the state.
 """
 
 from __future__ import annotations

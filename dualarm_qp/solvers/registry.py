@@ -316,6 +316,10 @@ class CertifiedSolver:
                        claims_bounds=self.info.hard_bounds)
 
     def __getattr__(self, key: str) -> Any:
+        # The wrapped solver's attributes. Never this object's own: while it is unpickled
+        # or copied, "inner" is not set yet, and looking it up here would recurse.
+        if key == "inner" or key.startswith("__"):
+            raise AttributeError(key)
         return getattr(self.inner, key)
 
     def __repr__(self) -> str:

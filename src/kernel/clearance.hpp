@@ -31,7 +31,8 @@ struct Proximities {
 // not finite, whatever within (its pairs are never skipped as far). With exact (the same
 // bodies and pairs), a pair with a box (whose capsule contains the box: its distance is
 // a lower bound) is measured by coal when its capsule distance is below within, and
-// dropped otherwise (kept at its bound when within = inf).
+// dropped otherwise (kept at its bound when within = inf, which only a non-finite
+// distance is not below; the answer is then not finite anyway).
 Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const std::vector<int>& body_frame,
                               const Eigen::Ref<const Points>& a_local,

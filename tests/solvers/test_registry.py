@@ -128,3 +128,21 @@ def test_certify_downgrades_a_false_claim() -> None:
     honest = certify(problem, good)
     assert honest.status is Status.OPTIMAL
     assert honest.objective == pytest.approx(problem.objective(good.x))
+
+
+@pytest.mark.parametrize("name", ["nullspace", "reference"])
+def test_a_certified_solver_pickles_and_copies(name: str) -> None:
+    """The wrapper forwards attributes to its solver, never its own: no recursion."""
+    import copy
+    import pickle
+
+    solver = get_solver(name)
+    problem = random_problem(np.random.default_rng(3))
+    expected = solver.solve(problem)
+    for other in (pickle.loads(pickle.dumps(solver)), copy.deepcopy(solver), copy.copy(solver)):
+        assert other.name == solver.name and other.inner is not None
+        got = other.solve(problem)
+        assert got.status is expected.status
+        np.testing.assert_array_equal(got.x, expected.x)
+    with pytest.raises(AttributeError):
+        solver.__no_such_attribute__  # noqa: B018

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from dualarm_qp.cli import main
-from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.errors import InvalidInputError, ShapeError
 from dualarm_qp.experiments import build_experiment, parse_config
 from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.limits.torque import ROW_PREFIX, TorqueLimit
@@ -63,6 +63,35 @@ def test_rows_are_the_linearised_torques() -> None:
         t1 = LoadTorques(exp.task).torques(y[:6], y[6:12], float(y[12]))
         rest.append(np.abs(t1 - (st.tau + dt * st.D @ x)).max())
     assert rest[0] < 5e-3 and rest[1] < 0.3 * rest[0], rest
+
+
+def test_every_joint_limited_gives_the_same_rows_as_a_selection() -> None:
+    """Every joint limited (the rows taken whole) and one joint less (a selection)."""
+    every = [200.0, 80.0, 60.0, 40.0, 15.0, 10.0]
+    exp = _experiment(every, torque_limits=True)
+    ctx, _ = StepBuilder(exp.task, exp.options).context(exp.initial)
+    lay = StepBuilder(exp.task, exp.options).layout
+    torques = LoadTorques(exp.task)
+    st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)
+    dt = exp.options.dt
+    for limits in (every, [200.0, 80.0, 60.0, np.inf, 15.0, 10.0]):
+        lim = np.r_[limits, limits]
+        keep = np.flatnonzero(np.isfinite(lim))
+        c = TorqueLimit(torques, lim, lay).constraint(ctx)
+        assert c.G is not None and c.h is not None
+        assert c.G.flags.c_contiguous and c.G.shape == (2 * keep.size, lay.n)
+        np.testing.assert_array_equal(c.G, np.vstack([dt * st.D[keep], -(dt * st.D[keep])]))
+        np.testing.assert_array_equal(c.h, np.r_[lim[keep] - st.tau[keep],
+                                                 lim[keep] + st.tau[keep]])
+
+
+def test_limits_of_the_wrong_length_are_refused() -> None:
+    exp = _experiment([200.0, 80.0, 60.0, 40.0, 15.0, 10.0], torque_limits=True)
+    lay = StepBuilder(exp.task, exp.options).layout
+    with pytest.raises(ShapeError, match="tau_max"):
+        TorqueLimit(LoadTorques(exp.task), np.full(3, 10.0), lay)
+    with pytest.raises(ShapeError, match="tau_max"):
+        TorqueLimit(LoadTorques(exp.task), np.float64(10.0), lay)
 
 
 def test_no_rows_when_off_and_no_leader_rows_without_leader_limits() -> None:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ...errors import ShapeError
 from ...task.torques import LoadTorques, torque_limits_of
 from ..context import StepContext
 from ..layout import Layout
@@ -53,6 +54,8 @@ class TorqueLimit:
     def __init__(self, torques: LoadTorques, tau_max: FloatArray, layout: Layout) -> None:
         self.torques = torques
         self.tau_max = np.asarray(tau_max, dtype=np.float64)
+        if self.tau_max.shape != (layout.n_l + layout.n_f,):
+            raise ShapeError("tau_max", (layout.n_l + layout.n_f,), self.tau_max.shape)
         self.layout = layout
         self._rows = np.flatnonzero(np.isfinite(self.tau_max))
         # Every joint limited (the common case): the rows are the arrays themselves.
