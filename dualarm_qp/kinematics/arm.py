@@ -170,7 +170,8 @@ class SerialArm(KernelHolder):
         Malformed parameters, or a model that is not one chain of revolute joints.
     """
 
-    _kernel_attributes = ("_chain",)  # made again when unpickled (_remake)
+    # Made again when unpickled (_remake): the kernel's chain and its empty output.
+    _kernel_attributes = ("_chain", "_no_jacobian")
 
     def __init__(
         self,
@@ -245,18 +246,18 @@ class SerialArm(KernelHolder):
             model.upperVelocityLimit = self.qd_max
         self._model = model
         self._data = model.createData()
-        self._chain = compiled_chain(model)
         self._tool_frames = (int(self._tool_id),)
-        # No Jacobian asked for: an empty (0, n) output. Sliced from a row, so that its
-        # strides are a C array's (numpy gives np.empty((0, n)) zero strides, which the
-        # kernel's in-place outputs refuse).
-        self._no_jacobian = np.empty((1, model.nq))[:0]
+        self._remake()
         self.base = base  # validated by the property setters
         self.tool = tool
 
     def _remake(self) -> None:
         # The kernel's copy of the Pinocchio model (a pickle holds the model).
         self._chain = compiled_chain(self._model)
+        # No Jacobian asked for: an empty (0, n) output. Sliced from a row, so that its
+        # strides are a C array's (numpy gives np.empty((0, n)) zero strides, which the
+        # kernel's in-place outputs refuse; so does a deep copy of this one).
+        self._no_jacobian = np.empty((1, self._model.nq))[:0]
 
     # ------------------------------------------------------------------ basics
     @property

@@ -8,6 +8,7 @@ model to 1e-12, and its Jacobians the finite differences of its poses.
 
 from __future__ import annotations
 
+import copy
 import importlib
 import pickle
 
@@ -224,18 +225,26 @@ def test_pinocchio_release_must_be_the_kernels(monkeypatch: pytest.MonkeyPatch) 
     assert _compiled.REBUILD in str(err.value)
 
 
-def test_arms_and_the_carried_object_model_pickle() -> None:
-    """The kernel's copy is rebuilt from the pickled Pinocchio model."""
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_arms_and_the_carried_object_model_pickle(how: str) -> None:
+    """The kernel's copy is rebuilt from the pickled Pinocchio model.
+
+    A deep copy too: it copies an empty array with zero strides, which the kernel's
+    in-place outputs refuse, so the arm's empty Jacobian output is made again as well.
+    """
     rng = np.random.default_rng(9)
     arm = puma560(base=random_pose(rng), tool=random_pose(rng, 0.1))
     carry = CarryModel(arm, CurvedBar(0.5, sigma_min=-0.2, sigma_max=0.3), random_pose(rng, 0.1))
     q = rng.uniform(-1.0, 1.0, 6)
-    arm2, carry2 = pickle.loads(pickle.dumps((arm, carry)))
+    arm2, carry2 = (pickle.loads(pickle.dumps((arm, carry))) if how == "pickle"
+                    else copy.deepcopy((arm, carry)))
     assert arm2.chain is not arm.chain
     T, J = arm.fk_jacobian(q)
     T2, J2 = arm2.fk_jacobian(q)
     np.testing.assert_array_equal(T2, T)
     np.testing.assert_array_equal(J2, J)
+    np.testing.assert_array_equal(arm2.fk(q), arm.fk(q))
+    np.testing.assert_array_equal(arm2.link_frames(q), arm.link_frames(q))
     kin, kin2 = carry.update(q, 0.1), carry2.update(q, 0.1)
     np.testing.assert_array_equal(kin2.T_target, kin.T_target)
     np.testing.assert_array_equal(kin2.J_target, kin.J_target)
