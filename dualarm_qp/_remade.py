@@ -1,10 +1,11 @@
 """Objects that hold the kernel's objects: pickled without them, made again (private).
 
 A kernel object (a ``dualarm_qp._kernel`` class: a chain, a waypoint path, the collision
-scene's coal solvers) is no Python object that a pickle can hold. A class that holds
-some names them in ``_kernel_attributes`` and makes them in ``_remake``: its pickles
-(of an arm, a task or a collision scene; ``copy.deepcopy`` pickles too) leave them out,
-and unpickling makes them again from the rest of the state.
+scene's coal solvers) is no Python object that a pickle can hold; nor is a native QP
+solver's module or set-up solver. A class that holds some names them in
+``_kernel_attributes`` and makes them in ``_remake``: its pickles (of an arm, a task, a
+collision scene, a controller; ``copy.deepcopy`` pickles too) leave them out, and
+unpickling makes them again from the rest of the state.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from dualarm_qp.solvers.certify import certify
 from dualarm_qp.step import build as build_module
 from dualarm_qp.step import problem as problem_module
 from dualarm_qp.step.kinematics import both_arms
-from tests.control.test_controller_verify import make_controller
+from tests.control.test_controller_verify import make_controller, stepped
 
 #: The module (the package's ``certify`` is the function of the same name).
 certify_module = importlib.import_module("dualarm_qp.solvers.certify")
@@ -89,12 +89,7 @@ def _same(one: object, two: object, where: str) -> None:
 
 def _run(solver: str, steps: int = 4) -> list[Any]:
     controller, state = make_controller(get_solver(solver))
-    outs = []
-    for _ in range(steps):
-        out = controller.step(state)
-        outs.append(out)
-        state = state.advanced(out, controller.options.dt)
-    return outs
+    return stepped(controller, state, steps)
 
 
 def _constructed(cls: type, values: dict[str, Any]) -> Any:

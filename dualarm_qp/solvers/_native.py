@@ -21,6 +21,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from .._remade import KernelHolder
 from .._signals import pass_on_sigint
 from ..step.problem import StepProblem
 
@@ -95,7 +96,7 @@ def _box(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArray]:
     return problem.b - problem.A @ c, problem.lower - c, problem.upper - c
 
 
-class OSQPNative:
+class OSQPNative(KernelHolder):
     """One ``osqp.OSQP`` object: the equality rows, the identity (box), the rows ``G``.
 
     The general rows have an upper bound only.
@@ -111,21 +112,29 @@ class OSQPNative:
     here. Without such an object the public methods are used.
     """
 
-    def __init__(self, options: dict[str, Any]) -> None:
-        import osqp
+    # The module and the solver set up at the last step: a pickle leaves them out, and
+    # its copy sets a solver up anew at its first step (its rho and duals start afresh).
+    _kernel_attributes = ("_osqp", "_solver", "_ext")
 
-        self._osqp = osqp
+    def __init__(self, options: dict[str, Any]) -> None:
         self.options = dict(options)
-        self._solver: Any = None
-        self._ext: Any = None
+        self._remake()
         self._shape: tuple[int, int, int] | None = None
         self._weights: FloatArray | None = None
         self._zero_y: FloatArray | None = None
-        self._infty = float(osqp.constant("OSQP_INFTY"))
+        self._infty = float(self._osqp.constant("OSQP_INFTY"))
         # Per-step buffers: values of [A; I] in csc order, and the bounds of [A; I] x.
         self._ax = np.zeros((0, 0))
         self._l = np.zeros(0)
         self._u = np.zeros(0)
+
+    def _remake(self) -> None:
+        """Import osqp; no solver set up yet."""
+        import osqp
+
+        self._osqp = osqp
+        self._solver: Any = None
+        self._ext: Any = None
 
     def _fill(self, problem: StepProblem) -> None:
         """Write the shifted step data into the buffers (sized for the problem's shape)."""
@@ -221,7 +230,7 @@ def _osqp_extension(solver: Any) -> Any:
     return ext if ext is not None and all(hasattr(ext, k) for k in needed) else None
 
 
-class ProxQPNative:
+class ProxQPNative(KernelHolder):
     """One ``proxsuite.proxqp.dense.QP`` with native box constraints and general rows.
 
     proxqp has no time limit. Its ``max_iter`` bounds the outer (augmented Lagrangian)
@@ -233,14 +242,22 @@ class ProxQPNative:
     #: Options passed to ``init`` rather than set on ``settings``.
     INIT_ONLY = ("compute_preconditioner",)
 
+    # The module and the problem set up at the last step: a pickle leaves them out, and
+    # its copy sets one up anew at its first step.
+    _kernel_attributes = ("_proxqp", "_qp")
+
     def __init__(self, options: dict[str, Any]) -> None:
+        self.options = dict(options)
+        self._remake()
+        self._shape: tuple[int, int, int] | None = None
+        self._weights: FloatArray | None = None
+
+    def _remake(self) -> None:
+        """Import proxqp; no problem set up yet."""
         from proxsuite import proxqp
 
         self._proxqp = proxqp
-        self.options = dict(options)
         self._qp: Any = None
-        self._shape: tuple[int, int, int] | None = None
-        self._weights: FloatArray | None = None
 
     def _rows(self, problem: StepProblem) -> tuple[Any, Any, Any]:
         """``(C, l, u)`` of the general rows in ``y`` (None without rows)."""

@@ -674,13 +674,15 @@ def _installed(solver: str) -> bool:
     return solver in qpsolvers.available_solvers
 
 
+def _qp_solver(key: str, /, **options: Any) -> QPSolver:
+    """Return a solver of backend ``key``: the registry's factory (module-level: it pickles)."""
+    return QPSolver(key, **options)
+
+
 def _register_all() -> None:
     """One registry entry per backend; available when qpsolvers can import it."""
     for key, backend in BACKENDS.items():
-        def factory(*, _key: str = key, **options: Any) -> QPSolver:
-            return QPSolver(_key, **options)
-
-        register(f"qp:{key}", factory,
+        register(f"qp:{key}", functools.partial(_qp_solver, key),
                  description=f"QP of Eq. 37 through qpsolvers/{backend.solver}",
                  available=functools.partial(_installed, backend.solver),
                  extra=backend.extra, hard_bounds=True,

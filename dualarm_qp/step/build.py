@@ -47,6 +47,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from .._frozen import made
+from .._remade import KernelHolder
 from .._validate import as_number
 from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
 from ..task.carry import CarryKinematics, CarryModel
@@ -166,7 +167,7 @@ def smallest_singular_value(J: FloatArray) -> float:
     return float(kernel.smallest_singular_value(J))
 
 
-class StepBuilder:
+class StepBuilder(KernelHolder):
     """Builds the step problems of one task under fixed options.
 
     What does not change from step to step (the layout, the weights, the limits, the
@@ -198,6 +199,9 @@ class StepBuilder:
     ShapeError
         A limit's compiled box form does not hold one number per variable.
     """
+
+    # The kernel's objects: made again when unpickled (a controller pickles whole).
+    _kernel_attributes = ("_parts", "_leader_arm", "_follower_arm")
 
     def __init__(self, task: DualArmTask, options: StepOptions, *,
                  leader_gain: float | None = None, leader_bounds: bool = True,
@@ -243,9 +247,6 @@ class StepBuilder:
         self._contact = task.contact
         self._zeros = np.zeros(lay.n)
         self._no_grasps = np.zeros(0)
-        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, n_l,
-                                         self.carry.chain)
-        self._follower_arm = ArmKinematics(follower.model, follower.data, n_f, follower.chain)
         self._labels = tuple(limit.name for limit in self.limits)
         # The limits whose box the kernel computes with the standard parts (a compiled
         # form, .limits.box_form), and the others, whose constraint(ctx) runs here.
@@ -254,6 +255,15 @@ class StepBuilder:
         self._python_limits = tuple((k, limit) for k, limit in enumerate(self.limits)
                                     if forms[k] is None)
         self._stack = LimitStack(self._labels, lay.n, [k for k, _ in self._forms])
+        self._remake()
+
+    def _remake(self) -> None:
+        """Make the kernel's parts and both arms' views of the kernel's chains."""
+        follower = self.task.follower
+        self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, self.layout.n_l,
+                                         self.carry.chain)
+        self._follower_arm = ArmKinematics(follower.model, follower.data, self.layout.n_f,
+                                           follower.chain)
         self._parts = self._make_parts()
 
     def _make_parts(self) -> kernel.StepParts:

@@ -21,6 +21,16 @@ from dualarm_qp.task.surfaces import PlaneBar
 from dualarm_qp.task.trajectory import LinearTrajectory
 
 
+def stepped(controller, state, steps: int) -> list:
+    """The outputs of ``steps`` steps from ``state``, each applied for one sample."""
+    outs = []
+    for _ in range(steps):
+        out = controller.step(state)
+        outs.append(out)
+        state = state.advanced(out, controller.options.dt)
+    return outs
+
+
 def make_controller(solver, **kw):
     """A leader and a follower closed on the paper's bar at sigma = 0.2 m."""
     leader = puma560()
