@@ -160,8 +160,9 @@ class CollisionScene(KernelHolder):
     def __post_init__(self) -> None:
         n_l, n_f = self.n_frames
         start = {"leader": 0, "follower": n_l, "object": n_l + n_f, "world": n_l + n_f + 1}
-        self._frame = np.array([start[b.owner] + max(b.link, 0) for b in self.bodies],
-                               dtype=np.intp)
+        # What the kernel's measure reads (src/kernel/clearance.cpp): each body's frame in
+        # the stack, its capsule, the pairs' bodies.
+        self._frame_list = [start[b.owner] + max(b.link, 0) for b in self.bodies]
         # Every body as a capsule in its frame: its own, or one containing its box (the
         # box's longest axis, radius the half-diagonal of the other two): for a box the
         # closed form then gives a lower bound, and coal the distance.
@@ -170,26 +171,12 @@ class CollisionScene(KernelHolder):
         self._b = np.array([c[1] for c in bounds]).reshape(-1, 3)
         self._r = np.array([c[2] for c in bounds])
         self._sphere = 0.5 * np.linalg.norm(self._b - self._a, axis=1) + self._r
-        self._ia = np.array([p.a for p in self.pairs], dtype=np.intp)
-        self._ib = np.array([p.b for p in self.pairs], dtype=np.intp)
-        # What the kernel's measure reads (src/kernel/clearance.cpp).
-        self._frame_list = self._frame.tolist()
-        self._ia_list = self._ia.tolist()
-        self._ib_list = self._ib.tolist()
+        self._ia_list = [p.a for p in self.pairs]
+        self._ib_list = [p.b for p in self.pairs]
         boxed = [isinstance(b.shape, Box) for b in self.bodies]
         self._boxed = [boxed[p.a] or boxed[p.b] for p in self.pairs]
         self.group_of = np.array([GROUPS.index(p.group) for p in self.pairs], dtype=np.intp)
         self._remake()
-
-    def _coal_pairs(self) -> Any:
-        """Return the kernel's coal geometries and solvers of the pairs with a box, or None."""
-        if not any(self._boxed):
-            return None
-        parts = [coal_parts(b.shape) for b in self.bodies]
-        return kernel.CoalPairs(
-            [p[0] for p in parts], np.array([p[1] for p in parts]).reshape(-1, 3),
-            np.concatenate([p[2] for p in parts]).reshape(-1, 4), self._ia_list,
-            self._ib_list, self._boxed, GJK_TOLERANCE, EPA_TOLERANCE)
 
     # -- names -------------------------------------------------------------------------
     @property
@@ -225,7 +212,7 @@ class CollisionScene(KernelHolder):
     def placed(self, frames: FloatArray) -> list[Capsule | Box]:
         """Every body in the world (its shape placed by its frame in ``frames``)."""
         out: list[Capsule | Box] = []
-        for body, f in zip(self.bodies, self._frame.tolist(), strict=True):
+        for body, f in zip(self.bodies, self._frame_list, strict=True):
             T = frames[f]
             shape = body.shape
             out.append(placed_capsule(shape, T) if isinstance(shape, Capsule)
@@ -288,7 +275,14 @@ class CollisionScene(KernelHolder):
                 self._ib_list, self._exact)
 
     def _remake(self) -> None:
-        self._exact = self._coal_pairs()
+        """Make the kernel's coal geometries and solvers of the pairs with a box (or None)."""
+        self._exact: Any = None
+        if any(self._boxed):
+            parts = [coal_parts(b.shape) for b in self.bodies]
+            self._exact = kernel.CoalPairs(
+                [p[0] for p in parts], np.array([p[1] for p in parts]).reshape(-1, 3),
+                np.concatenate([p[2] for p in parts]).reshape(-1, 4), self._ia_list,
+                self._ib_list, self._boxed, GJK_TOLERANCE, EPA_TOLERANCE)
 
     def nearest(self, frames: FloatArray) -> tuple[FloatArray, list[str]]:
         """Smallest distance of each group [m] (``inf`` for an empty group) and its pair."""

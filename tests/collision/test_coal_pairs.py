@@ -146,7 +146,7 @@ def _written_out(scene, frames: np.ndarray, within: float) -> tuple[np.ndarray, 
                 placed = []
                 for body, index in zip(bodies, (pair.a, pair.b), strict=True):
                     geom, local = coal_shape(body.shape)
-                    placed += [geom, frames[scene._frame[index]] @ local]
+                    placed += [geom, frames[scene._frame_list[index]] @ local]
                 one = coal_proximity(*placed)
                 d, pa, pb, n = one.distance, one.point_a, one.point_b, one.normal
         out_pairs.append(k)

@@ -23,8 +23,6 @@ origin ``o``, ``n^T J(p) = n^T J_v + ((p - o) x n)^T J_w``.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -76,8 +74,8 @@ class CollisionLimit(KernelHolder):
         self._names = [ROW_PREFIX + p.name for p in scene.pairs]
         self._remake()
 
-    def _kernel_damper(self) -> Any:
-        """Return the kernel's damper of this scene (``src/kernel/clearance.cpp``).
+    def _remake(self) -> None:
+        """Make the kernel's damper of this scene (``src/kernel/clearance.cpp``).
 
         It reads, per body, its owner's index in ``OWNERS`` (the kernel's codes) and its
         model frame (an arm's link; -1 for the object and the world).
@@ -86,13 +84,10 @@ class CollisionLimit(KernelHolder):
         owner = [OWNERS.index(b.owner) for b in scene.bodies]
         model_frame = [self._frames[OWNERS.index(b.owner)][b.link]
                        if b.owner in ("leader", "follower") else -1 for b in scene.bodies]
-        return kernel.DamperScene(
+        self._damper = kernel.DamperScene(
             *scene.measured_as(), owner, model_frame, list(self._frames[0]),
             list(self._frames[1]), self._d_i, self._d_s, self._gain, ZERO_ROW, lay.n_l,
             lay.n_f, lay.grasps.start, lay.n)
-
-    def _remake(self) -> None:
-        self._damper = self._kernel_damper()
 
     def frames(self, ctx: StepContext) -> FloatArray:
         """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
