@@ -53,9 +53,17 @@ def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLi
                     G: ArrayLike, h: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                     root_full: ArrayLike, center: ArrayLike, feas_tol: float,
                     max_iter: int, bounds: bool, eq_rtol: float, bounds_tol: float
-                    ) -> tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
-                               tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]],
-                               _Certificate | None]: ...
+                    ) -> _Solved: ...
+_Solved = tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
+                tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]], _Certificate | None]
+
+class ExactSolve:
+    def __init__(self, w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
+                 feas_tol: float, max_iter: int, bounds: bool, eq_rtol: float,
+                 bounds_tol: float) -> None: ...
+    @property
+    def n(self) -> int: ...
+
 def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
                     upper_ids: Sequence[int], n: int, pin_rtol: float
                     ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
@@ -71,6 +79,10 @@ def predicted_errors(carry: Chain, carry_frames: Sequence[int], follower: Chain,
                      sigma_l: float, x: ArrayLike, col_rate: ArrayLike, dt: float,
                      T_D: ArrayLike, e: _F) -> bool: ...
 def pose_error(T_star: ArrayLike, T: ArrayLike, e: _F) -> None: ...
+class LookaheadBound:
+    def __init__(self, n_l: int, n_f: int, dt: float, length_l: float, length_f: float,
+                 budget_pos: float, budget_rot: float, share: float) -> None: ...
+
 def negligible(x: ArrayLike, n_l: int, n_f: int, dt: float, T_tool: ArrayLike,
                T_target: ArrayLike, length_l: float, length_f: float, budget_pos: float,
                budget_rot: float, share: float) -> bool: ...
@@ -164,6 +176,10 @@ def braking_bound(D: ArrayLike, delta: ArrayLike, dt: ArrayLike) -> _F: ...
 def limit_box(kind: int, p: ArrayLike, off: ArrayLike, lo: ArrayLike, hi: ArrayLike,
               x_applied: ArrayLike, dt: float) -> tuple[_F, _F]: ...
 
+_Parts = tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
+               tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int],
+               NDArray[np.bool_], bool, list[tuple[bool, NDArray[np.int64], _F, _F]], float]
+
 class StepParts:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
@@ -172,8 +188,11 @@ class StepParts:
     def add_form(self, kind: int, p: ArrayLike, off: ArrayLike, limit: int) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
+    def add_rows(self, damper: DamperScene, limit: int) -> None: ...
     @property
     def forms(self) -> int: ...
+    @property
+    def row_forms(self) -> int: ...
     @property
     def n(self) -> int: ...
     @property
@@ -183,9 +202,15 @@ class StepParts:
                 sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
                 x_applied: ArrayLike, scale_max: float, leader_gain: float,
                 correction_gain: float, exact_orientation: bool
-                ) -> tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
-                           tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int],
-                           NDArray[np.bool_], bool, float]: ...
+                ) -> _Parts: ...
+    def prepare_solved(self, carry: Chain, q_carry: ArrayLike, col_rate: ArrayLike,
+                       follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
+                       sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
+                       x_applied: ArrayLike, scale_max: float, leader_gain: float,
+                       correction_gain: float, exact_orientation: bool, exact: ExactSolve,
+                       bound: LookaheadBound | None = None
+                       ) -> tuple[_Parts, tuple[_Solved, float, _F | None, bool | None]
+                                  | None]: ...
 
 def grasp_rate_range(r: ArrayLike, s_star: ArrayLike, r_min: ArrayLike, r_max: ArrayLike,
                      dt: float) -> tuple[float, float]: ...

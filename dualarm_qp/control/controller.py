@@ -366,12 +366,19 @@ class DualArmController:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         state = self._checked(state)
         # Checked once, here: the builder does not check the state or its own rates again.
-        build = self._builder.build_checked(state, scale_max, self._x_prev, self._x_applied)
+        # A solver that solves in the kernel solves the step in the call that builds it.
+        solver = certified(self.solver, self.tolerance)
+        builder = self._builder
+        la = self._lookahead
+        build, solved = builder.build_checked(
+            state, scale_max, self._x_prev, self._x_applied,
+            solver.kernel_solve(builder.cost.weights),
+            None if la is None else la.kernel_bound(self.options.dt))
         problem = build.problem
         t4 = time.perf_counter()
         try:
-            solution = solve_step(self.solver, problem, policy=self.policy,
-                                  tol=self.tolerance, fallback=self.fallback)
+            solution = solve_step(solver, problem, policy=self.policy, tol=self.tolerance,
+                                  fallback=self.fallback, solved=solved)
         except InfeasibleStepError as err:
             sv_l, sv_f = build.sigma_min
             raise InfeasibleStepError(
@@ -381,12 +388,15 @@ class DualArmController:
         # The solve's x clipped to the box, computed once (the look-ahead checks it).
         clipped: FloatArray | None = None
         inside: FloatArray | None = None
-        if (self._lookahead is not None and solution.status.usable
-                and solution.scale > 0.0 and scale_max > 0.0):
+        if la is not None and solution.status.usable and solution.scale > 0.0 and scale_max > 0.0:
             clipped = solution.x
-            inside = _inside(clipped, problem)
-            solution = self._within_budget(self._lookahead, state, build, solution, inside,
-                                           scale_max)
+            skip: bool | None = None
+            if solved is not None and solved[2] is not None and clipped is solved[0][1]:
+                # The kernel's answer, clipped and bounded in the call that solved it.
+                inside, skip = solved[2], solved[3]
+            else:
+                inside = _inside(clipped, problem)
+            solution = self._within_budget(la, state, build, solution, inside, scale_max, skip)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
@@ -428,23 +438,25 @@ class DualArmController:
             "status": status,
             "solution": solution,
             "build": build,
-            "times": StepTimes(build.kinematics_time, build.assembly_time, t5 - t4, t6 - t5),
+            "times": StepTimes(build.kinematics_time, build.assembly_time,
+                               t5 - t4 + (0.0 if solved is None else solved[1]), t6 - t5),
             "applied": usable_x,
         }))
 
     def _within_budget(self, la: Lookahead, state: DualArmState, build: StepBuild,
                        solution: StepSolution, build_x: FloatArray,
-                       scale_max: float) -> StepSolution:
+                       scale_max: float, skip: bool | None = None) -> StepSolution:
         """Slow the task until the errors predicted at the next sample fit the budget.
 
-        ``build_x`` is ``solution.x`` clipped to the box (what would be applied).
+        ``build_x`` is ``solution.x`` clipped to the box (what would be applied); ``skip``
+        is :meth:`Lookahead.negligible`'s answer for it when the kernel gave it already.
         Returns ``solution`` when its prediction fits (or is negligible by the bound),
         else the solve of the task scaled by the first halving of the scale whose
         prediction fits, or the one with the smallest prediction (status SCALED).
         """
         dt = self.options.dt
         problem = build.problem
-        if la.negligible(build, build_x, dt):
+        if la.negligible(build, build_x, dt) if skip is None else skip:
             return solution
         pred = la.predict_checked(state, build_x, scale_max * solution.scale, dt)
         share = pred.share(la.budget)

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from .._remade import KernelHolder
 from .._validate import as_number
 from ..errors import NonFiniteError
 from ..kinematics.arm import SerialArm
@@ -70,7 +71,7 @@ def chain_length(arm: SerialArm) -> float:
     return links + float(np.linalg.norm(model.frames[arm.tool_frame_id].placement.translation))
 
 
-class Lookahead:
+class Lookahead(KernelHolder):
     """Predicts the errors a command leaves after one sample.
 
     Parameters
@@ -88,6 +89,8 @@ class Lookahead:
         Joints of the leader and the follower (the slices of the decision vector).
     """
 
+    _kernel_attributes = ("_bound",)  # made again when unpickled (_remake)
+
     def __init__(self, task: DualArmTask, budget: tuple[float, float], carry: CarryModel,
                  n_l: int, n_f: int) -> None:
         self.task = task
@@ -95,6 +98,27 @@ class Lookahead:
         self.n_l, self.n_f = n_l, n_f
         self._carry = carry
         self._length = (chain_length(task.leader), chain_length(task.follower))
+        self._remake()
+
+    def _remake(self) -> None:
+        """Forget the kernel's bound (made again by :meth:`kernel_bound`)."""
+        self._bound: tuple[float, kernel.LookaheadBound] | None = None
+
+    def kernel_bound(self, dt: float) -> kernel.LookaheadBound:
+        """Return :meth:`negligible`'s numbers for the sample ``dt`` [s] as the kernel takes them.
+
+        What a step builder hands to the kernel so that the call that solves a step also
+        says whether the bound skips the prediction for its answer
+        (``kernel.StepParts.prepare_solved``): the same test as :meth:`negligible`. Made
+        once per ``dt``.
+        """
+        kept = self._bound
+        if kept is not None and kept[0] == dt:
+            return kept[1]
+        bound = kernel.LookaheadBound(self.n_l, self.n_f, dt, self._length[0], self._length[1],
+                                      self.budget[0], self.budget[1], SKIP_SHARE)
+        self._bound = (dt, bound)
+        return bound
 
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:
         """Whether the bound alone keeps the command's error under a tenth of the budget.

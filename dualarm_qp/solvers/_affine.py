@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from ..step.problem import StepProblem
+from ..step.problem import StepProblem, cost_root
 
 FloatArray = NDArray[np.float64]
 
@@ -153,6 +153,19 @@ def cost_arrays(problem: StepProblem) -> tuple[FloatArray, FloatArray, FloatArra
     if w.ndim == 1:
         return w, _EMPTY_MATRIX, _EMPTY_MATRIX
     return _EMPTY_VECTOR, w, problem.cost_root()
+
+
+def weight_arrays(weights: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`cost_arrays` of any problem with these ``weights`` (a builder's, before a step).
+
+    Raises
+    ------
+    InvalidInputError
+        A full weighting matrix that is not positive definite.
+    """
+    if weights.ndim == 1:
+        return weights, _EMPTY_MATRIX, _EMPTY_MATRIX
+    return _EMPTY_VECTOR, weights, cost_root(weights)
 
 
 _EMPTY_VECTOR = np.zeros(0)

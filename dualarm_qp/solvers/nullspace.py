@@ -38,8 +38,9 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from .._frozen import made
+from .._remade import KernelHolder
 from ..step.problem import StepProblem
-from ._affine import cost_arrays, keep_basis, problem_basis
+from ._affine import cost_arrays, keep_basis, problem_basis, weight_arrays
 from ._util import empty_box_answer, empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .certify import certify, verdict, verdict_fields
@@ -48,7 +49,7 @@ from .registry import check_number, check_tolerance, register
 FloatArray = NDArray[np.float64]
 
 
-class NullspaceSolver:
+class NullspaceSolver(KernelHolder):
     """Exact minimiser of Eq. 37 subject to ``A x = b``, the boxes and the rows.
 
     Parameters
@@ -64,6 +65,8 @@ class NullspaceSolver:
     """
 
     name = "nullspace"
+    # The kernel's settings of kernel_solve: made again when unpickled.
+    _kernel_attributes = ("_kernel_solve",)
 
     def __init__(self, *, feasibility_tol: float = 1e-10, max_iter: int | None = None,
                  tol: Tolerance = DEFAULT_TOLERANCE) -> None:
@@ -74,6 +77,11 @@ class NullspaceSolver:
         self.feasibility_tol = float(feasibility_tol)
         self.max_iter = max_iter
         self.tol = tol
+        self._remake()
+
+    def _remake(self) -> None:
+        """Forget the kernel's settings (made again at the next :meth:`kernel_solve`)."""
+        self._kernel_solve: tuple[tuple[Any, ...], kernel.ExactSolve] | None = None
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve one step exactly; see the module docstring."""
@@ -89,8 +97,33 @@ class NullspaceSolver:
             problem.center, self.feasibility_tol, self._max_iter())
         return self._claim(problem, code, x, rows, nullity, iterations, start)
 
+    def kernel_solve(self, weights: FloatArray, tol: Tolerance,
+                     claims_bounds: bool = True) -> kernel.ExactSolve:
+        """Return the kernel's settings of :meth:`solve_certified` for steps of these weights.
+
+        What a step builder hands to the kernel to solve a step in the call that builds
+        it (``kernel.StepParts.prepare_solved``); the answer then comes to
+        :meth:`solve_certified` as ``solved``. Made once and kept while the weights (the
+        same array), ``tol``, ``claims_bounds``, :attr:`feasibility_tol` and
+        :attr:`max_iter` stay the same.
+
+        Raises
+        ------
+        InvalidInputError
+            A full weighting matrix that is not positive definite.
+        """
+        key = (weights, tol, claims_bounds, self.feasibility_tol, self.max_iter)
+        kept = self._kernel_solve
+        if kept is not None and kept[0][0] is weights and kept[0][1:] == key[1:]:
+            return kept[1]
+        exact = kernel.ExactSolve(*weight_arrays(weights), self.feasibility_tol,
+                                  self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        self._kernel_solve = (key, exact)
+        return exact
+
     def solve_certified(self, problem: StepProblem, tol: Tolerance,
-                        claims_bounds: bool = True) -> StepSolution:
+                        claims_bounds: bool = True,
+                        solved: tuple[Any, ...] | None = None) -> StepSolution:
         """Solve one step and certify the answer, in one kernel call.
 
         What :class:`~.registry.CertifiedSolver` calls for this solver: the same
@@ -102,16 +135,27 @@ class NullspaceSolver:
         basis and the rows are kept in the problem's cache. A
         problem whose cache already holds them (a scaled copy of a solved step) is
         solved and certified by the two calls, which reuse them.
+
+        ``solved`` is that call's answer made already, with its seconds (first and second
+        in the tuple): the answer of the call that built ``problem`` and solved it with
+        :meth:`kernel_solve`'s settings for ``tol`` and ``claims_bounds``
+        (``StepParts.prepare_solved``). It is read here as this method's own call would
+        be.
         """
         start = time.perf_counter()
-        cache = problem._cache
-        if "basis" in cache and "ineq" in cache:
-            return certify(problem, self.solve(problem), tol, claims_bounds=claims_bounds)
-        w_diag, w_full, root_full = cost_arrays(problem)
-        code, x, rows, nullity, iterations, basis, ineq, reading = kernel.solve_certified(
-            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            w_diag, w_full, root_full, problem.center, self.feasibility_tol,
-            self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        if solved is not None:
+            answer, seconds = solved[0], solved[1]
+            start -= seconds
+        else:
+            cache = problem._cache
+            if "basis" in cache and "ineq" in cache:
+                return certify(problem, self.solve(problem), tol, claims_bounds=claims_bounds)
+            w_diag, w_full, root_full = cost_arrays(problem)
+            answer = kernel.solve_certified(
+                problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+                w_diag, w_full, root_full, problem.center, self.feasibility_tol,
+                self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        code, x, rows, nullity, iterations, basis, ineq, reading = answer
         if code == _EMPTY_BOX:  # not solved: the one answer to an empty box
             return certify(problem, empty_box_answer(problem, self.name,
                                                      time.perf_counter() - start),

@@ -70,7 +70,7 @@ RELAX_EPS = 1e-8
 
 def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale", *,
                tol: Tolerance = DEFAULT_TOLERANCE, relax_eps: float = RELAX_EPS,
-               fallback: StepSolver | None = None) -> StepSolution:
+               fallback: StepSolver | None = None, solved: Any = None) -> StepSolution:
     """Solve one step with ``solver`` and apply ``policy`` if the step is infeasible.
 
     Parameters
@@ -89,6 +89,10 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     fallback : StepSolver or None
         Solver for the steps that are feasible but that ``solver`` failed (and for a
         failed inner solve of ``"scale"``); None (the default) keeps the failure.
+    solved : tuple, optional
+        The kernel's answer to ``problem``, made in the call that built it with
+        ``certified(solver, tol).kernel_solve(...)``'s settings: the first solve reads
+        it instead of solving (:meth:`~.registry.CertifiedSolver.solve`).
 
     Returns
     -------
@@ -106,7 +110,7 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     if policy not in POLICIES:
         raise InvalidInputError(f"unknown policy '{policy}' (valid: {', '.join(POLICIES)})")
     solver = certified(solver, tol)
-    solution = solver.solve(problem)
+    solution = solver.solve(problem) if solved is None else solver.solve(problem, solved)
     if solution.status.usable:
         return solution
     # Policy time is counted from the first solve, which it includes.

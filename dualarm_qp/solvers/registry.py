@@ -18,6 +18,9 @@ from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance
 from .certify import certify
 
 if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
     from ..step.problem import StepProblem
 
 
@@ -45,9 +48,12 @@ class SolverInfo:
         Whether the solver takes a full (non-diagonal) weighting matrix ``W``.
     certifies_in_kernel : bool
         Whether the solver (an instance of ``factory``, a class) has
-        ``solve_certified(problem, tol, claims_bounds)``: its solve and the kernel's
-        certificate of the answer in one call, the verdict given by
-        :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver).
+        ``solve_certified(problem, tol, claims_bounds, solved=None)``: its solve and
+        the kernel's certificate of the answer in one call, the verdict given by
+        :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver);
+        and ``kernel_solve(weights, tol, claims_bounds)``: the kernel's settings of that
+        call, with which a step builder solves a step in the call that builds it
+        (``solved``).
     """
 
     name: str
@@ -297,21 +303,41 @@ class CertifiedSolver:
         self.tol = tol if tol is not None else getattr(solver, "tol", DEFAULT_TOLERANCE)
         # The registry's own solver class only (not a user's solver of the same name):
         # its solve and the kernel's certificate in one call.
-        self._in_kernel: Callable[[StepProblem, Tolerance, bool], StepSolution] | None = (
+        self._in_kernel: Callable[..., StepSolution] | None = (
             solver.solve_certified  # type: ignore[attr-defined]
             if info.certifies_in_kernel and type(solver) is info.factory else None)
         # A solver that takes rows and a full cost refuses no problem.
         self._may_refuse = not (info.takes_rows and info.dense_cost)
 
-    def solve(self, problem: StepProblem) -> StepSolution:
-        """Solve ``problem`` and certify the answer against it."""
+    def kernel_solve(self, weights: NDArray[np.float64]) -> Any:
+        """Return the kernel's settings with which a builder solves a step as it builds it.
+
+        For a solver that certifies in the kernel: its ``kernel_solve(weights, tol,
+        claims_bounds)`` with this wrapper's tolerances and its entry's claim of the
+        bounds. The answer of that call comes back through :meth:`solve`'s ``solved``.
+        None for every other solver (its solve runs after the build).
+        """
+        if self._in_kernel is None:
+            return None
+        return self.inner.kernel_solve(  # type: ignore[attr-defined]
+            weights, self.tol, self.info.hard_bounds)
+
+    def solve(self, problem: StepProblem, solved: Any = None) -> StepSolution:
+        """Solve ``problem`` and certify the answer against it.
+
+        ``solved`` is the kernel's answer to ``problem`` made with :meth:`kernel_solve`'s
+        settings in the call that built it (``StepParts.prepare_solved``); None solves.
+        """
         if self._may_refuse:
             why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
                                     not problem.diagonal_cost)
             if why is not None:
                 return failed(problem, Status.ERROR, self.name, why)
         if self._in_kernel is not None:
-            return self._in_kernel(problem, self.tol, self.info.hard_bounds)
+            return self._in_kernel(problem, self.tol, self.info.hard_bounds, solved)
+        if solved is not None:
+            raise TypeError(f"solver '{self.name}' does not solve in the kernel: no "
+                            "answer of the kernel's can be given to it")
         return certify(problem, self.inner.solve(problem), self.tol,
                        claims_bounds=self.info.hard_bounds)
 

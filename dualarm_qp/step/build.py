@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -62,8 +62,9 @@ from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
 from .limits.box_form import RANGE, BoxForm, compiled_constraint
+from .limits.row_form import RowForm, compiled_rows_constraint, is_damper
 from .options import StepOptions
-from .parts import Limit
+from .parts import Constraint, Limit
 from .problem import StepProblem
 from .stacking import PIN_RTOL, LimitStack, checked_rates
 from .state import DualArmState
@@ -162,6 +163,36 @@ def _compiled_form(limit: Limit) -> BoxForm | None:
     return None
 
 
+def _in_order(compiled: list[tuple[int, Constraint]],
+              python: Iterator[tuple[int, Constraint]]) -> Iterator[tuple[int, Constraint]]:
+    """Yield both lists' constraints by the limit's index (each list in that order).
+
+    The Python limits' constraints are asked for as they come: a limit's error is raised
+    after the constraints before it, as in a loop over the limits.
+    """
+    at = 0
+    for k, c in python:
+        while at < len(compiled) and compiled[at][0] < k:
+            yield compiled[at]
+            at += 1
+        yield k, c
+    yield from compiled[at:]
+
+
+def _compiled_rows(limit: Limit) -> RowForm | None:
+    """Return the compiled form of a limit's rows, or None (its constraint runs in Python).
+
+    A limit's rows are compiled when it declares a :class:`RowForm` holding a kernel
+    damper (``limit.compiled_rows``) and its ``constraint`` is
+    :func:`~.limits.row_form.compiled_rows_constraint`: a subclass that overrides
+    ``constraint`` runs its own.
+    """
+    if getattr(type(limit), "constraint", None) is not compiled_rows_constraint:
+        return None
+    form = getattr(limit, "compiled_rows", None)
+    return form if isinstance(form, RowForm) and is_damper(form.damper) else None
+
+
 def smallest_singular_value(J: FloatArray) -> float:
     """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
     return float(kernel.smallest_singular_value(J))
@@ -201,7 +232,7 @@ class StepBuilder(KernelHolder):
     """
 
     # The kernel's objects: made again when unpickled (a controller pickles whole).
-    _kernel_attributes = ("_parts", "_leader_arm", "_follower_arm")
+    _kernel_attributes = ("_parts", "_leader_arm", "_follower_arm", "_row_forms")
 
     def __init__(self, task: DualArmTask, options: StepOptions, *,
                  leader_gain: float | None = None, leader_bounds: bool = True,
@@ -248,18 +279,29 @@ class StepBuilder(KernelHolder):
         self._zeros = np.zeros(lay.n)
         self._no_grasps = np.zeros(0)
         self._labels = tuple(limit.name for limit in self.limits)
-        # The limits whose box the kernel computes with the standard parts (a compiled
-        # form, .limits.box_form), and the others, whose constraint(ctx) runs here.
+        # The limits whose box (a compiled form, .limits.box_form) or rows (.limits.row_form)
+        # the kernel computes with the standard parts, and the others, whose
+        # constraint(ctx) runs here.
         forms = [_compiled_form(limit) for limit in self.limits]
+        row_forms = [None if form is not None else _compiled_rows(limit)
+                     for form, limit in zip(forms, self.limits, strict=True)]
         self._forms = [(k, form) for k, form in enumerate(forms) if form is not None]
+        self._row_ids = [k for k, form in enumerate(row_forms) if form is not None]
         self._python_limits = tuple((k, limit) for k, limit in enumerate(self.limits)
-                                    if forms[k] is None)
+                                    if forms[k] is None and row_forms[k] is None)
         self._stack = LimitStack(self._labels, lay.n, [k for k, _ in self._forms])
         self._remake()
 
     def _remake(self) -> None:
-        """Make the kernel's parts and both arms' views of the kernel's chains."""
+        """Make the kernel's parts and both arms' views of the kernel's chains.
+
+        The row limits' compiled forms (their kernel dampers, which the parts compute
+        with) are read again from the limits first.
+        """
         follower = self.task.follower
+        self._row_forms: list[tuple[int, RowForm]] = [
+            (k, self.limits[k].compiled_rows)  # type: ignore[attr-defined]
+            for k in self._row_ids]
         self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, self.layout.n_l,
                                          self.carry.chain)
         self._follower_arm = ArmKinematics(follower.model, follower.data, self.layout.n_f,
@@ -285,6 +327,8 @@ class StepBuilder(KernelHolder):
                     raise ShapeError(f"the compiled box of the limit '{self._labels[k]}'",
                                      (lay.n,), values.shape)
             parts.add_form(form.kind, form.p, form.off, k)
+        for k, row_form in self._row_forms:
+            parts.add_rows(row_form.damper, k)
         # Straight grasps (and no Case 2 support, whose line moves): the kernel computes
         # their rates to the range ends from the grasp coordinates.
         lines = [line for line in (surf.line for surf in self._surfaces) if line is not None]
@@ -352,7 +396,8 @@ class StepBuilder(KernelHolder):
         """
         start = time.perf_counter()
         q_l, q_f, sigmas, x0 = self._checked(state, x_applied)
-        parts, _, support_force = self._prepared(state, q_l, q_f, sigmas, scale_max, x0, start)
+        parts, _, support_force, _ = self._prepared(state, q_l, q_f, sigmas, scale_max, x0,
+                                                    start)
         positions = self.layout.join(q_l, q_f, state.sigma, state.sigma_leader)
         return self._context(state, scale_max, positions, tuple(self._surfaces), x0, parts,
                              None), support_force
@@ -375,14 +420,19 @@ class StepBuilder(KernelHolder):
         return q_l, q_f, sigmas, x0
 
     def _prepared(self, state: DualArmState, q_l: FloatArray, q_f: FloatArray,
-                  sigmas: FloatArray, scale_max: float, x0: FloatArray, start: float
-                  ) -> tuple[tuple[Any, ...], float, float]:
-        """Return the kernel's standard parts at ``state``, their seconds and a support's push.
+                  sigmas: FloatArray, scale_max: float, x0: FloatArray, start: float,
+                  exact: Any = None, bound: Any = None
+                  ) -> tuple[tuple[Any, ...], float, float, Any]:
+        """Return the kernel's parts at ``state``, their seconds, a support's push, a solve.
 
         One kernel call (``kernel.StepParts.prepare``): both arms' kinematics, the rates
-        to the range ends, the equality, the centres and the compiled limits' boxes. The
+        to the range ends, the equality, the centres, the compiled limits' boxes and rows. The
         seconds are those of the kinematics from ``start`` (the kernel's own, last in
-        its tuple, and the Python before the call).
+        its tuple, and the Python before the call). With ``exact`` (the kernel's settings
+        of the exact solve, ``kernel.ExactSolve``) and no limit of Python's, the same
+        call also solves and certifies the step (``kernel.StepParts.prepare_solved``):
+        its answer, seconds, the answer clipped to the box and the look-ahead ``bound``'s
+        verdict on it, or None where the kernel did not solve.
         """
         sigma, sigma_l = state.sigma, state.sigma_leader
         follower, trajectory, carry = self.task.follower, self.task.trajectory, self.carry
@@ -400,11 +450,18 @@ class StepBuilder(KernelHolder):
         tasks = self.carry_tasks
         q_carry, twist = carry.configuration(q_l, sigma, sigma_l), trajectory.twist(state.t)
         called = time.perf_counter()
-        parts = self._parts.prepare(
-            carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist, sigmas,
-            grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain, tasks.correction_gain,
-            tasks.exact_orientation)
-        return parts, called - start + parts[-1], support_force
+        solved = None
+        if exact is None or self._python_limits:
+            parts = self._parts.prepare(
+                carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
+                sigmas, grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain,
+                tasks.correction_gain, tasks.exact_orientation)
+        else:
+            parts, solved = self._parts.prepare_solved(
+                carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
+                sigmas, grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain,
+                tasks.correction_gain, tasks.exact_orientation, exact, bound)
+        return parts, called - start + parts[-1], support_force, solved
 
     def _context(self, state: DualArmState, scale_max: float, positions: FloatArray,
                  surfaces: tuple[GraspSurface, ...], x0: FloatArray, parts: tuple[Any, ...],
@@ -481,33 +538,48 @@ class StepBuilder(KernelHolder):
         q_l, q_f, sigmas, x0 = self._checked(state, x_applied)
         if x_prev is not None:
             x_prev = checked_rates(x_prev, "x_prev", self.layout.n, finite=False)
-        return self._build(state, q_l, q_f, sigmas, scale_max, x_prev, x0, start)
+        return self._build(state, q_l, q_f, sigmas, scale_max, x_prev, x0, start)[0]
 
     def build_checked(self, state: DualArmState, scale_max: float,
-                      x_prev: FloatArray | None, x_applied: FloatArray) -> StepBuild:
+                      x_prev: FloatArray | None, x_applied: FloatArray,
+                      exact: Any = None, bound: Any = None) -> tuple[StepBuild, Any]:
         """:meth:`build` for a caller that checked its inputs (the controller's step).
 
         Nothing is checked again: ``state.q_l`` and ``state.q_f`` are finite float64
         arrays of the arms' lengths, ``state.sigma`` and ``state.sigma_leader`` finite
         Python floats, ``x_prev`` None or a float64 array of ``n`` numbers and
         ``x_applied`` one of ``n`` finite numbers (the controller's own answers).
+
+        Returns the build and, when ``exact`` (the solver's
+        :meth:`~dualarm_qp.solvers.registry.CertifiedSolver.kernel_solve`) is given and
+        every limit is compiled, the kernel's answer to the step made in the same call
+        (``solve_step``'s ``solved``, then the answer clipped to the box and, with
+        ``bound``, the look-ahead's :meth:`~dualarm_qp.control.lookahead.Lookahead.
+        kernel_bound`, whether its prediction may be skipped); None otherwise.
         """
         start = time.perf_counter()
         sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])
         return self._build(state, state.q_l, state.q_f, sigmas, scale_max, x_prev,
-                           x_applied, start)
+                           x_applied, start, exact, bound)
 
     def _build(self, state: DualArmState, q_l: FloatArray, q_f: FloatArray,
                sigmas: FloatArray, scale_max: float, x_prev: FloatArray | None,
-               x0: FloatArray, t0: float) -> StepBuild:
-        """Build the step from checked inputs (``t0``: when the build started)."""
-        parts, kinematics_time, support_force = self._prepared(state, q_l, q_f, sigmas,
-                                                               scale_max, x0, t0)
+               x0: FloatArray, t0: float, exact: Any = None, bound: Any = None
+               ) -> tuple[StepBuild, Any]:
+        """Build the step from checked inputs (``t0``: when the build started).
+
+        Returns the build and the kernel's answer to it when ``exact`` solved it in the
+        same call (else None).
+        """
+        parts, kinematics_time, support_force, solved = self._prepared(
+            state, q_l, q_f, sigmas, scale_max, x0, t0, exact, bound)
         (T, J_tool, J_object, J_target, J_f, e, _, _, A, b, finite, center, compiled_lo,
-         compiled_hi, box, recovering, recovers, _) = parts
+         compiled_hi, box, recovering, recovers, kernel_rows, _) = parts
         if not finite:
             raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
-        carry = CarryKinematics(T[0:4], J_tool, T[4:8], J_object, T[8:12], J_target)
+        carry = made(CarryKinematics, {  # the kernel's arrays: made unchecked
+            "T_tool": T[0:4], "J_tool": J_tool, "T_object": T[4:8], "J_object": J_object,
+            "T_target": T[8:12], "J_target": J_target})
         stack = self._stack
         lowers: list[FloatArray] = []
         lower_ids: list[int] = []
@@ -521,31 +593,42 @@ class StepBuilder(KernelHolder):
         # Taken now: the caller may move its joints in place, and a support's line moves.
         positions = self.layout.join(q_l, q_f, state.sigma, state.sigma_leader)
         surfaces = tuple(self._surfaces)
+        # The limits in the step's order: the compiled row limits' rows, which the kernel
+        # computed with the parts, between the others' constraint(ctx).
+        compiled = [(k, form.constraint(*answer)) for (k, form), answer in
+                    zip(self._row_forms, kernel_rows, strict=True)] if kernel_rows else []
+        constraints: Iterable[tuple[int, Constraint]] = compiled
         if self._python_limits:
             ctx = context = self._context(state, scale_max, positions, surfaces, x0, parts,
                                           carry)
-            for k, limit in self._python_limits:
-                c = limit.constraint(ctx)
-                if c.lower is not None:
-                    lowers.append(c.lower)
-                    lower_ids.append(k)
-                if c.upper is not None:
-                    uppers.append(c.upper)
-                    upper_ids.append(k)
-                if c.G is not None and c.h is not None and len(c.h):
-                    G_k, h_k = stack.checked_rows(k, c.G, c.h, c.row_names)
-                    G_parts.append(G_k)
-                    h_parts.append(h_k)
-                    row_ids.append(k)
-                    row_names += list(c.row_names) or [f"{limit.name} {i + 1}"
-                                                       for i in range(len(h_k))]
+            python = ((k, limit.constraint(ctx)) for k, limit in self._python_limits)
+            constraints = _in_order(compiled, python) if compiled else python
         else:  # nothing read it: made if and when someone does
             context = partial(self._context, state, scale_max, positions, surfaces, x0, parts,
                               carry)
+        for k, c in constraints:
+            if c.lower is not None:
+                lowers.append(c.lower)
+                lower_ids.append(k)
+            if c.upper is not None:
+                uppers.append(c.upper)
+                upper_ids.append(k)
+            if c.G is not None and c.h is not None and len(c.h):
+                # The kernel's rows (a compiled row limit's) are float arrays of the right
+                # shapes and finite (else refused above): only the others are checked.
+                G_k, h_k = ((c.G, c.h) if k in self._row_ids
+                            else stack.checked_rows(k, c.G, c.h, c.row_names))
+                G_parts.append(G_k)
+                h_parts.append(h_k)
+                row_ids.append(k)
+                row_names += list(c.row_names) or [f"{self._labels[k]} {i + 1}"
+                                                   for i in range(len(h_k))]
         lower, upper, lower_by, upper_by = stack.box(compiled_lo, compiled_hi, box,
                                                      lowers, lower_ids, uppers, upper_ids)
-        G, h = stack.rows(G_parts, h_parts, row_ids)
-        t2 = time.perf_counter()
+        G, h = stack.rows(G_parts, h_parts, row_ids,
+                          all_checked=not self._python_limits)
+        # The build's seconds, less a solve made in the same call (the solve's own).
+        t2 = time.perf_counter() - (0.0 if solved is None else solved[1])
         # Every part was checked where it was made (the limits' bounds and rows here):
         # the problem is assembled without a second check.
         problem = StepProblem.assembled(
@@ -561,7 +644,7 @@ class StepBuilder(KernelHolder):
         # The kernel's flag of this very array: not an init field, so that a build made
         # again with another array (dataclasses.replace) computes its own.
         object.__setattr__(build, "_recovers", recovers)
-        return build
+        return build, solved
 
     def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
                  ) -> float:

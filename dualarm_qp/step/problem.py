@@ -99,6 +99,25 @@ class Inequalities:
         return tuple(dict.fromkeys(self.label(int(i)) for i in picked))
 
 
+def cost_root(weights: FloatArray) -> FloatArray:
+    """``R`` with ``R^T R = W`` for the weights of a problem (:meth:`StepProblem.cost_root`).
+
+    ``diag(sqrt(w))`` for a diagonal cost (a vector ``w``), the upper Cholesky factor of a
+    full ``W`` otherwise.
+
+    Raises
+    ------
+    InvalidInputError
+        A full weighting matrix that is not positive definite.
+    """
+    if weights.ndim == 1:
+        return np.diag(np.sqrt(weights))
+    try:
+        return np.linalg.cholesky(weights).T
+    except np.linalg.LinAlgError as err:
+        raise InvalidInputError("the weighting matrix is not positive definite") from err
+
+
 def _c_array(value: Any) -> FloatArray:
     """``value`` as a C-ordered float64 array (a copy only when it is not one already).
 
@@ -312,15 +331,7 @@ class StepProblem:
         """
         root = self._cache.get("root")
         if root is None:
-            if self.weights.ndim == 1:
-                root = np.diag(np.sqrt(self.weights))
-            else:
-                try:
-                    root = np.linalg.cholesky(self.weights).T
-                except np.linalg.LinAlgError as err:
-                    raise InvalidInputError(
-                        "the weighting matrix is not positive definite") from err
-            self._cache["root"] = root
+            root = self._cache["root"] = cost_root(self.weights)
         return np.asarray(root)
 
     def gradient(self, x: FloatArray) -> FloatArray:
@@ -439,4 +450,4 @@ class StepProblem:
                    **fields)
 
 
-__all__ = ["Inequalities", "Names", "StepProblem"]
+__all__ = ["Inequalities", "Names", "StepProblem", "cost_root"]

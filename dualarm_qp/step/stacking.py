@@ -173,9 +173,12 @@ class LimitStack:
                              (h_k.shape[0],), (len(names),))
         return G_k, h_k
 
-    def rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int]
-             ) -> tuple[FloatArray, FloatArray]:
+    def rows(self, G_parts: list[FloatArray], h_parts: list[FloatArray], ids: list[int],
+             all_checked: bool = False) -> tuple[FloatArray, FloatArray]:
         """Return the limits' checked rows stacked, ``G`` (p, n) and ``h`` (p,).
+
+        ``all_checked``: every part is known finite (the kernel's rows of compiled row
+        limits); one such part is returned as it is.
 
         Raises
         ------
@@ -184,6 +187,10 @@ class LimitStack:
         """
         if not G_parts:
             return self._no_rows, self._no_rhs
+        if all_checked:
+            if len(G_parts) == 1:
+                return G_parts[0], h_parts[0]
+            return np.vstack(G_parts), np.concatenate(h_parts)
         G = np.vstack(G_parts)
         h = np.concatenate(h_parts)
         if kernel.first_defect([G], [h]) >= 0:

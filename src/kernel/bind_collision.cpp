@@ -140,13 +140,8 @@ void bind_collision(nb::module_& m) {
           "rows",
           [](const dqk::DamperScene& self, const dqk::Chain& leader, const dqk::Chain& follower,
              const CArray& J_object, const CArray& T_object) {
-            dqk::DamperRows d = self.rows(leader, follower, c_matrix(J_object, -1, "J_object"),
-                                          c_matrix(T_object, 4, "T_object"));
-            dqk::IndexVec pairs(static_cast<Index>(d.pairs.size()));
-            for (size_t k = 0; k < d.pairs.size(); ++k)
-              pairs[static_cast<Index>(k)] = d.pairs[k];
-            return nb::make_tuple(d.finite, out(std::move(pairs)), out(std::move(d.G)),
-                                  out(std::move(d.h)));
+            return damper_tuple(self.rows(leader, follower, c_matrix(J_object, -1, "J_object"),
+                                          c_matrix(T_object, 4, "T_object")));
           },
           "leader"_a, "follower"_a, "J_object"_a, "T_object"_a,
           "This step's rows: (finite, pairs, G, h); finite is False when the scene's "

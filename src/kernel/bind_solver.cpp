@@ -91,16 +91,8 @@ void bind_solver(nb::module_& m) {
                     G.cols() == n && h.size() == G.rows() && center.size() == n,
                 "solve_certified: arguments of inconsistent sizes");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
-        dqk::CertifiedStep s = dqk::solve_certified(A, b, lower, upper, G, h, cost, feas_tol,
-                                                    max_iter, bounds, eq_rtol, bounds_tol);
-        nb::object cert = nb::none();
-        if (s.certified) cert = certificate_tuple(std::move(s.cert));
-        return nb::make_tuple(s.empty_box ? dqk::EMPTY_BOX_CODE
-                                          : static_cast<int>(s.answer.code),
-                              out(std::move(s.answer.x)),
-                              s.answer.conflicts, s.answer.nullity, s.answer.iterations,
-                              basis_tuple(std::move(s.basis)), rows_tuple(std::move(s.rows)),
-                              cert);
+        return certified_tuple(dqk::solve_certified(A, b, lower, upper, G, h, cost, feas_tol,
+                                                    max_iter, bounds, eq_rtol, bounds_tol));
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "w_diag"_a, "w_full"_a,
       "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a, "bounds"_a, "eq_rtol"_a,
@@ -110,6 +102,25 @@ void bind_solver(nb::module_& m) {
       "inequalities(...)'s, certificate certificate(...)'s (with the KKT test) for an "
       "optimum, else None. A problem with an empty box (some lower > upper) is not "
       "solved: code EMPTY_BOX_CODE, x zero, no conflicts, an empty basis and rows.");
+
+  nb::class_<dqk::ExactSolve>(
+      m, "ExactSolve",
+      "solve_certified's settings of one controller: the cost's weights, the solver's "
+      "feasibility tolerance and iteration limit, the claim of the bounds and the "
+      "certificate's tolerances (StepParts.prepare_solved).")
+      .def(
+          "__init__",
+          [](dqk::ExactSolve* self, const Vec& w_diag, In w_full, In root_full, double feas_tol,
+             Index max_iter, bool bounds, double eq_rtol, double bounds_tol) {
+            const Index n = w_diag.size() ? w_diag.size() : w_full.rows();
+            // What cost_of accepts for a centre of n entries.
+            (void)cost_of(w_diag, w_full, root_full, Vec::Zero(n));
+            new (self) dqk::ExactSolve{w_diag, Mat(w_full), Mat(root_full), feas_tol,
+                                       max_iter, bounds, eq_rtol, bounds_tol};
+          },
+          "w_diag"_a, "w_full"_a, "root_full"_a, "feas_tol"_a, "max_iter"_a, "bounds"_a,
+          "eq_rtol"_a, "bounds_tol"_a)
+      .def_prop_ro("n", &dqk::ExactSolve::n);
 
   m.def(
       "dense_qp",

@@ -30,8 +30,11 @@
 #endif
 #include <numpy/arrayobject.h>
 
+#include "boxes.hpp"
 #include "capsules.hpp"
+#include "certified_step.hpp"
 #include "certify.hpp"
+#include "clearance.hpp"
 #include "kinematics.hpp"
 #include "linalg.hpp"
 #include "rows.hpp"
@@ -132,6 +135,26 @@ inline nb::tuple certificate_tuple(dqk::Certificate&& c) {
   return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
                         c.objective, out(std::move(c.active_lower)),
                         out(std::move(c.active_upper)), c.active_rows);
+}
+
+// solve_certified's answer as dualarm_qp/solvers/nullspace.py reads it: (code, x,
+// conflicts, nullity, iterations, basis, rows, certificate or None).
+inline nb::tuple certified_tuple(dqk::CertifiedStep&& s) {
+  nb::object cert = nb::none();
+  if (s.certified) cert = certificate_tuple(std::move(s.cert));
+  return nb::make_tuple(s.empty_box ? dqk::EMPTY_BOX_CODE : static_cast<int>(s.answer.code),
+                        out(std::move(s.answer.x)), s.answer.conflicts, s.answer.nullity,
+                        s.answer.iterations, basis_tuple(std::move(s.basis)),
+                        rows_tuple(std::move(s.rows)), cert);
+}
+
+// A step's collision rows as dualarm_qp/step/limits/collision.py reads them: (finite,
+// pairs, G, h).
+inline nb::tuple damper_tuple(dqk::DamperRows&& d) {
+  dqk::IndexVec pairs(static_cast<Index>(d.pairs.size()));
+  for (size_t k = 0; k < d.pairs.size(); ++k) pairs[static_cast<Index>(k)] = d.pairs[k];
+  return nb::make_tuple(d.finite, out(std::move(pairs)), out(std::move(d.G)),
+                        out(std::move(d.h)));
 }
 
 inline void require(bool ok, const char* what) {

@@ -112,6 +112,15 @@ void StepParts::add_form(int kind, const Vec& p, const BoolVec& off, std::int64_
   forms_.push_back(BoxForm{kind, p, off, limit});
 }
 
+void StepParts::add_rows(const DamperScene* damper, std::int64_t limit) {
+  if (damper == nullptr) throw std::invalid_argument("StepParts.add_rows: no damper");
+  if (limit < 0 || (!damper_limits_.empty() && limit <= damper_limits_.back()))
+    throw std::invalid_argument(
+        "StepParts.add_rows: the limits' indices are >= 0 and increase from one to the next");
+  dampers_.push_back(damper);
+  damper_limits_.push_back(limit);
+}
+
 void StepParts::add_grasp_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max,
                                double sigma_min, double sigma_max) {
@@ -205,6 +214,10 @@ StepPartsOut StepParts::prepare(Chain& carry, const Eigen::VectorXd& q_carry,
     o.recovering(i) = ranged_(i) && (o.lo(i) > 0.0 || o.hi(i) < 0.0);
     o.any_recovering = o.any_recovering || o.recovering(i);
   }
+  // The compiled row limits at the kinematics the chains now hold (what their
+  // constraint(ctx) computes from the same chains, J_object and T_object).
+  for (const DamperScene* damper : dampers_)
+    o.rows.push_back(damper->rows(carry, follower, o.J_object, o.T.middleRows(4, 4)));
   return o;
 }
 

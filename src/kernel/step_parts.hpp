@@ -2,15 +2,17 @@
 // (step_kinematics, without the smallest singular values: computed when read), the
 // Jacobians in decision order, the rates that reach each
 // variable's range ends, the equality (carry_equality), the centring cost's centres
-// (centre) and the boxes of the standard limits that declare a compiled form (range,
-// speed, acceleration; limit_box). The Python layer wraps the outputs without copies and
-// stacks the limits that have no compiled form (collision, torque, a user's own).
+// (centre), the boxes of the standard limits that declare a compiled form (range,
+// speed, acceleration; limit_box) and the rows of those that compute them here (the
+// collision scene's damper). The Python layer wraps the outputs without copies and
+// stacks the limits that have no compiled form (torque, a user's own).
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "boxes.hpp"
+#include "clearance.hpp"
 #include "equality.hpp"
 #include "kinematics.hpp"
 #include "linalg.hpp"
@@ -69,6 +71,7 @@ struct StepPartsOut {
   Box box;          // the compiled forms' boxes intersected (intersect_boxes, pin_rtol)
   BoolVec recovering;  // (n) ranged variables outside their range (lo > 0 or hi < 0)
   bool any_recovering = false;  // recovering holds a true
+  std::vector<DamperRows> rows;  // each compiled row limit's rows, in the limits' order
   double kinematics_seconds = 0.0;  // the kinematics' share of the call
 };
 
@@ -90,7 +93,11 @@ class StepParts {
   void add_grasp_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                       const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max,
                       double sigma_min, double sigma_max);
+  // A limit whose rows the kernel computes with the parts: a collision scene's damper
+  // (which must outlive this); limit is its index in the step's order (increasing).
+  void add_rows(const DamperScene* damper, std::int64_t limit);
   Index forms() const { return static_cast<Index>(forms_.size()); }
+  Index row_forms() const { return static_cast<Index>(dampers_.size()); }
   Index n() const { return n_; }
   bool grasp_lines() const { return static_cast<Index>(lines_.size()) == k_; }
 
@@ -119,6 +126,8 @@ class StepParts {
   double pin_rtol_;
   std::vector<BoxForm> forms_;
   std::vector<GraspLine> lines_;
+  std::vector<const DamperScene*> dampers_;
+  std::vector<std::int64_t> damper_limits_;
 };
 
 }  // namespace dqk

@@ -150,6 +150,10 @@ def reference_qp_rows(problem: StepProblem) -> np.ndarray | None:
             except np.linalg.LinAlgError:
                 continue
             sol += np.linalg.solve(K, rhs - K @ sol)
+            # A singular K that the solve did not notice gives no KKT point: its answer
+            # misses the system (seen: A x - b of 0.03 with five rows active).
+            if np.abs(K @ sol - rhs).max() > 1e-9 * max(1.0, float(np.abs(rhs).max())):
+                continue
             x, mu = sol[:n], sol[n + m:]
             if (C @ x - e > 1e-9 * np.maximum(1.0, np.abs(e))).any():
                 continue

@@ -25,6 +25,8 @@ from test_braking_bound import numpy_braking_bound
 
 from dualarm_qp._compiled import kernel
 from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.solvers.base import DEFAULT_TOLERANCE
+from dualarm_qp.solvers.nullspace import NullspaceSolver
 from dualarm_qp.step.bounds import grasp_rate_range, grasp_rates
 from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.kinematics import both_arms
@@ -469,27 +471,36 @@ def test_grasp_rate_range_refuses_what_is_not_numbers() -> None:
 
 @pytest.mark.parametrize("name", NAMES)
 def test_the_checked_build_is_the_build(name: str) -> None:
-    """What the controller calls (its own checked inputs) builds the same step, bit for bit."""
+    """What the controller calls (its own checked inputs) builds the same step, bit for bit,
+    with and without the exact solve in the same kernel call."""
     exp = _experiment(name)
     builder = exp.controller().builder
+    exact = NullspaceSolver().kernel_solve(builder.cost.weights, DEFAULT_TOLERANCE)
     rng = np.random.default_rng(11)
     for _ in range(3):
         state = _state(exp, builder, rng)
         x_prev, x_applied = rng.normal(0.0, 0.1, (2, builder.layout.n))
         a = builder.build(state, scale_max=0.75, x_prev=x_prev, x_applied=x_applied)
-        b = builder.build_checked(state, 0.75, x_prev, x_applied)
-        for field in ("A", "b", "weights", "center", "lower", "upper", "G", "h", "x_prev"):
-            _equal(getattr(a.problem, field), getattr(b.problem, field), field)
-        assert (a.problem.lower_by, a.problem.upper_by, a.problem.row_names) == (
-            b.problem.lower_by, b.problem.upper_by, b.problem.row_names)
-        for field in ("recovering", "closure_error", "leader_error", "T_f", "J_f"):
-            _equal(getattr(a, field), getattr(b, field), field)
+        b, unsolved = builder.build_checked(state, 0.75, x_prev, x_applied)
+        c, solved = builder.build_checked(state, 0.75, x_prev, x_applied, exact)
+        assert unsolved is None
+        # The kernel solves in the same call when every limit is compiled.
+        assert (solved is not None) == (not builder._python_limits)
+        for built in (b, c):
+            for field in ("A", "b", "weights", "center", "lower", "upper", "G", "h",
+                          "x_prev"):
+                _equal(getattr(a.problem, field), getattr(built.problem, field), field)
+            assert (a.problem.lower_by, a.problem.upper_by, a.problem.row_names) == (
+                built.problem.lower_by, built.problem.upper_by, built.problem.row_names)
+            for field in ("recovering", "closure_error", "leader_error", "T_f", "J_f"):
+                _equal(getattr(a, field), getattr(built, field), field)
 
 
 @pytest.mark.parametrize("name", ["puma_beam_limits", "both_sliding_bar", "ur5_pair_collision",
                                   "puma_beam_support"])
 def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
-    """Without a limit that reads it during the build, the context is made on first read:
+    """Without a limit that reads it during the build (every limit compiled, the collision
+    rows too), the context is made on first read:
     once, equal to the builder's context at the same state, with the build's values,
     even when read after later steps at other states and after the caller moved its
     joint arrays in place (the positions are a copy taken at the step)."""
@@ -509,7 +520,9 @@ def test_the_context_is_made_when_first_read(name: str, monkeypatch) -> None:
 
     monkeypatch.setattr(StepBuilder, "_context", counting)
     build = builder.build(state)
-    reads_it = any(not getattr(limit, "compiled", None) for limit in builder.limits)
+    # Limits with a compiled box or compiled rows (the collision limit) are the kernel's.
+    reads_it = any(not getattr(limit, "compiled", None)
+                   and not getattr(limit, "compiled_rows", None) for limit in builder.limits)
     assert len(made) == (1 if reads_it else 0)
     sv = build.sigma_min  # read before the context: computed once and handed over
     for _ in range(2):  # later steps elsewhere; the caller's arrays moved in place

@@ -29,11 +29,10 @@ from numpy.typing import NDArray
 from ..._compiled import kernel
 from ..._remade import KernelHolder
 from ...collision.scene import OWNERS, CollisionScene
-from ...errors import NonFiniteError
 from ..context import StepContext
 from ..layout import Layout
-from ..parts import Constraint
 from .registry import LimitSetup, register_limit
+from .row_form import RowForm, compiled_rows_constraint
 
 FloatArray = NDArray[np.float64]
 
@@ -42,6 +41,9 @@ ROW_PREFIX = "clearance "
 
 #: A row whose largest entry is below this [m/s per unit rate] moves nothing.
 ZERO_ROW = 1e-12
+
+#: What a non-finite frame or Jacobian of the rows is called in the error.
+NONFINITE = "the collision rows (the scene's frames or the Jacobians)"
 
 
 class CollisionLimit(KernelHolder):
@@ -71,7 +73,7 @@ class CollisionLimit(KernelHolder):
         self._gain = s.approach_speed_max / s.band
         self._d_s = s.safety_distance
         self._d_i = s.influence_distance
-        self._names = [ROW_PREFIX + p.name for p in scene.pairs]
+        self._names = tuple(ROW_PREFIX + p.name for p in scene.pairs)
         self._remake()
 
     def _remake(self) -> None:
@@ -96,31 +98,25 @@ class CollisionLimit(KernelHolder):
         follower = ctx.follower_arm.frame_poses(ff)
         return self.scene.frames(leader, follower, ctx.carry.T_object)
 
-    def constraint(self, ctx: StepContext) -> Constraint:
-        """Return one row per pair closer than ``d_i`` (none when every pair is farther).
+    @property
+    def compiled_rows(self) -> RowForm:
+        """The rows' compiled form: the kernel's damper of this scene (``.row_form``).
 
-        One kernel call (``kernel.DamperScene.rows``): the frame stack of
-        :meth:`frames`, the scene's :meth:`~CollisionScene.measure` within ``d_i``, and
-        for each pair closer than ``d_i`` the row ``n^T (J_a - J_b)`` and its bound. A
-        pair that no variable moves at this state (a sphere on its joint's axis against
-        an obstacle) has a zero row (largest entry at most :data:`ZERO_ROW`): no step
-        changes its distance to first order, so the row is left out (with ``h < 0`` it
-        would only make the step infeasible; the recorded clearance still judges the
-        run).
-
-        Raises
-        ------
-        NonFiniteError
-            A body's frame or a Jacobian the rows read is not finite.
+        At each step, one kernel call (``kernel.DamperScene.rows``) computes the frame
+        stack of :meth:`frames`, the scene's :meth:`~CollisionScene.measure` within
+        ``d_i``, and for each pair closer than ``d_i`` the row ``n^T (J_a - J_b)`` and its
+        bound. A pair that no variable moves at this state (a sphere on its joint's axis
+        against an obstacle) has a zero row (largest entry at most :data:`ZERO_ROW`): no
+        step changes its distance to first order, so the row is left out (with ``h < 0``
+        it would only make the step infeasible; the recorded clearance still judges the
+        run). A body's frame or a Jacobian the rows read that is not finite is a
+        :class:`~dualarm_qp.errors.NonFiniteError`.
         """
-        finite, pairs, G, h = self._damper.rows(ctx.leader_arm.chain, ctx.follower_arm.chain,
-                                                ctx.carry.J_object, ctx.carry.T_object)
-        if not finite:
-            raise NonFiniteError("the collision rows (the scene's frames or the Jacobians)")
-        if not len(h):
-            return Constraint()
-        names = self._names
-        return Constraint(G=G, h=h, row_names=tuple([names[k] for k in pairs.tolist()]))
+        return RowForm(self._damper, self._names, NONFINITE)
+
+    #: One row per pair closer than ``d_i`` (none when every pair is farther): the rows of
+    #: :attr:`compiled_rows` at the context's kinematics.
+    constraint = compiled_rows_constraint
 
 
 def _collision(setup: LimitSetup) -> CollisionLimit | None:

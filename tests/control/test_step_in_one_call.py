@@ -1,0 +1,263 @@
+"""The controller's step in one kernel call: the parts, the collision rows and the exact
+solve with its certificate (``kernel.StepParts.prepare_solved``).
+
+The one call must give what the calls one by one give, bit for bit: the build, the
+answer, its certificate and every field the controller reports. A limit of Python's
+(the torque limit, a user's own) keeps the calls one by one; a compiled row limit's rows
+join the others in the limits' order.
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_controller_verify import stepped
+
+from dualarm_qp import Constraint
+from dualarm_qp._compiled import kernel
+from dualarm_qp.errors import NonFiniteError
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.solvers import Status, Tolerance, certified, solve_step
+from dualarm_qp.solvers.base import DEFAULT_TOLERANCE
+from dualarm_qp.solvers.nullspace import NullspaceSolver
+from dualarm_qp.step.limits import CollisionLimit
+from dualarm_qp.step.limits.row_form import RowForm
+from dualarm_qp.step.state import DualArmState
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+#: Compiled limits only (boxes; collision rows with capsules and with boxes), and one
+#: with a limit of Python's (the torque rows).
+ONE_CALL = ("puma_beam_limits", "panda_pair_accel", "both_sliding_bar", "ur5_pair_collision",
+            "puma_beam_pillar", "panda_pair_shelf")
+PYTHON_LIMIT = ("ur5_pair_heavy_bar",)
+
+
+def _experiment(name: str, solver: str = "nullspace"):
+    path = CONFIGS / f"{name}.yaml"
+    return build_experiment(load_config(path), str(path), solver=solver)
+
+
+def _states(exp, n: int, seed: int) -> list[tuple[DualArmState, float]]:
+    """States along the run (every fifth sample) moved a little, and the scale_max of
+    each (some slowed)."""
+    rng = np.random.default_rng(seed)
+    ctrl = exp.controller()
+    dt = ctrl.options.dt
+    state = exp.initial
+    out = []
+    for k in range(5 * n):
+        if k % 5 == 0:
+            out.append((DualArmState(state.t, state.q_l + rng.normal(0.0, 0.002, state.q_l.shape),
+                                     state.q_f + rng.normal(0.0, 0.002, state.q_f.shape),
+                                     state.sigma, state.sigma_leader),
+                        float(rng.choice([1.0, 0.5]))))
+        state = state.advanced(ctrl.step(state), dt)
+    return out
+
+
+def _same(a: object, b: object, what: str) -> None:
+    if isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape, what
+        assert np.array_equal(a, b, equal_nan=True), what
+        if a.dtype.kind == "f":
+            assert np.array_equal(np.signbit(a), np.signbit(b)), f"{what}: a zero's sign"
+    elif isinstance(a, float) and isinstance(b, float) and a != a:
+        assert b != b, what
+    else:
+        assert a == b, what
+
+
+def _same_solution(a, b) -> None:
+    for field in ("x", "status", "objective", "eq_residual", "bound_violation",
+                  "active_lower", "active_upper", "message", "scale", "solver",
+                  "row_violation", "active_rows"):
+        _same(getattr(a, field), getattr(b, field), field)
+    assert {k: v for k, v in a.extras.items()} == {k: v for k, v in b.extras.items()}
+
+
+@pytest.mark.parametrize("name", ONE_CALL + PYTHON_LIMIT)
+def test_one_call_gives_what_the_calls_one_by_one_give(name: str) -> None:
+    """The build and the certified answer of the one call equal those of the build and
+    then the solve, bit for bit, at states near the start (full speed and slowed)."""
+    exp = _experiment(name)
+    ctrl = exp.controller()
+    builder = ctrl.builder
+    solver = certified(ctrl.solver, ctrl.tolerance)
+    exact = solver.kernel_solve(builder.cost.weights)
+    assert isinstance(exact, kernel.ExactSolve)
+    for state, scale_max in _states(exp, 6, 5):
+        x_applied = np.zeros(builder.n)
+        one, solved = builder.build_checked(state, scale_max, None, x_applied, exact)
+        apart, unsolved = builder.build_checked(state, scale_max, None, x_applied)
+        assert unsolved is None
+        assert (solved is None) == (name in PYTHON_LIMIT)
+        for field in ("A", "b", "weights", "center", "lower", "upper", "G", "h"):
+            _same(getattr(one.problem, field), getattr(apart.problem, field), field)
+        assert one.problem.names == apart.problem.names
+        for field in ("recovering", "closure_error", "leader_error", "T_f", "J_f"):
+            _same(getattr(one, field), getattr(apart, field), field)
+        first = solve_step(solver, one.problem, policy=ctrl.policy, tol=ctrl.tolerance,
+                           solved=solved)
+        second = solve_step(solver, apart.problem, policy=ctrl.policy, tol=ctrl.tolerance)
+        _same_solution(first, second)
+
+
+@pytest.mark.parametrize("name", ONE_CALL[:4])
+def test_a_controller_steps_as_with_the_calls_one_by_one(name: str, monkeypatch) -> None:
+    """A whole run of steps through the one call equals the same run with the calls one
+    by one (the solver's kernel settings withheld), in every output the rollout records."""
+    exp = _experiment(name)
+    state = exp.initial
+    one = stepped(exp.controller(), state, 40)
+    monkeypatch.setattr(type(exp.controller().solver), "kernel_solve",
+                        lambda self, weights: None)
+    apart = stepped(exp.controller(), state, 40)
+    for a, b in zip(one, apart, strict=True):
+        for field in ("ql_dot", "qf_dot", "m", "m_leader", "scale", "status", "applied"):
+            _same(getattr(a, field), getattr(b, field), field)
+        _same_solution(a.solution, b.solution)
+        _same(a.build.sigma_min, b.build.sigma_min, "sigma_min")
+
+
+def test_the_one_call_is_used_when_every_limit_is_compiled() -> None:
+    """The controller's build comes with the kernel's answer exactly when the solver
+    solves in the kernel and no limit runs in Python; the times split the solve out."""
+    exp = _experiment("ur5_pair_collision")
+    ctrl = exp.controller()
+    calls: list[bool] = []
+    real = type(ctrl.builder).build_checked
+
+    def spy(self, *args):
+        build, solved = real(self, *args)
+        calls.append(solved is not None)
+        return build, solved
+
+    type(ctrl.builder).build_checked = spy  # type: ignore[method-assign]
+    try:
+        out = ctrl.step(exp.initial)
+        assert calls == [True]
+        assert out.times.solve > 0.0 and out.times.assembly > 0.0
+        qp = _experiment("ur5_pair_collision", "qp:daqp").controller()
+        qp.step(exp.initial)
+        assert calls == [True, False]  # a QP backend solves after the build
+        heavy = _experiment("ur5_pair_heavy_bar").controller()
+        heavy.step(_experiment("ur5_pair_heavy_bar").initial)
+        assert calls == [True, False, False]  # the torque rows are Python's
+    finally:
+        type(ctrl.builder).build_checked = real  # type: ignore[method-assign]
+
+
+class Wall:
+    """A user's own limit: the follower's tool stays below a height (one row)."""
+
+    name = "wall"
+    gives_rows = True
+
+    def __init__(self, z: float) -> None:
+        self.z = z
+
+    def constraint(self, ctx):
+        G = np.zeros((1, ctx.layout.n))
+        G[0, ctx.layout.follower] = ctx.J_f[2]
+        return Constraint(G=G, h=np.array([(self.z - ctx.T_f[2, 3]) / ctx.dt]),
+                          row_names=("wall",))
+
+
+class OwnCollision(CollisionLimit):
+    """A collision limit whose constraint is its own: it runs in Python."""
+
+    def constraint(self, ctx):
+        return CollisionLimit.compiled_rows.fget(self).constraint(  # type: ignore[attr-defined]
+            *self.compiled_rows.damper.rows(ctx.leader_arm.chain, ctx.follower_arm.chain,
+                                            ctx.carry.J_object, ctx.carry.T_object))
+
+
+def test_compiled_rows_keep_the_limits_order_with_python_limits() -> None:
+    """The collision rows (the kernel's) and a user's rows (Python's) stack in the limits'
+    order, as each limit's constraint(ctx) gives them; a subclass that overrides
+    ``constraint`` runs its own and gives the same rows."""
+    exp = _experiment("ur5_pair_collision")
+    base = exp.controller()
+    collision = next(lim for lim in base.builder.limits if isinstance(lim, CollisionLimit))
+    z = float(exp.controller().builder.build(exp.initial).T_f[2, 3]) + 0.01
+    ctrl = type(base)(exp.task, base.solver, base.options, limits=[Wall(z)])
+    builder = ctrl.builder
+    assert [k for k, _ in builder._row_forms] == [builder.limits.index(
+        next(lim for lim in builder.limits if isinstance(lim, CollisionLimit)))]
+    for state, scale_max in _states(exp, 5, 9):
+        build = builder.build(state, scale_max=scale_max)
+        ctx = build.context
+        rows = [limit.constraint(ctx) for limit in builder.limits if limit.gives_rows]
+        G = np.vstack([c.G for c in rows if c.G is not None and len(c.h)])
+        h = np.concatenate([c.h for c in rows if c.h is not None and len(c.h)])
+        names = [name for c in rows if c.h is not None and len(c.h) for name in c.row_names]
+        _same(build.problem.G, G, "G")
+        _same(build.problem.h, h, "h")
+        assert list(build.problem.row_names) == names and names[-1] == "wall"
+    own = OwnCollision(collision.scene, collision.layout, *collision._frames)
+    assert own.compiled_rows is not None
+    mixed = type(base)(exp.task, base.solver, base.options, limits=[own])
+    assert any(lim is own for _, lim in mixed.builder._python_limits)
+    for state, scale_max in _states(exp, 3, 4):
+        a = base.builder.build(state, scale_max=scale_max).problem
+        b = mixed.builder.build(state, scale_max=scale_max).problem
+        # The scene's rows twice: the standard limit's (compiled), then the user's own.
+        _same(b.G, np.vstack([a.G, a.G]) if len(a.h) else a.G, "G")
+
+
+def test_non_finite_compiled_rows_are_refused() -> None:
+    """A damper that found a frame or a Jacobian off the finite numbers is an error."""
+    form = RowForm(None, ("clearance a-b",), "the collision rows (the test's)")
+    with pytest.raises(NonFiniteError, match="the test's"):
+        form.constraint(False, np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros(0))
+    c = form.constraint(True, np.array([0]), np.ones((1, 3)), np.array([2.0]))
+    assert c.row_names == ("clearance a-b",) and c.h.tolist() == [2.0]
+    assert form.constraint(True, np.zeros(0, dtype=np.int64), np.zeros((0, 3)),
+                           np.zeros(0)).G is None
+
+
+def test_the_kernel_settings_are_kept_while_nothing_changes() -> None:
+    """``kernel_solve`` makes the kernel's settings once and again only when the weights,
+    the tolerances, the claim or the solver's own settings change; a copy makes its own."""
+    solver = NullspaceSolver()
+    w = np.ones(13)
+    first = solver.kernel_solve(w, DEFAULT_TOLERANCE)
+    assert solver.kernel_solve(w, DEFAULT_TOLERANCE) is first
+    assert solver.kernel_solve(w.copy(), DEFAULT_TOLERANCE) is not first
+    changed = [solver.kernel_solve(w, Tolerance(equality=1e-6)),
+               solver.kernel_solve(w, DEFAULT_TOLERANCE, claims_bounds=False)]
+    solver.feasibility_tol = 1e-9
+    changed.append(solver.kernel_solve(w, DEFAULT_TOLERANCE))
+    solver.max_iter = 50
+    changed.append(solver.kernel_solve(w, DEFAULT_TOLERANCE))
+    assert len({id(e) for e in [*changed, first]}) == 5
+    for clone in (pickle.loads(pickle.dumps(solver)), copy.deepcopy(solver)):
+        assert clone.kernel_solve(w, DEFAULT_TOLERANCE).n == 13
+    full = solver.kernel_solve(np.diag(np.arange(1.0, 14.0)), DEFAULT_TOLERANCE)
+    assert full.n == 13
+
+
+def test_the_one_call_refuses_settings_of_another_size() -> None:
+    exp = _experiment("puma_beam_limits")
+    builder = exp.controller().builder
+    wrong = NullspaceSolver().kernel_solve(np.ones(builder.n + 1), DEFAULT_TOLERANCE)
+    with pytest.raises(ValueError, match="another size"):
+        builder.build_checked(exp.initial, 1.0, None, np.zeros(builder.n), wrong)
+    with pytest.raises(ValueError, match="cost"):
+        kernel.ExactSolve(np.ones(3), np.ones((2, 2)), np.zeros((0, 0)), 1e-10, -1, True,
+                          1e-7, 1e-7)
+
+
+def test_a_solver_that_does_not_solve_in_the_kernel_takes_no_kernel_answer() -> None:
+    exp = _experiment("puma_beam_limits", "qp:daqp")
+    ctrl = exp.controller()
+    solver = certified(ctrl.solver, ctrl.tolerance)
+    assert solver.kernel_solve(ctrl.builder.cost.weights) is None
+    build = ctrl.builder.build(exp.initial)
+    with pytest.raises(TypeError, match="does not solve in the kernel"):
+        solver.solve(build.problem, ("an answer", 0.0))
+    assert solver.solve(build.problem).status is Status.OPTIMAL
