@@ -209,8 +209,10 @@ inline dqk::Cost cost_of(const Vec& w_diag, const In& w_full, const In& root_ful
   return dqk::Cost(w_diag, w_full, root_full, center);
 }
 
-// The bindings of the exact solver, the factorisations and the certificate
-// (bind_solver.cpp), and of the collision scene (bind_collision.cpp).
+// The bindings of the step's parts and the step in one call (bind_step.cpp), of the exact
+// solver, the factorisations and the certificate (bind_solver.cpp), and of the collision
+// scene (bind_collision.cpp).
+void bind_step(nb::module_& m);
 void bind_solver(nb::module_& m);
 void bind_collision(nb::module_& m);
 
