@@ -370,10 +370,14 @@ class DualArmController:
         solver = certified(self.solver, self.tolerance)
         builder = self._builder
         la = self._lookahead
-        build, solved = builder.build_checked(
-            state, scale_max, self._x_prev, self._x_applied,
-            solver.kernel_solve(builder.cost.weights),
-            None if la is None else la.kernel_bound(self.options.dt))
+        if builder.solves_in_one_call:
+            build, solved = builder.build_checked(
+                state, scale_max, self._x_prev, self._x_applied,
+                solver.kernel_solve(builder.cost.weights),
+                None if la is None else la.kernel_bound(self.options.dt))
+        else:  # a limit of Python's reads the context between the parts and the solve
+            build, solved = builder.build_checked(state, scale_max, self._x_prev,
+                                                  self._x_applied)
         problem = build.problem
         t4 = time.perf_counter()
         try:

@@ -112,13 +112,16 @@ class NullspaceSolver(KernelHolder):
         InvalidInputError
             A full weighting matrix that is not positive definite.
         """
-        key = (weights, tol, claims_bounds, self.feasibility_tol, self.max_iter)
         kept = self._kernel_solve
-        if kept is not None and kept[0][0] is weights and kept[0][1:] == key[1:]:
-            return kept[1]
+        if kept is not None:
+            (w, t, claims, feasibility_tol, max_iter), exact = kept
+            if (w is weights and (t is tol or t == tol) and claims == claims_bounds
+                    and feasibility_tol == self.feasibility_tol and max_iter == self.max_iter):
+                return exact
         exact = kernel.ExactSolve(*weight_arrays(weights), self.feasibility_tol,
                                   self._max_iter(), claims_bounds, tol.equality, tol.bounds)
-        self._kernel_solve = (key, exact)
+        self._kernel_solve = ((weights, tol, claims_bounds, self.feasibility_tol,
+                               self.max_iter), exact)
         return exact
 
     def solve_certified(self, problem: StepProblem, tol: Tolerance,

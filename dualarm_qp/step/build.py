@@ -379,6 +379,11 @@ class StepBuilder(KernelHolder):
         self.carry_tasks.leader_gain = float(value)
 
     @property
+    def solves_in_one_call(self) -> bool:
+        """Whether a step can be built and solved in one kernel call (no limit of Python's)."""
+        return not self._python_limits
+
+    @property
     def row_limits(self) -> tuple[str, ...]:
         """Names of the limits that give general rows (what the pairing check reads)."""
         return tuple(limit.name for limit in self.limits if limit.gives_rows)
