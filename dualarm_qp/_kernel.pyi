@@ -209,7 +209,7 @@ class StepParts:
                        x_applied: ArrayLike, scale_max: float, leader_gain: float,
                        correction_gain: float, exact_orientation: bool, exact: ExactSolve,
                        bound: LookaheadBound | None = None
-                       ) -> tuple[_Parts, tuple[_Solved, float, _F | None, bool | None]
+                       ) -> tuple[_Parts, tuple[_Solved, float, bool | None]
                                   | None]: ...
 
 def grasp_rate_range(r: ArrayLike, s_star: ArrayLike, r_min: ArrayLike, r_max: ArrayLike,

@@ -26,7 +26,7 @@ from ..errors import (
 )
 from ..solvers.base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance
 from ..solvers.certify import certify, equality_limit
-from ..solvers.policy import POLICIES, Policy, solve_step
+from ..solvers.policy import POLICIES, Policy, solve_answered, solve_step
 from ..solvers.registry import certified, check_pairing
 from ..step.build import StepBuild, StepBuilder
 from ..step.layout import Layout
@@ -381,8 +381,10 @@ class DualArmController:
         problem = build.problem
         t4 = time.perf_counter()
         try:
-            solution = solve_step(solver, problem, policy=self.policy, tol=self.tolerance,
-                                  fallback=self.fallback, solved=solved)
+            solution = (solve_step(solver, problem, policy=self.policy, tol=self.tolerance,
+                                   fallback=self.fallback) if solved is None else
+                        solve_answered(solver, problem, solved, policy=self.policy,
+                                       tol=self.tolerance, fallback=self.fallback))
         except InfeasibleStepError as err:
             sv_l, sv_f = build.sigma_min
             raise InfeasibleStepError(
@@ -394,12 +396,9 @@ class DualArmController:
         inside: FloatArray | None = None
         if la is not None and solution.status.usable and solution.scale > 0.0 and scale_max > 0.0:
             clipped = solution.x
-            skip: bool | None = None
-            if solved is not None and solved[2] is not None and clipped is solved[0][1]:
-                # The kernel's answer, clipped and bounded in the call that solved it.
-                inside, skip = solved[2], solved[3]
-            else:
-                inside = _inside(clipped, problem)
+            inside = _inside(clipped, problem)
+            # The look-ahead's bound on the kernel's answer, asked in the call that solved it.
+            skip = solved[2] if solved is not None and clipped is solved[0][1] else None
             solution = self._within_budget(la, state, build, solution, inside, scale_max, skip)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE

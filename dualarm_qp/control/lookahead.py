@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -102,22 +103,24 @@ class Lookahead(KernelHolder):
 
     def _remake(self) -> None:
         """Forget the kernel's bound (made again by :meth:`kernel_bound`)."""
-        self._bound: tuple[float, kernel.LookaheadBound] | None = None
+        self._bound: tuple[tuple[Any, ...], kernel.LookaheadBound] | None = None
 
     def kernel_bound(self, dt: float) -> kernel.LookaheadBound:
         """Return :meth:`negligible`'s numbers for the sample ``dt`` [s] as the kernel takes them.
 
         What a step builder hands to the kernel so that the call that solves a step also
         says whether the bound skips the prediction for its answer
-        (``kernel.StepParts.prepare_solved``): the same test as :meth:`negligible`. Made
-        once per ``dt``.
+        (``kernel.StepParts.prepare_solved``): the same test as :meth:`negligible`, with
+        the numbers it reads now (``dt``, :attr:`budget`, the arms' joints and chain
+        lengths, :data:`SKIP_SHARE`). Made again whenever one of them changed.
         """
+        key = (dt, self.budget, self.n_l, self.n_f, self._length, SKIP_SHARE)
         kept = self._bound
-        if kept is not None and kept[0] == dt:
+        if kept is not None and kept[0] == key:
             return kept[1]
         bound = kernel.LookaheadBound(self.n_l, self.n_f, dt, self._length[0], self._length[1],
                                       self.budget[0], self.budget[1], SKIP_SHARE)
-        self._bound = (dt, bound)
+        self._bound = (key, bound)
         return bound
 
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:

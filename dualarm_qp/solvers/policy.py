@@ -70,7 +70,7 @@ RELAX_EPS = 1e-8
 
 def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale", *,
                tol: Tolerance = DEFAULT_TOLERANCE, relax_eps: float = RELAX_EPS,
-               fallback: StepSolver | None = None, solved: Any = None) -> StepSolution:
+               fallback: StepSolver | None = None) -> StepSolution:
     """Solve one step with ``solver`` and apply ``policy`` if the step is infeasible.
 
     Parameters
@@ -89,10 +89,6 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     fallback : StepSolver or None
         Solver for the steps that are feasible but that ``solver`` failed (and for a
         failed inner solve of ``"scale"``); None (the default) keeps the failure.
-    solved : tuple, optional
-        The kernel's answer to ``problem``, made in the call that built it with
-        ``certified(solver, tol).kernel_solve(...)``'s settings: the first solve reads
-        it instead of solving (:meth:`~.registry.CertifiedSolver.solve`).
 
     Returns
     -------
@@ -107,10 +103,32 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     InvalidInputError
         Unknown policy.
     """
+    return _solved_step(solver, problem, policy, tol, relax_eps, fallback, None)
+
+
+def solve_answered(solver: StepSolver, problem: StepProblem, answer: Any,
+                   policy: Policy = "scale", *, tol: Tolerance = DEFAULT_TOLERANCE,
+                   fallback: StepSolver | None = None) -> StepSolution:
+    """:func:`solve_step` for a step the kernel solved in the call that built it.
+
+    The controller's step (:meth:`~dualarm_qp.control.controller.DualArmController.step`):
+    ``answer`` is the kernel's answer to ``problem``, made by that call with
+    ``certified(solver, tol).kernel_solve(...)``'s settings
+    (``kernel.StepParts.prepare_solved``). The first solve reads it
+    (:meth:`~.registry.CertifiedSolver.read`) instead of solving; the policy and the
+    fallback then go on as in :func:`solve_step`. Nothing checks that ``answer``
+    belongs to ``problem``: only the call that made both may pass it.
+    """
+    return _solved_step(solver, problem, policy, tol, RELAX_EPS, fallback, answer)
+
+
+def _solved_step(solver: StepSolver, problem: StepProblem, policy: Policy, tol: Tolerance,
+                 relax_eps: float, fallback: StepSolver | None, answer: Any) -> StepSolution:
+    """:func:`solve_step`, its first solve read from the kernel's ``answer`` when given."""
     if policy not in POLICIES:
         raise InvalidInputError(f"unknown policy '{policy}' (valid: {', '.join(POLICIES)})")
     solver = certified(solver, tol)
-    solution = solver.solve(problem) if solved is None else solver.solve(problem, solved)
+    solution = solver.solve(problem) if answer is None else solver.read(problem, answer)
     if solution.status.usable:
         return solution
     # Policy time is counted from the first solve, which it includes.

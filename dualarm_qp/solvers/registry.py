@@ -314,7 +314,7 @@ class CertifiedSolver:
 
         For a solver that certifies in the kernel: its ``kernel_solve(weights, tol,
         claims_bounds)`` with this wrapper's tolerances and its entry's claim of the
-        bounds. The answer of that call comes back through :meth:`solve`'s ``solved``.
+        bounds. The answer of that call comes back through :meth:`read`.
         None for every other solver (its solve runs after the build).
         """
         if self._in_kernel is None:
@@ -322,24 +322,34 @@ class CertifiedSolver:
         return self.inner.kernel_solve(  # type: ignore[attr-defined]
             weights, self.tol, self.info.hard_bounds)
 
-    def solve(self, problem: StepProblem, solved: Any = None) -> StepSolution:
-        """Solve ``problem`` and certify the answer against it.
-
-        ``solved`` is the kernel's answer to ``problem`` made with :meth:`kernel_solve`'s
-        settings in the call that built it (``StepParts.prepare_solved``); None solves.
-        """
+    def solve(self, problem: StepProblem) -> StepSolution:
+        """Solve ``problem`` and certify the answer against it."""
         if self._may_refuse:
             why = self.info.refusal(tuple(dict.fromkeys(problem.row_names))[:3],
                                     not problem.diagonal_cost)
             if why is not None:
                 return failed(problem, Status.ERROR, self.name, why)
         if self._in_kernel is not None:
-            return self._in_kernel(problem, self.tol, self.info.hard_bounds, solved)
-        if solved is not None:
-            raise TypeError(f"solver '{self.name}' does not solve in the kernel: no "
-                            "answer of the kernel's can be given to it")
+            return self._in_kernel(problem, self.tol, self.info.hard_bounds)
         return certify(problem, self.inner.solve(problem), self.tol,
                        claims_bounds=self.info.hard_bounds)
+
+    def read(self, problem: StepProblem, answer: Any) -> StepSolution:
+        """Return the certified solution of the kernel's ``answer`` to ``problem``.
+
+        ``answer`` was made with :meth:`kernel_solve`'s settings in the call that built
+        ``problem`` (``StepParts.prepare_solved``): it is read as :meth:`solve` would
+        read its own kernel call (the solver's ``solve_certified(..., solved=answer)``).
+
+        Raises
+        ------
+        TypeError
+            The solver does not solve in the kernel (:meth:`kernel_solve` gave None).
+        """
+        if self._in_kernel is None:
+            raise TypeError(f"solver '{self.name}' does not solve in the kernel: no "
+                            "answer of the kernel's can be given to it")
+        return self._in_kernel(problem, self.tol, self.info.hard_bounds, answer)
 
     def __getattr__(self, key: str) -> Any:
         # The wrapped solver's attributes. Never this object's own: while it is unpickled

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -61,10 +61,10 @@ from .cost import CentringCost
 from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
-from .limits.box_form import RANGE, BoxForm, compiled_constraint
-from .limits.row_form import RowForm, compiled_rows_constraint, is_damper
+from .limits.box_form import RANGE, compiled_form
+from .limits.row_form import RowForm, compiled_rows, constraints_in_order
 from .options import StepOptions
-from .parts import Constraint, Limit
+from .parts import Limit
 from .problem import StepProblem
 from .stacking import PIN_RTOL, LimitStack, checked_rates
 from .state import DualArmState
@@ -147,50 +147,6 @@ class StepBuild:
                   else smallest_singular_values(self.carry.J_tool, self.J_f))
             object.__setattr__(self, "_sigma_min", sv)
         return sv
-
-
-def _compiled_form(limit: Limit) -> BoxForm | None:
-    """Return the compiled form of a limit's box, or None (its constraint runs in Python).
-
-    A limit's box is compiled when it declares a :class:`BoxForm` (``limit.compiled``)
-    and its ``constraint`` is :func:`~.limits.box_form.compiled_constraint` (the box of
-    that form): a subclass that overrides ``constraint`` runs its own.
-    """
-    form = getattr(limit, "compiled", None)
-    if isinstance(form, BoxForm) and getattr(type(limit), "constraint", None) is \
-            compiled_constraint:
-        return form
-    return None
-
-
-def _in_order(compiled: list[tuple[int, Constraint]],
-              python: Iterator[tuple[int, Constraint]]) -> Iterator[tuple[int, Constraint]]:
-    """Yield both lists' constraints by the limit's index (each list in that order).
-
-    The Python limits' constraints are asked for as they come: a limit's error is raised
-    after the constraints before it, as in a loop over the limits.
-    """
-    at = 0
-    for k, c in python:
-        while at < len(compiled) and compiled[at][0] < k:
-            yield compiled[at]
-            at += 1
-        yield k, c
-    yield from compiled[at:]
-
-
-def _compiled_rows(limit: Limit) -> RowForm | None:
-    """Return the compiled form of a limit's rows, or None (its constraint runs in Python).
-
-    A limit's rows are compiled when it declares a :class:`RowForm` holding a kernel
-    damper (``limit.compiled_rows``) and its ``constraint`` is
-    :func:`~.limits.row_form.compiled_rows_constraint`: a subclass that overrides
-    ``constraint`` runs its own.
-    """
-    if getattr(type(limit), "constraint", None) is not compiled_rows_constraint:
-        return None
-    form = getattr(limit, "compiled_rows", None)
-    return form if isinstance(form, RowForm) and is_damper(form.damper) else None
 
 
 def smallest_singular_value(J: FloatArray) -> float:
@@ -282,8 +238,8 @@ class StepBuilder(KernelHolder):
         # The limits whose box (a compiled form, .limits.box_form) or rows (.limits.row_form)
         # the kernel computes with the standard parts, and the others, whose
         # constraint(ctx) runs here.
-        forms = [_compiled_form(limit) for limit in self.limits]
-        row_forms = [None if form is not None else _compiled_rows(limit)
+        forms = [compiled_form(limit) for limit in self.limits]
+        row_forms = [None if form is not None else compiled_rows(limit)
                      for form, limit in zip(forms, self.limits, strict=True)]
         self._forms = [(k, form) for k, form in enumerate(forms) if form is not None]
         self._row_ids = [k for k, form in enumerate(row_forms) if form is not None]
@@ -291,25 +247,44 @@ class StepBuilder(KernelHolder):
                                     if forms[k] is None and row_forms[k] is None)
         self._stack = LimitStack(self._labels, lay.n, [k for k, _ in self._forms])
         self._remake()
+        self._kernel_parts()  # made now: a bad compiled form is refused here
 
     def _remake(self) -> None:
-        """Make the kernel's parts and both arms' views of the kernel's chains.
+        """Make both arms' views of the kernel's chains; the parts at their first use.
 
-        The row limits' compiled forms (their kernel dampers, which the parts compute
-        with) are read again from the limits first.
+        The kernel's parts hold the compiled row limits' dampers, kernel objects of the
+        limits: after unpickling, a limit may be remade after this builder (a limit that
+        refers back to its controller), so the parts are made when a step first needs
+        them (:meth:`_kernel_parts`).
         """
         follower = self.task.follower
-        self._row_forms: list[tuple[int, RowForm]] = [
-            (k, self.limits[k].compiled_rows)  # type: ignore[attr-defined]
-            for k in self._row_ids]
         self._leader_arm = ArmKinematics(self.carry.model, self.carry.data, self.layout.n_l,
                                          self.carry.chain)
         self._follower_arm = ArmKinematics(follower.model, follower.data, self.layout.n_f,
                                            follower.chain)
-        self._parts = self._make_parts()
+        self._parts: kernel.StepParts | None = None
+        self._row_forms: list[tuple[int, RowForm]] = []
+
+    def _kernel_parts(self) -> kernel.StepParts:
+        """Return the kernel's standard parts of this builder's steps (``step_parts.cpp``).
+
+        Made at the first call (the constructor's) and after unpickling: the compiled row
+        limits' forms are read from the limits then.
+
+        Raises
+        ------
+        ShapeError
+            A limit's compiled form does not hold one number per variable.
+        """
+        parts = self._parts
+        if parts is None:
+            self._row_forms = [(k, self.limits[k].compiled_rows)  # type: ignore[attr-defined]
+                               for k in self._row_ids]
+            parts = self._parts = self._make_parts()
+        return parts
 
     def _make_parts(self) -> kernel.StepParts:
-        """Return the kernel's standard parts of this builder's steps (``step_parts.cpp``).
+        """Return new kernel parts of this builder's steps (:meth:`_kernel_parts`'s).
 
         Raises
         ------
@@ -436,8 +411,8 @@ class StepBuilder(KernelHolder):
         its tuple, and the Python before the call). With ``exact`` (the kernel's settings
         of the exact solve, ``kernel.ExactSolve``) and no limit of Python's, the same
         call also solves and certifies the step (``kernel.StepParts.prepare_solved``):
-        its answer, seconds, the answer clipped to the box and the look-ahead ``bound``'s
-        verdict on it, or None where the kernel did not solve.
+        its answer, seconds and the look-ahead ``bound``'s verdict on the answer clipped
+        to the box, or None where the kernel did not solve.
         """
         sigma, sigma_l = state.sigma, state.sigma_leader
         follower, trajectory, carry = self.task.follower, self.task.trajectory, self.carry
@@ -448,7 +423,8 @@ class StepBuilder(KernelHolder):
             # first, from the kinematics at the current placement.
             kin = both_arms(carry, follower, q_l, q_f, sigma, sigma_l, T_D).carry
             support_force = self._support(self._contact, kin, state)
-        if self._parts.grasp_lines:  # the kernel computes the grasps' rates itself
+        kernel_parts = self._kernel_parts()
+        if kernel_parts.grasp_lines:  # the kernel computes the grasps' rates itself
             grasp_lo = grasp_hi = self._no_grasps
         else:
             grasp_lo, grasp_hi = self._grasp_rates(sigmas)
@@ -457,12 +433,12 @@ class StepBuilder(KernelHolder):
         called = time.perf_counter()
         solved = None
         if exact is None or self._python_limits:
-            parts = self._parts.prepare(
+            parts = kernel_parts.prepare(
                 carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
                 sigmas, grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain,
                 tasks.correction_gain, tasks.exact_orientation)
         else:
-            parts, solved = self._parts.prepare_solved(
+            parts, solved = kernel_parts.prepare_solved(
                 carry.chain, q_carry, carry.columns[1], follower.chain, q_f, T_D, twist,
                 sigmas, grasp_lo, grasp_hi, x0, scale_max, tasks.leader_gain,
                 tasks.correction_gain, tasks.exact_orientation, exact, bound)
@@ -558,9 +534,9 @@ class StepBuilder(KernelHolder):
         Returns the build and, when ``exact`` (the solver's
         :meth:`~dualarm_qp.solvers.registry.CertifiedSolver.kernel_solve`) is given and
         every limit is compiled, the kernel's answer to the step made in the same call
-        (``solve_step``'s ``solved``, then the answer clipped to the box and, with
-        ``bound``, the look-ahead's :meth:`~dualarm_qp.control.lookahead.Lookahead.
-        kernel_bound`, whether its prediction may be skipped); None otherwise.
+        (``solve_step``'s ``solved``, then, with ``bound``, the look-ahead's
+        :meth:`~dualarm_qp.control.lookahead.Lookahead.kernel_bound`, whether its
+        prediction may be skipped for the answer clipped to the box); None otherwise.
         """
         start = time.perf_counter()
         sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])
@@ -600,18 +576,15 @@ class StepBuilder(KernelHolder):
         surfaces = tuple(self._surfaces)
         # The limits in the step's order: the compiled row limits' rows, which the kernel
         # computed with the parts, between the others' constraint(ctx).
-        compiled = [(k, form.constraint(*answer)) for (k, form), answer in
-                    zip(self._row_forms, kernel_rows, strict=True)] if kernel_rows else []
-        constraints: Iterable[tuple[int, Constraint]] = compiled
+        ctx: StepContext | None = None
         if self._python_limits:
             ctx = context = self._context(state, scale_max, positions, surfaces, x0, parts,
                                           carry)
-            python = ((k, limit.constraint(ctx)) for k, limit in self._python_limits)
-            constraints = _in_order(compiled, python) if compiled else python
         else:  # nothing read it: made if and when someone does
             context = partial(self._context, state, scale_max, positions, surfaces, x0, parts,
                               carry)
-        for k, c in constraints:
+        for k, c in constraints_in_order(self._row_forms, kernel_rows, self._python_limits,
+                                         ctx):
             if c.lower is not None:
                 lowers.append(c.lower)
                 lower_ids.append(k)

@@ -4,7 +4,6 @@
 #include "binding.hpp"
 
 #include <chrono>
-#include <cmath>
 
 #include "certified_step.hpp"
 #include "lookahead.hpp"
@@ -119,26 +118,16 @@ void bind_step(nb::module_& m) {
               dqk::CertifiedStep s = exact.solve(Mat(o.A), o.b, o.box.lower, o.box.upper, G, h,
                                                  o.center);
               const double seconds = std::chrono::duration<double>(clock::now() - start).count();
-              // An optimum's x clipped to the box (what the controller applies: numpy's
-              // minimum(maximum(x, lower), upper), NaN and the zeros' signs alike) and, with
-              // a bound, whether the look-ahead may skip its prediction for it.
-              nb::object inside = nb::none(), skip = nb::none();
-              if (s.answer.code == dqk::StepCode::optimal && s.certified) {
-                const Vec& x = s.answer.x;
-                Vec clipped(x.size());
-                for (Index i = 0; i < x.size(); ++i) {
-                  double v = x(i);
-                  const double lo = o.box.lower(i), hi = o.box.upper(i);
-                  if (!(v >= lo || std::isnan(v))) v = lo;
-                  if (!(v <= hi || std::isnan(v))) v = hi;
-                  clipped(i) = v;
-                }
-                if (bound != nullptr)
-                  skip = nb::bool_((*bound)(clipped, dqk::Pose(o.T.middleRows(0, 4)),
-                                            dqk::Pose(o.T.middleRows(8, 4))));
-                inside = out(std::move(clipped));
+              // With a bound, for an optimum: whether the look-ahead may skip its prediction
+              // for the command the controller applies, x clipped to the box (the bound
+              // reads |x| only, so the clip's signs of zero do not matter to it).
+              nb::object skip = nb::none();
+              if (bound != nullptr && s.answer.code == dqk::StepCode::optimal && s.certified) {
+                const Vec clipped = s.answer.x.cwiseMax(o.box.lower).cwiseMin(o.box.upper);
+                skip = nb::bool_((*bound)(clipped, dqk::Pose(o.T.middleRows(0, 4)),
+                                          dqk::Pose(o.T.middleRows(8, 4))));
               }
-              solved = nb::make_tuple(certified_tuple(std::move(s)), seconds, inside, skip);
+              solved = nb::make_tuple(certified_tuple(std::move(s)), seconds, skip);
             }
             return nb::make_tuple(parts_tuple(std::move(o)), solved);
           },
@@ -148,11 +137,10 @@ void bind_step(nb::module_& m) {
           "bound"_a.none() = nb::none(),
           "(parts, solved): prepare's tuple and, for a step with no other limit, the step "
           "solved and certified on its equality, its box (the compiled forms') and the "
-          "compiled limits' rows: (solve_certified's tuple, its seconds, inside, skip), or "
-          "None where the equality, the box or the rows are not finite. For an optimum, "
-          "inside is its x clipped to the box and skip whether the bound (when given) "
-          "skips the look-ahead's prediction for it; both None otherwise (skip None too "
-          "without a bound).");
+          "compiled limits' rows: (solve_certified's tuple, its seconds, skip), or None "
+          "where the equality, the box or the rows are not finite. skip: for an optimum "
+          "and a bound, whether the bound skips the look-ahead's prediction for its x "
+          "clipped to the box; else None.");
 
   nb::class_<dqk::LookaheadBound>(
       m, "LookaheadBound",

@@ -97,4 +97,19 @@ def compiled_constraint(self: Any, ctx: StepContext) -> Constraint:
     return form.box(ctx)
 
 
-__all__ = ["ACCELERATION", "RANGE", "SPEED", "BoxForm", "compiled_constraint"]
+def compiled_form(limit: Any) -> BoxForm | None:
+    """Return the compiled form of a limit's box, or None (its constraint runs in Python).
+
+    A limit's box is compiled when it declares a :class:`BoxForm` (``limit.compiled``)
+    and its ``constraint`` is :func:`compiled_constraint` (the box of that form): a
+    subclass that overrides ``constraint`` runs its own.
+    """
+    form = getattr(limit, "compiled", None)
+    if isinstance(form, BoxForm) and getattr(type(limit), "constraint", None) is \
+            compiled_constraint:
+        return form
+    return None
+
+
+__all__ = ["ACCELERATION", "RANGE", "SPEED", "BoxForm", "compiled_constraint",
+           "compiled_form"]

@@ -13,6 +13,7 @@ kinematics, which is what a limit asked on its own gives. A subclass that overri
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -82,9 +83,51 @@ def compiled_rows_constraint(self: Any, ctx: StepContext) -> Constraint:
                                              ctx.carry.J_object, ctx.carry.T_object))
 
 
-def is_damper(value: object) -> bool:
-    """Whether ``value`` is a kernel damper (what a :class:`RowForm` holds)."""
-    return isinstance(value, kernel.DamperScene)
+def compiled_rows(limit: Any) -> RowForm | None:
+    """Return the compiled form of a limit's rows, or None (its constraint runs in Python).
+
+    A limit's rows are compiled when it declares a :class:`RowForm` holding a kernel
+    damper (``limit.compiled_rows``) and its ``constraint`` is
+    :func:`compiled_rows_constraint`: a subclass that overrides ``constraint`` runs its
+    own.
+    """
+    if getattr(type(limit), "constraint", None) is not compiled_rows_constraint:
+        return None
+    form = getattr(limit, "compiled_rows", None)
+    return form if isinstance(form, RowForm) and isinstance(
+        form.damper, kernel.DamperScene) else None
 
 
-__all__ = ["RowForm", "compiled_rows_constraint", "is_damper"]
+def constraints_in_order(compiled: Sequence[tuple[int, RowForm]],
+                         answers: Sequence[tuple[bool, NDArray[np.int64], FloatArray,
+                                                 FloatArray]],
+                         python: Sequence[tuple[int, Any]], ctx: StepContext | None
+                         ) -> Iterator[tuple[int, Constraint]]:
+    """Yield the constraint of every limit but the compiled boxes, in the limits' order.
+
+    Parameters
+    ----------
+    compiled, answers : sequence
+        The compiled row limits (index, form) and the kernel's answer of each (what
+        ``kernel.StepParts.prepare`` computed with the step's parts).
+    python : sequence of (int, Limit)
+        The limits whose ``constraint(ctx)`` runs in Python, and their indices.
+    ctx : StepContext or None
+        The step's context (None when ``python`` is empty).
+
+    Each constraint is made when its turn comes, as in a loop over the limits: a limit's
+    error (a :class:`~dualarm_qp.errors.NonFiniteError` of compiled rows, whatever a
+    Python limit raises) comes after every constraint before it was taken.
+    """
+    at = 0
+    for k, limit in python:
+        while at < len(compiled) and compiled[at][0] < k:
+            yield compiled[at][0], compiled[at][1].constraint(*answers[at])
+            at += 1
+        yield k, limit.constraint(ctx)
+    while at < len(compiled):
+        yield compiled[at][0], compiled[at][1].constraint(*answers[at])
+        at += 1
+
+
+__all__ = ["RowForm", "compiled_rows", "compiled_rows_constraint", "constraints_in_order"]
