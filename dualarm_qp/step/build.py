@@ -21,11 +21,14 @@ Case 2 support; another grasp's from its surface, through the same compiled Eqs.
 30-31), the equality (what :meth:`.tasks.CarryTasks.equality` gives), the centres (what
 :meth:`.cost.CentringCost.quadratic` gives), the boxes of the limits that declare a
 compiled form (:mod:`.limits.box_form`: ranges, speeds, accelerations) and their
-intersection, and the variables that recover. The forms and the straight grasps' lines,
-boxes and ranges are read when the builder is made, as the options are: a limit, a
-surface or a setting changed afterwards needs a new builder. The other limits
-(collision, torque, a user's own) run their ``constraint(ctx)`` on the context each
-step. Both arms' smallest singular values are computed when first read
+intersection, the rows of the limits that declare compiled rows
+(:mod:`.limits.row_form`: the collision limit's damper), and the variables that recover.
+The forms and the straight grasps' lines, boxes and ranges are read when the builder is
+made, as the options are: a limit, a surface or a setting changed afterwards needs a new
+builder. The other limits (the torque limit, a user's own) run their ``constraint(ctx)``
+on the context each step. Given the exact solver's kernel settings and no such limit,
+the same call also solves and certifies the step (:meth:`StepBuilder.build_checked`).
+Both arms' smallest singular values are computed when first read
 (:attr:`.context.StepContext.sigma_min`).
 
 The decision vector's slices are the :class:`~dualarm_qp.step.layout.Layout`'s. ``s``
@@ -38,7 +41,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
@@ -56,7 +58,8 @@ from ..task.scene import DualArmTask
 from ..task.support import SupportLine
 from ..task.surfaces import GraspSurface
 from .bounds import grasp_rates
-from .context import ArmKinematics, StepContext, smallest_singular_values
+from .built import StepBuild, smallest_singular_value
+from .context import ArmKinematics, StepContext
 from .cost import CentringCost
 from .kinematics import both_arms
 from .layout import Layout
@@ -71,87 +74,6 @@ from .state import DualArmState
 from .tasks import CarryTasks
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class StepBuild:
-    """A built step: the problem and every quantity computed on the way.
-
-    Attributes
-    ----------
-    problem : StepProblem
-        The problem handed to the solver (rows: leader task, then closure).
-    recovering : ndarray of bool, shape (n,)
-        Variables that start outside their range (the box forces them back).
-    recovers : bool
-        Whether any does (the kernel says so with the array).
-    closure_error : ndarray, shape (6,)
-        ``[dp; dw]`` from the follower's tool to its target [m, rad].
-    leader_error : ndarray, shape (6,)
-        ``[dp; dw]`` from the object frame to ``D(t)`` [m, rad].
-    carry : CarryKinematics
-        Leader, object and target poses and Jacobians at this state.
-    T_f, J_f : ndarray
-        Follower tool pose (4, 4) and Jacobian (6, n_f).
-    kinematics_time, assembly_time : float
-        Seconds spent in the kinematics and in assembling the problem.
-    support_force : float
-        Follower push ``h`` [N] of a Case 2 support at this state (NaN for a grasp).
-    context : StepContext or None
-        What the parts read. When no limit read it during the build, the builder
-        gives a function that makes it, and it is made when first read.
-    sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's tool Jacobian
-        (computed when first read, once, and shared with the context).
-    """
-
-    problem: StepProblem
-    recovering: NDArray[np.bool_]
-    closure_error: FloatArray
-    leader_error: FloatArray
-    carry: CarryKinematics
-    T_f: FloatArray
-    J_f: FloatArray
-    kinematics_time: float
-    assembly_time: float
-    support_force: float = math.nan
-    _context: StepContext | Callable[[tuple[float, float] | None], StepContext] | None = (
-        field(default=None, repr=False, compare=False))
-    _recovers: bool | None = field(default=None, init=False, repr=False, compare=False)
-    _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
-                                                   compare=False)
-
-    @property
-    def context(self) -> StepContext | None:
-        """What the parts read (made now if no limit read it during the build)."""
-        ctx = self._context
-        if ctx is None or isinstance(ctx, StepContext):
-            return ctx
-        made = ctx(self._sigma_min)  # the singular values, if read, carry over
-        object.__setattr__(self, "_context", made)  # a cache, on a frozen build
-        return made
-
-    @property
-    def recovers(self) -> bool:
-        """Whether some variable starts outside its range (``recovering.any()``)."""
-        flag = self._recovers  # the kernel's, set with the array it made
-        return bool(self.recovering.any()) if flag is None else flag
-
-    @property
-    def sigma_min(self) -> tuple[float, float]:
-        """Smallest singular value of the leader's and the follower's tool Jacobian."""
-        sv = self._sigma_min
-        if sv is None:
-            ctx = self._context
-            sv = (ctx.sigma_min if isinstance(ctx, StepContext)  # computed once
-                  else smallest_singular_values(self.carry.J_tool, self.J_f))
-            object.__setattr__(self, "_sigma_min", sv)
-        return sv
-
-
-def smallest_singular_value(J: FloatArray) -> float:
-    """Smallest singular value of the joint Jacobian ``J`` (0 with fewer columns than rows)."""
-    return float(kernel.smallest_singular_value(J))
 
 
 class StepBuilder(KernelHolder):
