@@ -112,15 +112,18 @@ class Lookahead(KernelHolder):
         says whether the bound skips the prediction for its answer
         (``kernel.StepParts.prepare_solved``): the same test as :meth:`negligible`, with
         the numbers it reads now (``dt``, :attr:`budget`, the arms' joints and chain
-        lengths, :data:`SKIP_SHARE`). Made again whenever one of them changed.
+        lengths, :data:`SKIP_SHARE`). Made again whenever one of them changed (a budget
+        set anew, even to the same numbers).
         """
-        key = (dt, self.budget, self.n_l, self.n_f, self._length, SKIP_SHARE)
         kept = self._bound
-        if kept is not None and kept[0] == key:
-            return kept[1]
+        if kept is not None:
+            (d, budget, n_l, n_f, length, share), bound = kept
+            if (d == dt and budget is self.budget and n_l == self.n_l and n_f == self.n_f
+                    and length is self._length and share == SKIP_SHARE):
+                return bound
         bound = kernel.LookaheadBound(self.n_l, self.n_f, dt, self._length[0], self._length[1],
                                       self.budget[0], self.budget[1], SKIP_SHARE)
-        self._bound = (key, bound)
+        self._bound = ((dt, self.budget, self.n_l, self.n_f, self._length, SKIP_SHARE), bound)
         return bound
 
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:

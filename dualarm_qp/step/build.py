@@ -345,7 +345,9 @@ class StepBuilder(KernelHolder):
             # first, from the kinematics at the current placement.
             kin = both_arms(carry, follower, q_l, q_f, sigma, sigma_l, T_D).carry
             support_force = self._support(self._contact, kin, state)
-        kernel_parts = self._kernel_parts()
+        kernel_parts = self._parts
+        if kernel_parts is None:  # after unpickling: made at the first step
+            kernel_parts = self._kernel_parts()
         if kernel_parts.grasp_lines:  # the kernel computes the grasps' rates itself
             grasp_lo = grasp_hi = self._no_grasps
         else:
@@ -505,8 +507,9 @@ class StepBuilder(KernelHolder):
         else:  # nothing read it: made if and when someone does
             context = partial(self._context, state, scale_max, positions, surfaces, x0, parts,
                               carry)
-        for k, c in constraints_in_order(self._row_forms, kernel_rows, self._python_limits,
-                                         ctx):
+        constraints = (constraints_in_order(self._row_forms, kernel_rows, self._python_limits,
+                                            ctx) if kernel_rows or ctx is not None else ())
+        for k, c in constraints:
             if c.lower is not None:
                 lowers.append(c.lower)
                 lower_ids.append(k)
