@@ -5,10 +5,14 @@ one rollout's controller inputs are recorded and replayed through a fresh contro
 cycling over them. Every step is timed whole, and inside it the compiled kernel's
 calls that the step makes:
 
-* the standard parts (``kernel.StepParts.prepare``: both arms' kinematics, the rates
-  to the range ends, the equality, the centres, the compiled limits' boxes);
-* the exact solve with its certificate (``kernel.solve_certified``), and the two calls
-  that replace it on a scaled copy of a solved step;
+* the step in one call (``kernel.StepParts.prepare_solved``: both arms' kinematics, the
+  rates to the range ends, the equality, the centres, the compiled limits' boxes and
+  rows, the exact solve with its certificate, the look-ahead's bound), which a step with
+  the exact solver and no limit of Python's makes; and inside it, by the kernel's own
+  clock, its kinematics and its solve with the certificate;
+* otherwise the standard parts (``kernel.StepParts.prepare``) and the exact solve with
+  its certificate (``kernel.solve_certified``);
+* the two calls that replace the solve on a scaled copy of a solved step (a slowed step);
 * the look-ahead's prediction (``kernel.predicted_errors``), on the steps that need it.
 
 What is left is Python: the builder, the solver's wrappers, the policy, the
@@ -49,7 +53,10 @@ KERNEL_CALLS = {
     "predicted_errors": "look-ahead prediction",
 }
 PREPARE = "standard parts"
-PARTS = (PREPARE, "solve + certificate", "look-ahead prediction")
+ONE_CALL = "the step in one call"
+PARTS = (ONE_CALL, PREPARE, "solve + certificate", "look-ahead prediction")
+#: Inside the one call, by the kernel's own clock (not subtracted again from the Python).
+INNER = ("  its kinematics", "  its solve + certificate")
 
 
 class _Clock:
@@ -58,11 +65,25 @@ class _Clock:
     def __init__(self) -> None:
         self.spent: dict[str, float] = dict.fromkeys(PARTS, 0.0)
         self.calls: dict[str, int] = dict.fromkeys(PARTS, 0)
+        self.inner: dict[str, float] = dict.fromkeys(INNER, np.nan)
 
     def reset(self) -> None:
         for part in PARTS:
             self.spent[part] = 0.0
             self.calls[part] = 0
+        for part in INNER:
+            self.inner[part] = np.nan
+
+    def one_call(self, fn: Callable[..., Any]) -> Callable[..., Any]:
+        """``prepare_solved`` timed whole, and its kernel clock's kinematics and solve."""
+        timed = self.timed(ONE_CALL, fn)
+
+        def call(*args: Any, **kwargs: Any) -> Any:
+            parts, solved = timed(*args, **kwargs)
+            self.inner[INNER[0]] = parts[-1]
+            self.inner[INNER[1]] = np.nan if solved is None else solved[1]
+            return parts, solved
+        return call
 
     def timed(self, part: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         perf = time.perf_counter
@@ -78,11 +99,12 @@ class _Clock:
 
 
 class _Parts:
-    """The builder's ``kernel.StepParts`` with its ``prepare`` timed."""
+    """The builder's ``kernel.StepParts`` with its ``prepare`` and ``prepare_solved`` timed."""
 
     def __init__(self, parts: Any, clock: _Clock) -> None:
         self._parts = parts
         self.prepare = clock.timed(PREPARE, parts.prepare)
+        self.prepare_solved = clock.one_call(parts.prepare_solved)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._parts, name)
@@ -114,7 +136,7 @@ def _timed(ctrl: Any, states: list[State], passes: int, clock: _Clock
            ) -> dict[str, np.ndarray]:
     perf = time.perf_counter
     total, python = [], []
-    parts: dict[str, list[float]] = {part: [] for part in PARTS}
+    parts: dict[str, list[float]] = {part: [] for part in (*PARTS, *INNER)}
     for _ in range(passes):
         ctrl.reset()
         for state, scale_max in states:
@@ -127,6 +149,9 @@ def _timed(ctrl: Any, states: list[State], passes: int, clock: _Clock
             for part in PARTS:
                 # NaN where the step made no such call (the median is over those that did).
                 parts[part].append(clock.spent[part] if clock.calls[part] else np.nan)
+                if part == ONE_CALL:
+                    for inner in INNER:
+                        parts[inner].append(clock.inner[inner])
     return {"whole step": np.array(total), **{f"kernel: {p}": np.array(v)
                                               for p, v in parts.items()},
             "Python around them": np.array(python)}

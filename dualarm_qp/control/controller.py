@@ -370,14 +370,14 @@ class DualArmController:
         solver = certified(self.solver, self.tolerance)
         builder = self._builder
         la = self._lookahead
-        if builder.solves_in_one_call:
-            build, solved = builder.build_checked(
-                state, scale_max, self._x_prev, self._x_applied,
-                solver.kernel_solve(builder.cost.weights),
+        exact = solver.kernel_solve(builder.cost.weights) if builder.solves_in_one_call else None
+        if exact is not None:
+            build, solved = builder.build_solved(
+                state, scale_max, self._x_prev, self._x_applied, exact,
                 None if la is None else la.kernel_bound(self.options.dt))
-        else:  # a limit of Python's reads the context between the parts and the solve
-            build, solved = builder.build_checked(state, scale_max, self._x_prev,
-                                                  self._x_applied)
+        else:  # a limit of Python's, or a solver that does not solve in the kernel
+            build = builder.build_checked(state, scale_max, self._x_prev, self._x_applied)
+            solved = None
         problem = build.problem
         t4 = time.perf_counter()
         try:

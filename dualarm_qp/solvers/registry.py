@@ -48,12 +48,13 @@ class SolverInfo:
         Whether the solver takes a full (non-diagonal) weighting matrix ``W``.
     certifies_in_kernel : bool
         Whether the solver (an instance of ``factory``, a class) has
-        ``solve_certified(problem, tol, claims_bounds, solved=None)``: its solve and
-        the kernel's certificate of the answer in one call, the verdict given by
-        :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver);
-        and ``kernel_solve(weights, tol, claims_bounds)``: the kernel's settings of that
-        call, with which a step builder solves a step in the call that builds it
-        (``solved``).
+        ``solve_certified(problem, tol, claims_bounds)``: its solve and the kernel's
+        certificate of the answer in one call, the verdict given by
+        :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver).
+        A solver that also has ``kernel_solve(weights, tol, claims_bounds)`` (the
+        kernel's settings of that call, with which a step builder solves a step in the
+        call that builds it) takes that call's answer as
+        ``solve_certified(..., solved=answer)``; one without it solves after the build.
     """
 
     name: str
@@ -317,10 +318,11 @@ class CertifiedSolver:
         bounds. The answer of that call comes back through :meth:`read`.
         None for every other solver (its solve runs after the build).
         """
-        if self._in_kernel is None:
+        # A solver registered before it had kernel settings solves after the build.
+        make = None if self._in_kernel is None else getattr(self.inner, "kernel_solve", None)
+        if make is None:
             return None
-        return self.inner.kernel_solve(  # type: ignore[attr-defined]
-            weights, self.tol, self.info.hard_bounds)
+        return make(weights, self.tol, self.info.hard_bounds)
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve ``problem`` and certify the answer against it."""

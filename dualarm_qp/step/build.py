@@ -446,21 +446,33 @@ class StepBuilder(KernelHolder):
         return self._build(state, q_l, q_f, sigmas, scale_max, x_prev, x0, start)[0]
 
     def build_checked(self, state: DualArmState, scale_max: float,
-                      x_prev: FloatArray | None, x_applied: FloatArray,
-                      exact: Any = None, bound: Any = None) -> tuple[StepBuild, Any]:
+                      x_prev: FloatArray | None, x_applied: FloatArray) -> StepBuild:
         """:meth:`build` for a caller that checked its inputs (the controller's step).
 
         Nothing is checked again: ``state.q_l`` and ``state.q_f`` are finite float64
         arrays of the arms' lengths, ``state.sigma`` and ``state.sigma_leader`` finite
         Python floats, ``x_prev`` None or a float64 array of ``n`` numbers and
         ``x_applied`` one of ``n`` finite numbers (the controller's own answers).
+        """
+        start = time.perf_counter()
+        sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])
+        return self._build(state, state.q_l, state.q_f, sigmas, scale_max, x_prev,
+                           x_applied, start)[0]
 
-        Returns the build and, when ``exact`` (the solver's
-        :meth:`~dualarm_qp.solvers.registry.CertifiedSolver.kernel_solve`) is given and
-        every limit is compiled, the kernel's answer to the step made in the same call
-        (``solve_step``'s ``solved``, then, with ``bound``, the look-ahead's
-        :meth:`~dualarm_qp.control.lookahead.Lookahead.kernel_bound`, whether its
-        prediction may be skipped for the answer clipped to the box); None otherwise.
+    def build_solved(self, state: DualArmState, scale_max: float,
+                     x_prev: FloatArray | None, x_applied: FloatArray, exact: Any,
+                     bound: Any = None) -> tuple[StepBuild, Any]:
+        """:meth:`build_checked` and the step solved in the same kernel call.
+
+        ``exact`` is the exact solver's kernel settings
+        (:meth:`~dualarm_qp.solvers.registry.CertifiedSolver.kernel_solve`); ``bound``
+        the look-ahead's (:meth:`~dualarm_qp.control.lookahead.Lookahead.kernel_bound`)
+        or None. Returns the build and the kernel's answer to it
+        (:func:`~dualarm_qp.solvers.policy.solve_answered`'s ``answer``: the certified
+        solve, its seconds, then with ``bound`` whether the look-ahead's prediction may
+        be skipped for the answer clipped to the box), or None where the kernel did not
+        solve: a limit runs in Python (:attr:`solves_in_one_call` is False), or the
+        step is refused (the errors :meth:`build` raises).
         """
         start = time.perf_counter()
         sigmas = np.array((state.sigma, state.sigma_leader)[:self.layout.n_grasp])

@@ -58,6 +58,14 @@ class CentringCost:
         #: ``dt`` over the centring horizon: the centres' scale.
         self.shrink = options.dt / (options.centre_horizon or options.dt)
 
+    def __setstate__(self, state: dict[str, object]) -> None:
+        # A pickle (and copy.deepcopy) gives numpy arrays back writeable: the weights and
+        # the centred flags stay read-only (the exact solver's kernel settings are kept
+        # for this very weights array).
+        self.__dict__.update(state)
+        self.weights.flags.writeable = False
+        self.centred.flags.writeable = False
+
     def quadratic(self, ctx: StepContext) -> Quadratic:
         """Weights ``S`` and centres ``dqhat_c`` [rad/s, m/s] at this step."""
         # The middle of each centred variable's finite rate range, scaled from dt to the

@@ -94,9 +94,8 @@ def test_one_call_gives_what_the_calls_one_by_one_give(name: str) -> None:
     assert isinstance(exact, kernel.ExactSolve)
     for state, scale_max in _states(exp, 6, 5):
         x_applied = np.zeros(builder.n)
-        one, solved = builder.build_checked(state, scale_max, None, x_applied, exact)
-        apart, unsolved = builder.build_checked(state, scale_max, None, x_applied)
-        assert unsolved is None
+        one, solved = builder.build_solved(state, scale_max, None, x_applied, exact)
+        apart = builder.build_checked(state, scale_max, None, x_applied)
         assert (solved is None) == (name in PYTHON_LIMIT)
         for field in ("A", "b", "weights", "center", "lower", "upper", "G", "h"):
             _same(getattr(one.problem, field), getattr(apart.problem, field), field)
@@ -136,14 +135,20 @@ def test_the_one_call_is_used_when_every_limit_is_compiled() -> None:
     exp = _experiment("ur5_pair_collision")
     ctrl = exp.controller()
     calls: list[bool] = []
-    real = type(ctrl.builder).build_checked
+    cls = type(ctrl.builder)
+    real_solved, real_checked = cls.build_solved, cls.build_checked
 
-    def spy(self, *args):
-        build, solved = real(self, *args)
+    def solved_spy(self, *args):
+        build, solved = real_solved(self, *args)
         calls.append(solved is not None)
         return build, solved
 
-    type(ctrl.builder).build_checked = spy  # type: ignore[method-assign]
+    def checked_spy(self, *args):
+        calls.append(False)
+        return real_checked(self, *args)
+
+    cls.build_solved = solved_spy  # type: ignore[method-assign]
+    cls.build_checked = checked_spy  # type: ignore[method-assign]
     try:
         out = ctrl.step(exp.initial)
         assert calls == [True]
@@ -155,7 +160,8 @@ def test_the_one_call_is_used_when_every_limit_is_compiled() -> None:
         heavy.step(_experiment("ur5_pair_heavy_bar").initial)
         assert calls == [True, False, False]  # the torque rows are Python's
     finally:
-        type(ctrl.builder).build_checked = real  # type: ignore[method-assign]
+        cls.build_solved = real_solved  # type: ignore[method-assign]
+        cls.build_checked = real_checked  # type: ignore[method-assign]
 
 
 class Wall:
@@ -185,16 +191,20 @@ class OwnCollision(CollisionLimit):
 
 def test_compiled_rows_keep_the_limits_order_with_python_limits() -> None:
     """The collision rows (the kernel's) and a user's rows (Python's) stack in the limits'
-    order, as each limit's constraint(ctx) gives them; a subclass that overrides
-    ``constraint`` runs its own and gives the same rows."""
+    order, as each limit's constraint(ctx) gives them, with compiled rows on both sides
+    of a Python limit (a second collision limit of the user's, after a wall); a subclass
+    that overrides ``constraint`` runs its own and gives the same rows."""
     exp = _experiment("ur5_pair_collision")
     base = exp.controller()
     collision = next(lim for lim in base.builder.limits if isinstance(lim, CollisionLimit))
     z = float(exp.controller().builder.build(exp.initial).T_f[2, 3]) + 0.01
-    ctrl = type(base)(exp.task, base.solver, base.options, limits=[Wall(z)])
+    second = CollisionLimit(collision.scene, collision.layout, *collision._frames)
+    ctrl = type(base)(exp.task, base.solver, base.options, limits=[Wall(z), second])
     builder = ctrl.builder
-    assert [k for k, _ in builder._row_forms] == [builder.limits.index(
-        next(lim for lim in builder.limits if isinstance(lim, CollisionLimit)))]
+    assert [k for k, _ in builder._row_forms] == [
+        k for k, lim in enumerate(builder.limits) if isinstance(lim, CollisionLimit)]
+    assert [type(lim) for _, lim in builder._python_limits][-1] is Wall
+    between = 0
     for state, scale_max in _states(exp, 5, 9):
         build = builder.build(state, scale_max=scale_max)
         ctx = build.context
@@ -204,7 +214,9 @@ def test_compiled_rows_keep_the_limits_order_with_python_limits() -> None:
         names = [name for c in rows if c.h is not None and len(c.h) for name in c.row_names]
         _same(build.problem.G, G, "G")
         _same(build.problem.h, h, "h")
-        assert list(build.problem.row_names) == names and names[-1] == "wall"
+        assert list(build.problem.row_names) == names and "wall" in names
+        between += names[-1] != "wall"  # the second collision limit's rows after the wall
+    assert between  # the case that tells the order from "compiled rows first"
     own = OwnCollision(collision.scene, collision.layout, *collision._frames)
     assert own.compiled_rows is not None
     mixed = type(base)(exp.task, base.solver, base.options, limits=[own])
@@ -253,7 +265,7 @@ def test_the_one_call_refuses_settings_of_another_size() -> None:
     builder = exp.controller().builder
     wrong = NullspaceSolver().kernel_solve(np.ones(builder.n + 1), DEFAULT_TOLERANCE)
     with pytest.raises(ValueError, match="another size"):
-        builder.build_checked(exp.initial, 1.0, None, np.zeros(builder.n), wrong)
+        builder.build_solved(exp.initial, 1.0, None, np.zeros(builder.n), wrong)
     with pytest.raises(ValueError, match="cost"):
         kernel.ExactSolve(np.ones(3), np.ones((2, 2)), np.zeros((0, 0)), 1e-10, -1, True,
                           1e-7, 1e-7)
@@ -290,15 +302,15 @@ def test_the_kernels_look_ahead_bound_is_the_bound(name: str) -> None:
     asked = 0
     for s in states:
         for scale_max in (1.0, 0.5, 0.0):
-            build, solved = builder.build_checked(s, scale_max, None, np.zeros(lay.n), exact,
-                                                  bound)
+            build, solved = builder.build_solved(s, scale_max, None, np.zeros(lay.n), exact,
+                                                 bound)
             answer, _, skip = solved
             if answer[0] != 0:  # not an optimum: nothing asked
                 assert skip is None
                 continue
             asked += 1
             assert skip == la.negligible(build, _inside(answer[1], build.problem), dt)
-            unbounded = builder.build_checked(s, scale_max, None, np.zeros(lay.n), exact)[1]
+            unbounded = builder.build_solved(s, scale_max, None, np.zeros(lay.n), exact)[1]
             assert unbounded[2] is None
     assert asked >= len(states)
 
@@ -316,8 +328,8 @@ def test_the_kernel_bound_follows_the_budget() -> None:
     la.budget = (la.budget[0] / 1000.0, la.budget[1] / 1000.0)
     second = la.kernel_bound(dt)
     assert second is not first and la.kernel_bound(2 * dt) is not second
-    build, (answer, _, skip) = builder.build_checked(state, 1.0, None, np.zeros(builder.n),
-                                                     exact, la.kernel_bound(dt))
+    build, (answer, _, skip) = builder.build_solved(state, 1.0, None, np.zeros(builder.n),
+                                                    exact, la.kernel_bound(dt))
     assert skip == la.negligible(build, _inside(answer[1], build.problem), dt)
     assert SKIP_SHARE == 0.1
 
@@ -389,3 +401,42 @@ def test_a_controller_whose_limit_refers_back_to_it_pickles() -> None:
         _same_solution(got.solution, want.solution)
         (k, form), = other.builder._row_forms
         assert form.damper is other.builder.limits[k]._damper
+        # The weights the kernel settings are kept for stay read-only in a copy.
+        assert not other.builder.cost.weights.flags.writeable
+
+
+class _CertifiesInKernel:
+    """A user's solver registered with ``certifies_in_kernel=True`` as the registry
+    documented it before the step became one call: ``solve_certified`` only."""
+
+    name = "mine"
+
+    def __init__(self) -> None:
+        self._exact = NullspaceSolver()
+        self.tol = self._exact.tol
+
+    def solve(self, problem):
+        return self._exact.solve(problem)
+
+    def solve_certified(self, problem, tol, claims_bounds=True):
+        return self._exact.solve_certified(problem, tol, claims_bounds)
+
+
+def test_a_solver_that_certifies_in_the_kernel_without_kernel_settings_still_steps(
+        monkeypatch) -> None:
+    """It has no ``kernel_solve``: its steps take the calls one by one, and give the
+    exact solver's answers."""
+    import dualarm_qp.solvers.registry as registry_module
+    from dualarm_qp.solvers import register
+
+    monkeypatch.setattr(registry_module, "_REGISTRY", dict(registry_module._REGISTRY))
+    register("mine", _CertifiesInKernel, description="mine", certifies_in_kernel=True,
+             hard_bounds=True)
+    mine = _experiment("puma_beam_limits", "mine").controller()
+    assert certified(mine.solver, mine.tolerance).kernel_solve(
+        mine.builder.cost.weights) is None
+    exact = _experiment("puma_beam_limits").controller()
+    state = _experiment("puma_beam_limits").initial
+    for a, b in zip(stepped(mine, state, 10), stepped(exact, state, 10), strict=True):
+        _same(a.solution.x, b.solution.x, "x")
+        assert a.status == b.status

@@ -481,9 +481,8 @@ def test_the_checked_build_is_the_build(name: str) -> None:
         state = _state(exp, builder, rng)
         x_prev, x_applied = rng.normal(0.0, 0.1, (2, builder.layout.n))
         a = builder.build(state, scale_max=0.75, x_prev=x_prev, x_applied=x_applied)
-        b, unsolved = builder.build_checked(state, 0.75, x_prev, x_applied)
-        c, solved = builder.build_checked(state, 0.75, x_prev, x_applied, exact)
-        assert unsolved is None
+        b = builder.build_checked(state, 0.75, x_prev, x_applied)
+        c, solved = builder.build_solved(state, 0.75, x_prev, x_applied, exact)
         # The kernel solves in the same call when every limit is compiled.
         assert (solved is not None) == (not builder._python_limits)
         for built in (b, c):

@@ -115,9 +115,12 @@ def constraints_in_order(compiled: Sequence[tuple[int, RowForm]],
     ctx : StepContext or None
         The step's context (None when ``python`` is empty).
 
-    Each constraint is made when its turn comes, as in a loop over the limits: a limit's
-    error (a :class:`~dualarm_qp.errors.NonFiniteError` of compiled rows, whatever a
-    Python limit raises) comes after every constraint before it was taken.
+    The kernel computed every compiled limit's rows in its call already; their
+    constraints, and the Python limits' ``constraint(ctx)`` calls, are made when their
+    turn comes, as in a loop over the limits: a limit's error (a
+    :class:`~dualarm_qp.errors.NonFiniteError` of compiled rows, whatever a Python limit
+    raises) comes after every constraint before it was taken, and no later limit is
+    asked.
     """
     at = 0
     for k, limit in python:
