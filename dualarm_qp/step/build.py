@@ -27,7 +27,7 @@ The forms and the straight grasps' lines, boxes and ranges are read when the bui
 made, as the options are: a limit, a surface or a setting changed afterwards needs a new
 builder. The other limits (the torque limit, a user's own) run their ``constraint(ctx)``
 on the context each step. Given the exact solver's kernel settings and no such limit,
-the same call also solves and certifies the step (:meth:`StepBuilder.build_checked`).
+the same call also solves and certifies the step (:meth:`StepBuilder.build_solved`).
 Both arms' smallest singular values are computed when first read
 (:attr:`.context.StepContext.sigma_min`).
 
