@@ -18,7 +18,8 @@ from pathlib import Path
 from .errors import KernelError
 
 #: What to run when the kernel is missing or stale.
-REBUILD = "run `pip install -e .` (or `pip install .`) in the project folder again"
+REBUILD = ("run `pip install --no-build-isolation -e .` (after `pip install -r "
+           "requirements-build.txt`; or `pip install .`) in the project folder again")
 
 #: The kernel's sources, when the package runs from a source tree.
 SOURCES = Path(__file__).resolve().parents[1] / "src" / "kernel"

@@ -37,5 +37,6 @@ def pytest_configure(config: pytest.Config) -> None:
     except ImportError as err:
         raise pytest.UsageError(
             f"the tests cannot import what they test ({err}). Install the project and "
-            "run its pytest: python3 -m venv .venv && .venv/bin/pip install -e \".[dev]\" "
-            "&& .venv/bin/pytest -n 2") from None
+            "run its pytest (the README's test command): python3 -m venv .venv && "
+            ".venv/bin/pip install -r requirements-build.txt && .venv/bin/pip install "
+            "--no-build-isolation -e \".[dev]\" && .venv/bin/pytest -n 2") from None
