@@ -278,7 +278,7 @@ def torque_step(name: str, samples: int) -> dict[str, Any] | None:
     states, info = record_states(exp)
     ctrl = exp.controller()
     limit = next(lim for lim in ctrl.builder.limits if lim.name == "torque")
-    contexts = [ctrl.builder.context(state)[0] for state, _ in states]
+    contexts = [ctrl.builder.build(state).context for state, _ in states]
     active = 0
     for state, scale_max in states:
         out = ctrl.step(state, scale_max=scale_max)

@@ -17,9 +17,6 @@ TIE_RTOL: float
 PRICE_TOL: float
 PIVOT_TOL: float
 EMPTY_BOX_CODE: int
-BOX_RANGE: int
-BOX_SPEED: int
-BOX_ACCELERATION: int
 
 def factor(A: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
 def affine(A: ArrayLike, b: ArrayLike) -> tuple[_F, _F, _F, _F, _F] | None: ...
@@ -57,13 +54,6 @@ def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLi
 _Solved = tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
                 tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]], _Certificate | None]
 
-class ExactSolve:
-    def __init__(self, w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
-                 feas_tol: float, max_iter: int, bounds: bool, eq_rtol: float,
-                 bounds_tol: float) -> None: ...
-    @property
-    def n(self) -> int: ...
-
 def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
                     upper_ids: Sequence[int], n: int, pin_rtol: float
                     ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
@@ -79,10 +69,6 @@ def predicted_errors(carry: Chain, carry_frames: Sequence[int], follower: Chain,
                      sigma_l: float, x: ArrayLike, col_rate: ArrayLike, dt: float,
                      T_D: ArrayLike, e: _F) -> bool: ...
 def pose_error(T_star: ArrayLike, T: ArrayLike, e: _F) -> None: ...
-class LookaheadBound:
-    def __init__(self, n_l: int, n_f: int, dt: float, length_l: float, length_f: float,
-                 budget_pos: float, budget_rot: float, share: float) -> None: ...
-
 def negligible(x: ArrayLike, n_l: int, n_f: int, dt: float, T_tool: ArrayLike,
                T_target: ArrayLike, length_l: float, length_f: float, budget_pos: float,
                budget_rot: float, share: float) -> bool: ...
@@ -173,44 +159,142 @@ class Chain:
                        derivatives: bool) -> tuple[_F, _F, _F]: ...
 
 def braking_bound(D: ArrayLike, delta: ArrayLike, dt: ArrayLike) -> _F: ...
-def limit_box(kind: int, p: ArrayLike, off: ArrayLike, lo: ArrayLike, hi: ArrayLike,
-              x_applied: ArrayLike, dt: float) -> tuple[_F, _F]: ...
+class Context:
+    n_l: int
+    n_f: int
+    k: int
+    n: int
+    t: float
+    dt: float
+    scale_max: float
+    T_tool: _F
+    T_object: _F
+    T_target: _F
+    T_f: _F
+    J_tool: _F
+    J_object: _F
+    J_target: _F
+    J_f: _F
+    leader_error: _F
+    closure_error: _F
+    twist: _F
+    positions: _F
+    rate_lo: _F
+    rate_hi: _F
+    x_applied: _F
+    def __init__(self, rate_lo: ArrayLike, rate_hi: ArrayLike,
+                 x_applied: ArrayLike | None = None, dt: float = 1.0,
+                 scale_max: float = 1.0) -> None: ...
 
-_Parts = tuple[_F, _F, _F, _F, _F, _F, _F, _F, _F, _F, bool, _F, _F, _F,
-               tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int],
-               NDArray[np.bool_], bool, list[tuple[bool, NDArray[np.int64], _F, _F]], float]
+class Equality:
+    A: _F
+    b: _F
+    names: tuple[str, ...]
+    def __init__(self, A: ArrayLike, b: ArrayLike, names: Sequence[str] = ()) -> None: ...
 
-class StepParts:
+class Quadratic:
+    weights: _F
+    center: _F
+    def __init__(self, w: ArrayLike | None = None, W: ArrayLike | None = None, *,
+                 center: ArrayLike) -> None: ...
+
+class Constraint:
+    lower: _F | None
+    upper: _F | None
+    G: _F | None
+    h: _F | None
+    row_names: tuple[str, ...]
+    nonfinite: str
+    def __init__(self, lower: ArrayLike | None = None, upper: ArrayLike | None = None,
+                 G: ArrayLike | None = None, h: ArrayLike | None = None,
+                 row_names: Sequence[str] = ()) -> None: ...
+
+class StepOut:
+    context: Context
+    A: _F
+    b: _F
+    eq_names: tuple[str, ...]
+    weights: _F
+    center: _F
+    lower: _F
+    upper: _F
+    lower_by: NDArray[np.int64]
+    upper_by: NDArray[np.int64]
+    G: _F
+    h: _F
+    row_names: tuple[str, ...]
+    row_limit: list[int]
+    recovering: NDArray[np.bool_]
+    any_recovering: bool
+    failed_part: int
+    failed_kind: str
+    failure: str
+    kinematics_seconds: float
+    seconds: float
+    def __init__(self) -> None: ...
+    def sigma_min(self) -> tuple[float, float]: ...
+
+class Task:
+    weight: float
+    def __init__(self) -> None: ...
+
+class CostTerm:
+    def __init__(self) -> None: ...
+
+class Limit:
+    def __init__(self) -> None: ...
+
+class ObjectPathTask(Task):
+    gain: float
+    def __init__(self, gain: float) -> None: ...
+    def equality(self, ctx: object) -> Equality: ...
+
+class GraspClosureTask(Task):
+    gain: float
+    exact_orientation: bool
+    def __init__(self, gain: float, exact_orientation: bool) -> None: ...
+    def equality(self, ctx: object) -> Equality: ...
+
+class CentringCost(CostTerm):
+    def __init__(self, weights: ArrayLike, centred: ArrayLike, shrink: float) -> None: ...
+    def quadratic(self, ctx: object) -> Quadratic: ...
+
+class RangeLimit(Limit):
+    size: int
+    def __init__(self, recovery: ArrayLike, off: ArrayLike) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class SpeedLimit(Limit):
+    size: int
+    def __init__(self, v_max: ArrayLike) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class AccelerationLimit(Limit):
+    size: int
+    def __init__(self, delta: ArrayLike) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class CollisionLimit(Limit):
+    def __init__(self, damper: DamperScene, names: Sequence[str], nonfinite: str) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
-                 centred: ArrayLike, shrink: float, ranged: ArrayLike,
-                 pin_rtol: float) -> None: ...
-    def add_form(self, kind: int, p: ArrayLike, off: ArrayLike, limit: int) -> None: ...
+                 ranged: ArrayLike, pin_rtol: float) -> None: ...
+    def add_task(self, task: Task) -> None: ...
+    def add_cost(self, cost: CostTerm) -> None: ...
+    def add_limit(self, limit: Limit) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
-    def add_rows(self, damper: DamperScene, limit: int) -> None: ...
-    @property
-    def forms(self) -> int: ...
-    @property
-    def row_forms(self) -> int: ...
     @property
     def n(self) -> int: ...
     @property
     def grasp_lines(self) -> bool: ...
-    def prepare(self, carry: Chain, q_carry: ArrayLike, col_rate: ArrayLike,
-                follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
-                sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
-                x_applied: ArrayLike, scale_max: float, leader_gain: float,
-                correction_gain: float, exact_orientation: bool
-                ) -> _Parts: ...
-    def prepare_solved(self, carry: Chain, q_carry: ArrayLike, col_rate: ArrayLike,
-                       follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
-                       sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
-                       x_applied: ArrayLike, scale_max: float, leader_gain: float,
-                       correction_gain: float, exact_orientation: bool, exact: ExactSolve,
-                       bound: LookaheadBound | None = None
-                       ) -> tuple[_Parts, tuple[_Solved, float, bool | None]
-                                  | None]: ...
+    def build(self, out: StepOut, carry: Chain, q_carry: ArrayLike, col_rate: ArrayLike,
+              follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
+              sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
+              x_applied: ArrayLike, t: float, scale_max: float, user: object) -> None: ...
 
 def grasp_rate_range(r: ArrayLike, s_star: ArrayLike, r_min: ArrayLike, r_max: ArrayLike,
                      dt: float) -> tuple[float, float]: ...

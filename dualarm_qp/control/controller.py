@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .._frozen import made
 from ..errors import (
     DualArmError,
     InfeasibleStepError,
@@ -26,7 +25,7 @@ from ..errors import (
 )
 from ..solvers.base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance
 from ..solvers.certify import certify, equality_limit
-from ..solvers.policy import POLICIES, Policy, solve_answered, solve_step
+from ..solvers.policy import POLICIES, Policy, solve_step
 from ..solvers.registry import certified, check_pairing
 from ..step.build import StepBuild, StepBuilder
 from ..step.layout import Layout
@@ -284,11 +283,12 @@ class DualArmController:
         With an error budget, the step at full path speed is solved and its predicted
         errors at the next sample are weighed against the budget too.
         """
-        state = self._checked(state)
         la = self._lookahead
         share = None
         if la is not None:
-            problem = self._builder.build(state).problem
+            build = self._builder.build(state)
+            state = build.context.state
+            problem = build.problem
             try:
                 sol = solve_step(self.solver, problem, policy="scale", tol=self.tolerance,
                                  fallback=self.fallback)
@@ -321,26 +321,13 @@ class DualArmController:
                 raise NonFiniteError("rates")
             self._x_applied = x.copy()
 
-    def _checked(self, state: DualArmState) -> DualArmState:
-        """``state`` with float arrays of the right lengths, or a clear error."""
-        q_l = self.task.leader.check_q(state.q_l, "leader joints q_l")
-        q_f = self.task.follower.check_q(state.q_f, "follower joints q_f")
-        try:
-            t, sigma = float(state.t), float(state.sigma)
-            sigma_l = float(state.sigma_leader)
-        except (TypeError, ValueError) as err:
-            raise InvalidInputError(f"state t and sigma must be numbers: {err}") from err
-        except OverflowError as err:  # an integer beyond the largest float
-            raise NonFiniteError("state t, sigma or sigma_leader") from err
-        if not (math.isfinite(t) and math.isfinite(sigma) and math.isfinite(sigma_l)):
-            raise NonFiniteError("state t, sigma or sigma_leader")
-        if (q_l is state.q_l and q_f is state.q_f and t is state.t and sigma is state.sigma
-                and sigma_l is state.sigma_leader):
-            return state
-        return DualArmState(t, q_l, q_f, sigma, sigma_l)
-
     def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
         """Compute one step's command from the measured ``state``.
+
+        The step, in order: the builder's one loop (the context, every task, cost term
+        and limit asked in turn, their pieces stacked: :meth:`StepBuilder.build`), the
+        solve under the policy (every answer certified once), the guards (the
+        look-ahead's error budget, the escape from a singularity), the command applied.
 
         Parameters
         ----------
@@ -364,53 +351,51 @@ class DualArmController:
         """
         if not 0.0 <= scale_max <= 1.0:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
-        state = self._checked(state)
-        # Checked once, here: the builder does not check the state or its own rates again.
-        # A solver that solves in the kernel solves the step in the call that builds it.
-        solver = certified(self.solver, self.tolerance)
-        builder = self._builder
-        la = self._lookahead
-        exact = solver.kernel_solve(builder.cost.weights) if builder.solves_in_one_call else None
-        if exact is not None:
-            build, solved = builder.build_solved(
-                state, scale_max, self._x_prev, self._x_applied, exact,
-                None if la is None else la.kernel_bound(self.options.dt))
-        else:  # a limit of Python's, or a solver that does not solve in the kernel
-            build = builder.build_checked(state, scale_max, self._x_prev, self._x_applied)
-            solved = None
-        problem = build.problem
-        t4 = time.perf_counter()
+        build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev,
+                                    x_applied=self._x_applied)
+        solved = time.perf_counter()
+        solution = self._solved(build)
+        guarded = time.perf_counter()
+        solution = self._guarded(build, solution, scale_max)
+        out = self._applied(build, solution, scale_max, StepTimes(
+            build.kinematics_time, build.assembly_time, guarded - solved,
+            time.perf_counter() - guarded))
+        if self.on_step is not None:
+            self.on_step(out)
+        return out
+
+    def _solved(self, build: StepBuild) -> StepSolution:
+        """Solve the step under the policy (every answer certified once)."""
         try:
-            solution = (solve_step(solver, problem, policy=self.policy, tol=self.tolerance,
-                                   fallback=self.fallback) if solved is None else
-                        solve_answered(solver, problem, solved, policy=self.policy,
-                                       tol=self.tolerance, fallback=self.fallback))
+            return solve_step(self.solver, build.problem, policy=self.policy,
+                              tol=self.tolerance, fallback=self.fallback)
         except InfeasibleStepError as err:
             sv_l, sv_f = build.sigma_min
             raise InfeasibleStepError(
                 f"{err.reason} (smallest singular values of the arms' Jacobians: leader "
                 f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
-        t5 = time.perf_counter()
-        # The solve's x clipped to the box, computed once (the look-ahead checks it).
-        clipped: FloatArray | None = None
-        inside: FloatArray | None = None
-        if la is not None and solution.status.usable and solution.scale > 0.0 and scale_max > 0.0:
-            clipped = solution.x
-            inside = _inside(clipped, problem)
-            # The look-ahead's bound on the kernel's answer, asked in the call that solved it.
-            skip = solved[2] if solved is not None and clipped is solved[0][1] else None
-            solution = self._within_budget(la, state, build, solution, inside, scale_max, skip)
+
+    def _guarded(self, build: StepBuild, solution: StepSolution, scale_max: float
+                 ) -> StepSolution:
+        """Keep the answer within the error budget, or escape a collapsed step."""
+        la = self._lookahead
+        if la is not None and solution.status.usable and solution.scale > 0.0 \
+                and scale_max > 0.0:
+            solution = self._within_budget(la, build, solution, scale_max)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
-            solution = self._escaped(state, build, solution, self._escape)
-        t6 = time.perf_counter()
+            solution = self._escaped(build, solution, self._escape)
+        return solution
 
+    def _applied(self, build: StepBuild, solution: StepSolution, scale_max: float,
+                 times: StepTimes) -> ControlOutput:
+        """Return the command of ``solution``, clipped to the box, kept as the last applied."""
+        problem = build.problem
         status = solution.status
         if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovers:
             status = Status.RECOVERING
             solution = replace(solution, status=status)
-        # Every answer was certified once, in the solve: nothing here checks it again.
         if not self._hard_bounds and status is Status.VIOLATION:
             # The paper's methods ignore the bounds by design: integrate a bound
             # violation and report it, but never a step whose equality is broken.
@@ -420,10 +405,7 @@ class DualArmController:
         if not usable_x:
             x = np.zeros(problem.n)
         elif self._hard_bounds:
-            # The clip of the look-ahead's check holds for the same x (a RECOVERING
-            # status keeps it; a slower or an escape solve does not).
-            x = inside if inside is not None and solution.x is clipped else _inside(
-                solution.x, problem)
+            x = _inside(solution.x, problem)
         else:
             x = solution.x
         self._x_prev = x if usable_x else None
@@ -431,35 +413,24 @@ class DualArmController:
             self._x_applied = x
         scale = scale_max * min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
         ql_dot, qf_dot, m, m_leader = self._builder.layout.split(x)
-        # Every field is the step's own, of its documented type: made unchecked.
-        return self._done(made(ControlOutput, {
-            "ql_dot": ql_dot,
-            "qf_dot": qf_dot,
-            "m": m,
-            "m_leader": m_leader,
-            "scale": scale,
-            "status": status,
-            "solution": solution,
-            "build": build,
-            "times": StepTimes(build.kinematics_time, build.assembly_time,
-                               t5 - t4 + (0.0 if solved is None else solved[1]), t6 - t5),
-            "applied": usable_x,
-        }))
+        return ControlOutput(ql_dot=ql_dot, qf_dot=qf_dot, m=m, m_leader=m_leader,
+                             scale=scale, status=status, solution=solution, build=build,
+                             times=times, applied=usable_x)
 
-    def _within_budget(self, la: Lookahead, state: DualArmState, build: StepBuild,
-                       solution: StepSolution, build_x: FloatArray,
-                       scale_max: float, skip: bool | None = None) -> StepSolution:
+    def _within_budget(self, la: Lookahead, build: StepBuild, solution: StepSolution,
+                       scale_max: float) -> StepSolution:
         """Slow the task until the errors predicted at the next sample fit the budget.
 
-        ``build_x`` is ``solution.x`` clipped to the box (what would be applied); ``skip``
-        is :meth:`Lookahead.negligible`'s answer for it when the kernel gave it already.
-        Returns ``solution`` when its prediction fits (or is negligible by the bound),
-        else the solve of the task scaled by the first halving of the scale whose
-        prediction fits, or the one with the smallest prediction (status SCALED).
+        Returns ``solution`` when the prediction of its command (its ``x`` clipped to
+        the box, what would be applied) fits (or is negligible by the bound), else the
+        solve of the task scaled by the first halving of the scale whose prediction
+        fits, or the one with the smallest prediction (status SCALED).
         """
         dt = self.options.dt
         problem = build.problem
-        if la.negligible(build, build_x, dt) if skip is None else skip:
+        state = build.context.state
+        build_x = _inside(solution.x, problem)
+        if la.negligible(build, build_x, dt):
             return solution
         pred = la.predict_checked(state, build_x, scale_max * solution.scale, dt)
         share = pred.share(la.budget)
@@ -491,10 +462,11 @@ class DualArmController:
                 break
         return best
 
-    def _escaped(self, state: DualArmState, build: StepBuild, solution: StepSolution,
-                 threshold: float) -> StepSolution:
+    def _escaped(self, build: StepBuild, solution: StepSolution, threshold: float
+                 ) -> StepSolution:
         """Return the escape move from a collapsed step (:mod:`.escape`), or ``solution``."""
         lay = self._builder.layout
+        state = build.context.state
         task = self.task
         arms = tuple(arm for arm, sv in zip(
             (("leader", task.leader, lay.leader, state.q_l),
@@ -515,12 +487,6 @@ class DualArmController:
                      f"singular values {build.sigma_min[0]:.3g}, {build.sigma_min[1]:.3g}): "
                      f"a move {how} raising it by {esc.rate:.3g} per s; "
                      f"{solution.message}")), self.tolerance)
-
-    def _done(self, out: ControlOutput) -> ControlOutput:
-        """Hand ``out`` to the ``on_step`` hook, then return it."""
-        if self.on_step is not None:
-            self.on_step(out)
-        return out
 
 
 def _inside(x: FloatArray, problem: StepProblem) -> FloatArray:

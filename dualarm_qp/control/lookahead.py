@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._remade import KernelHolder
 from .._validate import as_number
 from ..errors import NonFiniteError
 from ..kinematics.arm import SerialArm
@@ -72,7 +70,7 @@ def chain_length(arm: SerialArm) -> float:
     return links + float(np.linalg.norm(model.frames[arm.tool_frame_id].placement.translation))
 
 
-class Lookahead(KernelHolder):
+class Lookahead:
     """Predicts the errors a command leaves after one sample.
 
     Parameters
@@ -90,8 +88,6 @@ class Lookahead(KernelHolder):
         Joints of the leader and the follower (the slices of the decision vector).
     """
 
-    _kernel_attributes = ("_bound",)  # made again when unpickled (_remake)
-
     def __init__(self, task: DualArmTask, budget: tuple[float, float], carry: CarryModel,
                  n_l: int, n_f: int) -> None:
         self.task = task
@@ -99,32 +95,6 @@ class Lookahead(KernelHolder):
         self.n_l, self.n_f = n_l, n_f
         self._carry = carry
         self._length = (chain_length(task.leader), chain_length(task.follower))
-        self._remake()
-
-    def _remake(self) -> None:
-        """Forget the kernel's bound (made again by :meth:`kernel_bound`)."""
-        self._bound: tuple[tuple[Any, ...], kernel.LookaheadBound] | None = None
-
-    def kernel_bound(self, dt: float) -> kernel.LookaheadBound:
-        """Return :meth:`negligible`'s numbers for the sample ``dt`` [s] as the kernel takes them.
-
-        What a step builder hands to the kernel so that the call that solves a step also
-        says whether the bound skips the prediction for its answer
-        (``kernel.StepParts.prepare_solved``): the same test as :meth:`negligible`, with
-        the numbers it reads now (``dt``, :attr:`budget`, the arms' joints and chain
-        lengths, :data:`SKIP_SHARE`). Made again whenever one of them changed (a budget
-        set anew, even to the same numbers).
-        """
-        kept = self._bound
-        if kept is not None:
-            (d, budget, n_l, n_f, length, share), bound = kept
-            if (d == dt and budget is self.budget and n_l == self.n_l and n_f == self.n_f
-                    and length is self._length and share == SKIP_SHARE):
-                return bound
-        bound = kernel.LookaheadBound(self.n_l, self.n_f, dt, self._length[0], self._length[1],
-                                      self.budget[0], self.budget[1], SKIP_SHARE)
-        self._bound = ((dt, self.budget, self.n_l, self.n_f, self._length, SKIP_SHARE), bound)
-        return bound
 
     def negligible(self, build: StepBuild, x: FloatArray, dt: float) -> bool:
         """Whether the bound alone keeps the command's error under a tenth of the budget.
@@ -135,9 +105,9 @@ class Lookahead(KernelHolder):
         sliding on a curved path turns with it; a straight path adds nothing at second
         order but is counted too, cheaply and safely).
         """
-        carry = build.carry
+        ctx = build.parts.context
         negligible: bool = kernel.negligible(
-            x, self.n_l, self.n_f, dt, carry.T_tool, carry.T_target, self._length[0],
+            x, self.n_l, self.n_f, dt, ctx.T_tool, ctx.T_target, self._length[0],
             self._length[1], self.budget[0], self.budget[1], SKIP_SHARE)
         return negligible
 

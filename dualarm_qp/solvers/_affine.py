@@ -25,7 +25,6 @@ rounding (about 1e-15 relative) of the cut-off.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -257,33 +256,13 @@ def _as_basis(basis: tuple[FloatArray, FloatArray, int, float, bool]) -> NullBas
 
 
 def problem_basis(problem: StepProblem) -> NullBasis:
-    """:func:`null_basis` of ``problem.A``, computed once per problem and shared."""
-    value = problem._cache.get("basis")
-    if type(value) is NullBasis:
-        return value
-    basis = null_basis(problem.A) if value is None else _as_basis(value)
-    problem._cache["basis"] = basis
-    return basis
-
-
-def keep_basis(problem: StepProblem, basis: tuple[FloatArray, FloatArray, int, float, bool]
-               ) -> None:
-    """Keep ``kernel.basis(problem.A)``'s tuple as :func:`problem_basis`'s answer.
-
-    For a kernel call that computed the basis on the way (the exact solver's solve and
-    certificate in one call). The tuple is kept as it is and made a :class:`NullBasis`
-    when first read: a step whose answer needs no second look at the basis (most of
-    them) does not pay for the object.
-    """
-    problem._cache["basis"] = basis
+    """:func:`null_basis` of ``problem.A``."""
+    return null_basis(problem.A)
 
 
 def problem_factor(problem: StepProblem) -> Factor:
-    """:func:`factor` of ``problem.A``, computed once per problem and shared."""
-    value = problem._cache.get("factor")
-    if value is None:
-        value = problem._cache["factor"] = factor(problem.A)
-    return cast(Factor, value)
+    """:func:`factor` of ``problem.A``."""
+    return factor(problem.A)
 
 
 @dataclass(frozen=True, slots=True)

@@ -47,8 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._frozen import made
-from ..step.problem import StepProblem
+from ..step.problem import Inequalities, StepProblem
 from ._affine import cost_arrays, problem_basis
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
@@ -111,6 +110,7 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
     start = time.perf_counter()
     x = claim.x
     reading = None
+    ineq: Inequalities | None = None
     if isinstance(x, np.ndarray) and x.shape == (problem.n,) and x.dtype.kind in "fiu":
         x = np.asarray(x, dtype=np.float64)
         ineq = problem.inequalities()
@@ -121,11 +121,12 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
             *(problem_basis(problem).args() if ask else _NO_BASIS), ineq.C, ineq.e,
             ineq.kind, w_diag, w_full, root_full,
             problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
-    return verdict(problem, claim, x, reading, tol, claims_bounds, start)
+    return verdict(problem, claim, x, reading, tol, claims_bounds, start, ineq)
 
 
 def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: Reading | None,
-            tol: Tolerance, claims_bounds: bool, start: float) -> StepSolution:
+            tol: Tolerance, claims_bounds: bool, start: float,
+            inequalities: Inequalities | None = None) -> StepSolution:
     """Return what ``claim`` is worth from the kernel's reading of its ``x`` (the rules above).
 
     :func:`certify`'s decisions, for it and for the one kernel call that solves and
@@ -143,7 +144,7 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
         ``time.perf_counter()`` when the certification began.
     """
     fields = verdict_fields(problem, claim.status, claim.message, x, reading, tol,
-                            claims_bounds)
+                            claims_bounds, inequalities)
     if fields is None:
         n = problem.n
         zeros = np.zeros(n, dtype=bool)
@@ -156,16 +157,13 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
     solve_time = claim.solve_time + (time.perf_counter() - start)
     if type(claim) is not StepSolution:  # a subclass keeps its type and its own fields
         return replace(claim, **fields, solve_time=solve_time)
-    # Every field: the verdict's, and the claim's scale, solver and extras (a direct
-    # construction costs a third of dataclasses.replace, once per step).
-    fields.update(solve_time=solve_time, scale=claim.scale, solver=claim.solver,
-                  extras=claim.extras)
-    return made(StepSolution, fields)
+    return StepSolution(**fields, solve_time=solve_time, scale=claim.scale,
+                        solver=claim.solver, extras=claim.extras)
 
 
 def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatArray,
-                   reading: Reading | None, tol: Tolerance, claims_bounds: bool
-                   ) -> dict[str, Any] | None:
+                   reading: Reading | None, tol: Tolerance, claims_bounds: bool,
+                   inequalities: Inequalities | None = None) -> dict[str, Any] | None:
     """Return the certified fields of a claim (``status``, ``message``, its ``x``), or None.
 
     The decisions of :func:`verdict`, on the claim's parts: for a solver that makes its
@@ -201,7 +199,8 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
                 bound_violation=box, active_lower=active_lo.view(np.bool_),
                 active_upper=active_up.view(np.bool_), build_time=problem.build_time,
                 message=message, verified_with=tol, row_violation=rows,
-                active_rows=problem.inequalities().labels(active) if active else ())
+                active_rows=(inequalities or problem.inequalities()).labels(active)
+                if active else ())
 
 
 #: The kernel's certificate of one ``x`` (``kernel.certificate``'s tuple): finite, the

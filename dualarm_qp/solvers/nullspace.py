@@ -37,10 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._frozen import made
-from .._remade import KernelHolder
-from ..step.problem import StepProblem
-from ._affine import cost_arrays, keep_basis, problem_basis, weight_arrays
+from ..step.problem import Inequalities, Names, StepProblem
+from ._affine import cost_arrays, problem_basis
 from ._util import empty_box_answer, empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
 from .certify import certify, verdict, verdict_fields
@@ -49,7 +47,7 @@ from .registry import check_number, check_tolerance, register
 FloatArray = NDArray[np.float64]
 
 
-class NullspaceSolver(KernelHolder):
+class NullspaceSolver:
     """Exact minimiser of Eq. 37 subject to ``A x = b``, the boxes and the rows.
 
     Parameters
@@ -65,8 +63,6 @@ class NullspaceSolver(KernelHolder):
     """
 
     name = "nullspace"
-    # The kernel's settings of kernel_solve: made again when unpickled.
-    _kernel_attributes = ("_kernel_solve",)
 
     def __init__(self, *, feasibility_tol: float = 1e-10, max_iter: int | None = None,
                  tol: Tolerance = DEFAULT_TOLERANCE) -> None:
@@ -77,11 +73,6 @@ class NullspaceSolver(KernelHolder):
         self.feasibility_tol = float(feasibility_tol)
         self.max_iter = max_iter
         self.tol = tol
-        self._remake()
-
-    def _remake(self) -> None:
-        """Forget the kernel's settings (made again at the next :meth:`kernel_solve`)."""
-        self._kernel_solve: tuple[tuple[Any, ...], kernel.ExactSolve] | None = None
 
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve one step exactly; see the module docstring."""
@@ -91,91 +82,45 @@ class NullspaceSolver(KernelHolder):
             return empty
         ineq = problem.inequalities()
         w_diag, w_full, root_full = cost_arrays(problem)
-        basis = problem_basis(problem)  # shared with the certificate and scaled copies
         code, x, rows, nullity, iterations = kernel.solve_nullspace(
-            problem.A, problem.b, *basis.args(), ineq.C, ineq.e, w_diag, w_full, root_full,
-            problem.center, self.feasibility_tol, self._max_iter())
-        return self._claim(problem, code, x, rows, nullity, iterations, start)
-
-    def kernel_solve(self, weights: FloatArray, tol: Tolerance,
-                     claims_bounds: bool = True) -> kernel.ExactSolve:
-        """Return the kernel's settings of :meth:`solve_certified` for steps of these weights.
-
-        What a step builder hands to the kernel to solve a step in the call that builds
-        it (``kernel.StepParts.prepare_solved``); the answer then comes to
-        :meth:`solve_certified` as ``solved``. Made once and kept while the weights (the
-        same array), ``tol``, ``claims_bounds``, :attr:`feasibility_tol` and
-        :attr:`max_iter` stay the same.
-
-        Raises
-        ------
-        InvalidInputError
-            A full weighting matrix that is not positive definite.
-        """
-        kept = self._kernel_solve
-        if kept is not None:
-            (w, t, claims, feasibility_tol, max_iter), exact = kept
-            if (w is weights and (t is tol or t == tol) and claims == claims_bounds
-                    and feasibility_tol == self.feasibility_tol and max_iter == self.max_iter):
-                return exact
-        exact = kernel.ExactSolve(*weight_arrays(weights), self.feasibility_tol,
-                                  self._max_iter(), claims_bounds, tol.equality, tol.bounds)
-        self._kernel_solve = ((weights, tol, claims_bounds, self.feasibility_tol,
-                               self.max_iter), exact)
-        return exact
+            problem.A, problem.b, *problem_basis(problem).args(), ineq.C, ineq.e, w_diag,
+            w_full, root_full, problem.center, self.feasibility_tol, self._max_iter())
+        return self._claim(problem, code, x, rows, nullity, iterations, start, ineq)
 
     def solve_certified(self, problem: StepProblem, tol: Tolerance,
-                        claims_bounds: bool = True,
-                        solved: tuple[Any, ...] | None = None) -> StepSolution:
+                        claims_bounds: bool = True) -> StepSolution:
         """Solve one step and certify the answer, in one kernel call.
 
         What :class:`~.registry.CertifiedSolver` calls for this solver: the same
         solve as :meth:`solve` and, for an optimum, the kernel's certificate of its
         ``x`` (the function :func:`~.certify.certify` calls) on the same basis of ``A``
         and the same rows, computed once; :func:`~.certify.verdict_fields` decides, as
-        for every solver (an optimum's answer is made in one piece, with no claim object
-        first). An empty box is found by the same call, which then does not solve. The
-        basis and the rows are kept in the problem's cache. A
-        problem whose cache already holds them (a scaled copy of a solved step) is
-        solved and certified by the two calls, which reuse them.
-
-        ``solved`` is that call's answer made already, with its seconds (first and second
-        in the tuple): the answer of the call that built ``problem`` and solved it with
-        :meth:`kernel_solve`'s settings for ``tol`` and ``claims_bounds``
-        (``StepParts.prepare_solved``). It is read here as this method's own call would
-        be.
+        for every solver. An empty box is found by the same call, which then does not
+        solve.
         """
         start = time.perf_counter()
-        if solved is not None:
-            answer, seconds = solved[0], solved[1]
-            start -= seconds
-        else:
-            cache = problem._cache
-            if "basis" in cache and "ineq" in cache:
-                return certify(problem, self.solve(problem), tol, claims_bounds=claims_bounds)
-            w_diag, w_full, root_full = cost_arrays(problem)
-            answer = kernel.solve_certified(
-                problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-                w_diag, w_full, root_full, problem.center, self.feasibility_tol,
-                self._max_iter(), claims_bounds, tol.equality, tol.bounds)
-        code, x, rows, nullity, iterations, basis, ineq, reading = answer
+        w_diag, w_full, root_full = cost_arrays(problem)
+        code, x, rows, nullity, iterations, _, ineq, reading = kernel.solve_certified(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+            w_diag, w_full, root_full, problem.center, self.feasibility_tol,
+            self._max_iter(), claims_bounds, tol.equality, tol.bounds)
         if code == _EMPTY_BOX:  # not solved: the one answer to an empty box
             return certify(problem, empty_box_answer(problem, self.name,
                                                      time.perf_counter() - start),
                            tol, claims_bounds=claims_bounds)
-        keep_basis(problem, basis)
-        problem.keep_inequalities(*ineq)
-        if code == _OPTIMAL:  # an optimum: certified in one piece, without a claim object first
+        inequalities = Inequalities(*ineq, Names(problem.names, problem.row_names,
+                                                 problem.lower_by, problem.upper_by))
+        if code == _OPTIMAL:  # an optimum: certified in one piece, without a claim first
             fields = verdict_fields(problem, Status.OPTIMAL, "", x, reading, tol,
-                                    claims_bounds)
+                                    claims_bounds, inequalities)
             if fields is not None:
                 extras: dict[str, Any] = {"nullity": nullity}
                 if iterations >= 0:
                     extras["iterations"] = iterations
-                fields.update(scale=1.0, solve_time=time.perf_counter() - start,
-                              solver=self.name, extras=extras)
-                return made(StepSolution, fields)  # every field checked: made unchecked
-        claim = self._claim(problem, code, x, rows, nullity, iterations, start)
+                return StepSolution(**fields, scale=1.0,
+                                    solve_time=time.perf_counter() - start,
+                                    solver=self.name, extras=extras)
+        claim = self._claim(problem, code, x, rows, nullity, iterations, start, inequalities)
         if reading is None:  # not an optimum: the claim is certified as it is
             return certify(problem, claim, tol, claims_bounds=claims_bounds)
         return verdict(problem, claim, x, reading, tol, claims_bounds, time.perf_counter())
@@ -184,7 +129,8 @@ class NullspaceSolver(KernelHolder):
         return -1 if self.max_iter is None else self.max_iter
 
     def _claim(self, problem: StepProblem, code: int, x: FloatArray, rows: list[int],
-               nullity: int, iterations: int, start: float) -> StepSolution:
+               nullity: int, iterations: int, start: float,
+               inequalities: Inequalities | None = None) -> StepSolution:
         """Return the solver's claim from the kernel's answer (OPTIMAL, or a failure)."""
         if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
@@ -194,7 +140,7 @@ class NullspaceSolver(KernelHolder):
         if iterations >= 0:
             extras["iterations"] = iterations
         if code == _INFEASIBLE:
-            return self._infeasible(problem, rows, start, extras)
+            return self._infeasible(problem, rows, start, extras, inequalities)
         if code == _MAX_ITER:
             return failed(problem, Status.ERROR, self.name,
                           f"active set did not converge in {iterations - 1} "
@@ -203,8 +149,9 @@ class NullspaceSolver(KernelHolder):
                             solve_time=time.perf_counter() - start, extras=extras)
 
     def _infeasible(self, problem: StepProblem, rows: list[int], start: float,
-                    extras: dict[str, Any]) -> StepSolution:
-        conflicts = problem.inequalities().labels(rows)
+                    extras: dict[str, Any], inequalities: Inequalities | None = None
+                    ) -> StepSolution:
+        conflicts = (inequalities or problem.inequalities()).labels(rows)
         return failed(problem, Status.INFEASIBLE, self.name,
                       "no x meets A x = b within the limits; conflicting: "
                       + ", ".join(conflicts), time.perf_counter() - start,

@@ -103,34 +103,19 @@ def solve_step(solver: StepSolver, problem: StepProblem, policy: Policy = "scale
     InvalidInputError
         Unknown policy.
     """
-    return _solved_step(solver, problem, policy, tol, relax_eps, fallback, None)
-
-
-def solve_answered(solver: StepSolver, problem: StepProblem, answer: Any,
-                   policy: Policy = "scale", *, tol: Tolerance = DEFAULT_TOLERANCE,
-                   fallback: StepSolver | None = None) -> StepSolution:
-    """:func:`solve_step` for a step the kernel solved in the call that built it.
-
-    The controller's step (:meth:`~dualarm_qp.control.controller.DualArmController.step`):
-    ``answer`` is the kernel's answer to ``problem``, made by that call with
-    ``certified(solver, tol).kernel_solve(...)``'s settings
-    (``kernel.StepParts.prepare_solved``). The first solve reads it
-    (:meth:`~.registry.CertifiedSolver.read`) instead of solving; the policy and the
-    fallback then go on as in :func:`solve_step`. Nothing checks that ``answer``
-    belongs to ``problem``: only the call that made both may pass it.
-    """
-    return _solved_step(solver, problem, policy, tol, RELAX_EPS, fallback, answer)
-
-
-def _solved_step(solver: StepSolver, problem: StepProblem, policy: Policy, tol: Tolerance,
-                 relax_eps: float, fallback: StepSolver | None, answer: Any) -> StepSolution:
-    """:func:`solve_step`, its first solve read from the kernel's ``answer`` when given."""
     if policy not in POLICIES:
         raise InvalidInputError(f"unknown policy '{policy}' (valid: {', '.join(POLICIES)})")
     solver = certified(solver, tol)
-    solution = solver.solve(problem) if answer is None else solver.read(problem, answer)
+    solution = solver.solve(problem)
     if solution.status.usable:
         return solution
+    return _after_failure(solver, problem, solution, policy, tol, relax_eps, fallback)
+
+
+def _after_failure(solver: Any, problem: StepProblem, solution: StepSolution,
+                   policy: Policy, tol: Tolerance, relax_eps: float,
+                   fallback: StepSolver | None) -> StepSolution:
+    """Apply the policy and the fallback to a step the solver gave no usable answer to."""
     # Policy time is counted from the first solve, which it includes.
     start = time.perf_counter() - solution.solve_time
     known = solution.extras.get("task_scale")

@@ -18,8 +18,6 @@ from .base import DEFAULT_TOLERANCE, Status, StepSolution, StepSolver, Tolerance
 from .certify import certify
 
 if TYPE_CHECKING:
-    import numpy as np
-    from numpy.typing import NDArray
 
     from ..step.problem import StepProblem
 
@@ -51,10 +49,6 @@ class SolverInfo:
         ``solve_certified(problem, tol, claims_bounds)``: its solve and the kernel's
         certificate of the answer in one call, the verdict given by
         :func:`~.certify.verdict` as for every solver (the exact ``nullspace`` solver).
-        A solver that also has ``kernel_solve(weights, tol, claims_bounds)`` (the
-        kernel's settings of that call, with which a step builder solves a step in the
-        call that builds it) takes that call's answer as
-        ``solve_certified(..., solved=answer)``; one without it solves after the build.
     """
 
     name: str
@@ -310,20 +304,6 @@ class CertifiedSolver:
         # A solver that takes rows and a full cost refuses no problem.
         self._may_refuse = not (info.takes_rows and info.dense_cost)
 
-    def kernel_solve(self, weights: NDArray[np.float64]) -> Any:
-        """Return the kernel's settings with which a builder solves a step as it builds it.
-
-        For a solver that certifies in the kernel: its ``kernel_solve(weights, tol,
-        claims_bounds)`` with this wrapper's tolerances and its entry's claim of the
-        bounds. The answer of that call comes back through :meth:`read`.
-        None for every other solver (its solve runs after the build).
-        """
-        # A solver registered before it had kernel settings solves after the build.
-        make = None if self._in_kernel is None else getattr(self.inner, "kernel_solve", None)
-        if make is None:
-            return None
-        return make(weights, self.tol, self.info.hard_bounds)
-
     def solve(self, problem: StepProblem) -> StepSolution:
         """Solve ``problem`` and certify the answer against it."""
         if self._may_refuse:
@@ -335,23 +315,6 @@ class CertifiedSolver:
             return self._in_kernel(problem, self.tol, self.info.hard_bounds)
         return certify(problem, self.inner.solve(problem), self.tol,
                        claims_bounds=self.info.hard_bounds)
-
-    def read(self, problem: StepProblem, answer: Any) -> StepSolution:
-        """Return the certified solution of the kernel's ``answer`` to ``problem``.
-
-        ``answer`` was made with :meth:`kernel_solve`'s settings in the call that built
-        ``problem`` (``StepParts.prepare_solved``): it is read as :meth:`solve` would
-        read its own kernel call (the solver's ``solve_certified(..., solved=answer)``).
-
-        Raises
-        ------
-        TypeError
-            The solver does not solve in the kernel (:meth:`kernel_solve` gave None).
-        """
-        if self._in_kernel is None:
-            raise TypeError(f"solver '{self.name}' does not solve in the kernel: no "
-                            "answer of the kernel's can be given to it")
-        return self._in_kernel(problem, self.tol, self.info.hard_bounds, answer)
 
     def __getattr__(self, key: str) -> Any:
         # The wrapped solver's attributes. Never this object's own: while it is unpickled

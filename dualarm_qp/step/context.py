@@ -8,7 +8,6 @@ cost term and limit; none of them computes kinematics of its own.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -100,9 +99,14 @@ class ArmKinematics:
         return J[:3] - pin.skew(r) @ J[3:]
 
 
-@dataclass(frozen=True, slots=True)
 class StepContext:
-    """The step's state and kinematics.
+    """The step's state and kinematics: what every part reads.
+
+    The kernel's loop computes the kinematics once, before it asks any part; this object
+    reads them from the kernel's context of the step (``kernel_context``, numpy views
+    of the kernel's arrays), with the state and the task the step was built from.
+    Valid during its step: the arms' kinematics (``leader_arm``, ``follower_arm``) are
+    those of the latest step.
 
     Attributes
     ----------
@@ -112,71 +116,107 @@ class StepContext:
         Arms, object and path.
     layout : Layout
         The slices of the decision vector.
-    dt : float
-        Sampling interval [s].
-    scale_max : float
-        Share of the path's feed-forward asked for (1: full speed).
-    carry : CarryKinematics
-        Poses and Jacobians of the leader's tool, the object frame and the follower's
-        target (world frame, ``[v; w]``, columns in decision order over the leader's
-        joints and the grasps).
-    T_f, J_f : ndarray
-        Follower tool pose (4, 4) [m] and Jacobian (6, n_f).
     surfaces : tuple of GraspSurface
         The grasps' paths at this step, the follower's first (a Case 2 support line
         follows gravity from step to step).
-    positions : ndarray, shape (n,)
-        What the decision variables are rates of: joints [rad], grasp coordinates [m].
-    rate_lo, rate_hi : ndarray, shape (n,)
-        The rates that would take each variable to the ends of its range in one
-        sample (Eqs. 30-36) [rad/s, m/s] (``-inf`` / ``inf`` for an unbounded range;
-        ``rate_lo > 0`` or ``rate_hi < 0``: the variable is outside its range).
-    x_applied : ndarray, shape (n,)
-        The last command applied [rad/s, m/s] (zero from rest): what acceleration limits
-        measure the step from. Not the solver's warm start.
-    leader_error : ndarray, shape (6,)
-        ``[dp; dw]`` from the object frame to ``D(t)`` [m, rad].
-    closure_error : ndarray, shape (6,)
-        ``[dp; dw]`` from the follower's tool to its target [m, rad].
     leader_arm, follower_arm : ArmKinematics
         The arms' models and kinematics at this step (their links, for limits that need
         them).
-    sigma_min : tuple of float
-        Smallest singular value of the leader's and the follower's tool Jacobian
-        (computed when first read, from ``carry.J_tool`` and ``J_f``).
+    kernel_context : kernel.Context
+        The kernel's context of the step (what the compiled parts read).
     """
 
-    state: DualArmState
-    task: DualArmTask
-    layout: Layout
-    dt: float
-    scale_max: float
-    carry: CarryKinematics
-    T_f: FloatArray
-    J_f: FloatArray
-    surfaces: tuple[GraspSurface, ...]
-    positions: FloatArray
-    rate_lo: FloatArray
-    rate_hi: FloatArray
-    x_applied: FloatArray
-    leader_error: FloatArray
-    closure_error: FloatArray
-    leader_arm: ArmKinematics
-    follower_arm: ArmKinematics
-    _sigma_min: tuple[float, float] | None = field(default=None, init=False, repr=False,
-                                                   compare=False)
+    __slots__ = ("_out", "follower_arm", "kernel_context", "layout", "leader_arm", "state",
+                 "surfaces", "task")
+
+    def __init__(self, out: Any, state: DualArmState, task: DualArmTask, layout: Layout,
+                 surfaces: tuple[GraspSurface, ...], leader_arm: ArmKinematics,
+                 follower_arm: ArmKinematics) -> None:
+        self._out = out
+        self.kernel_context = out.context
+        self.state = state
+        self.task = task
+        self.layout = layout
+        self.surfaces = surfaces
+        self.leader_arm = leader_arm
+        self.follower_arm = follower_arm
+
+    @property
+    def dt(self) -> float:
+        """Sampling interval [s]."""
+        return float(self.kernel_context.dt)
+
+    @property
+    def scale_max(self) -> float:
+        """Share of the path's feed-forward asked for (1: full speed)."""
+        return float(self.kernel_context.scale_max)
+
+    @property
+    def carry(self) -> CarryKinematics:
+        """Poses and Jacobians of the leader's tool, the object and the follower's target.
+
+        World frame, ``[v; w]``, columns in decision order over the leader's joints and
+        the grasps.
+        """
+        k = self.kernel_context
+        return CarryKinematics(k.T_tool, k.J_tool, k.T_object, k.J_object, k.T_target,
+                               k.J_target)
+
+    @property
+    def T_f(self) -> FloatArray:
+        """The follower's tool pose (4, 4) [m]."""
+        return np.asarray(self.kernel_context.T_f)
+
+    @property
+    def J_f(self) -> FloatArray:
+        """The follower's tool Jacobian (6, n_f), world axes ``[v; w]``."""
+        return np.asarray(self.kernel_context.J_f)
+
+    @property
+    def positions(self) -> FloatArray:
+        """What the decision variables are rates of: joints [rad], grasp coordinates [m]."""
+        return np.asarray(self.kernel_context.positions)
+
+    @property
+    def rate_lo(self) -> FloatArray:
+        """Rates [rad/s, m/s] to each variable's lower range end in one sample.
+
+        Eqs. 30-36; ``-inf`` for an unbounded range; ``> 0``: the variable is below its
+        range.
+        """
+        return np.asarray(self.kernel_context.rate_lo)
+
+    @property
+    def rate_hi(self) -> FloatArray:
+        """Rates [rad/s, m/s] to each variable's upper range end (``< 0``: above it)."""
+        return np.asarray(self.kernel_context.rate_hi)
+
+    @property
+    def x_applied(self) -> FloatArray:
+        """The last command applied [rad/s, m/s] (zero from rest).
+
+        What acceleration limits measure the step from; not the solver's warm start.
+        """
+        return np.asarray(self.kernel_context.x_applied)
+
+    @property
+    def leader_error(self) -> FloatArray:
+        """``[dp; dw]`` from the object frame to ``D(t)`` [m, rad]."""
+        return np.asarray(self.kernel_context.leader_error)
+
+    @property
+    def closure_error(self) -> FloatArray:
+        """``[dp; dw]`` from the follower's tool to its target [m, rad]."""
+        return np.asarray(self.kernel_context.closure_error)
 
     @property
     def sigma_min(self) -> tuple[float, float]:
         """Smallest singular value of the leader's and the follower's tool Jacobian.
 
-        Computed when first read (about 6 us for both, a tenth of a step): a loop that
-        never reads them does not pay for them.
+        Computed by the kernel when first asked in a step (about 6 us for both, a tenth
+        of a step): a loop that never reads them does not pay for them.
         """
-        sv = self._sigma_min
-        if sv is None:
-            sv = smallest_singular_values(self.carry.J_tool, self.J_f)
-            object.__setattr__(self, "_sigma_min", sv)  # a cache, on a frozen context
+        sv: tuple[float, float] = self._out.sigma_min()
         return sv
 
     @property

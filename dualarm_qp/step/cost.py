@@ -6,24 +6,25 @@ with ``S`` diagonal (the joint weights and the sliding weight ``s7``) and ``dqha
 rate that would bring each variable to the middle of its range in ``centre_horizon``
 seconds (Eqs. 38-40; the paper's horizon is one sample). A variable without a finite
 range (and the leader's joints, for the paper's methods, whose leader box is open) has
-centre 0: the term then asks for the smallest rate.
+centre 0: the term then asks for the smallest rate. A compiled part
+(``kernel.CentringCost``).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .context import StepContext
 from .layout import Layout
 from .options import StepOptions
-from .parts import Quadratic
 
 FloatArray = NDArray[np.float64]
 
 
-class CentringCost:
+class CentringCost(kernel.CentringCost):
     """Eq. 37 with the range centres of Eqs. 38-40.
 
     Parameters
@@ -36,6 +37,15 @@ class CentringCost:
     leader_ranges : bool
         Centre the leader's joints too (False: centre 0, for the paper's methods whose
         leader box is open).
+
+    Attributes
+    ----------
+    weights : ndarray, shape (n,)
+        ``S``'s diagonal (read-only).
+    centred : ndarray of bool, shape (n,)
+        Which variables are centred (the others' centre is 0).
+    shrink : float
+        ``dt`` over the centring horizon: the centres' scale.
     """
 
     name = "centring"
@@ -47,31 +57,25 @@ class CentringCost:
                             else options.leader_joint_weights)
         w[layout.follower] = options.joint_weights
         w[layout.grasps] = options.grasp_weight
-        w.flags.writeable = False  # shared by every problem
-        self.weights = w
+        w.flags.writeable = False
         centred = np.ones(layout.n, dtype=bool)
         if not leader_ranges:
             centred[layout.leader] = False
         centred.flags.writeable = False
-        #: Which variables are centred (the others' centre is 0).
-        self.centred = centred
-        #: ``dt`` over the centring horizon: the centres' scale.
-        self.shrink = options.dt / (options.centre_horizon or options.dt)
+        shrink = options.dt / (options.centre_horizon or options.dt)
+        super().__init__(w, centred, shrink)
+        self.weights: FloatArray = w
+        self.centred: NDArray[np.bool_] = centred
+        self.shrink = shrink
+        self._args = (layout, options, leader_ranges)
 
-    def __setstate__(self, state: dict[str, object]) -> None:
-        # A pickle (and copy.deepcopy) gives numpy arrays back writeable: the weights and
-        # the centred flags stay read-only (the exact solver's kernel settings are kept
-        # for this very weights array).
-        self.__dict__.update(state)
-        self.weights.flags.writeable = False
-        self.centred.flags.writeable = False
+    def __reduce__(self) -> tuple[Any, ...]:
+        layout, options, leader_ranges = self._args
+        return (_centring, (layout, options, leader_ranges))
 
-    def quadratic(self, ctx: StepContext) -> Quadratic:
-        """Weights ``S`` and centres ``dqhat_c`` [rad/s, m/s] at this step."""
-        # The middle of each centred variable's finite rate range, scaled from dt to the
-        # centring horizon (one compiled call, src/kernel/boxes.cpp).
-        return Quadratic(self.weights, kernel.centre(ctx.rate_lo, ctx.rate_hi, self.centred,
-                                                     self.shrink))
+
+def _centring(layout: Layout, options: StepOptions, leader_ranges: bool) -> CentringCost:
+    return CentringCost(layout, options, leader_ranges=leader_ranges)
 
 
 __all__ = ["CentringCost"]

@@ -1,27 +1,32 @@
-"""The parts a step is stacked from: equality tasks, cost terms and limits.
+"""The parts a step is made of: tasks, cost terms and limits, and what each gives.
 
 A step problem (:class:`~dualarm_qp.step.problem.StepProblem`) is not written out by
-hand: :class:`~dualarm_qp.step.build.StepBuilder` stacks small parts, each of which
-reads the step's context (:class:`~dualarm_qp.step.context.StepContext`: the state,
-its kinematics computed once, ``dt``) and returns its piece:
+hand: each step, one loop (:class:`~dualarm_qp.step.build.StepBuilder`, in the compiled
+kernel) makes the step's context (:class:`~dualarm_qp.step.context.StepContext`: the
+state, its kinematics computed once, ``dt``), asks every part in turn for its piece and
+stacks the pieces:
 
-* a **task** gives equality rows ``A_i x = b_i`` (the object follows ``D(t)``; the
-  grasp stays closed);
-* a **cost term** gives a weighted distance ``(x - c_i)^T W_i (x - c_i)`` (the paper's
-  centring, Eqs. 37-40);
+* a **task** gives rows ``A x = b`` (:class:`Equality`): an equality of the step (the
+  object follows ``D(t)``; the grasp stays closed) or, with a ``weight``, the cost term
+  ``weight |A x - b|^2`` (a posture to hold in the null space of the equalities);
+* a **cost term** gives a weighted distance ``(x - c)^T W (x - c)`` (:class:`Quadratic`:
+  the paper's centring, Eqs. 37-40); the terms and the weighted tasks are summed;
 * a **limit** gives boxes on named variables and/or rows ``G x <= h`` with a name per
-  row (joint range and speed, grasp range and speed, acceleration, a user's wall, the
-  collision distances).
+  row (:class:`Constraint`: joint range and speed, grasp range and speed, acceleration,
+  the collision distances, a wall of yours).
 
-Adding a limit is one class with a ``name``, a ``gives_rows`` flag (whether it gives
-general rows, which some solvers cannot take) and one method, ``constraint(ctx)``;
-see ``docs/api.md`` and ``examples/custom_limit.py``.
+Every part is asked through the same door. The library's own are compiled: objects of
+the kernel's part classes (``kernel.Task``, ``kernel.CostTerm``, ``kernel.Limit``), each
+with one method the kernel's loop calls. A part of yours is any object of the protocols
+below: the loop asks it in turn, in its place among the others (the builder wraps it in
+a kernel part, :mod:`.python_parts`). See ``docs/api.md``, ``examples/custom_limit.py``
+and ``examples/custom_task.py``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,21 +39,21 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True, slots=True)
 class Equality:
-    """Equality rows ``A x = b`` of a task.
+    """Rows ``A x = b`` of a task.
 
     Attributes
     ----------
     A : ndarray, shape (k, n)
         Rows over the whole decision vector.
     b : ndarray, shape (k,)
-        Right-hand side (the task scale multiplies it).
+        Right-hand side [m/s, rad/s] (the policy's task scale multiplies it).
     names : tuple of str
         One name per row.
     """
 
-    A: FloatArray
-    b: FloatArray
-    names: tuple[str, ...]
+    A: Any
+    b: Any
+    names: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,8 +68,8 @@ class Quadratic:
         Where the term is zero [rad/s, m/s].
     """
 
-    weights: FloatArray
-    center: FloatArray
+    weights: Any
+    center: Any
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,21 +86,33 @@ class Constraint:
     h : ndarray, shape (p,), optional
         Their right-hand sides (``inf`` for a row that does not bind).
     row_names : tuple of str
-        One name per row (``"wall"``, ``"qf3 - obstacle pillar"``).
+        One name per row (``"wall"``, ``"qf3 - obstacle pillar"``); default
+        ``"<limit name> <i>"``.
     """
 
-    lower: FloatArray | None = None
-    upper: FloatArray | None = None
-    G: FloatArray | None = None
-    h: FloatArray | None = None
+    lower: Any = None
+    upper: Any = None
+    G: Any = None
+    h: Any = None
     row_names: tuple[str, ...] = ()
 
 
 @runtime_checkable
 class Task(Protocol):
-    """An equality task of the step."""
+    """A task of the step: rows ``A x = b``, held exactly or, with a weight, in the cost.
+
+    Attributes
+    ----------
+    name : str
+        How messages name it.
+    weight : float or None
+        None (or ``inf``): the rows are equalities of the step. A number ``>= 0``: the
+        term ``weight |A x - b|^2`` joins the cost [1 / (rad/s)^2, mixed units as the
+        rows].
+    """
 
     name: str
+    weight: float | None
 
     def equality(self, ctx: StepContext) -> Equality:
         """Return the task's rows at this step."""

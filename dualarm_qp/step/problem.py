@@ -24,7 +24,7 @@ The problem converts to and from :class:`qpsolvers.Problem` (:meth:`StepProblem.
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 import math
 import operator
 from dataclasses import dataclass, field
@@ -34,7 +34,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._frozen import made
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
 if TYPE_CHECKING:
@@ -188,8 +187,6 @@ class StepProblem:
     lower_by: tuple[str, ...] = ()
     upper_by: tuple[str, ...] = ()
     build_time: float = 0.0
-    _cache: dict[str, Any] = field(default_factory=dict, init=False, compare=False,
-                                   repr=False)
 
     def __post_init__(self) -> None:
         A = _c_array(self.A)
@@ -250,21 +247,6 @@ class StepProblem:
             elif len(given) != n:
                 raise ShapeError(name, (n,), (len(given),))
 
-    @classmethod
-    def assembled(cls, **parts: Any) -> StepProblem:
-        """Return a problem from parts the step builder checked where it made them.
-
-        Every init field is given by keyword. Validation happens once, at the boundary
-        (the parts come from the kernel and from checked settings; a limit's bounds
-        and rows are checked by :class:`~dualarm_qp.step.stacking.LimitStack` as the
-        builder stacks them), so nothing is checked or copied again here: ``A`` and ``b`` are
-        the kernel's equality (finite), the weights the cost's (positive, from
-        :class:`~dualarm_qp.step.options.StepOptions`), the centre and the box the
-        kernel's, and every array a C-ordered float64 of the right shape. Anything
-        else builds a problem with the checking constructor.
-        """
-        return made(cls, parts)
-
     # -- sizes ---------------------------------------------------------------------------
     @property
     def n(self) -> int:
@@ -301,19 +283,9 @@ class StepProblem:
                 b = scale * self.b
             if kernel.first_defect([b], []) >= 0:
                 raise NonFiniteError("b (scaled)")
-        if x_prev is not None:
-            x_prev = np.asarray(x_prev, dtype=np.float64)
-            if x_prev.shape != (self.n,):
-                raise ShapeError("x_prev", (self.n,), x_prev.shape)
-        # Everything else was checked when this problem was made: a copy, not a new check.
-        out = copy.copy(self)
-        set_ = object.__setattr__
-        set_(out, "b", b)
-        set_(out, "x_prev", self.x_prev if x_prev is None else x_prev)
-        # The same A, boxes, rows and cost: their factorisations carry over.
-        set_(out, "_cache", {key: self._cache[key] for key in ("factor", "basis", "ineq", "root")
-                             if key in self._cache})
-        return out
+        # Everything else was checked when this problem was made; the constructor checks
+        # the new right-hand side and warm start.
+        return dataclasses.replace(self, b=b, x_prev=self.x_prev if x_prev is None else x_prev)
 
     def weight_matrix(self) -> FloatArray:
         """``W`` as an ``n x n`` matrix."""
@@ -329,10 +301,7 @@ class StepProblem:
         InvalidInputError
             A full weighting matrix that is not positive definite.
         """
-        root = self._cache.get("root")
-        if root is None:
-            root = self._cache["root"] = cost_root(self.weights)
-        return np.asarray(root)
+        return cost_root(self.weights)
 
     def gradient(self, x: FloatArray) -> FloatArray:
         """``W (x - c)``, half the gradient of Eq. 37 at ``x``."""
@@ -365,27 +334,14 @@ class StepProblem:
                                                                                     upper)
 
     def inequalities(self) -> Inequalities:
-        """Every finite inequality as unit-norm rows ``C x <= e`` (computed once)."""
-        cached = self._cache.get("ineq")
-        if type(cached) is Inequalities:
-            return cached
-        # Built by the compiled kernel (src/kernel/rows.cpp), which the exact solver uses.
-        C, e, kind, index = (kernel.inequalities(self.lower, self.upper, self.G, self.h)
-                             if cached is None else cached)
-        out = Inequalities(C, e, kind, index,
-                           Names(self.names, self.row_names, self.lower_by, self.upper_by))
-        self._cache["ineq"] = out
-        return out
+        """Every finite inequality as unit-norm rows ``C x <= e`` (one kernel call).
 
-    def keep_inequalities(self, C: FloatArray, e: FloatArray, kind: NDArray[np.int8],
-                          index: NDArray[np.int64]) -> None:
-        """Keep the kernel's rows of this problem (``kernel.inequalities``'s tuple).
-
-        For a kernel call that built them on the way (the exact solver's solve and
-        certificate in one call): :meth:`inequalities` then returns them, made an
-        :class:`Inequalities` when first read.
+        Built by the compiled kernel (``src/kernel/rows.cpp``), which the exact solver
+        uses.
         """
-        self._cache["ineq"] = (C, e, kind, index)
+        C, e, kind, index = kernel.inequalities(self.lower, self.upper, self.G, self.h)
+        return Inequalities(C, e, kind, index,
+                            Names(self.names, self.row_names, self.lower_by, self.upper_by))
 
     def row_violation(self, x: FloatArray) -> float:
         """Largest violation of a general row, ``max((G x - h) / |G_i|, 0)`` [units of x]."""

@@ -1,8 +1,8 @@
 """The step's two equality tasks: the object follows ``D(t)``; the grasp stays closed.
 
 Both read the carried-object model's Jacobians from the step's context
-(:class:`~dualarm_qp.step.context.StepContext`), in world coordinates ``[v; w]``, and
-are one block of twelve rows, assembled by the compiled kernel in one call:
+(:class:`~dualarm_qp.step.context.StepContext`), in world coordinates ``[v; w]``; each
+is a compiled part (``kernel.ObjectPathTask``, ``kernel.GraspClosureTask``) of six rows:
 
     J_o [ql_dot; m_l] = s V_o(t) + K_l e_l                       (Eq. 14 differentiated)
     J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c                    (Eqs. 25-27)
@@ -19,64 +19,60 @@ step (Sec. 3.3); ``exact_orientation=True`` keeps its curvature term instead.
 
 from __future__ import annotations
 
-import numpy as np
+from typing import Any
 
 from .._compiled import kernel
-from ..errors import NonFiniteError
-from .context import StepContext
-from .parts import Equality
 
 _AXES = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 
-class CarryTasks:
-    """The object follows ``D(t)`` (rows 1-6); the follower's grasp stays closed (7-12).
+class ObjectPathTask(kernel.ObjectPathTask):
+    """The object follows ``D(t)``: ``J_o [ql_dot; m_l] = scale_max V_o(t) + K_l e_l``.
 
     Parameters
     ----------
-    leader_gain : float
-        Feedback gain ``K_l`` [1/s] on the object's pose error to ``D(t)``.
-    correction_gain : float
+    gain : float
+        Feedback gain ``K_l`` [1/s] on the object's pose error to ``D(t)`` (the
+        controller may change it between steps: ``task.gain``).
+    """
+
+    name = "object path"
+    row_names = tuple(f"object {a}" for a in _AXES)
+
+    def __init__(self, gain: float) -> None:
+        super().__init__(float(gain))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (ObjectPathTask, (self.gain,))
+
+
+class GraspClosureTask(kernel.GraspClosureTask):
+    """The follower's grasp stays closed: ``J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c``.
+
+    Parameters
+    ----------
+    gain : float
         Feedback gain ``K`` [1/s] on the closure error; 0 disables it.
     exact_orientation : bool
         Keep the curvature term of the follower's grasp frame (False: the paper's frozen
         orientation, Sec. 3.3).
-
-    Attributes
-    ----------
-    leader_gain, correction_gain : float
-        The gains (the controller may change ``leader_gain`` between steps).
     """
 
-    name = "object path and grasp closure"
-    row_names = (*(f"object {a}" for a in _AXES), *(f"closure {a}" for a in _AXES))
+    name = "grasp closure"
+    row_names = tuple(f"closure {a}" for a in _AXES)
 
-    def __init__(self, leader_gain: float, correction_gain: float, *,
-                 exact_orientation: bool = False) -> None:
-        self.leader_gain = float(leader_gain)
-        self.correction_gain = float(correction_gain)
-        self.exact_orientation = bool(exact_orientation)
+    def __init__(self, gain: float, *, exact_orientation: bool = False) -> None:
+        super().__init__(float(gain), bool(exact_orientation))
 
-    def equality(self, ctx: StepContext) -> Equality:
-        """Rows 1-6 ``J_o [ql_dot; m_l] = scale_max V_o(t) + K_l e_l``, then the closure's.
-
-        Rows 7-12: ``J_f qf_dot - J_t [ql_dot; m; m_l] = K e_c``.
-
-        Raises
-        ------
-        NonFiniteError
-            The rows would hold NaN or infinity.
-        """
-        carry, lay = ctx.carry, ctx.layout
-        A = np.empty((12, lay.n))
-        b = np.empty(12)
-        twist = ctx.task.trajectory.twist(ctx.state.t)
-        if not kernel.carry_equality(
-                lay.n_l, carry.J_object, carry.J_target, ctx.J_f, twist, ctx.leader_error,
-                ctx.closure_error, ctx.scale_max, self.leader_gain, self.correction_gain,
-                self.exact_orientation, A, b):
-            raise NonFiniteError("the step's equality (D(t), its twist or the arms' poses)")
-        return Equality(A, b, self.row_names)
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_closure, (self.gain, self.exact_orientation))
 
 
-__all__ = ["CarryTasks"]
+def _closure(gain: float, exact_orientation: bool) -> GraspClosureTask:
+    return GraspClosureTask(gain, exact_orientation=exact_orientation)
+
+
+#: The standard tasks' row names, in the step's order.
+ROW_NAMES = ObjectPathTask.row_names + GraspClosureTask.row_names
+
+__all__ = ["ROW_NAMES", "GraspClosureTask", "ObjectPathTask"]

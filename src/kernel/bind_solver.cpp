@@ -103,25 +103,6 @@ void bind_solver(nb::module_& m) {
       "optimum, else None. A problem with an empty box (some lower > upper) is not "
       "solved: code EMPTY_BOX_CODE, x zero, no conflicts, an empty basis and rows.");
 
-  nb::class_<dqk::ExactSolve>(
-      m, "ExactSolve",
-      "solve_certified's settings of one controller: the cost's weights, the solver's "
-      "feasibility tolerance and iteration limit, the claim of the bounds and the "
-      "certificate's tolerances (StepParts.prepare_solved).")
-      .def(
-          "__init__",
-          [](dqk::ExactSolve* self, const Vec& w_diag, In w_full, In root_full, double feas_tol,
-             Index max_iter, bool bounds, double eq_rtol, double bounds_tol) {
-            const Index n = w_diag.size() ? w_diag.size() : w_full.rows();
-            // What cost_of accepts for a centre of n entries.
-            (void)cost_of(w_diag, w_full, root_full, Vec::Zero(n));
-            new (self) dqk::ExactSolve{w_diag, Mat(w_full), Mat(root_full), feas_tol,
-                                       max_iter, bounds, eq_rtol, bounds_tol};
-          },
-          "w_diag"_a, "w_full"_a, "root_full"_a, "feas_tol"_a, "max_iter"_a, "bounds"_a,
-          "eq_rtol"_a, "bounds_tol"_a)
-      .def_prop_ro("n", &dqk::ExactSolve::n);
-
   m.def(
       "dense_qp",
       [](In R, const Vec& t_free, In M, const Vec& f, double feas_tol,

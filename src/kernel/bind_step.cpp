@@ -1,13 +1,18 @@
-// dualarm_qp._kernel's step: the standard parts of one step (StepParts, prepare) and the
-// step built, solved and certified in one call (prepare_solved) with the look-ahead's
-// bound (module.cpp makes the module).
+// dualarm_qp._kernel's step: the context every part reads, the three kinds of part
+// (Task, CostTerm, Limit) with the library's own, and the step that asks them in turn
+// (module.cpp makes the module). A Python subclass of a part class overrides its one
+// method (equality, quadratic or constraint: a trampoline below), and the step's loop
+// asks it as it asks a compiled part.
 #include "binding.hpp"
 
-#include <chrono>
+#include <nanobind/stl/optional.h>
+#include <nanobind/trampoline.h>
 
-#include "certified_step.hpp"
-#include "lookahead.hpp"
-#include "step_parts.hpp"
+#include <optional>
+#include <utility>
+
+#include "standard_parts.hpp"
+#include "step.hpp"
 
 namespace dqk_binding {
 
@@ -15,145 +20,451 @@ using namespace nb::literals;
 
 namespace {
 
-// The compiled row limits' rows, one DamperScene.rows tuple each.
-nb::list rows_list(std::vector<dqk::DamperRows>& rows) {
-  nb::list out_rows;
-  for (dqk::DamperRows& r : rows) out_rows.append(damper_tuple(std::move(r)));
-  return out_rows;
+// A numpy array viewing value, a member of the object owner (kept alive by the array).
+// Writeable, as numpy's own arrays are (some QP backends refuse read-only buffers): the
+// step's objects are made anew each step, so a write changes that step's only.
+template <typename M>
+nb::object view(const M& value, nb::handle owner) {
+  using S = typename M::Scalar;
+  constexpr int nd = M::ColsAtCompileTime == 1 ? 1 : 2;
+  npy_intp shape[2] = {static_cast<npy_intp>(nd == 1 ? value.size() : value.rows()),
+                       static_cast<npy_intp>(nd == 1 ? 1 : value.cols())};
+  npy_intp strides[2] = {static_cast<npy_intp>(sizeof(S)), 0};
+  if constexpr (nd == 2) {
+    strides[0] = static_cast<npy_intp>(value.rowStride() * sizeof(S));
+    strides[1] = static_cast<npy_intp>(value.colStride() * sizeof(S));
+  }
+  if (value.size() == 0) {  // no memory to view: a fresh empty array of the shape
+    PyObject* empty = PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0);
+    if (empty == nullptr) throw nb::python_error();
+    return nb::steal(empty);
+  }
+  PyObject* array = PyArray_New(&PyArray_Type, nd, shape, numpy_type<S>(), strides,
+                                const_cast<S*>(value.data()), 0,
+                                NPY_ARRAY_ALIGNED | NPY_ARRAY_WRITEABLE, nullptr);
+  if (array == nullptr) throw nb::python_error();
+  owner.inc_ref();
+  if (PyArray_SetBaseObject(reinterpret_cast<PyArrayObject*>(array), owner.ptr()) < 0) {
+    owner.dec_ref();
+    Py_DECREF(array);
+    throw nb::python_error();
+  }
+  return nb::steal(array);
 }
 
-// StepParts.prepare's answer as dualarm_qp/step/build.py reads it (the docstring of
-// "prepare" below names the items).
-nb::tuple parts_tuple(dqk::StepPartsOut&& o) {
-  dqk::Box& box = o.box;
-  return nb::make_tuple(
-      out(std::move(o.T)), out(std::move(o.J_tool)), out(std::move(o.J_object)),
-      out(std::move(o.J_target)), out(std::move(o.J_f)), out(std::move(o.e)),
-      out(std::move(o.lo)), out(std::move(o.hi)), out(std::move(o.A)), out(std::move(o.b)),
-      o.equality_finite, out(std::move(o.center)), out(std::move(o.lowers)),
-      out(std::move(o.uppers)),
-      nb::make_tuple(out(std::move(box.lower)), out(std::move(box.upper)),
-                     out(std::move(box.lower_by)), out(std::move(box.upper_by)),
-                     box.nan_limit),
-      out(std::move(o.recovering)), o.any_recovering, rows_list(o.rows), o.kinematics_seconds);
+// Binds the read-only array property name of T, the member the getter returns.
+template <typename T, typename Get>
+void array_property(nb::class_<T>& cls, const char* name, Get get, const char* doc) {
+  cls.def_prop_ro(
+      name, [get](nb::handle self) { return view(get(nb::cast<const T&>(self)), self); }, doc);
+}
+
+nb::tuple names_tuple(const std::vector<std::string>& names) {
+  nb::list out;
+  for (const std::string& s : names) out.append(nb::str(s.data(), s.size()));
+  return nb::tuple(out);
+}
+
+// The Python object a part written in Python reads (the step's user handle).
+nb::handle user_of(const dqk::Context& ctx) {
+  if (ctx.user == nullptr)
+    throw std::invalid_argument("a part written in Python was asked without its context");
+  return nb::handle(static_cast<PyObject*>(ctx.user));
+}
+
+// What a part written in Python gave, in the kernel's form: its answer as it is when
+// it is one (a kernel Equality, Quadratic or Constraint), else converted and checked by
+// dualarm_qp/step/python_parts.py (kernel_equality, ...), which names the part.
+template <typename Value>
+Value taken(nb::object answer, nb::handle self, const dqk::Context& ctx, const char* convert) {
+  if (!nb::isinstance<Value>(answer)) {
+    nb::object name = nb::getattr(self, "name", nb::str(Py_TYPE(self.ptr())->tp_name));
+    answer = nb::module_::import_("dualarm_qp.step.python_parts")
+                 .attr(convert)(answer, name, ctx.n);
+  }
+  return std::move(nb::cast<Value&>(answer));
+}
+
+// The trampolines: a Python subclass's method, called with the Python context, whose
+// answer is taken over; a subclass of a library part that does not override the method
+// runs the part's own.
+template <typename Base>
+struct PyTask : Base {
+  NB_TRAMPOLINE(Base);
+  dqk::Equality equality(const dqk::Context& ctx) const override {
+    nb::detail::ticket t(nb_trampoline, "equality", nb::detail::str_hash("equality"),
+                         std::is_abstract_v<Base>);
+    if constexpr (!std::is_abstract_v<Base>) {
+      if (!t.key.is_valid()) return Base::equality(ctx);
+    }
+    nb::handle self = nb_trampoline.base();
+    return taken<dqk::Equality>(self.attr(t.key)(user_of(ctx)), self, ctx, "kernel_equality");
+  }
+};
+
+template <typename Base>
+struct PyCost : Base {
+  NB_TRAMPOLINE(Base);
+  dqk::Quadratic quadratic(const dqk::Context& ctx) const override {
+    nb::detail::ticket t(nb_trampoline, "quadratic", nb::detail::str_hash("quadratic"),
+                         std::is_abstract_v<Base>);
+    if constexpr (!std::is_abstract_v<Base>) {
+      if (!t.key.is_valid()) return Base::quadratic(ctx);
+    }
+    nb::handle self = nb_trampoline.base();
+    return taken<dqk::Quadratic>(self.attr(t.key)(user_of(ctx)), self, ctx,
+                                 "kernel_quadratic");
+  }
+};
+
+template <typename Base>
+struct PyLimit : Base {
+  NB_TRAMPOLINE(Base);
+  dqk::Constraint constraint(const dqk::Context& ctx) const override {
+    nb::detail::ticket t(nb_trampoline, "constraint", nb::detail::str_hash("constraint"),
+                         std::is_abstract_v<Base>);
+    if constexpr (!std::is_abstract_v<Base>) {
+      if (!t.key.is_valid()) return Base::constraint(ctx);
+    }
+    nb::handle self = nb_trampoline.base();
+    return taken<dqk::Constraint>(self.attr(t.key)(user_of(ctx)), self, ctx,
+                                  "kernel_constraint");
+  }
+};
+
+// The kernel context of a Python context (its attribute kernel_context), or a kernel
+// context itself, for a compiled part asked on its own (part.constraint(ctx) from Python).
+const dqk::Context& kernel_context(nb::handle py_ctx) {
+  if (nb::isinstance<dqk::Context>(py_ctx)) return nb::cast<const dqk::Context&>(py_ctx);
+  return nb::cast<const dqk::Context&>(py_ctx.attr("kernel_context"));
+}
+
+using OptVec = std::optional<Vec>;
+using OptMat = std::optional<dqk::RowMat>;
+
+void bind_values(nb::module_& m) {
+  auto eq = nb::class_<dqk::Equality>(m, "Equality", "A task's rows A x = b (kernel form).");
+  eq.def(
+      "__init__",
+      [](dqk::Equality* self, const dqk::RowMat& A, const Vec& b,
+         const std::vector<std::string>& names) {
+        require(A.rows() == b.size() && (names.empty() || names.size() == size_t(b.size())),
+                "Equality: A (m, n), b (m) and m names (or none)");
+        new (self) dqk::Equality{A, b, names};
+      },
+      "A"_a, "b"_a, "names"_a = std::vector<std::string>());
+  array_property(eq, "A", [](const dqk::Equality& e) -> const dqk::RowMat& { return e.A; },
+                 "(m, n)");
+  array_property(eq, "b", [](const dqk::Equality& e) -> const Vec& { return e.b; }, "(m)");
+  eq.def_prop_ro("names", [](const dqk::Equality& e) { return names_tuple(e.names); });
+
+  auto quad = nb::class_<dqk::Quadratic>(
+      m, "Quadratic", "A cost term (x - center)^T W (x - center) (kernel form).");
+  quad.def(
+      "__init__",
+      [](dqk::Quadratic* self, const OptVec& w, const OptMat& W, const Vec& center) {
+        require(w.has_value() != W.has_value(), "Quadratic: the diagonal w or the matrix W");
+        new (self) dqk::Quadratic{w ? *w : Vec(), W ? *W : dqk::RowMat(), center};
+      },
+      "w"_a.none() = nb::none(), "W"_a.none() = nb::none(), "center"_a);
+  quad.def_prop_ro("weights", [](nb::handle self) {
+    const auto& q = nb::cast<const dqk::Quadratic&>(self);
+    return q.diagonal() ? view(q.w, self) : view(q.W, self);
+  });
+  array_property(quad, "center", [](const dqk::Quadratic& q) -> const Vec& { return q.center; },
+                 "(n)");
+
+  auto con = nb::class_<dqk::Constraint>(
+      m, "Constraint", "What a limit asks of x: boxes and/or rows (kernel form).");
+  con.def(
+      "__init__",
+      [](dqk::Constraint* self, const OptVec& lower, const OptVec& upper, const OptMat& G,
+         const OptVec& h, const std::vector<std::string>& row_names) {
+        require(G.has_value() == h.has_value() && (!G || G->rows() == h->size()) &&
+                    (row_names.empty() || (h && row_names.size() == size_t(h->size()))),
+                "Constraint: rows G (p, n) and h (p) together, p row names (or none)");
+        auto* c = new (self) dqk::Constraint();
+        c->has_lower = lower.has_value();
+        c->has_upper = upper.has_value();
+        if (lower) c->lower = *lower;
+        if (upper) c->upper = *upper;
+        if (G) {
+          c->G = *G;
+          c->h = *h;
+        }
+        c->row_names = row_names;
+      },
+      "lower"_a.none() = nb::none(), "upper"_a.none() = nb::none(), "G"_a.none() = nb::none(),
+      "h"_a.none() = nb::none(), "row_names"_a = std::vector<std::string>());
+  con.def_prop_ro("lower", [](nb::handle self) -> nb::object {
+    const auto& c = nb::cast<const dqk::Constraint&>(self);
+    return c.has_lower ? view(c.lower, self) : nb::none();
+  });
+  con.def_prop_ro("upper", [](nb::handle self) -> nb::object {
+    const auto& c = nb::cast<const dqk::Constraint&>(self);
+    return c.has_upper ? view(c.upper, self) : nb::none();
+  });
+  con.def_prop_ro("G", [](nb::handle self) -> nb::object {
+    const auto& c = nb::cast<const dqk::Constraint&>(self);
+    return c.h.size() ? view(c.G, self) : nb::none();
+  });
+  con.def_prop_ro("h", [](nb::handle self) -> nb::object {
+    const auto& c = nb::cast<const dqk::Constraint&>(self);
+    return c.h.size() ? view(c.h, self) : nb::none();
+  });
+  con.def_prop_ro("row_names",
+                  [](const dqk::Constraint& c) { return names_tuple(c.row_names); });
+  con.def_ro("nonfinite", &dqk::Constraint::nonfinite,
+             "What a compiled part could not compute (empty: computed).");
+}
+
+void bind_context(nb::module_& m) {
+  auto ctx = nb::class_<dqk::Context>(
+      m, "Context", "A step's state and kinematics, computed once, as every part reads them.");
+  ctx.def(
+         "__init__",
+         [](dqk::Context* self, const Vec& rate_lo, const Vec& rate_hi,
+            const std::optional<Vec>& x_applied, double dt, double scale_max) {
+           require(rate_lo.size() == rate_hi.size() &&
+                       (!x_applied || x_applied->size() == rate_lo.size()) && dt > 0.0,
+                   "Context: rate_lo, rate_hi (and x_applied) of one length, dt > 0");
+           auto* c = new (self) dqk::Context();
+           c->n = rate_lo.size();
+           c->rate_lo = rate_lo;
+           c->rate_hi = rate_hi;
+           c->x_applied = x_applied ? *x_applied : Vec::Zero(c->n);
+           c->positions = Vec::Zero(c->n);
+           c->dt = dt;
+           c->scale_max = scale_max;
+         },
+         "rate_lo"_a, "rate_hi"_a, "x_applied"_a.none() = nb::none(), "dt"_a = 1.0,
+         "scale_max"_a = 1.0,
+         "A context of the rates to the range ends alone (what the box limits read), to ask "
+         "a limit on its own.")
+      .def_ro("n_l", &dqk::Context::n_l)
+      .def_ro("n_f", &dqk::Context::n_f)
+      .def_ro("k", &dqk::Context::k)
+      .def_ro("n", &dqk::Context::n)
+      .def_ro("t", &dqk::Context::t, "Path time [s].")
+      .def_ro("dt", &dqk::Context::dt, "Sampling interval [s].")
+      .def_ro("scale_max", &dqk::Context::scale_max);
+  using C = dqk::Context;
+  array_property(ctx, "T_tool", [](const C& c) -> const dqk::Pose& { return c.T_tool; },
+                 "The leader's tool pose (4, 4) [m].");
+  array_property(ctx, "T_object", [](const C& c) -> const dqk::Pose& { return c.T_object; },
+                 "The object frame's pose (4, 4) [m].");
+  array_property(ctx, "T_target", [](const C& c) -> const dqk::Pose& { return c.T_target; },
+                 "The follower's target pose (4, 4) [m].");
+  array_property(ctx, "T_f", [](const C& c) -> const dqk::Pose& { return c.T_f; },
+                 "The follower's tool pose (4, 4) [m].");
+  array_property(ctx, "J_tool", [](const C& c) -> const dqk::RowMat& { return c.J_tool; },
+                 "The leader's tool Jacobian (6, n_l).");
+  array_property(ctx, "J_object", [](const C& c) -> const dqk::RowMat& { return c.J_object; },
+                 "The object frame's Jacobian (6, n_l + k), decision order.");
+  array_property(ctx, "J_target", [](const C& c) -> const dqk::RowMat& { return c.J_target; },
+                 "The follower's target's Jacobian (6, n_l + k), decision order.");
+  array_property(ctx, "J_f", [](const C& c) -> const dqk::RowMat& { return c.J_f; },
+                 "The follower's tool Jacobian (6, n_f).");
+  array_property(ctx, "leader_error", [](const C& c) -> const dqk::Vec6& { return c.leader_error; },
+                 "[dp; dw] from the object frame to D(t) [m, rad].");
+  array_property(ctx, "closure_error",
+                 [](const C& c) -> const dqk::Vec6& { return c.closure_error; },
+                 "[dp; dw] from the follower's tool to its target [m, rad].");
+  array_property(ctx, "twist", [](const C& c) -> const dqk::Vec6& { return c.twist; },
+                 "D(t)'s twist [m/s, rad/s].");
+  array_property(ctx, "positions", [](const C& c) -> const Vec& { return c.positions; },
+                 "Joints [rad] and grasp coordinates [m], decision order.");
+  array_property(ctx, "rate_lo", [](const C& c) -> const Vec& { return c.rate_lo; },
+                 "Rates to the lower range ends in one sample.");
+  array_property(ctx, "rate_hi", [](const C& c) -> const Vec& { return c.rate_hi; },
+                 "Rates to the upper range ends in one sample.");
+  array_property(ctx, "x_applied", [](const C& c) -> const Vec& { return c.x_applied; },
+                 "The last command applied [rad/s, m/s].");
+}
+
+void bind_out(nb::module_& m) {
+  auto out = nb::class_<dqk::StepOut>(
+      m, "StepOut", "A step as Step.build makes it: its context, its problem's parts.");
+  using O = dqk::StepOut;
+  out.def(nb::init<>())
+      .def_prop_ro(
+          "context", [](O& o) -> dqk::Context& { return o.context; },
+          nb::rv_policy::reference_internal, "What every part read (kinematics once).");
+  array_property(out, "A", [](const O& o) -> const dqk::RowMat& { return o.A; },
+                 "The equality tasks' rows (m, n).");
+  array_property(out, "b", [](const O& o) -> const Vec& { return o.b; }, "(m)");
+  out.def_prop_ro("eq_names", [](const O& o) { return names_tuple(o.eq_names); });
+  out.def_prop_ro("weights", [](nb::handle self) {
+    const auto& o = nb::cast<const O&>(self);
+    return o.W.size() ? view(o.W, self) : view(o.w, self);
+  }, "The cost's diagonal (n), or its whole matrix (n, n).");
+  array_property(out, "center", [](const O& o) -> const Vec& { return o.center; }, "(n)");
+  array_property(out, "lower", [](const O& o) -> const Vec& { return o.box.lower; }, "(n)");
+  array_property(out, "upper", [](const O& o) -> const Vec& { return o.box.upper; }, "(n)");
+  array_property(out, "lower_by", [](const O& o) -> const dqk::IndexVec& { return o.box.lower_by; },
+                 "The limit that set each lower bound (-1: none).");
+  array_property(out, "upper_by", [](const O& o) -> const dqk::IndexVec& { return o.box.upper_by; },
+                 "The limit that set each upper bound (-1: none).");
+  array_property(out, "G", [](const O& o) -> const dqk::RowMat& { return o.G; },
+                 "The limits' rows (p, n).");
+  array_property(out, "h", [](const O& o) -> const Vec& { return o.h; }, "(p)");
+  out.def_prop_ro("row_names", [](const O& o) { return names_tuple(o.row_names); })
+      .def_prop_ro("row_limit", [](const O& o) { return o.row_limit; },
+                   "The limit of each row (indices).");
+  array_property(out, "recovering", [](const O& o) -> const dqk::BoolVec& { return o.recovering; },
+                 "Ranged variables outside their range.");
+  out.def_ro("any_recovering", &O::any_recovering)
+      .def_ro("failed_part", &O::failed_part, "The part that gave no piece (-1: none).")
+      .def_ro("failed_kind", &O::failed_kind, "'task', 'cost' or 'limit'.")
+      .def_ro("failure", &O::failure, "What it could not compute.")
+      .def_ro("kinematics_seconds", &O::kinematics_seconds)
+      .def_ro("seconds", &O::seconds)
+      .def("sigma_min", &O::sigma_min,
+           "The smallest singular values of the leader's tool Jacobian and the "
+           "follower's (computed when first asked).");
+}
+
+// A compiled limit asked on its own: a piece it cannot compute (nonfinite) is raised as
+// the library's NonFiniteError, as the step raises it.
+template <typename T, typename Cls>
+void bind_limit_method(Cls& cls) {
+  cls.def(
+      "constraint",
+      [](const T& self, nb::handle py_ctx) {
+        dqk::Constraint c = self.T::constraint(kernel_context(py_ctx));
+        if (!c.nonfinite.empty()) {
+          nb::object error =
+              nb::module_::import_("dualarm_qp.errors").attr("NonFiniteError")(c.nonfinite);
+          PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(error.ptr())), error.ptr());
+          throw nb::python_error();
+        }
+        return c;
+      },
+      "ctx"_a, "The limit's boxes and rows at the step's context (a StepContext).");
+}
+
+void bind_parts(nb::module_& m) {
+  nb::class_<dqk::Task, PyTask<dqk::Task>>(
+      m, "Task", "A task of the step: equality(ctx) gives its rows A x = b.")
+      .def(nb::init<>())
+      .def_rw("weight", &dqk::Task::weight,
+              "inf: equality rows; a finite weight: the cost term weight |A x - b|^2.");
+  nb::class_<dqk::CostTerm, PyCost<dqk::CostTerm>>(
+      m, "CostTerm", "A term of the step's cost: quadratic(ctx) gives its weights and centre.")
+      .def(nb::init<>());
+  nb::class_<dqk::Limit, PyLimit<dqk::Limit>>(
+      m, "Limit", "A limit of the step: constraint(ctx) gives its boxes and rows.")
+      .def(nb::init<>());
+
+  auto object = nb::class_<dqk::ObjectPathTask, dqk::Task, PyTask<dqk::ObjectPathTask>>(
+      m, "ObjectPathTask", "The object follows D(t): six rows (Eq. 14 differentiated).");
+  object.def(nb::init<double>(), "gain"_a)
+      .def_rw("gain", &dqk::ObjectPathTask::gain, "K_l [1/s].")
+      .def(
+          "equality",
+          [](const dqk::ObjectPathTask& self, nb::handle py_ctx) {
+            return self.dqk::ObjectPathTask::equality(kernel_context(py_ctx));
+          },
+          "ctx"_a);
+  auto closure = nb::class_<dqk::GraspClosureTask, dqk::Task, PyTask<dqk::GraspClosureTask>>(
+      m, "GraspClosureTask", "The follower's grasp stays closed: six rows (Eqs. 25-27).");
+  closure.def(nb::init<double, bool>(), "gain"_a, "exact_orientation"_a)
+      .def_rw("gain", &dqk::GraspClosureTask::gain, "K [1/s].")
+      .def_rw("exact_orientation", &dqk::GraspClosureTask::exact_orientation)
+      .def(
+          "equality",
+          [](const dqk::GraspClosureTask& self, nb::handle py_ctx) {
+            return self.dqk::GraspClosureTask::equality(kernel_context(py_ctx));
+          },
+          "ctx"_a);
+
+  nb::class_<dqk::CentringCost, dqk::CostTerm, PyCost<dqk::CentringCost>>(
+      m, "CentringCost", "Eqs. 37-40: every variable pulled towards the middle of its range.")
+      .def(nb::init<Vec, dqk::BoolVec, double>(), "weights"_a, "centred"_a, "shrink"_a)
+      .def(
+          "quadratic",
+          [](const dqk::CentringCost& self, nb::handle py_ctx) {
+            return self.dqk::CentringCost::quadratic(kernel_context(py_ctx));
+          },
+          "ctx"_a);
+
+  auto range = nb::class_<dqk::RangeLimit, dqk::Limit, PyLimit<dqk::RangeLimit>>(
+      m, "RangeLimit", "Rate boxes from the position ranges, with recovery (Eqs. 30-36).");
+  range.def(nb::init<Vec, dqk::BoolVec>(), "recovery"_a, "off"_a)
+      .def_prop_ro("size", [](const dqk::RangeLimit& l) { return l.recovery().size(); },
+                   "The variables it is made for.");
+  bind_limit_method<dqk::RangeLimit>(range);
+  auto speed = nb::class_<dqk::SpeedLimit, dqk::Limit, PyLimit<dqk::SpeedLimit>>(
+      m, "SpeedLimit", "The box [-v_max, v_max].");
+  speed.def(nb::init<Vec>(), "v_max"_a)
+      .def_prop_ro("size", [](const dqk::SpeedLimit& l) { return l.v_max().size(); },
+                   "The variables it is made for.");
+  bind_limit_method<dqk::SpeedLimit>(speed);
+  auto accel = nb::class_<dqk::AccelerationLimit, dqk::Limit, PyLimit<dqk::AccelerationLimit>>(
+      m, "AccelerationLimit", "|x - x_applied| <= a dt, cut by the braking bounds.");
+  accel.def(nb::init<Vec>(), "delta"_a)
+      .def_prop_ro("size", [](const dqk::AccelerationLimit& l) { return l.delta().size(); },
+                   "The variables it is made for.");
+  bind_limit_method<dqk::AccelerationLimit>(accel);
+  auto collision = nb::class_<dqk::CollisionLimit, dqk::Limit, PyLimit<dqk::CollisionLimit>>(
+      m, "CollisionLimit", "The velocity damper of a collision scene: one row per near pair.");
+  collision.def(
+      "__init__",
+      [](dqk::CollisionLimit* self, const dqk::DamperScene& damper,
+         std::vector<std::string> names, std::string nonfinite) {
+        new (self) dqk::CollisionLimit(&damper, std::move(names), std::move(nonfinite));
+      },
+      "damper"_a, "names"_a, "nonfinite"_a, nb::keep_alive<1, 2>());
+  bind_limit_method<dqk::CollisionLimit>(collision);
+}
+
+void bind_loop(nb::module_& m) {
+  nb::class_<dqk::Step>(m, "Step", "One step as one loop: the context, then every part in turn.")
+      .def(nb::init<Index, Index, std::vector<int>, int, std::vector<int>, Vec, Vec, double,
+                    dqk::BoolVec, double>(),
+           "n_l"_a, "n_f"_a, "carry_frames"_a, "follower_tool"_a, "cols"_a, "q_min"_a,
+           "q_max"_a, "dt"_a, "ranged"_a, "pin_rtol"_a)
+      .def("add_task", &dqk::Step::add_task, "task"_a, nb::keep_alive<1, 2>())
+      .def("add_cost", &dqk::Step::add_cost, "cost"_a, nb::keep_alive<1, 2>())
+      .def("add_limit", &dqk::Step::add_limit, "limit"_a, nb::keep_alive<1, 2>())
+      .def(
+          "add_grasp_line",
+          [](dqk::Step& self, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+             const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max, double sigma_min,
+             double sigma_max) {
+            self.add_grasp_line(dqk::GraspLine{origin, direction, r_min, r_max, sigma_min,
+                                               sigma_max});
+          },
+          "origin"_a, "direction"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a)
+      .def_prop_ro("n", &dqk::Step::n)
+      .def_prop_ro("grasp_lines", &dqk::Step::grasp_lines)
+      .def(
+          "build",
+          [](const dqk::Step& self, dqk::StepOut& out, dqk::Chain& carry,
+             const Eigen::VectorXd& q_carry, const Vec& col_rate, dqk::Chain& follower,
+             const Eigen::VectorXd& q_f, const dqk::Pose& T_D, const dqk::Vec6& twist,
+             const Vec& sigmas, const Vec& grasp_lo, const Vec& grasp_hi, const Vec& x_applied,
+             double t, double scale_max, nb::handle user) {
+            self.build(out, carry, q_carry, col_rate, follower, q_f, T_D, twist, sigmas,
+                       grasp_lo, grasp_hi, x_applied, t, scale_max,
+                       user.is_none() ? nullptr : static_cast<void*>(user.ptr()));
+          },
+          "out"_a, "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a,
+          "twist"_a, "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "t"_a,
+          "scale_max"_a, "user"_a.none(),
+          "The step at one state into out (a StepOut): the context, then every task, cost "
+          "term and limit in the order added; user is what parts written in Python read "
+          "(their context) or None.");
 }
 
 }  // namespace
 
 void bind_step(nb::module_& m) {
-  nb::class_<dqk::StepParts>(m, "StepParts",
-                             "The standard parts of one step in one call (StepBuilder).")
-      .def(nb::init<Index, Index, std::vector<int>, int, std::vector<int>, Vec, Vec, double,
-                    dqk::BoolVec, double, dqk::BoolVec, double>(),
-           "n_l"_a, "n_f"_a, "carry_frames"_a, "follower_tool"_a, "cols"_a, "q_min"_a,
-           "q_max"_a, "dt"_a, "centred"_a, "shrink"_a, "ranged"_a, "pin_rtol"_a)
-      .def("add_form", &dqk::StepParts::add_form, "kind"_a, "p"_a, "off"_a, "limit"_a)
-      .def("add_grasp_line", &dqk::StepParts::add_grasp_line, "origin"_a, "direction"_a,
-           "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a)
-      .def(
-          "add_rows",
-          [](dqk::StepParts& self, const dqk::DamperScene& damper, std::int64_t limit) {
-            self.add_rows(&damper, limit);
-          },
-          "damper"_a, "limit"_a, nb::keep_alive<1, 2>(),
-          "A limit whose rows prepare computes: a collision scene's damper (kept alive with "
-          "this object); limit is its index in the step's order (increasing).")
-      .def_prop_ro("forms", &dqk::StepParts::forms)
-      .def_prop_ro("row_forms", &dqk::StepParts::row_forms)
-      .def_prop_ro("n", &dqk::StepParts::n)
-      .def_prop_ro("grasp_lines", &dqk::StepParts::grasp_lines)
-      .def(
-          "prepare",
-          [](const dqk::StepParts& self, dqk::Chain& carry, const Eigen::VectorXd& q_carry,
-             const Vec& col_rate, dqk::Chain& follower, const Eigen::VectorXd& q_f,
-             const dqk::Pose& T_D, const dqk::Vec6& twist, const Vec& sigmas,
-             const Vec& grasp_lo, const Vec& grasp_hi, const Vec& x_applied, double scale_max,
-             double leader_gain, double correction_gain, bool exact_orientation) {
-            return parts_tuple(self.prepare(carry, q_carry, col_rate, follower, q_f, T_D,
-                                            twist, sigmas, grasp_lo, grasp_hi, x_applied,
-                                            scale_max, leader_gain, correction_gain,
-                                            exact_orientation));
-          },
-          "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a, "twist"_a,
-          "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a,
-          "leader_gain"_a, "correction_gain"_a, "exact_orientation"_a,
-          "(T, J_tool, J_object, J_target, J_f, e, lo, hi, A, b, equality_finite, "
-          "center, lowers, uppers, box, recovering, any_recovering, rows, "
-          "kinematics_seconds) at one state; box is intersect_boxes's tuple of the compiled "
-          "forms' boxes, rows a list of DamperScene.rows's tuple per compiled row limit.")
-      .def(
-          "prepare_solved",
-          [](const dqk::StepParts& self, dqk::Chain& carry, const Eigen::VectorXd& q_carry,
-             const Vec& col_rate, dqk::Chain& follower, const Eigen::VectorXd& q_f,
-             const dqk::Pose& T_D, const dqk::Vec6& twist, const Vec& sigmas,
-             const Vec& grasp_lo, const Vec& grasp_hi, const Vec& x_applied, double scale_max,
-             double leader_gain, double correction_gain, bool exact_orientation,
-             const dqk::ExactSolve& exact, const dqk::LookaheadBound* bound) {
-            require(exact.n() == self.n(), "prepare_solved: the solve's cost has another size");
-            dqk::StepPartsOut o =
-                self.prepare(carry, q_carry, col_rate, follower, q_f, T_D, twist, sigmas,
-                             grasp_lo, grasp_hi, x_applied, scale_max, leader_gain,
-                             correction_gain, exact_orientation);
-            // A step the Python layer refuses (a non-finite equality, box or rows) is not
-            // solved.
-            bool finite = o.equality_finite && o.box.nan_limit < 0;
-            Index p = 0;
-            for (const dqk::DamperRows& r : o.rows) {
-              finite = finite && r.finite;
-              p += r.G.rows();
-            }
-            nb::object solved = nb::none();
-            if (finite) {
-              using clock = std::chrono::steady_clock;
-              const auto start = clock::now();
-              const Index n = self.n();
-              Mat G(p, n);  // the rows stacked in the limits' order (LimitStack.rows)
-              Vec h(p);
-              Index at = 0;
-              for (const dqk::DamperRows& r : o.rows) {
-                G.middleRows(at, r.G.rows()) = r.G;
-                h.segment(at, r.h.size()) = r.h;
-                at += r.G.rows();
-              }
-              dqk::CertifiedStep s = exact.solve(Mat(o.A), o.b, o.box.lower, o.box.upper, G, h,
-                                                 o.center);
-              const double seconds = std::chrono::duration<double>(clock::now() - start).count();
-              // With a bound, for an optimum: whether the look-ahead may skip its prediction
-              // for the command the controller applies, x clipped to the box (the bound
-              // reads |x| only, so the clip's signs of zero do not matter to it).
-              nb::object skip = nb::none();
-              if (bound != nullptr && s.answer.code == dqk::StepCode::optimal && s.certified) {
-                const Vec clipped = s.answer.x.cwiseMax(o.box.lower).cwiseMin(o.box.upper);
-                skip = nb::bool_((*bound)(clipped, dqk::Pose(o.T.middleRows(0, 4)),
-                                          dqk::Pose(o.T.middleRows(8, 4))));
-              }
-              solved = nb::make_tuple(certified_tuple(std::move(s)), seconds, skip);
-            }
-            return nb::make_tuple(parts_tuple(std::move(o)), solved);
-          },
-          "carry"_a, "q_carry"_a, "col_rate"_a, "follower"_a, "q_f"_a, "T_D"_a, "twist"_a,
-          "sigmas"_a, "grasp_lo"_a, "grasp_hi"_a, "x_applied"_a, "scale_max"_a,
-          "leader_gain"_a, "correction_gain"_a, "exact_orientation"_a, "exact"_a,
-          "bound"_a.none() = nb::none(),
-          "(parts, solved): prepare's tuple and, for a step with no other limit, the step "
-          "solved and certified on its equality, its box (the compiled forms') and the "
-          "compiled limits' rows: (solve_certified's tuple, its seconds, skip), or None "
-          "where the equality, the box or the rows are not finite. skip: for an optimum "
-          "and a bound, whether the bound skips the look-ahead's prediction for its x "
-          "clipped to the box; else None.");
-
-  nb::class_<dqk::LookaheadBound>(
-      m, "LookaheadBound",
-      "negligible's numbers of one controller but the command and the poses "
-      "(StepParts.prepare_solved).")
-      .def("__init__",
-           [](dqk::LookaheadBound* self, Index n_l, Index n_f, double dt, double length_l,
-              double length_f, double budget_pos, double budget_rot, double share) {
-             new (self) dqk::LookaheadBound{n_l, n_f, dt, length_l, length_f, budget_pos,
-                                            budget_rot, share};
-           },
-           "n_l"_a, "n_f"_a, "dt"_a, "length_l"_a, "length_f"_a, "budget_pos"_a,
-           "budget_rot"_a, "share"_a);
+  bind_values(m);
+  bind_context(m);
+  bind_out(m);
+  bind_parts(m);
+  bind_loop(m);
 }
 
 }  // namespace dqk_binding

@@ -34,27 +34,4 @@ CertifiedStep solve_certified(const Mat& A, const Vec& b, const Vec& lower, cons
                               const Mat& G, const Vec& h, const Cost& cost, double feas_tol,
                               Index max_iter, bool bounds, double eq_rtol, double bounds_tol);
 
-// What solve_certified takes that stays the same from step to step of one controller:
-// the cost's weights (w_diag for a diagonal cost; w_full and its upper Cholesky factor
-// root_full for a full one, the other empty), the solver's feasibility tolerance and
-// iteration limit, whether the answer claims the bounds and the certificate's
-// tolerances. With the step's centre it solves and certifies one step
-// (StepParts.prepare_solved: the step's parts and its answer in one call).
-struct ExactSolve {
-  Vec w_diag;
-  Mat w_full;
-  Mat root_full;
-  double feas_tol = 0.0;
-  Index max_iter = -1;
-  bool bounds = true;
-  double eq_rtol = 0.0;
-  double bounds_tol = 0.0;
-  Index n() const { return w_diag.size() ? w_diag.size() : w_full.rows(); }
-  CertifiedStep solve(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
-                      const Mat& G, const Vec& h, const Vec& center) const {
-    return solve_certified(A, b, lower, upper, G, h, Cost(w_diag, w_full, root_full, center),
-                           feas_tol, max_iter, bounds, eq_rtol, bounds_tol);
-  }
-};
-
 }  // namespace dqk

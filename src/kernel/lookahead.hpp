@@ -36,16 +36,4 @@ bool negligible(const Eigen::VectorXd& x, Eigen::Index n_l, Eigen::Index n_f, do
                 double length_l, double length_f, double budget_pos, double budget_rot,
                 double share);
 
-// The look-ahead's bound of one controller: negligible's numbers but the command and the
-// poses (StepParts.prepare_solved asks it of the step's clipped answer).
-struct LookaheadBound {
-  Eigen::Index n_l = 0, n_f = 0;
-  double dt = 0.0, length_l = 0.0, length_f = 0.0, budget_pos = 0.0, budget_rot = 0.0,
-         share = 0.0;
-  bool operator()(const Eigen::VectorXd& x, const Pose& T_tool, const Pose& T_target) const {
-    return negligible(x, n_l, n_f, dt, T_tool, T_target, length_l, length_f, budget_pos,
-                      budget_rot, share);
-  }
-};
-
 }  // namespace dqk

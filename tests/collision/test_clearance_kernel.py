@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import copy
 import pickle
-from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -56,7 +55,7 @@ def _point_row(arm, frame: int, point: np.ndarray, normal: np.ndarray) -> np.nda
 @pytest.mark.parametrize("seed", range(3))
 def test_rows_equal_the_jacobians_written_out(setup, seed: int) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(_random_state(exp, builder.layout, np.random.default_rng(seed)))
+    ctx = builder.build(_random_state(exp, builder.layout, np.random.default_rng(seed))).context
     c = limit.constraint(ctx)
     assert c.G is not None and c.G.shape[0] > 5
     lay = builder.layout
@@ -97,7 +96,7 @@ def test_measure_places_every_body_and_pair(setup) -> None:
     closed form: this checks the kernel's placement and the pairs' order).
     """
     exp, builder, limit = setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     scene = limit.scene
     frames = limit.frames(ctx)
     placed = scene.placed(frames)
@@ -146,7 +145,7 @@ def _rows_one_by_one(limit: CollisionLimit, ctx) -> tuple[list[str], np.ndarray,
 @pytest.mark.parametrize("seed", range(4))
 def test_one_call_is_the_steps_one_by_one(setup, seed: int) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(_random_state(exp, builder.layout, np.random.default_rng(seed)))
+    ctx = builder.build(_random_state(exp, builder.layout, np.random.default_rng(seed))).context
     got = limit.constraint(ctx)
     names, G, h = _rows_one_by_one(limit, ctx)
     assert list(got.row_names) == names
@@ -160,7 +159,7 @@ def test_unmoved_pairs_leave_no_row() -> None:
     exp = experiment(*PUMA)
     builder = exp.controller().builder
     limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     names, _, _ = _rows_one_by_one(limit, ctx)
     measured = limit.scene.measure(limit.frames(ctx), within=limit._d_i)
     near = int(np.count_nonzero(measured.prox.distance < limit._d_i))
@@ -177,8 +176,8 @@ def test_a_scene_without_boxes() -> None:
     limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
     assert limit.scene._exact is None
     for seed in range(3):
-        ctx, _ = builder.context(_random_state(exp, builder.layout,
-                                               np.random.default_rng(seed)))
+        ctx = builder.build(_random_state(exp, builder.layout,
+                                               np.random.default_rng(seed))).context
         got = limit.constraint(ctx)
         names, G, h = _rows_one_by_one(limit, ctx)
         assert list(got.row_names) == names and names
@@ -189,29 +188,23 @@ def test_a_scene_without_boxes() -> None:
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_a_non_finite_frame_or_jacobian_is_an_error(setup, bad: float) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(exp.initial)
-    T = ctx.carry.T_object.copy()
-    T[0, 3] = bad
-    for T_object, J_object in ((T, ctx.carry.J_object), (ctx.carry.T_object, None)):
-        if J_object is None:  # every column in turn (the object's rows read them all)
-            for col in range(ctx.carry.J_object.shape[1]):
-                J = ctx.carry.J_object.copy()
-                J[0, col] = bad
-                off = SimpleNamespace(leader_arm=ctx.leader_arm,
-                                      follower_arm=ctx.follower_arm,
-                                      carry=SimpleNamespace(J_object=J, T_object=T_object))
-                with pytest.raises(NonFiniteError, match="collision rows"):
-                    limit.constraint(off)
-            continue
-        off = SimpleNamespace(leader_arm=ctx.leader_arm, follower_arm=ctx.follower_arm,
-                              carry=SimpleNamespace(J_object=J_object, T_object=T_object))
+    # The object's pose, then each column of its Jacobian in turn (the object's rows read
+    # them all), made non-finite in the step's own context.
+    n_cols = builder.build(exp.initial).context.carry.J_object.shape[1]
+    for where in ["T", *range(n_cols)]:
+        ctx = builder.build(exp.initial).context
+        kctx = ctx.kernel_context
+        if where == "T":
+            kctx.T_object[0, 3] = bad
+        else:
+            kctx.J_object[0, where] = bad
         with pytest.raises(NonFiniteError, match="collision rows"):
-            limit.constraint(off)
+            limit.constraint(ctx)
 
 
 def test_the_limit_pickles_and_copies(setup) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     before = limit.constraint(ctx)
     for other in (pickle.loads(pickle.dumps(limit)), copy.deepcopy(limit)):
         assert other._damper is not limit._damper
@@ -223,7 +216,7 @@ def test_the_limit_pickles_and_copies(setup) -> None:
 
 def test_scene_with_box_pairs_pickles_after_measuring(setup) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     frames = limit.frames(ctx)
     before = limit.scene.measure(frames)
     assert limit.scene._exact is not None  # the box pairs' kernel solvers
@@ -235,7 +228,7 @@ def test_scene_with_box_pairs_pickles_after_measuring(setup) -> None:
 
 def test_bad_arrays_are_errors(setup) -> None:
     exp, builder, limit = setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     scene, lay = limit.scene, builder.layout
     frames = limit.frames(ctx).reshape(-1, 4)
     nb = len(scene.bodies)

@@ -166,7 +166,7 @@ def test_scene_measure_is_the_rule_written_out(scene_setup, within: float, seed:
     state = copy.copy(exp.initial)
     q_l = state.q_l + rng.normal(0.0, 0.3, lay.n_l)
     q_f = state.q_f + rng.normal(0.0, 0.3, lay.n_f)
-    ctx, _ = builder.context(type(state)(state.t, q_l, q_f, state.sigma, state.sigma_leader))
+    ctx = builder.build(type(state)(state.t, q_l, q_f, state.sigma, state.sigma_leader)).context
     frames = limit.frames(ctx)
     got = scene.measure(frames, within)
     pairs, want = _written_out(scene, frames, within)
@@ -183,7 +183,7 @@ def test_scene_measure_is_the_rule_written_out(scene_setup, within: float, seed:
 
 def test_scene_measure_refuses_a_non_finite_frame(scene_setup) -> None:
     exp, builder, limit = scene_setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     frames = limit.frames(ctx).copy()
     for bad in (np.nan, np.inf, -np.inf):
         off = frames.copy()
@@ -196,7 +196,7 @@ def test_scene_measure_refuses_a_non_finite_frame(scene_setup) -> None:
 def test_scene_with_box_pairs_copies_and_pickles(scene_setup) -> None:
     """The kernel's object stays behind and is made again: the same answers."""
     exp, builder, limit = scene_setup
-    ctx, _ = builder.context(exp.initial)
+    ctx = builder.build(exp.initial).context
     frames = limit.frames(ctx)
     before = limit.scene.measure(frames)
     for other in (pickle.loads(pickle.dumps(limit.scene)), copy.deepcopy(limit.scene)):

@@ -53,7 +53,7 @@ def _distance(task, state: DualArmState, pair: str = PAIR) -> float:
 def _row(controller, state: DualArmState, pair: str = PAIR) -> tuple[np.ndarray, float]:
     builder = controller.builder
     limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
-    rows = limit.constraint(builder.context(state)[0])
+    rows = limit.constraint(builder.build(state).context)
     i = list(rows.row_names).index(ROW_PREFIX + pair)
     return rows.G[i], float(rows.h[i])
 

@@ -118,7 +118,7 @@ def test_rows_match_finite_differences(setup, seed: int) -> None:
     task, layout = exp.task, builder.layout
     rng = np.random.default_rng(seed)
     state = _random_state(exp, layout, rng)
-    ctx, _ = builder.context(state)
+    ctx = builder.build(state).context
     rows = limit.constraint(ctx)
     pairs = [name[len(ROW_PREFIX):] for name in rows.row_names]
     # Every pair is within d_i = 5 m; the ones without a row are those no variable moves
@@ -151,8 +151,8 @@ def test_grasp_columns(setup) -> None:
     zero there too, where the slide runs along the object's face)."""
     exp, builder, limit = setup
     layout = builder.layout
-    rows = limit.constraint(builder.context(_random_state(exp, layout,
-                                                          np.random.default_rng(9)))[0])
+    rows = limit.constraint(builder.build(_random_state(exp, layout,
+                                                          np.random.default_rng(9))).context)
     assert np.all(rows.G[:, layout.grasp_follower] == 0.0)
     if layout.grasp_leader is None:
         return
@@ -174,7 +174,7 @@ def test_rows_are_the_pairs_closer_than_d_i(seed: int) -> None:
     limit = next(lim for lim in builder.limits if isinstance(lim, CollisionLimit))
     rng = np.random.default_rng(100 + seed)
     state = _random_state(exp, builder.layout, rng)
-    rows = limit.constraint(builder.context(state)[0])
+    rows = limit.constraint(builder.build(state).context)
     d = _distances(exp.task, state)
     s = exp.task.scene.settings
     near = sorted(p for p, v in d.items() if v < s.influence_distance)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dualarm_qp._compiled import kernel
 from dualarm_qp.step.limits import AccelerationLimit, braking_bound
 from dualarm_qp.step.stacking import pin_rounding
 
@@ -63,7 +62,7 @@ def test_the_limit_object_gives_that_box(seed):
     hi = rng.uniform(-0.5, 2.0, n) / dt  # some past the upper end (D < 0)
     lo = -rng.uniform(-0.5, 2.0, n) / dt
     hi[1], lo[2] = np.inf, -np.inf  # no range end
-    ctx = SimpleNamespace(x_applied=x, rate_hi=hi, rate_lo=lo, dt=dt)
+    ctx = kernel.Context(lo, hi, x, dt=dt)
     box = AccelerationLimit(a, dt).constraint(ctx)
     delta = a * dt
     with np.errstate(invalid="ignore"):

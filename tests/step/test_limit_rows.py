@@ -136,19 +136,5 @@ def test_the_assembled_problem_is_the_checked_one(name):
             assert a.flags.c_contiguous, f.name
         else:
             assert a == b, f.name
-    assert problem._cache is not ref._cache
 
 
-def test_assembled_takes_every_field_by_name():
-    """A missing or unknown field is the caller's bug, refused at once (not read later)."""
-    path = CONFIGS / "puma_beam_limits.yaml"
-    exp = build_experiment(load_config(path), str(path))
-    problem = exp.controller().step(exp.initial).build.problem
-    parts = {f.name: getattr(problem, f.name) for f in dataclasses.fields(StepProblem)
-             if f.init}
-    assert StepProblem.assembled(**parts) == problem
-    del parts["upper"]
-    with pytest.raises(TypeError, match="upper"):
-        StepProblem.assembled(**parts)
-    with pytest.raises(TypeError, match="lower_bound"):
-        StepProblem.assembled(**{**parts, "upper": problem.upper, "lower_bound": 0.0})

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -164,7 +162,7 @@ def _rate_bounds_reference(x, x_min, x_max, v_max, dt, recovery_fraction):
 
 def stacked_box(x, x_min, x_max, v_max, dt, recovery_fraction):
     """The box the range and speed limits give together (the builder's intersection)."""
-    ctx = SimpleNamespace(rate_lo=(x_min - x) / dt, rate_hi=(x_max - x) / dt)
+    ctx = kernel.Context((x_min - x) / dt, (x_max - x) / dt)
     everything = np.ones(x.shape, dtype=bool)
     parts = [RangeLimit("range", everything, v_max, recovery_fraction).constraint(ctx),
              SpeedLimit("speed", v_max).constraint(ctx)]
@@ -202,7 +200,7 @@ def test_a_partial_range_limit_and_the_centring_match_the_per_variable_formula(s
     mask = rng.random(n) < 0.6
     with np.errstate(invalid="ignore"):
         lo, hi = (x_min - x) / 0.05, (x_max - x) / 0.05
-    ctx = SimpleNamespace(rate_lo=lo, rate_hi=hi)
+    ctx = kernel.Context(lo, hi)
     box = RangeLimit("range", mask, v_max, 0.5).constraint(ctx)
     with np.errstate(invalid="ignore"):
         want = _rate_bounds_reference(x, x_min, x_max, np.full(n, np.inf), 0.05, 0.0)

@@ -69,7 +69,7 @@ def test_every_joint_limited_gives_the_same_rows_as_a_selection() -> None:
     """Every joint limited (the rows taken whole) and one joint less (a selection)."""
     every = [200.0, 80.0, 60.0, 40.0, 15.0, 10.0]
     exp = _experiment(every, torque_limits=True)
-    ctx, _ = StepBuilder(exp.task, exp.options).context(exp.initial)
+    ctx = StepBuilder(exp.task, exp.options).build(exp.initial).context
     lay = StepBuilder(exp.task, exp.options).layout
     torques = LoadTorques(exp.task)
     st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)

@@ -26,11 +26,12 @@ rule ``sqrt(2 a D)``. A variable outside its range has no braking bound towards 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..._compiled import kernel
-from .box_form import ACCELERATION, BoxForm, compiled_constraint
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -39,7 +40,7 @@ FloatArray = NDArray[np.float64]
 def braking_bound(D: FloatArray, delta: FloatArray, dt: float | FloatArray) -> FloatArray:
     """Largest rate from which a stop within the distance ``D`` is possible.
 
-    Computed by the kernel (``src/kernel/step_parts.cpp``), the one implementation, which
+    Computed by the kernel (``src/kernel/standard_parts.cpp``), the one implementation, which
     the step's acceleration box uses too.
 
     Parameters
@@ -64,8 +65,11 @@ def braking_bound(D: FloatArray, delta: FloatArray, dt: float | FloatArray) -> F
     return V.reshape(D_.shape)
 
 
-class AccelerationLimit:
+class AccelerationLimit(kernel.AccelerationLimit):
     """``|x - x_applied| <= a dt``, intersected with the braking bound of each range end.
+
+    A compiled part: the box around the last applied command, cut by the braking bounds
+    (the distances to each end of the range come from the rate ranges of Eqs. 30-36).
 
     Parameters
     ----------
@@ -79,14 +83,14 @@ class AccelerationLimit:
     gives_rows = False
 
     def __init__(self, a_max: FloatArray, dt: float) -> None:
+        delta = a_max * dt
+        super().__init__(delta)
         self.a_max = a_max
-        self.delta = a_max * dt
-        #: The box as the kernel computes it (:mod:`.box_form`).
-        self.compiled = BoxForm(ACCELERATION, self.delta)
+        self.delta = delta
+        self._dt = dt
 
-    #: The box around the last applied command, cut by the braking bounds (the
-    #: distances to each end of the range come from the rate ranges of Eqs. 30-36).
-    constraint = compiled_constraint
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (AccelerationLimit, (self.a_max, self._dt))
 
 
 def _acceleration(setup: LimitSetup) -> AccelerationLimit | None:

@@ -23,16 +23,16 @@ origin ``o``, ``n^T J(p) = n^T J_v + ((p - o) x n)^T J_w``.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..._compiled import kernel
-from ..._remade import KernelHolder
 from ...collision.scene import OWNERS, CollisionScene
 from ..context import StepContext
 from ..layout import Layout
 from .registry import LimitSetup, register_limit
-from .row_form import RowForm, compiled_rows_constraint
 
 FloatArray = NDArray[np.float64]
 
@@ -46,8 +46,18 @@ ZERO_ROW = 1e-12
 NONFINITE = "the collision rows (the scene's frames or the Jacobians)"
 
 
-class CollisionLimit(KernelHolder):
+class CollisionLimit(kernel.CollisionLimit):
     """The velocity damper of every pair of a collision scene within ``d_i``.
+
+    A compiled part. At each step the kernel computes the frame stack of
+    :meth:`frames`, the scene's :meth:`~CollisionScene.measure` within ``d_i``, and for
+    each pair closer than ``d_i`` the row ``n^T (J_a - J_b)`` and its bound (the
+    kernel's ``DamperScene``). A pair that no variable moves at this state (a sphere on
+    its joint's axis against an obstacle) has a zero row (largest entry at most
+    :data:`ZERO_ROW`): no step changes its distance to first order, so the row is left
+    out (with ``h < 0`` it would only make the step infeasible; the recorded clearance
+    still judges the run). A body's frame or a Jacobian the rows read that is not
+    finite stops the step with a :class:`~dualarm_qp.errors.NonFiniteError`.
 
     Parameters
     ----------
@@ -59,37 +69,31 @@ class CollisionLimit(KernelHolder):
         Model frame ids of each arm's link frames (``SerialArm.link_frame_ids``).
     """
 
-    _kernel_attributes = ("_damper",)  # made again when unpickled (_remake)
-
     name = "collision"
     gives_rows = True
 
     def __init__(self, scene: CollisionScene, layout: Layout, leader_frames: tuple[int, ...],
                  follower_frames: tuple[int, ...]) -> None:
+        s = scene.settings
+        owner = [OWNERS.index(b.owner) for b in scene.bodies]
+        frames = (leader_frames, follower_frames)
+        model_frame = [frames[OWNERS.index(b.owner)][b.link]
+                       if b.owner in ("leader", "follower") else -1 for b in scene.bodies]
+        damper = kernel.DamperScene(
+            *scene.measured_as(), owner, model_frame, list(leader_frames),
+            list(follower_frames), s.influence_distance, s.safety_distance,
+            s.approach_speed_max / s.band, ZERO_ROW, layout.n_l, layout.n_f,
+            layout.grasps.start, layout.n)
+        super().__init__(damper, [ROW_PREFIX + p.name for p in scene.pairs], NONFINITE)
+        self._damper = damper
+        self._d_i, self._d_s = s.influence_distance, s.safety_distance
+        self._gain = s.approach_speed_max / s.band
         self.scene = scene
         self.layout = layout
-        self._frames = (leader_frames, follower_frames)
-        s = scene.settings
-        self._gain = s.approach_speed_max / s.band
-        self._d_s = s.safety_distance
-        self._d_i = s.influence_distance
-        self._names = tuple(ROW_PREFIX + p.name for p in scene.pairs)
-        self._remake()
+        self._frames = frames
 
-    def _remake(self) -> None:
-        """Make the kernel's damper of this scene (``src/kernel/clearance.cpp``).
-
-        It reads, per body, its owner's index in ``OWNERS`` (the kernel's codes) and its
-        model frame (an arm's link; -1 for the object and the world).
-        """
-        scene, lay = self.scene, self.layout
-        owner = [OWNERS.index(b.owner) for b in scene.bodies]
-        model_frame = [self._frames[OWNERS.index(b.owner)][b.link]
-                       if b.owner in ("leader", "follower") else -1 for b in scene.bodies]
-        self._damper = kernel.DamperScene(
-            *scene.measured_as(), owner, model_frame, list(self._frames[0]),
-            list(self._frames[1]), self._d_i, self._d_s, self._gain, ZERO_ROW, lay.n_l,
-            lay.n_f, lay.grasps.start, lay.n)
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (CollisionLimit, (self.scene, self.layout, *self._frames))
 
     def frames(self, ctx: StepContext) -> FloatArray:
         """Return the scene's frame stack at this step (:meth:`CollisionScene.frames`)."""
@@ -97,26 +101,6 @@ class CollisionLimit(KernelHolder):
         leader = ctx.leader_arm.frame_poses(lf)
         follower = ctx.follower_arm.frame_poses(ff)
         return self.scene.frames(leader, follower, ctx.carry.T_object)
-
-    @property
-    def compiled_rows(self) -> RowForm:
-        """The rows' compiled form: the kernel's damper of this scene (``.row_form``).
-
-        At each step, one kernel call (``kernel.DamperScene.rows``) computes the frame
-        stack of :meth:`frames`, the scene's :meth:`~CollisionScene.measure` within
-        ``d_i``, and for each pair closer than ``d_i`` the row ``n^T (J_a - J_b)`` and its
-        bound. A pair that no variable moves at this state (a sphere on its joint's axis
-        against an obstacle) has a zero row (largest entry at most :data:`ZERO_ROW`): no
-        step changes its distance to first order, so the row is left out (with ``h < 0``
-        it would only make the step infeasible; the recorded clearance still judges the
-        run). A body's frame or a Jacobian the rows read that is not finite is a
-        :class:`~dualarm_qp.errors.NonFiniteError`.
-        """
-        return RowForm(self._damper, self._names, NONFINITE)
-
-    #: One row per pair closer than ``d_i`` (none when every pair is farther): the rows of
-    #: :attr:`compiled_rows` at the context's kinematics.
-    constraint = compiled_rows_constraint
 
 
 def _collision(setup: LimitSetup) -> CollisionLimit | None:

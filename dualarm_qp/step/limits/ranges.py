@@ -15,17 +15,23 @@ infeasible).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-from .box_form import RANGE, BoxForm, compiled_constraint
+from ..._compiled import kernel
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
 
 
-class RangeLimit:
+class RangeLimit(kernel.RangeLimit):
     """Rate boxes from the position ranges of some variables, with recovery.
+
+    A compiled part: ``[rate_lo, rate_hi]``, opened towards the range for a variable
+    outside it: below the range not further down, back at least at the recovery rate
+    (the kernel's ``range_box``, src/kernel/boxes.cpp).
 
     Parameters
     ----------
@@ -43,17 +49,15 @@ class RangeLimit:
 
     def __init__(self, name: str, mask: NDArray[np.bool_], speed: FloatArray,
                  recovery_fraction: float) -> None:
-        self.name = name
-        self.mask = mask
         rec = (recovery_fraction * np.where(mask, speed, 0.0)
                if recovery_fraction > 0.0 else np.zeros(mask.shape))
-        #: The box as the kernel computes it (:mod:`.box_form`).
-        self.compiled = BoxForm(RANGE, rec, ~mask)
+        super().__init__(rec, ~mask)
+        self.name = name
+        self.mask = mask
+        self._args = (name, mask, speed, recovery_fraction)
 
-    #: ``[rate_lo, rate_hi]``, opened towards the range for a variable outside it: below
-    #: the range not further down, back at least at the recovery rate (the kernel's
-    #: ``range_box``, src/kernel/boxes.cpp).
-    constraint = compiled_constraint
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (RangeLimit, self._args)
 
 
 def _speeds(setup: LimitSetup) -> FloatArray:

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from ...task.scene import DualArmTask
 from ..layout import Layout
 from ..options import StepOptions
-from ..parts import Limit
 
 
 @dataclass(frozen=True)
@@ -42,8 +42,9 @@ class LimitSetup:
     leader_bounds: bool
 
 
-#: A factory: the limit the settings ask for, or None.
-LimitFactory = Callable[[LimitSetup], Limit | None]
+#: A factory: the limit the settings ask for (a :class:`~..parts.Limit`, or a kernel
+#: part), or None.
+LimitFactory = Callable[[LimitSetup], Any]
 
 _FACTORIES: dict[str, LimitFactory] = {}
 
@@ -58,7 +59,7 @@ def registered_limits() -> tuple[str, ...]:
     return tuple(_FACTORIES)
 
 
-def standard_limits(setup: LimitSetup) -> list[Limit]:
+def standard_limits(setup: LimitSetup) -> list[Any]:
     """Every registered limit that ``setup`` asks for, in registration order."""
     limits = []
     for factory in _FACTORIES.values():

@@ -7,17 +7,19 @@ a solver that claims hard limits) and ``grasp_speed_max`` for every sliding gras
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-from .box_form import SPEED, BoxForm, compiled_constraint
+from ..._compiled import kernel
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
 
 
-class SpeedLimit:
-    """The box ``[-v_max, v_max]`` on some variables.
+class SpeedLimit(kernel.SpeedLimit):
+    """The box ``[-v_max, v_max]`` on some variables (a compiled part).
 
     Parameters
     ----------
@@ -30,13 +32,12 @@ class SpeedLimit:
     gives_rows = False
 
     def __init__(self, name: str, v_max: FloatArray) -> None:
+        super().__init__(v_max)
         self.name = name
         self.v_max = v_max
-        #: The box as the kernel computes it (:mod:`.box_form`).
-        self.compiled = BoxForm(SPEED, v_max)
 
-    #: The same box at every step.
-    constraint = compiled_constraint
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (SpeedLimit, (self.name, self.v_max))
 
 
 def _joint_speed(setup: LimitSetup) -> SpeedLimit | None:

@@ -19,14 +19,16 @@ that asks its torque back within the limit in one sample.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._compiled import kernel
 from ...errors import ShapeError
 from ...task.torques import LoadTorques, torque_limits_of
 from ..context import StepContext
 from ..layout import Layout
-from ..parts import Constraint
 from .registry import LimitSetup, register_limit
 
 FloatArray = NDArray[np.float64]
@@ -35,8 +37,11 @@ FloatArray = NDArray[np.float64]
 ROW_PREFIX = "torque "
 
 
-class TorqueLimit:
+class TorqueLimit(kernel.Limit):
     """``|tau + dt D x| <= tau_max`` for every joint with a finite limit.
+
+    A part written in Python (a subclass of the kernel's limit: the step's loop asks its
+    :meth:`constraint` in turn).
 
     Parameters
     ----------
@@ -52,6 +57,7 @@ class TorqueLimit:
     gives_rows = True
 
     def __init__(self, torques: LoadTorques, tau_max: FloatArray, layout: Layout) -> None:
+        super().__init__()
         self.torques = torques
         self.tau_max = np.asarray(tau_max, dtype=np.float64)
         if self.tau_max.shape != (layout.n_l + layout.n_f,):
@@ -65,11 +71,14 @@ class TorqueLimit:
         self.row_names = (tuple(f"{ROW_PREFIX}{j} max" for j in joints)
                           + tuple(f"{ROW_PREFIX}{j} min" for j in joints))
 
-    def constraint(self, ctx: StepContext) -> Constraint:
-        """Return the two rows of every limited joint at this state."""
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (TorqueLimit, (self.torques, self.tau_max, self.layout))
+
+    def constraint(self, ctx: StepContext) -> Any:
+        """Return the two rows of every limited joint at this state (``kernel.Constraint``)."""
         rows = self._rows
         if rows.size == 0:
-            return Constraint()
+            return kernel.Constraint()
         s = ctx.state
         st = self.torques.linearised(s.q_l, s.q_f, s.sigma, s.sigma_leader)
         if self._every:
@@ -77,8 +86,9 @@ class TorqueLimit:
         else:
             D = ctx.dt * st.D[rows]
             tau, lim = st.tau[rows], self.tau_max[rows]
-        return Constraint(G=np.concatenate((D, -D)), h=np.concatenate((lim - tau, lim + tau)),
-                          row_names=self.row_names)
+        return kernel.Constraint(G=np.concatenate((D, -D)),
+                                 h=np.concatenate((lim - tau, lim + tau)),
+                                 row_names=list(self.row_names))
 
 
 def _torque(setup: LimitSetup) -> TorqueLimit | None:
