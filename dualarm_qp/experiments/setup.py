@@ -42,7 +42,7 @@ from ..solvers.registry import (
 )
 from ..step.build import StepBuilder
 from ..step.options import StepOptions
-from ..step.parts import Limit
+from ..step.parts import CostTerm, Limit, Task
 from ..step.state import DualArmState
 from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.loads import ObjectLoad, UnbalancedLoadError
@@ -121,6 +121,10 @@ class Experiment:
         (:meth:`start_rates`).
     limits_extra : tuple of Limit
         Limits of the user's added to the step (``limits=`` of the controller).
+    tasks_extra : tuple of Task
+        Tasks of the user's added to the step (``tasks=`` of the controller).
+    costs_extra : tuple of CostTerm
+        Cost terms of the user's added to the step (``costs=`` of the controller).
     """
 
     name: str
@@ -139,6 +143,8 @@ class Experiment:
     notes: dict[str, Any] = field(default_factory=dict)
     initial_rates: str = "rest"
     limits_extra: tuple[Limit, ...] = ()
+    tasks_extra: tuple[Task, ...] = ()
+    costs_extra: tuple[CostTerm, ...] = ()
 
     def controller(
         self,
@@ -190,7 +196,8 @@ class Experiment:
                                  tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
                                  fallback=backup, on_step=on_step, error_budget=budget,
                                  singularity_escape=self.limits.singular_value_min or 1e-3,
-                                 limits=self.limits_extra)
+                                 limits=self.limits_extra, tasks=self.tasks_extra,
+                                 costs=self.costs_extra)
 
     def start_rates(self) -> FloatArray | None:
         """Return the rates the run starts with [rad/s, m/s] (decision order), or None.
@@ -461,6 +468,8 @@ def build_experiment(
     solver: str | None = None,
     solver_options: SolverOptions | None = None,
     limits: Sequence[Limit] = (),
+    tasks: Sequence[Task] = (),
+    costs: Sequence[CostTerm] = (),
     dt: float | None = None,
 ) -> Experiment:
     """Build the task, initial state and controller settings of an experiment.
@@ -481,6 +490,11 @@ def build_experiment(
         Limits of the user's added to the step (:mod:`dualarm_qp.step.parts`), checked
         against the solver here (a limit that gives rows needs a solver that takes
         rows).
+    tasks : sequence of Task
+        Tasks of the user's added to the step: equality rows, or with a ``weight`` a
+        term of the cost (``examples/custom_task.py``).
+    costs : sequence of CostTerm
+        Cost terms of the user's, summed with the paper's centring.
     dt : float, optional
         Sampling interval [s] instead of the file's ``controller.dt`` (e.g. 1e-3 for a
         1 kHz loop). The gains and the range-centring horizon the file leaves to their
@@ -512,10 +526,11 @@ def build_experiment(
                                 f"got {dt!r}")
     try:
         exp = _build(cfg, path, solver, solver_options, dt)
-        if limits:
-            exp.limits_extra = tuple(limits)
-        check_pairing(solver_info(exp.solver_name),
-                      StepBuilder(exp.task, exp.options, limits=exp.limits_extra).row_limits)
+        exp.limits_extra, exp.tasks_extra, exp.costs_extra = (
+            tuple(limits), tuple(tasks), tuple(costs))
+        builder = StepBuilder(exp.task, exp.options, limits=exp.limits_extra,
+                              tasks=exp.tasks_extra, costs=exp.costs_extra)
+        check_pairing(solver_info(exp.solver_name), builder.row_limits, builder.full_cost)
         return exp
     except ConfigError as err:
         if err.path is None:

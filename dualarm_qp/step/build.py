@@ -186,6 +186,7 @@ class StepBuilder(KernelHolder):
             step.add_cost(c)
         for limit in parts[2]:
             step.add_limit(limit)
+        step.set_labels([limit.name for limit in self.limits])
         # Straight grasps (and no Case 2 support, whose line moves): the kernel computes
         # their rates to the range ends from the grasp coordinates.
         lines = [line for line in (surf.line for surf in self._surfaces) if line is not None]
@@ -242,6 +243,16 @@ class StepBuilder(KernelHolder):
     @leader_gain.setter
     def leader_gain(self, value: float) -> None:
         self.tasks[0].gain = float(value)
+
+    @property
+    def full_cost(self) -> bool:
+        """Whether the step's cost is a full matrix (a weighted task of the user's).
+
+        What the pairing check reads with :attr:`row_limits`: a solver that takes a
+        diagonal cost only cannot take such a step. A cost term of the user's that
+        gives a full matrix is refused by such a solver when the step is solved.
+        """
+        return any(getattr(task, "weight", None) is not None for task in self.tasks[2:])
 
     @property
     def row_limits(self) -> tuple[str, ...]:
@@ -312,15 +323,12 @@ class StepBuilder(KernelHolder):
 
     def _problem(self, out: Any, x_prev: FloatArray | None, seconds: float) -> StepProblem:
         """Return the problem of the kernel's step ``out`` (named from the builder's parts)."""
-        labels = self._labels
-        lower_by = tuple([labels[i] if i >= 0 else "" for i in out.lower_by.tolist()])
-        upper_by = tuple([labels[i] if i >= 0 else "" for i in out.upper_by.tolist()])
         return StepProblem(
             A=out.A, b=out.b, weights=out.weights, center=out.center, lower=out.lower,
             upper=out.upper, G=out.G, h=out.h, n_grasp=self.layout.n_grasp, x_prev=x_prev,
             names=self.layout.names, row_names=out.row_names,
-            eq_names=self._eq_names or out.eq_names, lower_by=lower_by, upper_by=upper_by,
-            build_time=seconds)
+            eq_names=self._eq_names or out.eq_names, lower_by=out.lower_names,
+            upper_by=out.upper_names, build_time=seconds, source=out)
 
     def _failure(self, out: Any) -> InvalidInputError:
         """Return the error of a part that gave no piece (``out.failed_part``)."""

@@ -8,6 +8,8 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/trampoline.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <utility>
 
@@ -308,6 +310,25 @@ void bind_out(nb::module_& m) {
   array_property(out, "G", [](const O& o) -> const dqk::RowMat& { return o.G; },
                  "The limits' rows (p, n).");
   array_property(out, "h", [](const O& o) -> const Vec& { return o.h; }, "(p)");
+  // The limit that set each bound, by name ("" where none did).
+  auto sources = [](const O& o, const dqk::IndexVec& by) {
+    const Index n = by.size();
+    nb::tuple names = nb::steal<nb::tuple>(PyTuple_New(n));
+    for (Index i = 0; i < n; ++i) {
+      const std::int64_t k = by(i);
+      nb::str name("");
+      if (k >= 0 && o.labels && size_t(k) < o.labels->size()) {
+        const std::string& s = (*o.labels)[size_t(k)];
+        name = nb::str(s.data(), s.size());
+      }
+      PyTuple_SET_ITEM(names.ptr(), i, name.release().ptr());
+    }
+    return names;
+  };
+  out.def_prop_ro("lower_names", [sources](const O& o) { return sources(o, o.box.lower_by); },
+                  "The name of the limit that set each lower bound.")
+      .def_prop_ro("upper_names", [sources](const O& o) { return sources(o, o.box.upper_by); },
+                   "The name of the limit that set each upper bound.");
   out.def_prop_ro("row_names", [](const O& o) { return names_tuple(o.row_names); })
       .def_prop_ro("row_limit", [](const O& o) { return o.row_limit; },
                    "The limit of each row (indices).");
@@ -427,6 +448,8 @@ void bind_loop(nb::module_& m) {
       .def("add_task", &dqk::Step::add_task, "task"_a, nb::keep_alive<1, 2>())
       .def("add_cost", &dqk::Step::add_cost, "cost"_a, nb::keep_alive<1, 2>())
       .def("add_limit", &dqk::Step::add_limit, "limit"_a, nb::keep_alive<1, 2>())
+      .def("set_labels", &dqk::Step::set_labels, "labels"_a,
+           "The limits' names, in the order added (what the bounds' sources are called).")
       .def(
           "add_grasp_line",
           [](dqk::Step& self, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
@@ -457,9 +480,68 @@ void bind_loop(nb::module_& m) {
           "(their context) or None.");
 }
 
+// A step problem's arrays as StepProblem holds them (float64, C-ordered; anything else is
+// refused with a TypeError and converted by the caller first).
+using Strict = nb::ndarray<const double, nb::c_contig, nb::device::cpu>;
+
+// StepProblem's checks of its arrays in one pass (dualarm_qp/step/problem.py names the
+// codes): 0 when they hold; 1 A is not 2-D; 2 to 7 the shape of b, center, lower, upper,
+// weights, G; 8 the length of h; 10 + k a NaN or infinity in the k-th of A, b, weights,
+// center, G (a NaN in lower, upper, h: 15 to 17); 20 a diagonal weight not > 0; 21 a
+// full weighting matrix that is not symmetric (to 1e-12 relative).
+int problem_check(const Strict& A, const Strict& b, const Strict& w, const Strict& c,
+                  const Strict& lower, const Strict& upper, const Strict& G, const Strict& h) {
+  if (A.ndim() != 2) return 1;
+  const size_t m = A.shape(0), n = A.shape(1);
+  auto vec = [](const Strict& a, size_t len) { return a.ndim() == 1 && a.shape(0) == len; };
+  if (!vec(b, m)) return 2;
+  if (!vec(c, n)) return 3;
+  if (!vec(lower, n)) return 4;
+  if (!vec(upper, n)) return 5;
+  const bool diagonal = vec(w, n);
+  if (!diagonal && !(w.ndim() == 2 && w.shape(0) == n && w.shape(1) == n)) return 6;
+  if (G.ndim() != 2 || G.shape(1) != n) return 7;
+  if (!vec(h, G.shape(0))) return 8;
+  auto finite = [](const Strict& a) {
+    const double* d = a.data();
+    for (size_t i = 0; i < a.size(); ++i)
+      if (!std::isfinite(d[i])) return false;
+    return true;
+  };
+  auto no_nan = [](const Strict& a) {
+    const double* d = a.data();
+    for (size_t i = 0; i < a.size(); ++i)
+      if (std::isnan(d[i])) return false;
+    return true;
+  };
+  const Strict* must_be_finite[] = {&A, &b, &w, &c, &G};
+  for (int k = 0; k < 5; ++k)
+    if (!finite(*must_be_finite[k])) return 10 + k;
+  const Strict* not_nan[] = {&lower, &upper, &h};
+  for (int k = 0; k < 3; ++k)
+    if (!no_nan(*not_nan[k])) return 15 + k;
+  const double* W = w.data();
+  if (diagonal) {
+    for (size_t i = 0; i < n; ++i)
+      if (!(W[i] > 0.0)) return 20;
+  } else {
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = 0; j < i; ++j)
+        if (std::abs(W[i * n + j] - W[j * n + i]) >
+            1e-12 * std::min(std::abs(W[i * n + j]), std::abs(W[j * n + i])))
+          return 21;
+  }
+  return 0;
+}
+
 }  // namespace
 
 void bind_step(nb::module_& m) {
+  m.def("problem_check", &problem_check, "A"_a.noconvert(), "b"_a.noconvert(),
+        "weights"_a.noconvert(), "center"_a.noconvert(), "lower"_a.noconvert(),
+        "upper"_a.noconvert(), "G"_a.noconvert(), "h"_a.noconvert(),
+        "StepProblem's checks of its arrays in one pass: 0 when they hold, else the code "
+        "of the first that fails (src/kernel/bind_step.cpp); float64 C-ordered arrays only.");
   bind_values(m);
   bind_context(m);
   bind_out(m);

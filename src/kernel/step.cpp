@@ -329,6 +329,7 @@ void Step::build(StepOut& out, Chain& carry, const Eigen::VectorXd& q_carry,
   for (int c : cols_) {
     if (c >= nq) throw std::invalid_argument("Step.build: a column past the chain's");
   }
+  out.labels = labels_;
   out.failed_part = -1;
   out.failed_kind.clear();
   out.failure.clear();
