@@ -220,6 +220,8 @@ class StepOut:
     upper: _F
     lower_by: NDArray[np.int64]
     upper_by: NDArray[np.int64]
+    lower_names: tuple[str, ...]
+    upper_names: tuple[str, ...]
     G: _F
     h: _F
     row_names: tuple[str, ...]
@@ -278,6 +280,9 @@ class CollisionLimit(Limit):
     def __init__(self, damper: DamperScene, names: Sequence[str], nonfinite: str) -> None: ...
     def constraint(self, ctx: object) -> Constraint: ...
 
+def problem_check(A: _F, b: _F, weights: _F, center: _F, lower: _F, upper: _F, G: _F,
+                  h: _F) -> int: ...
+
 class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
@@ -285,6 +290,7 @@ class Step:
     def add_task(self, task: Task) -> None: ...
     def add_cost(self, cost: CostTerm) -> None: ...
     def add_limit(self, limit: Limit) -> None: ...
+    def set_labels(self, labels: Sequence[str]) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
     @property

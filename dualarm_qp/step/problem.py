@@ -241,7 +241,7 @@ class StepProblem:
                 self.h)
 
     def _defect(self, code: int) -> InvalidInputError:
-        """The error of ``kernel.problem_check``'s ``code`` (src/kernel/bind_step.cpp)."""
+        """Return the error of ``kernel.problem_check``'s ``code`` (src/kernel/bind_step.cpp)."""
         if code == 1:
             return ShapeError("A", (-1, -1), np.shape(self.A))
         m, n = self.A.shape
