@@ -153,7 +153,7 @@ def test_a_stale_kernel_is_refused(tmp_path: Path) -> None:
     assert source_hash(tmp_path) == kernel.SOURCE_HASH
     with (tmp_path / "nnls.cpp").open("a") as fh:
         fh.write("// edited\n")
-    with pytest.raises(KernelError, match=r"stale.*pip install -e \."):
+    with pytest.raises(KernelError, match=r"stale.*pip install --no-build-isolation -e \."):
         check_fresh(tmp_path)
     check_fresh(tmp_path / "absent")  # an installed wheel has no sources: nothing to check
 
@@ -167,7 +167,7 @@ def test_a_missing_kernel_says_how_to_build_it() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, check=True, timeout=60).stdout
     assert out.startswith("KernelError True")
-    assert "pip install -e ." in out
+    assert "pip install --no-build-isolation -e ." in out
 
 
 @settings(max_examples=30, deadline=None)
