@@ -7,6 +7,8 @@ Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 
 input (configuration, arguments, missing solver, an output folder in use), 130
 interrupted by Ctrl-C (SIGINT) or SIGTERM (what was done is written, marked
 ``interrupted``), 141 standard output closed early (``dualarm-qp solvers | head -1``).
+For ``physics``, 1 is a verdict other than ``ok`` (the check's outputs are written) or
+a simulation that diverged.
 """
 
 from __future__ import annotations
@@ -204,8 +206,15 @@ def _cmd_physics(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     for name in ("replay", "closed_loop"):
         print(_physics_line(name, p[name]))
-    print(f"physics.status: {p['status']}" + "".join(f"\n  {w}" for w in p["reasons"]))
+    cause = ("" if p["cause"] is None else f" (cause: {p['cause']}, from t = "
+             f"{p['cause_t_s']:.3f} s, sample {p['cause_sample']})")
+    print(f"physics.status: {p['status']}{cause}" + "".join(f"\n  {w}" for w in p["reasons"]))
+    if p["status"] == "ok" and p["oscillation"] is not None:  # below every threshold
+        print(f"  note: {p['oscillation']['message']}")
     print(f"  outputs: {args.run_dir}/ (physics.png, report.html, summary.json)")
+    if p["status"] != "ok":
+        _err(f"physics check {p['status'].upper()}: {p['message']}")
+        return EXIT_FAILED
     return EXIT_OK
 
 
