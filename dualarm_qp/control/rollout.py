@@ -34,7 +34,7 @@ from ..step.state import DualArmState
 from .collisions import blocked_by_pair, path_collision_of, record_clearance
 from .controller import DualArmController
 from .loads import record_loads
-from .plant import Plant
+from .plant import Plant, not_followed, planned_errors
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .torques import TorqueReport, blocked_by_torque, record_torques, torque_at_start
@@ -440,6 +440,8 @@ def rollout(
     end_tol = 1e-9 * max(1.0, abs(path_end))
     rows = 0  # samples recorded whole
     interrupted: KeyboardInterrupt | None = None
+    planned: dict[str, tuple[float, float]] | None = None  # the plan's own errors (plant)
+    plant_lag = False  # the failure is the plant's: it did not follow the command
     try:
         for k in range(max_rows):
             state = DualArmState(tau, q_l, q_f, sigma, sigma_l)
@@ -470,6 +472,12 @@ def rollout(
             failure = _sample_failure(tr, k, out.applied or at_end, out.status.value,
                                       out.solution.message, limits, warnings,
                                       speed_limited=controller.options.velocity_limits)
+            if failure is not None and planned is not None and failure.criterion in (
+                    "closure", "tracking"):  # measured: was it the plan's own error?
+                lagged = not_followed(failure, planned, limits.closure
+                                      if failure.criterion == "closure" else limits.tracking)
+                failure = failure if lagged is None else lagged
+                plant_lag = lagged is not None
             if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
                 if tau - window[1] < 0.01 * (t_wall - window[0]):
                     failure = Failure(
@@ -488,7 +496,11 @@ def rollout(
                          _time_lost(t_wall - path_start, tau - path_start, dt))
             if at_end or k == max_rows - 1:
                 break
-            nxt = state.advanced(out, dt) if plant is None else plant.advance(state, out, dt)
+            if plant is None:
+                nxt = state.advanced(out, dt)
+            else:
+                nxt = plant.advance(state, out, dt)
+                planned = planned_errors(task, state, out, dt)
             tau, q_l, q_f, sigma, sigma_l = (nxt.t, nxt.q_l, nxt.q_f, nxt.sigma,
                                              nxt.sigma_leader)
             t_wall = t_wall + dt
@@ -559,7 +571,7 @@ def rollout(
         # With a plant, a failure at a measured state may be the plant's own (a diverged
         # simulation): it is not relabelled.
         failure = blocked_by_torque(controller, trace, failure)
-    if failure is not None and failure.criterion in EXPLAINED and len(trace):
+    if failure is not None and failure.criterion in EXPLAINED and len(trace) and not plant_lag:
         failure = _explained(controller, trace, failure)
     return RolloutResult(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
