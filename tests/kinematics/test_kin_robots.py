@@ -41,6 +41,7 @@ CHAINS = [
     ("baxter", "left_arm_mount", "left_gripper"),
     ("baxter", "base", "left_gripper"),
     ("baxter", "base", "right_gripper"),
+    ("kinova", "base", "j2s6s200_end_effector"),  # three continuous joints
 ]
 
 
@@ -49,10 +50,18 @@ def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
 
 
 def urdf_limits(path: Path, joints: list[str]) -> tuple[np.ndarray, ...]:
-    """``lower``, ``upper`` and ``velocity`` of the joints' limit tags, read as XML."""
-    tags = {j.get("name"): j.find("limit") for j in ET.parse(path).getroot().findall("joint")}
+    """``lower``, ``upper`` and ``velocity`` of the joints' limit tags, read as XML.
+
+    A continuous joint has no range (-inf, inf), whatever its tag says.
+    """
+    found = {j.get("name"): j for j in ET.parse(path).getroot().findall("joint")}
+    tags = {name: j.find("limit") for name, j in found.items()}
+    endless = {name for name, j in found.items() if j.get("type") == "continuous"}
     lo, hi, vel = ([float(tags[name].get(k)) for name in joints]  # type: ignore[union-attr, arg-type]
                    for k in ("lower", "upper", "velocity"))
+    for i, name in enumerate(joints):
+        if name in endless:
+            lo[i], hi[i] = -np.inf, np.inf
     return np.array(lo), np.array(hi), np.array(vel)
 
 
@@ -197,13 +206,38 @@ def test_urdf_speed_zero_means_no_limit(tmp_path: Path) -> None:
     np.testing.assert_array_equal(arm.qd_max, [np.inf, 1.5])
 
 
-@pytest.mark.parametrize(("kind", "words"), [("continuous", "continuous"),
-                                             ("prismatic", "prismatic")])
-def test_urdf_joint_kinds_refused(tmp_path: Path, kind: str, words: str) -> None:
-    with pytest.raises(RobotModelError, match=f"joint 'a' is {words}") as err:
-        urdf_arm(write_urdf(tmp_path, kind_a=kind), "world", "tip")
+def test_urdf_prismatic_joint_refused(tmp_path: Path) -> None:
+    with pytest.raises(RobotModelError, match="joint 'a' is prismatic") as err:
+        urdf_arm(write_urdf(tmp_path, kind_a="prismatic"), "world", "tip")
     assert err.value.field == "chain"
-    urdf_arm(write_urdf(tmp_path, kind_a=kind), "l1", "tip")  # not in the chain: locked
+    urdf_arm(write_urdf(tmp_path, kind_a="prismatic"), "l1", "tip")  # not in the chain: locked
+
+
+@pytest.mark.parametrize("axis", ["0 0 1", "0 0.6 0.8", "0 -1 0"])
+def test_urdf_continuous_joint_is_one_angle_without_range(tmp_path: Path, axis: str) -> None:
+    """A continuous joint is a revolute joint of range +-inf: one angle, not wrapped, the
+    same kinematics as the revolute joint of the same axis, its speed and effort kept."""
+    text = TWO_LINK.format(kind_a="continuous", vel_a="2").replace(
+        '<axis xyz="0 0 1"/>', f'<axis xyz="{axis}"/>', 1)
+    (tmp_path / "continuous.urdf").write_text(text)
+    (tmp_path / "revolute.urdf").write_text(text.replace('"continuous"', '"revolute"'))
+    arm = urdf_arm(tmp_path / "continuous.urdf", "world", "tip")
+    same = urdf_arm(tmp_path / "revolute.urdf", "world", "tip")
+    assert arm.n == 2 and arm.model.nq == 2 and arm.joint_names == ["a", "b"]
+    np.testing.assert_array_equal(arm.q_min, [-np.inf, -3])
+    np.testing.assert_array_equal(arm.q_max, [np.inf, 0.5])
+    np.testing.assert_array_equal(arm.qd_max, [2, 1.5])
+    np.testing.assert_array_equal(arm.model.effortLimit, [1, 1])
+    rng = np.random.default_rng(4)
+    for q in ([0.0, 0.0], [7.5, -0.4], *rng.uniform(-10, 10, (10, 2))):
+        q = np.asarray(q, dtype=float)
+        np.testing.assert_allclose(arm.fk(q), same.fk(q), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(arm.jacobian(q), fd_jacobian(arm, q), atol=1e-9)
+    np.testing.assert_allclose(arm.fk([0.3 + 2 * np.pi, 0.2]), arm.fk([0.3, 0.2]),
+                               atol=1e-14)  # a turn on: the same pose, another angle
+    ranged = urdf_arm(tmp_path / "continuous.urdf", "world", "tip", q_min=[-4, -3],
+                      q_max=[4, 0.5])
+    np.testing.assert_array_equal(ranged.q_min, [-4, -3])
 
 
 def test_bad_urdf_files(tmp_path: Path) -> None:
