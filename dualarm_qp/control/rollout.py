@@ -31,7 +31,7 @@ from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
 from ..step.state import DualArmState
-from .collisions import blocked_by_pair, path_collision_of, record_clearance
+from .collisions import blocked_by_pair, clearance_at_start, path_collision_of, record_clearance
 from .controller import DualArmController
 from .loads import record_loads
 from .plant import Plant
@@ -340,8 +340,12 @@ def rollout(
         exception propagates (and the samples are lost).
     preflight : bool
         Before the first sample, check that both arms can reach the path at its
-        waypoints (:mod:`.preflight`); a waypoint out of reach fails the run on
-        criterion ``"unreachable"`` with no sample run. Default True.
+        waypoints (:mod:`.preflight`; criterion ``"unreachable"``), that no joint needs
+        more than its torque limit at the start (with torque limits; ``"torque"``), that
+        no collision pair is closer than the safety distance less the allowance at the
+        start and that ``D(t)`` keeps the object off the obstacles (with collision
+        avoidance; ``"collision"``, ``"path_collision"``): a check that fails fails the
+        run with no sample run. Default True.
     initial_rates : ndarray, optional
         The rates the pair moves at when the run starts [rad/s, m/s], in the
         controller's decision order (:attr:`DualArmController.layout`); default zero (the
@@ -421,6 +425,16 @@ def rollout(
                 _realised(controller, tr.truncate(0), dt, v_start), hard,
                 extras={"torque_at_start": {"joint": heavy.joint, "torque_N_m": heavy.torque,
                                             "limit_N_m": heavy.limit}})
+        close = clearance_at_start(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l))
+        if close is not None:
+            return RolloutResult(
+                tr.truncate(0), Failure("collision", 0, path_start, close.distance,
+                                        close.limit, f"before the run: {close.message}"),
+                controller.solver.name, dt, path_start, path_end,
+                _realised(controller, tr.truncate(0), dt, v_start), hard,
+                extras={"collision_at_start": {"pair": close.pair,
+                                               "distance_m": close.distance,
+                                               "safety_distance_m": close.safety_distance}})
         blocked = path_collision_of(task, path_start, path_end, dt)
         if blocked is not None:
             return RolloutResult(
