@@ -150,7 +150,7 @@ def blocked_by_pair(controller: DualArmController, trace: Trace, failure: Failur
     names = scene.pair_names
     distance = {}
     for name in pairs:
-        distance[name] = _pair_distance(controller, state, names.index(name))
+        distance[name] = pair_distance(controller, state, names.index(name))
     worst = min(pairs, key=lambda p: distance[p])
     d_s = scene.settings.safety_distance
     why = (f"blocked by a collision pair: {worst} at {distance[worst] * 1e3:.1f} mm "
@@ -161,7 +161,7 @@ def blocked_by_pair(controller: DualArmController, trace: Trace, failure: Failur
                                limit=d_s, message=f"{failure.message}; {why}")
 
 
-def _pair_distance(controller: DualArmController, state: DualArmState, pair: int) -> float:
+def pair_distance(controller: DualArmController, state: DualArmState, pair: int) -> float:
     """Distance [m] of pair ``pair`` of the task's scene at ``state``."""
     task = controller.task
     scene = task.scene
@@ -173,4 +173,4 @@ def _pair_distance(controller: DualArmController, state: DualArmState, pair: int
 
 
 __all__ = ["BLOCKED_SCALE", "ClearanceAtStart", "blocked_by_pair", "clearance_at_start",
-           "path_collision_of", "record_clearance"]
+           "pair_distance", "path_collision_of", "record_clearance"]
