@@ -252,3 +252,37 @@ def test_bad_urdf_files(tmp_path: Path) -> None:
     with pytest.raises(RobotModelError, match="tip frame 'hand' not found") as err:
         urdf_arm(write_urdf(tmp_path), "world", "hand")
     assert err.value.field == "tip"
+
+
+@needs_robots
+def test_kinova_continuous_joints_are_its_urdf_made_revolute(tmp_path: Path) -> None:
+    """The Jaco with its three continuous joints equals the same URDF with them typed
+    revolute: the same poses, Jacobians, inertias (hence joint torques), efforts and
+    speed limits, one coordinate per joint; only the ranges differ (none, where the
+    revolute copy reads the limit tags' +-2 pi)."""
+    from dualarm_qp.task.torques import ArmStatics
+
+    path = example_robot_urdf("kinova")
+    assert path.read_text().count('type="continuous"') == 3
+    copy = tmp_path / "kinova_revolute.urdf"
+    copy.write_text(path.read_text().replace('type="continuous"', 'type="revolute"'))
+    arm = example_robot_arm("kinova", "base", "j2s6s200_end_effector")
+    same = urdf_arm(copy, "base", "j2s6s200_end_effector")
+    assert arm.model.nq == arm.model.nv == 6 and arm.joint_names == same.joint_names
+    endless = [0, 3, 5]
+    np.testing.assert_array_equal(arm.q_min[endless], -np.inf)
+    np.testing.assert_array_equal(arm.q_max[endless], np.inf)
+    np.testing.assert_array_equal(same.q_max[endless], 6.28318530718)
+    np.testing.assert_array_equal(arm.q_min[[1, 2, 4]], same.q_min[[1, 2, 4]])
+    np.testing.assert_array_equal(arm.qd_max, same.qd_max)
+    np.testing.assert_array_equal(arm.model.effortLimit, same.model.effortLimit)
+    for j in range(1, arm.model.njoints):
+        assert arm.model.inertias[j] == same.model.inertias[j]
+    rng = np.random.default_rng(5)
+    g = np.array([0.0, 0.0, -9.81])
+    statics, statics_same = ArmStatics(arm, g), ArmStatics(same, g)
+    for q in rng.uniform(-7.0, 7.0, (10, 6)):
+        np.testing.assert_allclose(arm.fk(q), same.fk(q), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(arm.jacobian(q), same.jacobian(q), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(statics.torque(q, np.zeros(6)),
+                                   statics_same.torque(q, np.zeros(6)), rtol=0, atol=1e-12)
