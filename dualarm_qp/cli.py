@@ -123,9 +123,13 @@ def _torque_line(r: dict[str, Any]) -> str:
 
 def print_run_summary(s: dict[str, Any], out: str) -> None:
     """Print the console summary of one run (from its summary.json content)."""
+    from .experiments.limits_kept import limits_lines
+
     status = s.get("status", "completed" if s["completed"] else "failed")
     print(f"{s['experiment']}: solver {s['solver']}, {s['samples']} samples, "
           f"{status if status == 'completed' else status.upper()}")
+    if "limits_kept" in s:
+        print("\n".join(limits_lines(s["limits_kept"])))
     if not s["samples"]:  # refused before the first sample: there is nothing to sum up
         failure = s.get("failure") or {}
         print(f"  no sample was run; failed on: {failure.get('criterion', '?')}")
