@@ -62,6 +62,7 @@ from .config import (
     SurfaceSpec,
 )
 from .options import SolverFlagError, SolverOptions, flag_error, options_for
+from .setup_checks import check_acceleration_limits, check_physics_tau_max, check_within_reach
 from .setup_scene import scene_of
 
 #: A start further than this from its pose at t0 (leader: D(t0) H1^-1; follower: the
@@ -638,6 +639,8 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
             raise ConfigError(f"the {role} has {arm.n} joints; it needs at least {least} "
                               "to carry the object along a 6-DoF path", path=path,
                               key=_model_key(getattr(cfg, role), role))
+    check_acceleration_limits(cfg, {"leader": leader, "follower": follower}, path)
+    check_physics_tau_max(cfg, {"leader": leader, "follower": follower}, path)
 
     # Follower: its base may be recovered from the grasp closure at t0 (the paper's case).
     f_spec = cfg.follower
@@ -666,6 +669,8 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
         task = DualArmTask(leader, follower, H1, surface, trajectory,
                            leader_surface=leader_surface, contact=contact,
                            load=None if cfg.object.mass is None else _load(cfg, sc, path))
+    check_within_reach(cfg, task.leader, "leader", _path_targets(cfg, task, sigma_l0, path),
+                       path)
     q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking, sigma_l0)
     if q_f0 is None:
         q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,
@@ -811,6 +816,24 @@ def _solve_initial(spec: InitialSpec, arm: SerialArm, preset: str | None, T: Flo
     return q
 
 
+def _path_targets(cfg: ExperimentConfig, task: DualArmTask, sigma_l0: float, path: str
+                  ) -> list[tuple[str, FloatArray]]:
+    """Return the leader's targets ``D(t) H1^-1`` at the path's ends or waypoints, named."""
+    trajectory = task.trajectory
+    hand = "object.H1" if task.leader_surface is None else "object.leader_grasp_initial"
+    if cfg.trajectory.type == "linear":
+        named = [(trajectory.t0, f"D(t0) H1^-1 at the path's start (trajectory.start, {hand})"),
+                 (trajectory.tf, "D(t) H1^-1 at the path's end (trajectory.start, "
+                                 f"trajectory.velocity, {hand})")]
+    else:
+        times = (trajectory.times.tolist() if isinstance(trajectory, WaypointTrajectory)
+                 else [trajectory.t0, trajectory.tf])
+        named = [(float(t), f"D(t) H1^-1 at t = {t:g} s (trajectory.waypoints.{i}.pose, "
+                            f"{hand})") for i, t in enumerate(times)]
+    with _at("trajectory", path):
+        return [(what, task.leader_target(t, sigma_l0)) for t, what in named]
+
+
 def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
                     notes: dict[str, Any], tracking: tuple[float, float],
                     sigma_l0: float) -> FloatArray:
@@ -841,6 +864,9 @@ def _follower_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path
     follower = task.follower
     with _at("object.grasp_initial", path):
         T = task.follower_target(q_l0, sigma0, sigma_l0)
+    check_within_reach(cfg, follower, "follower", [
+        ("D(t0) H2(grasp_initial) (object.grasp_initial, object.surface, follower.base)", T)],
+        path)
     if spec.joints is None:
         return _solve_initial(spec, follower, cfg.follower.preset, T, sc, "follower",
                               "the grasp D(t0) H2(grasp_initial)", path, notes)
