@@ -209,6 +209,9 @@ class StepProblem:
         if code:
             raise self._defect(code)
         n = self.n
+        if self.G.size == 0 and self.G.shape != (0, n):  # no rows (the default)
+            object.__setattr__(self, "G", np.zeros((0, n)))
+            object.__setattr__(self, "h", np.zeros(0))
         if self.x_prev is not None:
             xp = _c_array(self.x_prev)
             if xp.shape != (n,):
@@ -234,9 +237,6 @@ class StepProblem:
         """Set every array as a C-ordered float64 one (no rows: ``G`` of shape (0, n))."""
         for name in ("A", "b", "weights", "center", "lower", "upper", "G", "h"):
             object.__setattr__(self, name, _c_array(getattr(self, name)))
-        A, G = self.A, self.G
-        if G.size == 0 and A.ndim == 2:
-            object.__setattr__(self, "G", np.zeros((0, A.shape[1])))
         return (self.A, self.b, self.weights, self.center, self.lower, self.upper, self.G,
                 self.h)
 

@@ -500,8 +500,9 @@ int problem_check(const Strict& A, const Strict& b, const Strict& w, const Stric
   if (!vec(upper, n)) return 5;
   const bool diagonal = vec(w, n);
   if (!diagonal && !(w.ndim() == 2 && w.shape(0) == n && w.shape(1) == n)) return 6;
-  if (G.ndim() != 2 || G.shape(1) != n) return 7;
-  if (!vec(h, G.shape(0))) return 8;
+  if (G.ndim() != 2 || (G.size() > 0 && G.shape(1) != n)) return 7;  // no rows: any width
+  if (G.size() == 0 && h.size() != 0) return 8;
+  if (G.size() > 0 && !vec(h, G.shape(0))) return 8;
   auto finite = [](const Strict& a) {
     const double* d = a.data();
     for (size_t i = 0; i < a.size(); ++i)
