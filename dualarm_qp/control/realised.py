@@ -9,6 +9,9 @@ positions. Three rules:
 * **speed**: ``|q[k+1] - q[k]| / dt <= v_max (1 + SPEED_RTOL)`` for every sample;
 * **acceleration** (when the run keeps acceleration limits):
   ``|v[k] - v[k-1]| / dt <= a_max (1 + ACCEL_RTOL)``, with ``v[-1]`` the initial rates;
+* **jerk** (when the run keeps jerk limits): ``|a[k] - a[k-1]| / dt <= j_max (1 +
+  JERK_RTOL)``, ``a`` the accelerations above (third differences of the positions),
+  with ``a[-1] = 0`` (the run starts at rest or at constant rates);
 * **range**: the distance outside ``[lo, hi]`` never exceeds its smallest earlier value
   by more than ``RANGE_TOL``: a variable that starts outside its range never moves
   further out, and one that is inside (or got back inside) never leaves it (compared
@@ -32,6 +35,10 @@ SPEED_RTOL = 1e-6
 #: Relative slack on an acceleration limit for finite-difference rounding.
 ACCEL_RTOL = 1e-6
 
+#: Relative slack on a jerk limit for finite-difference rounding (a third difference
+#: loses about three digits more than a first one).
+JERK_RTOL = 1e-5
+
 #: Absolute slack [rad or m] on a range: the solvers' bound tolerance (1e-7 per s) over
 #: one sample, plus rounding.
 RANGE_TOL = 1e-9
@@ -43,7 +50,7 @@ class Breach:
 
     Attributes
     ----------
-    criterion : {"range", "speed", "acceleration"}
+    criterion : {"range", "speed", "acceleration", "jerk"}
         Which rule was broken.
     variable : str
         Name of the variable (``"ql2"``, ``"qf3"``, ``"grasp"``).
@@ -51,7 +58,7 @@ class Breach:
         Row of the trace (for a speed: the first row of the pair).
     amount : float
         The realised value: distance outside the range [rad or m], speed [rad/s or
-        m/s] or acceleration [rad/s^2 or m/s^2].
+        m/s], acceleration [rad/s^2 or m/s^2] or jerk [rad/s^3 or m/s^3].
     limit : float
         What it was allowed: the smallest earlier distance outside the range, the
         speed limit or the acceleration limit.
@@ -65,6 +72,10 @@ class Breach:
 
     def describe(self, dt: float) -> str:
         """One line for a person."""
+        if self.criterion == "jerk":
+            return (f"{self.variable} changed its acceleration at {self.amount:.6g} per s^3 "
+                    f"at sample {self.sample} (limit {self.limit:.6g}, "
+                    f"{self.amount / self.limit:.3g}x)")
         if self.criterion == "acceleration":
             return (f"{self.variable} accelerated at {self.amount:.6g} per s^2 at sample "
                     f"{self.sample} (limit {self.limit:.6g}, "
@@ -105,6 +116,10 @@ class LimitReport:
         ``max |dv/dt| / a_max`` (NaN when no acceleration limit is finite).
     worst_acceleration : str
         The variable that reached it.
+    jerk_ratio : float
+        ``max |da/dt| / j_max`` (NaN when no jerk limit is finite).
+    worst_jerk : str
+        The variable that reached it.
     """
 
     range_ratio: float
@@ -116,6 +131,8 @@ class LimitReport:
     breach: Breach | None
     acceleration_ratio: float = math.nan
     worst_acceleration: str = ""
+    jerk_ratio: float = math.nan
+    worst_jerk: str = ""
 
     def as_dict(self) -> dict[str, object]:
         """JSON-ready."""
@@ -125,13 +142,15 @@ class LimitReport:
                 "range_excess_max": self.range_excess, "worst_range": self.worst_range,
                 "worst_speed": self.worst_speed,
                 "acceleration_ratio_max": self.acceleration_ratio,
-                "worst_acceleration": self.worst_acceleration}
+                "worst_acceleration": self.worst_acceleration,
+                "jerk_ratio_max": self.jerk_ratio, "worst_jerk": self.worst_jerk}
 
 
 def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt: float,
             names: Sequence[str], *, speed_rule: bool = True,
             a_max: FloatArray | None = None, v_start: FloatArray | None = None,
-            acceleration_rule: bool = False) -> LimitReport:
+            acceleration_rule: bool = False, j_max: FloatArray | None = None,
+            jerk_rule: bool = False) -> LimitReport:
     """Measure the realised motion ``x`` (rows: samples) against its limits.
 
     Parameters
@@ -155,6 +174,10 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         The rates the run started with [per s] (default zero: from rest).
     acceleration_rule : bool
         Whether an acceleration above ``a_max`` is a breach.
+    j_max : ndarray, shape (n,), optional
+        Jerk limits [per s^3] (may be infinite; None: not measured).
+    jerk_rule : bool
+        Whether a jerk above ``j_max`` is a breach.
     """
     x = np.asarray(x, dtype=np.float64)
     x = x.reshape(x.shape[0], -1) if x.ndim != 2 else x
@@ -184,6 +207,8 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         if speed_rule:
             over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
             first += [(int(k), "speed", int(j)) for k, j in over[:1]]
+    v0 = np.zeros(x.shape[1]) if v_start is None else np.asarray(v_start, dtype=np.float64)
+    jerk_ratio, jj, jerk = _jerks(x, v0, dt, j_max, jerk_rule, first)
     accel_ratio, ja, accel = math.nan, 0, np.zeros((0, x.shape[1]))
     if a_max is not None:
         a_lim = np.broadcast_to(np.asarray(a_max, dtype=np.float64), x.shape[1:])
@@ -209,6 +234,9 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         k, what, j = min(first)
         if what == "speed":
             breach = Breach("speed", names[j], k, float(speed[k, j]), float(v_max[j]))
+        elif what == "jerk":
+            breach = Breach("jerk", names[j], k, float(jerk[k, j]),
+                            float(np.broadcast_to(np.asarray(j_max), x.shape[1:])[j]))
         elif what == "acceleration":
             breach = Breach("acceleration", names[j], k, float(accel[k, j]),
                             float(np.broadcast_to(np.asarray(a_max), x.shape[1:])[j]))
@@ -217,7 +245,35 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     return LimitReport(float(ratio[:, jr].max()), float(ratio[0].max()), speed_ratio,
                        float(excess.max()), names[jr], names[js] if rows > 1 else "none moved",
                        breach, accel_ratio,
-                       names[ja] if rows > 1 and accel_ratio == accel_ratio else "")
+                       names[ja] if rows > 1 and accel_ratio == accel_ratio else "",
+                       jerk_ratio, names[jj] if rows > 1 and jerk_ratio == jerk_ratio else "")
 
 
-__all__ = ["ACCEL_RTOL", "RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]
+def _jerks(x: FloatArray, v0: FloatArray, dt: float, j_max: FloatArray | None, rule: bool,
+           first: list[tuple[int, str, int]]) -> tuple[float, int, FloatArray]:
+    """Third differences of ``x`` over ``dt`` against ``j_max``: (ratio, worst, jerks).
+
+    Row ``k`` of the jerks is the change between the accelerations ``a[k-1]`` and
+    ``a[k]`` of :func:`measure` (``a[-1] = 0``); a breach is appended to ``first``.
+    """
+    empty = np.zeros((0, x.shape[1]))
+    if j_max is None:
+        return math.nan, 0, empty
+    j_lim = np.broadcast_to(np.asarray(j_max, dtype=np.float64), x.shape[1:])
+    limited = np.isfinite(j_lim)
+    if not limited.any():
+        return math.nan, 0, empty
+    if x.shape[0] < 2:
+        return 0.0, 0, empty
+    v = np.vstack([v0, np.diff(x, axis=0) / dt])
+    a = np.vstack([np.zeros(x.shape[1]), np.diff(v, axis=0) / dt])
+    jerk = np.abs(np.diff(a, axis=0)) / dt
+    jratio = np.where(limited, jerk / np.where(limited, j_lim, 1.0), 0.0)
+    jj = int(np.argmax(jratio.max(axis=0)))
+    if rule:
+        over = np.argwhere(limited & (jerk > j_lim * (1.0 + JERK_RTOL)))
+        first += [(int(k), "jerk", int(j)) for k, j in over[:1]]
+    return float(jratio[:, jj].max()), jj, jerk
+
+
+__all__ = ["ACCEL_RTOL", "JERK_RTOL", "RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

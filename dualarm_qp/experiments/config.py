@@ -28,6 +28,7 @@ from pydantic import (
 )
 
 from ..errors import ConfigError
+from .config_cell import CellSpec
 from .config_physics import PhysicsSpec
 from .config_scene import CollisionSpec, SceneSpec, ShapeSpec
 from .config_types import (
@@ -154,6 +155,7 @@ class ArmSpec(Model):
     q_max: list[LimitNum] | None = None
     qd_max: list[LimitNum] | None = None
     qdd_max: list[LimitNum] | None = None
+    qddd_max: list[LimitNum] | None = None
     tau_max: list[LimitNum] | None = None
     link_radius: Annotated[list[Num], Field(min_length=1, max_length=64)] | None = None
     initial: InitialSpec
@@ -367,7 +369,9 @@ class ControllerSpec(Model):
     ``acceleration_limits`` keeps every joint within its arm's ``qdd_max`` and every
     grasp within ``grasp_acc_max`` (length unit / time unit^2); ``initial_rates`` says
     how the run starts: ``rest`` (the default) or ``path`` (already moving as the first
-    step of the path asks, its answer without acceleration limits).
+    step of the path asks, its answer without acceleration limits). ``jerk_limits``
+    keeps every joint within its arm's ``qddd_max`` and every grasp within
+    ``grasp_jerk_max`` (length unit / time unit^3); it needs ``acceleration_limits``.
     """
 
     dt: Num
@@ -378,6 +382,8 @@ class ControllerSpec(Model):
     acceleration_limits: Flag = False
     torque_limits: Flag = False
     grasp_acc_max: Num | None = None
+    jerk_limits: Flag = False
+    grasp_jerk_max: Num | None = None
     initial_rates: Literal["rest", "path"] = "rest"
     correction_gain: Num | None = None
     leader_gain: Num | None = None
@@ -416,7 +422,7 @@ class ControllerSpec(Model):
         return self
 
     @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap",
-                     "grasp_acc_max")
+                     "grasp_acc_max", "grasp_jerk_max")
     @classmethod
     def _positive_time(cls, v: float | None) -> float | None:
         if v is not None and not (math.isfinite(v) and v > 0):
@@ -482,6 +488,7 @@ class ExperimentConfig(Model):
     scene: SceneSpec = Field(default_factory=SceneSpec)
     collision: CollisionSpec = Field(default_factory=CollisionSpec)
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)  # docs/physics.md
+    cell: CellSpec = Field(default_factory=CellSpec)  # docs/robots.md
 
     @field_validator("name")
     @classmethod

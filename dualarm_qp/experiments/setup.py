@@ -63,6 +63,7 @@ from .config import (
 )
 from .options import SolverFlagError, SolverOptions, flag_error, options_for
 from .setup_checks import check_acceleration_limits, check_physics_tau_max, check_within_reach
+from .setup_jerk import with_jerk_limits
 from .setup_scene import scene_of
 
 #: A start further than this from its pose at t0 (leader: D(t0) H1^-1; follower: the
@@ -732,6 +733,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
                           "projection is unbounded and would break them (drift is "
                           "corrected through the step's feedback term)", path=path,
                           key="controller.projection", valid=["false"]) from None
+    task, options = with_jerk_limits(cfg, task, options, sc.angle, sc.length, sc.time, path)
     return Experiment(
         name=cfg.name,
         path=path,

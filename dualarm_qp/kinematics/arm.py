@@ -153,6 +153,8 @@ class SerialArm(KernelHolder):
     qdd_max : array_like, shape (n,)
         Joint acceleration limits [rad/s^2], symmetric. Default inf (none: a URDF
         states no acceleration limits).
+    qddd_max : array_like, shape (n,)
+        Joint jerk limits [rad/s^3], symmetric. Default inf (none).
     base : array_like, shape (4, 4)
         ``T_world_base``, the pose of the arm's base frame (frame 0) in the world.
     tool : array_like, shape (4, 4)
@@ -188,6 +190,7 @@ class SerialArm(KernelHolder):
         q_max: Any = None,
         qd_max: Any = None,
         qdd_max: Any = None,
+        qddd_max: Any = None,
         base: Any = None,
         tool: Any = None,
         name: str = "arm",
@@ -216,7 +219,8 @@ class SerialArm(KernelHolder):
             lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
         self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
                          vel if qd_max is None else qd_max,
-                         np.full(n, np.inf) if qdd_max is None else qdd_max, n)
+                         np.full(n, np.inf) if qdd_max is None else qdd_max, n,
+                         qddd_max=qddd_max)
         frame = template.frames[flange]
         self._flange = pin.SE3(frame.placement)
         self._tool_id = template.addFrame(pin.Frame(_TOOL, frame.parentJoint, flange,
@@ -228,7 +232,8 @@ class SerialArm(KernelHolder):
         self._root_frames = [i for i, f in enumerate(template.frames) if f.parentJoint == 0]
         self._place(base, tool)
 
-    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int) -> None:
+    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int, *,
+                    qddd_max: Any = None) -> None:
         self.q_min = _limit(q_min, "q_min", n)
         self.q_max = _limit(q_max, "q_max", n)
         check_limits(self.q_min, self.q_max, f"{self.name} joint limits")
@@ -238,6 +243,10 @@ class SerialArm(KernelHolder):
         self.qdd_max = _limit(qdd_max, "qdd_max", n)
         if (self.qdd_max <= 0).any():
             raise LimitsError(f"{self.name}: qdd_max must be positive, got {self.qdd_max}")
+        self.qddd_max = _limit(np.full(n, np.inf) if qddd_max is None else qddd_max,
+                               "qddd_max", n)
+        if (self.qddd_max <= 0).any():
+            raise LimitsError(f"{self.name}: qddd_max must be positive, got {self.qddd_max}")
 
     def _place(self, base: Any, tool: Any) -> None:
         """Copy the template model, allocate its data, set the limits, base and tool."""
@@ -357,7 +366,8 @@ class SerialArm(KernelHolder):
         return new
 
     def with_limits(self, q_min: Any = None, q_max: Any = None,
-                    qd_max: Any = None, qdd_max: Any = None) -> SerialArm:
+                    qd_max: Any = None, qdd_max: Any = None, *,
+                    qddd_max: Any = None) -> SerialArm:
         """Return a copy of this arm with other limits (None keeps a limit as it is).
 
         Raises
@@ -370,7 +380,8 @@ class SerialArm(KernelHolder):
         new._set_limits(self.q_min if q_min is None else q_min,
                         self.q_max if q_max is None else q_max,
                         self.qd_max if qd_max is None else qd_max,
-                        self.qdd_max if qdd_max is None else qdd_max, self.n)
+                        self.qdd_max if qdd_max is None else qdd_max, self.n,
+                        qddd_max=self.qddd_max if qddd_max is None else qddd_max)
         new._place(self._base, self._tool)
         return new
 
