@@ -20,7 +20,7 @@ from .base import Cell, CellSetupError
 from .loop import DriveResult, DriveSettings, drive
 
 #: The cells ``drive --cell`` knows.
-CELLS = ("mujoco",)
+CELLS = ("mujoco", "franka")
 
 #: The watchdog's default: this many samples of ``dt``.
 WATCHDOG_SAMPLES = 3
@@ -73,6 +73,10 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> C
 
         plant = MujocoPlant(exp.task, settings_for(cfg, exp, path), arm_tau_max=arm_tau_max(exp))
         return MujocoCell(plant, exp.initial, exp.options.dt, realtime=cfg.cell.realtime)
+    if kind == "franka":
+        from .franka import franka_cell
+
+        return franka_cell(cfg, exp, path)
     raise CellSetupError(f"unknown cell {kind!r}; the cells are {', '.join(CELLS)}")
 
 
@@ -144,7 +148,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub: Any) -> None:
-    """Add ``drive`` to the command line's subcommands."""
+    """Add ``drive`` and ``serve`` to the command line's subcommands."""
     d = sub.add_parser("drive", help="drive two arms along the file's path through a cell; "
                        "write the same folder as 'run'")
     d.add_argument("config", type=Path, help="experiment YAML file (with a cell: section "
@@ -157,6 +161,9 @@ def add_parsers(sub: Any) -> None:
     d.add_argument("--force", action="store_true",
                    help="write into a folder that holds other files, keeping them")
     d.set_defaults(func=cmd_drive)
+    from .serve import add_serve_parser
+
+    add_serve_parser(sub)
 
 
 __all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive",
