@@ -8,6 +8,7 @@ as they are. The timestamp of every message, and its header stamp, is the row's 
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -30,8 +31,9 @@ TOPICS: dict[str, str] = {
 DIAGNOSTIC_NAME = "dualarm_qp: step"
 
 
+@functools.cache
 def typestore() -> Any:
-    """Return rosbags' type store of ROS 2 Jazzy.
+    """Return rosbags' type store of ROS 2 Jazzy (one per process: it compiles its types).
 
     Raises
     ------

@@ -208,15 +208,15 @@ def samples_from_columns(columns: Mapping[str, NDArray[Any]], n_l: int, n_f: int
     q_f = stack([f"qf{j + 1}" for j in range(n_f)])
     ql_dot = stack([f"ql_dot{j + 1}" for j in range(n_l)])
     qf_dot = stack([f"qf_dot{j + 1}" for j in range(n_f)])
-    col = {c: np.asarray(columns[c], dtype=np.float64)
+    col = {c: np.asarray(columns[c], dtype=np.float64).tolist()
            for c in ("t", "path_t", "grasp", "m", *DIAGNOSTIC_KEYS)}
-    g_l = np.asarray(columns.get("grasp_leader", nan), dtype=np.float64)
-    m_l = np.asarray(columns.get("m_leader", nan), dtype=np.float64)
-    status = columns["status"]
-    return [Sample(float(col["t"][k]), float(col["path_t"][k]), q_l[k], q_f[k],
-                   float(col["grasp"][k]), float(g_l[k]), ql_dot[k], qf_dot[k],
-                   float(col["m"][k]), float(m_l[k]), str(status[k]),
-                   {key: float(col[key][k]) for key in DIAGNOSTIC_KEYS})
+    g_l = np.asarray(columns.get("grasp_leader", nan), dtype=np.float64).tolist()
+    m_l = np.asarray(columns.get("m_leader", nan), dtype=np.float64).tolist()
+    status = [str(v) for v in columns["status"]]
+    values = [dict(zip(DIAGNOSTIC_KEYS, row, strict=True))
+              for row in zip(*(col[key] for key in DIAGNOSTIC_KEYS), strict=True)]
+    return [Sample(col["t"][k], col["path_t"][k], q_l[k], q_f[k], col["grasp"][k], g_l[k],
+                   ql_dot[k], qf_dot[k], col["m"][k], m_l[k], status[k], values[k])
             for k in range(rows)]
 
 

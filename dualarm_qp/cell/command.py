@@ -17,7 +17,7 @@ from .._signals import SignalHold, raise_if_interrupted
 from ..experiments.config import ExperimentConfig, load_config, safe_name
 from ..experiments.setup import Experiment, build_experiment
 from .base import Cell, CellSetupError
-from .loop import DriveResult, DriveSettings, drive
+from .loop import DriveResult, DriveSettings, Observer, drive
 
 #: The cells ``drive --cell`` knows.
 CELLS = ("mujoco", "franka")
@@ -81,9 +81,11 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> C
 
 
 def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Path | None, *,
-                    dry_run: bool = False, plots: bool = True
-                    ) -> tuple[DriveResult, dict[str, Any]]:
+                    dry_run: bool = False, plots: bool = True,
+                    observer: Observer | None = None) -> tuple[DriveResult, dict[str, Any]]:
     """Drive ``cell`` and write the run's folder (with SIGINT and SIGTERM held).
+
+    ``observer`` is handed each recorded sample (a live view: :mod:`dualarm_qp.bag.live`).
 
     Returns
     -------
@@ -102,7 +104,7 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
 
     t0 = time.perf_counter()
     res = drive(cell, controller, exp.initial, duration=exp.duration, settings=settings,
-                limits=exp.limits, progress=progress)
+                limits=exp.limits, progress=progress, observer=observer)
     wall = time.perf_counter() - t0
     with SignalHold():
         summary = make_summary(exp, res.result, wall)
@@ -129,8 +131,18 @@ def cmd_drive(args: argparse.Namespace) -> int:
                / f"cell_{args.cell}")
     check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
     out = _output_folder(out)
-    res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
-                                   plots=not args.no_plots)
+    view = None
+    if args.foxglove:
+        from ..bag.live import open_drive_view
+
+        view = open_drive_view(cfg, exp, path, port=args.port)
+        print(f"live view at {view.view.url} (Foxglove WebSocket)", flush=True)
+    try:
+        res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
+                                       plots=not args.no_plots, observer=view)
+    finally:
+        if view is not None:
+            view.view.close()
     stop = summary["cell"]["stop"]
     print(f"{exp.name}: cell {args.cell}{' (dry run)' if args.dry_run else ''}: "
           f"{summary['status']}, {summary['samples']} samples, "
@@ -160,6 +172,11 @@ def add_parsers(sub: Any) -> None:
     d.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     d.add_argument("--force", action="store_true",
                    help="write into a folder that holds other files, keeping them")
+    d.add_argument("--foxglove", action="store_true",
+                   help="serve each sample live on 127.0.0.1 (Foxglove WebSocket), as "
+                   "'bag' writes it")
+    d.add_argument("--port", type=int, default=8765,
+                   help="the live view's port (default 8765; 0: any free one)")
     d.set_defaults(func=cmd_drive)
     from .serve import add_serve_parser
 

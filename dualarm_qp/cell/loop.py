@@ -11,7 +11,8 @@ Each sample ``k``, at the cell's time ``t0 + k dt``:
 4. **clamp** the command to the joints' speed, acceleration and jerk limits
    (:mod:`.safety`) and **send** it (not in a dry run);
 5. **record** the sample (the columns of ``run``'s ``trajectory.csv`` and the cell's
-   own, :data:`CELL_COLUMNS`), then wait for the next sample time.
+   own, :data:`CELL_COLUMNS`), hand it to the observer if there is one (a live view, a
+   ROS 2 node's topics: :data:`Observer`), then wait for the next sample time.
 
 Whatever ends the loop (the path's end, a failed step, Ctrl-C or SIGTERM, the watchdog,
 a state out of range, a cell error), both arms are then brought to rest by the stop ramp
@@ -41,6 +42,10 @@ from .record import cell_columns, cell_realised, stop_summary
 from .safety import CommandLimits, StopRamp
 
 FloatArray = NDArray[np.float64]
+
+#: Called with the trace and the row just recorded (control and stop rows alike); it
+#: must not raise (an observer that can fail keeps its own errors).
+Observer = Callable[[Trace, int], None]
 
 
 @dataclass(frozen=True)
@@ -131,8 +136,10 @@ class _Loop:
     """One drive of a cell (see the module); :func:`drive` runs it."""
 
     def __init__(self, cell: Cell, controller: DualArmController, initial: DualArmState,
-                 duration: float, settings: DriveSettings, limits: RunLimits) -> None:
+                 duration: float, settings: DriveSettings, limits: RunLimits,
+                 observer: Observer | None = None) -> None:
         self.cell, self.controller, self.settings, self.limits = cell, controller, settings, limits
+        self.observer = observer
         self.task = controller.task
         self.dt = controller.options.dt
         self.initial = initial
@@ -202,6 +209,8 @@ class _Loop:
         lg.sigma_measured.append(reading.sigma)
         lg.offset.append(float(np.max(np.abs(np.r_[reading.q_l - state.q_l,
                                                    reading.q_f - state.q_f]), initial=0.0)))
+        if self.observer is not None:
+            self.observer(self.trace, len(lg.robot_t) - 1)
 
     def _sample_failure(self, k: int, out: ControlOutput) -> None:
         tr, lim = self.trace, self.limits
@@ -312,7 +321,8 @@ class _Loop:
 
 def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
           duration: float, settings: DriveSettings, limits: RunLimits | None = None,
-          progress: Callable[[float, float], None] | None = None) -> DriveResult:
+          progress: Callable[[float, float], None] | None = None,
+          observer: Observer | None = None) -> DriveResult:
     """Drive ``cell`` along ``duration`` seconds of path (see the module).
 
     Parameters
@@ -331,6 +341,8 @@ def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
         Tolerances and cap (defaults: :class:`~dualarm_qp.control.rollout.RunLimits`).
     progress : callable, optional
         Called as ``progress(path_done, 0.0)`` after every sample.
+    observer : callable, optional
+        Called as ``observer(trace, k)`` with each row just recorded (:data:`Observer`).
 
     Returns
     -------
@@ -340,7 +352,7 @@ def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
         why, with every sample recorded.
     """
     limits = RunLimits() if limits is None else limits
-    loop = _Loop(cell, controller, initial, duration, settings, limits)
+    loop = _Loop(cell, controller, initial, duration, settings, limits, observer)
     try:
         try:
             loop.run(progress)
@@ -398,4 +410,4 @@ def _result(loop: _Loop) -> DriveResult:
     return DriveResult(result, columns, cell)
 
 
-__all__ = ["DriveResult", "DriveSettings", "command_limits", "drive"]
+__all__ = ["DriveResult", "DriveSettings", "Observer", "command_limits", "drive"]
