@@ -20,7 +20,7 @@ from .base import Cell, CellSetupError
 from .loop import DriveResult, DriveSettings, Observer, drive
 
 #: The cells ``drive --cell`` knows.
-CELLS = ("mujoco", "franka")
+CELLS = ("mujoco", "franka", "ros2")
 
 #: The watchdog's default: this many samples of ``dt``.
 WATCHDOG_SAMPLES = 3
@@ -57,8 +57,9 @@ def check_drivable(exp: Experiment, path: str) -> None:
                              "the object (Case 1), not one that supports it")
 
 
-def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> Cell:
-    """Build the cell ``kind`` of the experiment (not yet opened).
+def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str, *,
+              dry_run: bool = False) -> Cell:
+    """Build the cell ``kind`` of the experiment (not yet opened; ``dry_run``: it sends nothing).
 
     Raises
     ------
@@ -77,6 +78,10 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> C
         from .franka import franka_cell
 
         return franka_cell(cfg, exp, path)
+    if kind == "ros2":
+        from .ros2 import ros2_cell
+
+        return ros2_cell(cfg, exp, path, dry_run=dry_run)
     raise CellSetupError(f"unknown cell {kind!r}; the cells are {', '.join(CELLS)}")
 
 
@@ -115,6 +120,20 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
     return res, summary
 
 
+def _together(observers: list[Observer]) -> Observer | None:
+    """One observer that calls each of ``observers`` in turn (None: there are none)."""
+    if not observers:
+        return None
+    if len(observers) == 1:
+        return observers[0]
+
+    def each(trace: Any, k: int) -> None:
+        for observer in observers:
+            observer(trace, k)
+
+    return each
+
+
 def cmd_drive(args: argparse.Namespace) -> int:
     """``dualarm-qp drive``: exit 0 completed, 1 failed or stopped, 130 interrupted."""
     from ..cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, _err, _output_folder
@@ -126,7 +145,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     exp = build_experiment(cfg, path)
     check_drivable(exp, path)
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
-    cell = open_cell(args.cell, cfg, exp, path)
+    cell = open_cell(args.cell, cfg, exp, path, dry_run=args.dry_run)
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
     check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
@@ -137,9 +156,11 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
         view = open_drive_view(cfg, exp, path, port=args.port)
         print(f"live view at {view.view.url} (Foxglove WebSocket)", flush=True)
+    observers = [o for o in (view, getattr(cell, "observe", None)) if o is not None]
     try:
         res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
-                                       plots=not args.no_plots, observer=view)
+                                       plots=not args.no_plots,
+                                       observer=_together(observers))
     finally:
         if view is not None:
             view.view.close()

@@ -1,0 +1,113 @@
+"""The ROS 2 cell without ROS: its settings, the joint-state mapping, what it refuses.
+
+The project's own environment has no rclpy; these run there (the loopback tests run the
+node in the ROS environment: ``test_ros2_loopback.py``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dualarm_qp.cell.base import CellSetupError
+from dualarm_qp.cell.ros2 import ArmTopics, JointStates, ros2_settings
+from dualarm_qp.cli import main
+from dualarm_qp.experiments.config import load_config
+from dualarm_qp.experiments.setup import build_experiment
+
+ROOT = Path(__file__).resolve().parents[2]
+FR3 = ROOT / "configs" / "fr3_pair.yaml"
+NO_RCLPY = importlib.util.find_spec("rclpy") is None
+
+
+def _arms():
+    return (ArmTopics("leader", ("a1", "a2"), "/joint_states", "/l/commands", None),
+            ArmTopics("follower", ("b1", "b2", "b3"), "/joint_states", "/f/commands", None))
+
+
+def test_joint_states_are_mapped_by_name_whatever_their_order() -> None:
+    js = JointStates(_arms())
+    assert js.missing() == ["a1", "a2", "b1", "b2", "b3"]
+    js.update(["b3", "other", "a2", "b1", "a1", "b2"], [5.0, 9.0, 2.0, 3.0, 1.0, 4.0], 0.5)
+    assert js.missing() == []
+    r = js.reading()
+    assert r.t == 0.5
+    assert r.q_l.tolist() == [1.0, 2.0]
+    assert r.q_f.tolist() == [3.0, 4.0, 5.0]
+
+
+def test_a_reading_is_as_old_as_its_oldest_joint() -> None:
+    """Per-arm topics: one arm's state that stops coming ages the whole reading."""
+    js = JointStates(_arms())
+    js.update(["a1", "a2"], [1.0, 2.0], 1.0)
+    js.update(["b1", "b2", "b3"], [3.0, 4.0, 5.0], 1.0)
+    js.update(["a1", "a2"], [1.5, 2.5], 1.2)  # the follower's broadcaster went quiet
+    r = js.reading()
+    assert r.t == 1.0
+    assert r.q_l.tolist() == [1.5, 2.5]
+
+
+def test_the_reading_at_a_sample_instant_is_the_last_one_stamped_no_later() -> None:
+    js = JointStates(_arms())
+    names = ["a1", "a2", "b1", "b2", "b3"]
+    for k in range(10):
+        js.update(names, [float(k)] * 5, 0.002 * k)
+    assert js.reading(0.010).q_l.tolist() == [5.0, 5.0]
+    assert js.reading(0.0109).t == pytest.approx(0.010)
+    assert js.reading(None).t == pytest.approx(0.018)
+    assert js.reading(-1.0).t == 0.0  # nothing that old: the oldest kept
+    for k in range(10, 10 + JointStates.HISTORY):
+        js.update(names, [float(k)] * 5, 0.002 * k)
+    assert js.reading(0.0).t == pytest.approx(0.002 * 10)  # the history is bounded
+    assert math.isfinite(js.newest_t)
+
+
+def test_the_settings_come_from_the_files_cell_section() -> None:
+    cfg = load_config(FR3)
+    exp = build_experiment(cfg, str(FR3))
+    s = ros2_settings(cfg, exp, str(FR3))
+    assert s.interface == "velocity" and s.use_sim_time is False and s.dt == 0.01
+    leader, follower = s.arms
+    assert leader.joints == tuple(cfg.cell.leader.joints)
+    assert leader.command_topic == "/leader_velocity_controller/commands"
+    assert follower.trajectory_topic == "/follower_trajectory_controller/joint_trajectory"
+    assert np.isclose(exp.options.dt, s.dt)
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda c: c["leader"].pop("joints"), "cell.leader.joints"),
+    (lambda c: c["follower"].update(joints=c["follower"]["joints"][:6]), "got 6"),
+    (lambda c: c["follower"].pop("controller"), "cell.follower.controller"),
+])
+def test_a_cell_section_the_node_cannot_use_is_refused(tmp_path, edit, message) -> None:
+    raw = yaml.safe_load(FR3.read_text())
+    edit(raw["cell"])
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    cfg = load_config(path)
+    with pytest.raises(CellSetupError, match=message):
+        ros2_settings(cfg, build_experiment(cfg, str(path)), str(path))
+
+
+def test_a_dry_run_needs_no_controller(tmp_path) -> None:
+    raw = yaml.safe_load(FR3.read_text())
+    raw["cell"]["leader"].pop("controller")
+    path = tmp_path / "dry.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    cfg = load_config(path)
+    s = ros2_settings(cfg, build_experiment(cfg, str(path)), str(path), need="")
+    assert s.arms[0].command_topic is None
+
+
+@pytest.mark.skipif(not NO_RCLPY, reason="rclpy is installed here")
+def test_without_rclpy_the_drive_says_how_to_get_it(tmp_path, capsys) -> None:
+    code = main(["drive", str(FR3), "--cell", "ros2", "--out", str(tmp_path / "out")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "rclpy" in err and "setup.bash" in err
+    assert not (tmp_path / "out").exists()
