@@ -145,6 +145,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
     exp = build_experiment(cfg, path)
     check_drivable(exp, path)
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
+    if args.send_run is not None:
+        if args.cell != "ros2":
+            raise CellSetupError("--send-run sends a run to ROS 2 trajectory controllers: "
+                                 "give --cell ros2")
+        from .ros2_trajectory import cmd_send_run
+
+        return cmd_send_run(args, cfg, exp, path)
     cell = open_cell(args.cell, cfg, exp, path, dry_run=args.dry_run)
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
@@ -193,6 +200,9 @@ def add_parsers(sub: Any) -> None:
     d.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     d.add_argument("--force", action="store_true",
                    help="write into a folder that holds other files, keeping them")
+    d.add_argument("--send-run", nargs="?", const="rollout", metavar="RUN_DIR",
+                   help="ROS 2: send a completed run (RUN_DIR, or without it a fresh rollout "
+                   "of the file) whole to each arm's joint_trajectory_controller, then watch")
     d.add_argument("--foxglove", action="store_true",
                    help="serve each sample live on 127.0.0.1 (Foxglove WebSocket), as "
                    "'bag' writes it")

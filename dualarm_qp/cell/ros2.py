@@ -7,7 +7,10 @@ Per arm (``cell.leader``, ``cell.follower`` of the experiment file):
   ``joints`` (a message's order is not guaranteed; a message may carry other joints, or
   only some of the arm's). A joint's stamp is its message's header stamp (the receive
   time when a driver stamps zero); a reading's stamp is the **oldest** of both arms'
-  joints, so that one arm whose state stops is seen by the watchdog;
+  joints, so that one arm whose state stops is seen by the watchdog. The loop reads
+  the state **at each sample instant** (the newest stamped no later than it, waiting
+  for it up to half a sample): a node that runs late still samples the arms on the
+  sample grid;
 * **command**: ``std_msgs/Float64MultiArray`` on ``<controller>/commands`` (a
   ``forward_command_controller`` over the arm's joints, in the order of ``joints``),
   each sample: the rates [rad/s] with ``interface: velocity``; with ``interface:
@@ -209,17 +212,21 @@ class Ros2Cell:
         The names of the published grasp joints.
     dry_run : bool
         Send nothing: no command topic is needed.
+    trajectories : bool
+        Publish to each arm's ``joint_trajectory_controller`` instead (the publishers
+        :attr:`publishers`, ``trajectory_msgs/JointTrajectory``; :mod:`.ros2_trajectory`).
     """
 
     kind = "ros2"
     between = "held"
 
     def __init__(self, settings: Ros2Settings, task: DualArmTask, names: StreamNames, *,
-                 dry_run: bool = False) -> None:
+                 dry_run: bool = False, trajectories: bool = False) -> None:
         self.settings = settings
         self.task = task
         self.names = names
         self.dry_run = dry_run
+        self.trajectories = trajectories
         self.node: Ros2Node | None = None
         self.states = JointStates(settings.arms)
         self._commands: list[Any] = []
@@ -262,7 +269,10 @@ class Ros2Cell:
         t = node.types
         for topic in sorted({a.state_topic for a in s.arms}):
             node.subscribe(t.JointState, topic, self._on_state)
-        if not self.dry_run:
+        if self.trajectories:
+            self._commands = [node.publisher(t.JointTrajectory, str(a.trajectory_topic))
+                              for a in s.arms]
+        elif not self.dry_run:
             self._commands = [node.publisher(t.Float64MultiArray, str(a.command_topic))
                               for a in s.arms]
         self._pub = {"joints": node.publisher(t.JointState, "~/joint_states"),
@@ -303,9 +313,14 @@ class Ros2Cell:
         assert self.node is not None
         return self.node.now()
 
+    @property
+    def publishers(self) -> list[Any]:
+        """The leader's and the follower's command publishers (none in a dry run)."""
+        return list(self._commands)
+
     def send(self, ql_dot: FloatArray, qf_dot: FloatArray) -> None:
         """Publish both arms' commands (rates, or the positions they reach: see the module)."""
-        if not self._commands:
+        if not self._commands or self.trajectories:
             return
         msg_type = self._node_types().Float64MultiArray
         for i, (pub, rates) in enumerate(zip(self._commands, (ql_dot, qf_dot), strict=True)):

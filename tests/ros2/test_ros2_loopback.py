@@ -207,3 +207,46 @@ def test_the_node_stops_safely_on_ctrl_c(ros_env, tmp_path) -> None:
 def stand_in_log(stand_in: StandIn) -> list[dict]:
     return [json.loads(line) for line in stand_in.log_path.read_text().splitlines()
             if line.endswith("}")]
+
+
+def test_a_verified_run_is_sent_whole_to_the_trajectory_controllers(ros_env, tmp_path) -> None:
+    """One JointTrajectory per arm, one stamp for both; the arms end where the run ended.
+
+    The stand-in runs by the wall clock here (no streamed commands to step with), at a
+    quarter of real time, and the watch's watchdog is 0.2 s of its clock.
+    """
+    config = _config(tmp_path, watchdog=0.2)
+    cfg = load_config(config)
+    run = tmp_path / "run"
+    done = subprocess.run([str(ros_env.python), "-m", "dualarm_qp", "run", str(config),
+                           "--out", str(run), "--no-plots"], env=ros_env.env,
+                          capture_output=True, text=True, timeout=600, check=False)
+    assert done.returncode == 0, done.stdout + done.stderr
+    stand_in = StandIn(ros_env, tmp_path, config, lockstep=False)
+    try:
+        drive = _drive(ros_env, config, tmp_path / "out", "--send-run", str(run))
+        out, err = drive.communicate(timeout=600)
+    finally:
+        log = stand_in.stop()
+    assert drive.returncode == 0, out + err
+    sent = json.loads((tmp_path / "out" / "sent.json").read_text())
+    assert sent["status"] == "completed" and sent["reason"] == "end"
+    rows, _ = _record(run)
+    trajs = [e for e in log if "trajectory" in e]
+    assert [e["trajectory"] for e in trajs] == [cfg.cell.leader.trajectory_controller,
+                                                cfg.cell.follower.trajectory_controller]
+    assert trajs[0]["stamp"] == trajs[1]["stamp"] == pytest.approx(sent["start_s"], abs=1e-9)
+    assert trajs[0]["stamp"] > trajs[0]["t"]  # a moment ahead, for both arms alike
+    n_l = len(stand_in.leader)
+    t0 = float(rows[0]["t"])
+    for e, prefix, names in ((trajs[0], "ql", stand_in.leader),
+                             (trajs[1], "qf", stand_in.follower)):
+        assert e["names"] == names
+        assert e["times"] == pytest.approx([float(r["t"]) - t0 for r in rows], abs=1e-9)
+        assert e["positions"] == [[float(r[f"{prefix}{j + 1}"]) for j in range(len(names))]
+                                  for r in rows]
+    final = [e["q"] for e in log if "q" in e][-1]
+    want = ([float(rows[-1][f"ql{j + 1}"]) for j in range(n_l)]
+            + [float(rows[-1][f"qf{j + 1}"]) for j in range(n_l)])
+    assert final == pytest.approx(want, abs=1e-12)
+    assert sent["deviation_end_rad"] < 1e-9

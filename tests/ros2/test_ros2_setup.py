@@ -111,3 +111,41 @@ def test_without_rclpy_the_drive_says_how_to_get_it(tmp_path, capsys) -> None:
     err = capsys.readouterr().err
     assert "rclpy" in err and "setup.bash" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_run_to_send_is_the_runs_motion_and_a_rollout_is_the_same(tmp_path) -> None:
+    import dataclasses
+
+    from dualarm_qp.cell.ros2_trajectory import plan_from_rollout, plan_from_run
+    from dualarm_qp.experiments.run import run_experiment
+
+    exp = build_experiment(load_config(FR3), str(FR3))
+    exp = dataclasses.replace(exp, duration=0.2)
+    outcome = run_experiment(exp, tmp_path, progress=False, plots=False)
+    assert outcome.ok
+    a, b = plan_from_run(tmp_path, exp), plan_from_rollout(exp)
+    assert a.t[0] == 0.0 and len(a.t) == len(outcome.result.trace)
+    np.testing.assert_array_equal(a.q_l, outcome.result.trace.q_l)
+    np.testing.assert_array_equal(a.ql_dot[:-1], outcome.result.trace.ql_dot[:-1])
+    assert not np.any(a.ql_dot[-1]) and not np.any(a.qf_dot[-1])  # at rest at the end
+    np.testing.assert_allclose(a.q_f, b.q_f, atol=1e-12)
+    q_l, _ = a.at(a.t[3] / 2 + a.t[4] / 2)
+    np.testing.assert_allclose(q_l, (a.q_l[3] + a.q_l[4]) / 2, atol=1e-15)
+
+
+@pytest.mark.parametrize("what", ["failed_run", "other_cell", "dry_run"])
+def test_what_send_run_refuses(tmp_path, capsys, what) -> None:
+    args = ["drive", str(FR3), "--cell", "ros2", "--out", str(tmp_path / "out"), "--send-run"]
+    if what == "failed_run":
+        run = tmp_path / "run"
+        run.mkdir()
+        (run / "summary.json").write_text('{"status": "failed"}')
+        args.append(str(run))
+    elif what == "other_cell":
+        args[3] = "mujoco"
+    else:
+        args.append("--dry-run")
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert {"failed_run": "did not complete", "other_cell": "--cell ros2",
+            "dry_run": "no dry run"}[what] in err
