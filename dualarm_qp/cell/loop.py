@@ -209,8 +209,15 @@ class _Loop:
         lg.sigma_measured.append(reading.sigma)
         lg.offset.append(float(np.max(np.abs(np.r_[reading.q_l - state.q_l,
                                                    reading.q_f - state.q_f]), initial=0.0)))
+
+    def _observe(self, k: int) -> None:
+        """Hand row ``k`` to the observer, once the row is counted.
+
+        An interrupt inside the observer (Ctrl-C while it publishes) then leaves the
+        record whole.
+        """
         if self.observer is not None:
-            self.observer(self.trace, len(lg.robot_t) - 1)
+            self.observer(self.trace, k)
 
     def _sample_failure(self, k: int, out: ControlOutput) -> None:
         tr, lim = self.trace, self.limits
@@ -262,6 +269,7 @@ class _Loop:
                              "infeasible" if isinstance(err, InfeasibleStepError) else "error")
                 self._log_row(reading, self.sent1, np.zeros_like(self.sent1), state)
                 self.rows = self.control_rows = k + 1
+                self._observe(k)
                 self._fail("solver", str(err))
                 return
             computed = (np.r_[out.ql_dot, out.qf_dot] if out.applied and not at_end
@@ -274,6 +282,7 @@ class _Loop:
                 self.trace.scale[k] = self.trace.scale[k - 1]
             self._log_row(reading, sent, computed, state)
             self.rows = self.control_rows = k + 1
+            self._observe(k)
             self._sample_failure(k, out)
             if self.failure is not None or at_end:
                 return
@@ -315,6 +324,7 @@ class _Loop:
                     self._log_row(reading, v, v, state)
                     self.rows = k + 1
                     self.sent2, self.sent1 = self.sent1, v
+                    self._observe(k)
             except CellError as err:
                 self.warnings.append(f"the stop could not be completed: {err}")
 

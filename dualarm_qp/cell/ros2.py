@@ -65,6 +65,9 @@ CONNECT_TIMEOUT = 30.0
 CLOCK_STALL = 2.0
 #: Longest wait [s] of one spin of the node (an interrupt is seen within it).
 SPIN = 0.005
+#: Longest wall time [s] a read waits for the state of its sample instant (a clock
+#: that waits for the node, as a simulator in step with it does, does not advance).
+READ_WAIT = 0.1
 
 
 @dataclass(frozen=True)
@@ -294,14 +297,15 @@ class Ros2Cell:
     def read(self) -> Reading:
         """Return both arms' joints at the last sample instant waited for (see the module).
 
-        Waits for the state of that instant up to half a sample on the ROS clock; a
-        state that does not come by then is not waited for (the watchdog judges its age).
+        Waits for the state of that instant up to half a sample on the ROS clock (and
+        :data:`READ_WAIT` of wall time); a state that does not come by then is not
+        waited for (the watchdog judges its age).
         """
         assert self.node is not None
         at = self._sample_t
         if at is not None:
             give_up = at + 0.5 * self.settings.dt
-            stall = time.monotonic() + CLOCK_STALL
+            stall = time.monotonic() + READ_WAIT
             while (self.states.newest_t < at - 1e-9 * max(1.0, abs(at))
                    and self.node.now() < give_up and time.monotonic() < stall):
                 self.node.spin_once(SPIN)

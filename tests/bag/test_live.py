@@ -177,3 +177,28 @@ def test_bag_foxglove_serves_until_ctrl_c(run_dir) -> None:
             proc.kill()
     assert proc.returncode == 130, err
     assert "Traceback" not in err
+
+
+def test_an_interrupt_inside_the_observer_leaves_the_record_whole() -> None:
+    """Ctrl-C while a sample is being published: the loop stops as on any interrupt, the
+    record is whole and the observer never sees a row that was not recorded."""
+    cfg = load_config(ACCEL)
+    exp = dataclasses.replace(build_experiment(cfg, str(ACCEL)), duration=0.6)
+    seen: list[tuple[int, str, float]] = []
+
+    def observer(trace, k):
+        seen.append((k, trace.status[k], float(trace.t[k])))
+        if k == 5 and len(seen) == 6:
+            raise KeyboardInterrupt("Ctrl-C while publishing")
+
+    cell = KinematicCell(exp.initial.q_l, exp.initial.q_f, exp.options.dt)
+    res = drive(cell, exp.controller(), exp.initial, duration=exp.duration,
+                settings=DriveSettings(watchdog=3 * exp.options.dt), limits=exp.limits,
+                observer=observer)
+    assert res.result.failure.criterion == "interrupted"
+    trace = res.result.trace
+    assert all(len(v) == len(trace) for v in res.columns.values())
+    assert [k for k, _, _ in seen] == list(range(len(trace)))
+    assert all(status for _, status, _ in seen)
+    assert [t for _, _, t in seen] == trace.t.tolist()
+    assert trace.status[6:] == ["stopping"] * (len(trace) - 6)

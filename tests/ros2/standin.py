@@ -11,10 +11,10 @@ positions interpolated linearly between its points, from its header stamp on).
 
 The clock ticks every ``wall_period`` seconds of wall time, except in ``lockstep``
 (a simulator in step with its controller, as MuJoCo is in the project's MuJoCo cell):
-once commands come, each command to every forward controller lets the clock run one
-controller sample (``dt``) and no further, so a busy machine delays the whole
-simulation rather than the commands within it. Without a command for ``idle`` seconds
-of wall time, the clock ticks on by the wall again.
+there it stands still (its state and clock published again every ``wall_period``),
+and each command to every forward controller lets it run one controller sample
+(``dt``), so a busy machine delays the whole simulation rather than the commands within
+it.
 
 ``freeze_after`` [s of its clock]: that long after the first command it publishes no
 more joint states (its clock goes on), as a broadcaster that stopped. Everything it did
@@ -56,10 +56,8 @@ class StandIn:
         self.period_ns = round(spec["period"] * 1e9)
         self.lockstep = bool(spec.get("lockstep", False))
         self.sample_ticks = round(spec.get("dt", spec["period"]) / spec["period"])
-        self.idle = float(spec.get("idle", 1.0))
         self.pending: set[str] = set()
         self.allowed = 0
-        self.last_command = -float("inf")
         self.freeze_after = spec.get("freeze_after")
         self.freeze_ns: int | None = None
         self.interface = spec.get("interface", "velocity")
@@ -91,11 +89,10 @@ class StandIn:
         if self.freeze_after is not None and self.freeze_ns is None:
             self.freeze_ns = self.t_ns + round(self.freeze_after * 1e9)
             self.write(freeze_at=self.freeze_ns * 1e-9)
-        self.last_command = time.monotonic()
         self.pending.add(controller)
         if self.pending >= set(self.spec["controllers"]):
             self.pending.clear()
-            self.allowed = self.sample_ticks  # one sample more, from where the clock is
+            self.allowed += self.sample_ticks  # one sample more
         if len(data) != len(joints):
             return  # as ros2_control does: a command of the wrong size is dropped
         for name, value in zip(joints, data, strict=True):
@@ -140,15 +137,17 @@ class StandIn:
         w = (tau - times[k - 1]) / (times[k] - times[k - 1])
         self.q[name] = values[k - 1] + w * (values[k] - values[k - 1])
 
-    def tick(self) -> None:
-        self.t_ns += self.period_ns
-        for name in self.names:
-            if name in self.trajectories:
-                self._follow(name)
-            else:
-                self.q[name] += self.v[name] * self.period_ns * 1e-9
+    def tick(self, advance: bool = True) -> None:
+        if advance:
+            self.t_ns += self.period_ns
+            for name in self.names:
+                if name in self.trajectories:
+                    self._follow(name)
+                else:
+                    self.q[name] += self.v[name] * self.period_ns * 1e-9
         stamp = rclpy.time.Time(nanoseconds=self.t_ns).to_msg()
-        self.write(q=[self.q[n] for n in self.names])
+        if advance:
+            self.write(q=[self.q[n] for n in self.names])
         if self.freeze_ns is None or self.t_ns < self.freeze_ns:
             msg = JointState(name=self.order,
                              position=[self.q.get(n, 0.25) for n in self.order],
@@ -162,15 +161,14 @@ class StandIn:
         next_tick = time.monotonic()
         while rclpy.ok():
             now = time.monotonic()
-            stepped = self.lockstep and now - self.last_command < self.idle
-            if stepped and self.allowed > 0:
+            if self.lockstep and self.allowed > 0:
                 self.tick()
                 self.allowed -= 1
                 next_tick = now + wall
                 rclpy.spin_once(self.node, timeout_sec=0.0)
                 continue
-            if not stepped and now >= next_tick:
-                self.tick()
+            if now >= next_tick:
+                self.tick(advance=not self.lockstep or self.t_ns == 0)
                 next_tick = max(next_tick + wall, now - wall)
             rclpy.spin_once(self.node, timeout_sec=max(0.0, min(next_tick - now, wall)))
 

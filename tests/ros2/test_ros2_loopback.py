@@ -40,8 +40,11 @@ PERIOD, WALL_PERIOD = 0.002, 0.008
 
 
 def _config(folder: Path, **cell) -> Path:
+    """fr3_pair on the stand-in's clock; in step with it, a state is never late: the
+    watchdog is two samples."""
     raw = yaml.safe_load(FR3.read_text())
-    raw["cell"].update(use_sim_time=True, **cell)
+    raw["cell"].update(use_sim_time=True, watchdog=0.02)
+    raw["cell"].update(cell)
     path = folder / "fr3_ros2.yaml"
     path.write_text(yaml.safe_dump(raw))
     return path
@@ -109,8 +112,10 @@ def _assert_brought_to_rest(log, rows, summary, stand_in, cfg):
     assert not np.any(sent[-1])
 
 
-def test_the_node_drives_the_stand_in_through_the_whole_path(ros_env, tmp_path) -> None:
-    config = _config(tmp_path)
+@pytest.mark.parametrize("interface", ["velocity", "position"])
+def test_the_node_drives_the_stand_in_through_the_whole_path(ros_env, tmp_path,
+                                                             interface) -> None:
+    config = _config(tmp_path, interface=interface)
     cfg = load_config(config)
     stand_in = StandIn(ros_env, tmp_path, config)
     try:
@@ -136,12 +141,21 @@ def test_the_node_drives_the_stand_in_through_the_whole_path(ros_env, tmp_path) 
         q = q_at[round(t, 9)]
         assert [float(r[f"ql{j + 1}"]) for j in range(n_l)] == pytest.approx(q[:n_l], abs=1e-12)
         assert [float(r[f"qf{j + 1}"]) for j in range(n_l)] == pytest.approx(q[n_l:], abs=1e-12)
-    # what was sent reached the controllers, in the joints' order
-    sent_l = [[float(r[f"ql_sent{j + 1}"]) for j in range(n_l)] for r in rows]
-    heard = [c["data"] for c in _commands(log, cfg.cell.leader.controller)]
-    assert len(heard) >= 0.9 * len(rows)
-    assert all(h in sent_l for h in heard)
-    _assert_brought_to_rest(log, rows, summary, stand_in, cfg)
+    # what was sent reached the controllers, in the joints' order: the rates, or the
+    # positions they reach at the next sample (from the measured start)
+    sent_l = np.array([[float(r[f"ql_sent{j + 1}"]) for j in range(n_l)] for r in rows])
+    heard = np.array([c["data"] for c in _commands(log, cfg.cell.leader.controller)])
+    assert len(heard) == len(rows) - 1  # all but the row at the path's end
+    end = control - 1
+    sent_l = np.delete(sent_l, end, axis=0)
+    if interface == "velocity":
+        np.testing.assert_array_equal(heard, sent_l)
+        _assert_brought_to_rest(log, rows, summary, stand_in, cfg)
+    else:
+        q0 = np.array([float(rows[0][f"ql{j + 1}"]) for j in range(n_l)])
+        np.testing.assert_allclose(heard, q0 + np.cumsum(sent_l, axis=0) * 0.01, atol=1e-12)
+        np.testing.assert_array_equal(heard[-1], heard[-2])  # at rest: the position held
+        assert not np.any(sent_l[-1])
     # the grasp as a virtual joint and the step's status, published by the node
     grasps = [e for e in log if e.get("heard") == "grasp"]
     assert grasps and all(e["names"] == ["follower_grasp"] for e in grasps)
