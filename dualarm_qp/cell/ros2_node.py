@@ -2,7 +2,7 @@
 
 The project's own environment has no rclpy: it comes from a ROS 2 installation (Jazzy
 or later; ``source /opt/ros/<distro>/setup.bash`` puts it on ``PYTHONPATH``) or from
-community wheels in an environment of their own (``docs/robots.md``). Nothing else of
+community wheels in an environment of their own (``docs/ros2.md``). Nothing else of
 the package imports rclpy, and this module only when a ROS 2 cell is opened.
 
 :class:`Ros2Node` is one node in a context of its own, spun by a single-threaded
@@ -23,7 +23,7 @@ from .base import CellSetupError
 #: What to do when rclpy cannot be imported.
 ROS_MISSING = ("the ROS 2 cell needs rclpy and the message packages (sensor_msgs, std_msgs, "
                "trajectory_msgs, diagnostic_msgs): source your ROS 2 installation first "
-               "(source /opt/ros/jazzy/setup.bash), or see docs/robots.md")
+               "(source /opt/ros/jazzy/setup.bash), or see docs/ros2.md")
 
 
 @dataclass(frozen=True)

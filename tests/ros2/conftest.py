@@ -9,13 +9,14 @@ its compiled kernel from there. It is built once (a lock keeps two test workers 
 building it together; about 250 MB from PyPI, a minute or two) and reused while its
 stamp matches.
 
-Every test session talks on a ROS domain of its own, on this machine only
-(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
+Every test process talks on a ROS domain of its own (claimed by a lock, see
+``ros_domain``), on this machine only (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
 """
 
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
 import random
@@ -24,6 +25,8 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,6 +39,8 @@ ROS_PACKAGES = ("ros-jazzy-rclpy", "ros-jazzy-rmw-fastrtps-cpp", "ros-jazzy-sens
                 "ros-jazzy-std-msgs", "ros-jazzy-trajectory-msgs", "ros-jazzy-diagnostic-msgs",
                 "ros-jazzy-geometry-msgs", "ros-jazzy-rosgraph-msgs")
 STAND_IN = Path(__file__).resolve().parent / "standin.py"
+#: ROS domains the tests may use, 1 to DOMAINS (Fast DDS maps 0 to 101 to ports).
+DOMAINS = 101
 
 
 def _stamp() -> dict[str, object]:
@@ -77,11 +82,21 @@ def _build() -> None:
     (ROS_VENV / "dualarm_qp-stamp.json").write_text(json.dumps(_stamp()))
 
 
+def lock_path() -> Path:
+    """The lock every test process of this checkout takes to build ``.venv-ros``.
+
+    Named from a digest of the environment's path, the same in every process (``hash``
+    of a string is salted per process: test workers would each take a lock of their own
+    and build the environment over each other).
+    """
+    digest = hashlib.sha256(str(ROS_VENV).encode()).hexdigest()[:16]
+    return Path(tempfile.gettempdir()) / f"dualarm_qp-ros-{digest}.lock"
+
+
 def ros_python() -> Path:
     """Return the ROS environment's Python, building the environment when needed."""
     ROS_VENV.parent.mkdir(parents=True, exist_ok=True)
-    lock_path = Path(tempfile.gettempdir()) / f"dualarm_qp-{abs(hash(str(ROS_VENV)))}.lock"
-    with open(lock_path, "w") as lock:
+    with open(lock_path(), "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         if not _usable():
             _build()
@@ -102,11 +117,33 @@ class RosEnv:
         return subprocess.Popen([str(self.python), *args], env=self.env, cwd=ROOT, **kw)
 
 
+@contextmanager
+def ros_domain() -> Iterator[int]:
+    """Hold a ROS domain that no other test process on this machine holds.
+
+    Domains 1 to 101 (0 is ROS's default, a user's own graph), tried from a random one
+    on; each is claimed by a lock held until the test process ends, so two test workers,
+    or two checkouts' test runs at once, never hear each other's topics.
+    """
+    first = random.SystemRandom().randrange(DOMAINS)
+    for k in range(DOMAINS):
+        domain = 1 + (first + k) % DOMAINS
+        path = Path(tempfile.gettempdir()) / f"dualarm_qp-ros-domain-{domain}.lock"
+        with open(path, "w") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                continue
+            yield domain
+            return
+    raise RuntimeError(f"every ROS domain 1 to {DOMAINS} is held by another test process")
+
+
 @pytest.fixture(scope="session")
-def ros_env() -> RosEnv:
+def ros_env() -> Iterator[RosEnv]:
     python = ros_python()
     env = {k: v for k, v in os.environ.items() if not k.startswith(("ROS_", "RMW_"))}
-    env.update(ROS_DOMAIN_ID=str(random.SystemRandom().randrange(1, 100)),
-               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
-               PYTHONUNBUFFERED="1")
-    return RosEnv(python, env)
+    with ros_domain() as domain:
+        env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+                   RMW_IMPLEMENTATION="rmw_fastrtps_cpp", PYTHONUNBUFFERED="1")
+        yield RosEnv(python, env)

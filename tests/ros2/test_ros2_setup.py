@@ -149,3 +149,37 @@ def test_what_send_run_refuses(tmp_path, capsys, what) -> None:
     err = capsys.readouterr().err
     assert {"failed_run": "did not complete", "other_cell": "--cell ros2",
             "dry_run": "no dry run"}[what] in err
+
+
+def test_every_test_process_takes_the_same_lock_to_build_the_ros_environment() -> None:
+    """Two test workers must wait for each other, not build ``.venv-ros`` together."""
+    import subprocess
+    import sys
+
+    probe = ("import runpy, sys; sys.path.insert(0, 'tests'); "
+             "print(runpy.run_path('tests/ros2/conftest.py')['lock_path']())")
+    paths = {subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True,
+                            text=True, check=True).stdout for _ in range(2)}
+    assert len(paths) == 1 and paths.pop().strip().endswith(".lock")
+
+
+def test_two_test_processes_never_share_a_ros_domain() -> None:
+    """A domain is held by one test process at a time (a lock per domain)."""
+    import runpy
+
+    ros_domain = runpy.run_path(str(ROOT / "tests" / "ros2" / "conftest.py"))["ros_domain"]
+    for _ in range(20):
+        with ros_domain() as a, ros_domain() as b:
+            assert a != b and 1 <= min(a, b) and max(a, b) <= 101
+
+
+def test_the_docs_install_the_wheels_the_tests_run_on() -> None:
+    """docs/ros2.md's environment of community wheels is the one the tests build."""
+    import re
+    import runpy
+
+    packages = runpy.run_path(str(ROOT / "tests" / "ros2" / "conftest.py"))["ROS_PACKAGES"]
+    section = (ROOT / "docs" / "ros2.md").read_text().split("the community wheels\n")[1]
+    (block,) = re.findall(r"```bash\n(.*?)```", section.split("\n## ")[0], re.DOTALL)
+    assert sorted(re.findall(r"\bros-jazzy-[a-z0-9-]+", block)) == sorted(packages)
+    assert "zz_dualarm_qp_project.pth" in block and "site.addsitedir" in block
