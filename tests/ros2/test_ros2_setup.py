@@ -153,14 +153,16 @@ def test_what_send_run_refuses(tmp_path, capsys, what) -> None:
 
 def test_every_test_process_takes_the_same_lock_to_build_the_ros_environment() -> None:
     """Two test workers must wait for each other, not build ``.venv-ros`` together."""
+    import runpy
     import subprocess
     import sys
 
-    probe = ("import runpy, sys; sys.path.insert(0, 'tests'); "
-             "print(runpy.run_path('tests/ros2/conftest.py')['lock_path']())")
-    paths = {subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True,
-                            text=True, check=True).stdout for _ in range(2)}
-    assert len(paths) == 1 and paths.pop().strip().endswith(".lock")
+    conftest = str(ROOT / "tests" / "ros2" / "conftest.py")
+    here = runpy.run_path(conftest)["lock_path"]()
+    probe = f"import runpy; print(runpy.run_path({conftest!r})['lock_path']())"
+    there = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                           check=True).stdout.strip()
+    assert there == str(here) and there.endswith(".lock")
 
 
 def test_two_test_processes_never_share_a_ros_domain() -> None:
