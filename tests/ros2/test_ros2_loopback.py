@@ -56,6 +56,7 @@ class StandIn:
         exp = build_experiment(cfg, str(config))
         lead, foll = cfg.cell.leader, cfg.cell.follower
         self.leader, self.follower = list(lead.joints), list(foll.joints)
+        self.task, self.dt = exp.task, exp.options.dt
         joints = dict(zip(self.leader, exp.initial.q_l.tolist(), strict=True))
         joints.update(zip(self.follower, exp.initial.q_f.tolist(), strict=True))
         self.log_path = folder / "standin.log"
@@ -110,6 +111,19 @@ def _assert_brought_to_rest(log, rows, summary, stand_in, cfg):
     assert summary["cell"]["stop"]["at_rest"] is True
     sent = np.array([[float(r[k]) for k in r if "_sent" in k] for r in rows])
     assert not np.any(sent[-1])
+    _assert_sent_within_limits(sent, stand_in)
+
+
+def _assert_sent_within_limits(sent, stand_in):
+    """Every command sent, from rest at the start to rest at the end, within the arms'
+    speed and acceleration limits (the record's rates and their differences over dt)."""
+    arms = (stand_in.task.leader, stand_in.task.follower)
+    v_max = np.concatenate([a.qd_max for a in arms])
+    a_max = np.concatenate([a.qdd_max for a in arms])
+    assert sent.shape[1] == len(v_max)
+    assert np.all(np.abs(sent) <= v_max * (1 + 1e-9))
+    acc = np.abs(np.diff(np.vstack([np.zeros(len(v_max)), sent]), axis=0)) / stand_in.dt
+    assert np.all(acc <= a_max * (1 + 1e-9)), float(np.max(acc / a_max))
 
 
 @pytest.mark.parametrize("interface", ["velocity", "position"])
@@ -156,6 +170,8 @@ def test_the_node_drives_the_stand_in_through_the_whole_path(ros_env, tmp_path,
         np.testing.assert_allclose(heard, q0 + np.cumsum(sent_l, axis=0) * 0.01, atol=1e-12)
         np.testing.assert_array_equal(heard[-1], heard[-2])  # at rest: the position held
         assert not np.any(sent_l[-1])
+        _assert_sent_within_limits(
+            np.array([[float(r[k]) for k in r if "_sent" in k] for r in rows]), stand_in)
     # the grasp as a virtual joint and the step's status, published by the node
     grasps = [e for e in log if e.get("heard") == "grasp"]
     assert grasps and all(e["names"] == ["follower_grasp"] for e in grasps)
