@@ -41,14 +41,8 @@ from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
-from .loads import (
-    FALLBACK_LENGTH,
-    GraspStatics,
-    ObjectLoad,
-    hand_statics,
-    hand_wrenches,
-    sliding_statics,
-)
+from .hands import hand_statics, hand_wrenches
+from .loads import FALLBACK_LENGTH, GraspStatics, ObjectLoad, sliding_statics
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
