@@ -37,7 +37,7 @@ from .trace import Trace
 
 if TYPE_CHECKING:
     from .controller import DualArmController
-    from .rollout import Failure
+    from .failure import Failure
 
 FloatArray = NDArray[np.float64]
 
