@@ -77,7 +77,7 @@ def test_no_module_imports_from_a_higher_layer(parts, path):
 
 
 #: The one module that builds a DualArmController (Experiment.controller).
-CONTROLLER_BUILDER = ("experiments", "setup.py")
+CONTROLLER_BUILDER = ("experiments", "experiment.py")
 
 
 def _sources():
