@@ -132,10 +132,10 @@ def test_swallowed_signal_keeps_the_job_out_of_the_store(tmp_path: Path) -> None
 
 def _interrupted_osqp(monkeypatch: pytest.MonkeyPatch) -> None:
     """osqp answering as it does when its own handler caught a SIGINT that Python ignores."""
-    from dualarm_qp.solvers import _native
+    from dualarm_qp.solvers.backends import BackendAnswer, osqp_
 
-    monkeypatch.setattr(_native.OSQPNative, "solve", lambda self, problem:
-                        _native.BackendAnswer(None, False, False, "interrupted"))
+    monkeypatch.setattr(osqp_.OSQPNative, "solve", lambda self, problem:
+                        BackendAnswer(problem, None, False, False, "interrupted"))
 
 
 @pytest.mark.skipif("qp:osqp" not in available_solvers(), reason="osqp not installed")
