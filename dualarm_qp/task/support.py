@@ -59,7 +59,11 @@ from numpy.typing import NDArray
 
 from .._validate import as_array
 from ..errors import InvalidInputError, LimitsError
-from .surfaces import PlaneBar, _as_bound, _as_sigma, _line_box_range, _unit
+from .plane_bar import PlaneBar
+from .plane_bar import line_box_range as _line_box_range
+from .plane_bar import unit_vector as _unit
+from .surface_base import as_bound as _as_bound
+from .surface_base import as_sigma as _as_sigma
 
 FloatArray = NDArray[np.float64]
 
