@@ -20,45 +20,6 @@ using namespace nb::literals;
 
 namespace {
 
-// A numpy array viewing value, a member of the object owner (kept alive by the array).
-// Writeable, as numpy's own arrays are (some QP backends refuse read-only buffers): the
-// step's objects are made anew each step, so a write changes that step's only.
-template <typename M>
-nb::object view(const M& value, nb::handle owner) {
-  using S = typename M::Scalar;
-  constexpr int nd = M::ColsAtCompileTime == 1 ? 1 : 2;
-  npy_intp shape[2] = {static_cast<npy_intp>(nd == 1 ? value.size() : value.rows()),
-                       static_cast<npy_intp>(nd == 1 ? 1 : value.cols())};
-  npy_intp strides[2] = {static_cast<npy_intp>(sizeof(S)), 0};
-  if constexpr (nd == 2) {
-    strides[0] = static_cast<npy_intp>(value.rowStride() * sizeof(S));
-    strides[1] = static_cast<npy_intp>(value.colStride() * sizeof(S));
-  }
-  if (value.size() == 0) {  // no memory to view: a fresh empty array of the shape
-    PyObject* empty = PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0);
-    if (empty == nullptr) throw nb::python_error();
-    return nb::steal(empty);
-  }
-  PyObject* array = PyArray_New(&PyArray_Type, nd, shape, numpy_type<S>(), strides,
-                                const_cast<S*>(value.data()), 0,
-                                NPY_ARRAY_ALIGNED | NPY_ARRAY_WRITEABLE, nullptr);
-  if (array == nullptr) throw nb::python_error();
-  owner.inc_ref();
-  if (PyArray_SetBaseObject(reinterpret_cast<PyArrayObject*>(array), owner.ptr()) < 0) {
-    owner.dec_ref();
-    Py_DECREF(array);
-    throw nb::python_error();
-  }
-  return nb::steal(array);
-}
-
-// Binds the read-only array property name of T, the member the getter returns.
-template <typename T, typename Get>
-void array_property(nb::class_<T>& cls, const char* name, Get get, const char* doc) {
-  cls.def_prop_ro(
-      name, [get](nb::handle self) { return view(get(nb::cast<const T&>(self)), self); }, doc);
-}
-
 nb::tuple names_tuple(const std::vector<std::string>& names) {
   nb::list out;
   for (const std::string& s : names) out.append(nb::str(s.data(), s.size()));
