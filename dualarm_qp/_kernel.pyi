@@ -18,45 +18,130 @@ PRICE_TOL: float
 PIVOT_TOL: float
 EMPTY_BOX_CODE: int
 
-def factor(A: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
-def affine(A: ArrayLike, b: ArrayLike) -> tuple[_F, _F, _F, _F, _F] | None: ...
-def inequalities(lower: ArrayLike, upper: ArrayLike, G: ArrayLike, h: ArrayLike
-                 ) -> tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]]: ...
+class Factor:
+    U: _F
+    sigma: _F
+    V: _F
+    N: _F
+
+class Affine:
+    x0: _F
+    factor: Factor
+
+class Basis:
+    P: _F
+    N: _F
+    rank: int
+    sigma_max: float
+    qr: bool
+
+class Rows:
+    C: _F
+    e: _F
+    kind: NDArray[np.int8]
+    index: NDArray[np.int64]
+
+class Residuals:
+    eq: float
+    box: float
+    row: float
+
+class Certificate:
+    finite: bool
+    eq: float
+    box: float
+    row: float
+    eq_limit: float
+    kkt: int
+    objective: float
+    active_lower: NDArray[np.uint8]
+    active_upper: NDArray[np.uint8]
+    active_rows: list[int]
+
+class StepAnswer:
+    code: int
+    x: _F
+    conflicts: list[int]
+    nullity: int
+    iterations: int
+
+class CertifiedStep:
+    code: int
+    x: _F
+    conflicts: list[int]
+    nullity: int
+    iterations: int
+    basis: Basis
+    rows: Rows
+    certificate: Certificate | None
+
+class DenseQPResult:
+    status: int
+    t: _F
+    active: list[int]
+    multipliers: list[float]
+    blocking: int
+    iterations: int
+
+class NNLSResult:
+    x: _F
+    rnorm: float
+    converged: bool
+
+class ScaleLPResult:
+    status: int
+    t: _F
+    s: float
+    rows: list[int]
+
+class Box:
+    lower: _F
+    upper: _F
+    lower_by: NDArray[np.int64]
+    upper_by: NDArray[np.int64]
+    nan_limit: int
+
+class RateBox:
+    lower: _F
+    upper: _F
+
+class SingularValues:
+    leader: float
+    follower: float
+
+def factor(A: ArrayLike) -> Factor: ...
+def affine(A: ArrayLike, b: ArrayLike) -> Affine | None: ...
+def inequalities(lower: ArrayLike, upper: ArrayLike, G: ArrayLike, h: ArrayLike) -> Rows: ...
 def least_distance(N: ArrayLike, x0: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                    root_full: ArrayLike, center: ArrayLike) -> _F: ...
-def basis(A: ArrayLike) -> tuple[_F, _F, int, float, bool]: ...
+def basis(A: ArrayLike) -> Basis: ...
 def solve_nullspace(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                     sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
                     w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike,
-                    feas_tol: float, max_iter: int) -> tuple[int, _F, list[int], int, int]: ...
+                    feas_tol: float, max_iter: int) -> StepAnswer: ...
 def dense_qp(R: ArrayLike, t_free: ArrayLike, M: ArrayLike, f: ArrayLike, feas_tol: float,
-             max_iter: int) -> tuple[int, _F, list[int], list[float], int, int]: ...
-def nnls(A: ArrayLike, b: ArrayLike, max_iter: int) -> tuple[_F, float, bool]: ...
+             max_iter: int) -> DenseQPResult: ...
+def nnls(A: ArrayLike, b: ArrayLike, max_iter: int) -> NNLSResult: ...
 def residuals(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
-              G: ArrayLike, h: ArrayLike, x: ArrayLike) -> tuple[float, float, float]: ...
+              G: ArrayLike, h: ArrayLike, x: ArrayLike) -> Residuals: ...
 def kkt_holds(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
               sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
-_Certificate = tuple[bool, float, float, float, float, int, float, NDArray[np.uint8],
-                     NDArray[np.uint8], list[int]]
 def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                 G: ArrayLike, h: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                 sigma_max: float, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
                 w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
                 center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
-                bounds_tol: float, ask_kkt: bool) -> _Certificate: ...
+                bounds_tol: float, ask_kkt: bool) -> Certificate: ...
 def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                     G: ArrayLike, h: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                     root_full: ArrayLike, center: ArrayLike, feas_tol: float,
                     max_iter: int, bounds: bool, eq_rtol: float, bounds_tol: float
-                    ) -> _Solved: ...
-_Solved = tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
-                tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]], _Certificate | None]
+                    ) -> CertifiedStep: ...
 
 def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
-                    upper_ids: Sequence[int], n: int, pin_rtol: float
-                    ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
+                    upper_ids: Sequence[int], n: int, pin_rtol: float) -> Box: ...
 def first_defect(finite: Sequence[ArrayLike], not_nan: Sequence[ArrayLike]) -> int: ...
 def step_kinematics(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int],
                     follower: Chain, q_f: ArrayLike, follower_tool: int, T_D: ArrayLike,
@@ -75,18 +160,17 @@ def negligible(x: ArrayLike, n_l: int, n_f: int, dt: float, T_tool: ArrayLike,
 def ik_dls(chain: Chain, tool: int, T_target: ArrayLike, q: _F, lo: ArrayLike,
            hi: ArrayLike, tol_pos: float, tol_rot: float, max_iter: int, damping: float,
            mu_min: float, mu_max: float) -> tuple[int, float, float, int]: ...
-def range_box(lo: ArrayLike, hi: ArrayLike, rec: ArrayLike, off: ArrayLike
-              ) -> tuple[_F, _F]: ...
+def range_box(lo: ArrayLike, hi: ArrayLike, rec: ArrayLike, off: ArrayLike) -> RateBox: ...
 def centre(lo: ArrayLike, hi: ArrayLike, centred: ArrayLike, shrink: float) -> _F: ...
 def smallest_singular_value(J: ArrayLike) -> float: ...
 def smallest_singular_values(J_leader: ArrayLike, J_follower: ArrayLike
-                             ) -> tuple[float, float]: ...
+                             ) -> SingularValues: ...
 def carry_equality(n_l: int, J_object: ArrayLike, J_target: ArrayLike, J_f: ArrayLike,
                    twist: ArrayLike, e_l: ArrayLike, e_c: ArrayLike, scale: float,
                    gain_l: float, gain_c: float, exact_orientation: bool, A: _F, b: _F
                    ) -> bool: ...
 def scale_lp(M: ArrayLike, a: ArrayLike, g: ArrayLike, s_lo: float, s_hi: float
-             ) -> tuple[int, _F, float, list[int]]: ...
+             ) -> ScaleLPResult: ...
 
 def segment_closest_points(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike
                            ) -> tuple[_F, _F, _F, _F]: ...

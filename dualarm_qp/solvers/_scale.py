@@ -163,10 +163,10 @@ def _lp(M: FloatArray, a: FloatArray, g: FloatArray, s_lo: float, s_hi: float
     hold ``s``); when infeasible, the rows of the dual ray. None when the iteration
     limit is reached (never seen; reported, not guessed).
     """
-    status, t, s, rows = kernel.scale_lp(M, a, g, s_lo, s_hi)
-    if status == _LP_LIMIT:
+    r = kernel.scale_lp(M, a, g, s_lo, s_hi)
+    if r.status == _LP_LIMIT:
         return None
-    return status == _LP_OPTIMAL, t, float(s), [int(j) for j in rows]
+    return r.status == _LP_OPTIMAL, r.t, r.s, r.rows
 
 
 #: The kernel's status codes of the LP.

@@ -75,9 +75,9 @@ def residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float]:
 
 def _residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float, float]:
     """``max |A x - b|``, the largest box violation and :meth:`StepProblem.row_violation`."""
-    eq, box, rows = kernel.residuals(problem.A, problem.b, problem.lower, problem.upper,
-                                     problem.G, problem.h, x)
-    return float(eq), float(box), float(rows)
+    r = kernel.residuals(problem.A, problem.b, problem.lower, problem.upper, problem.G,
+                         problem.h, x)
+    return r.eq, r.box, r.row
 
 
 def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
@@ -138,7 +138,7 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
     ----------
     x : ndarray
         ``claim.x`` as float64 (``reading`` not None).
-    reading : tuple or None
+    reading : kernel.Certificate or None
         The kernel's certificate of ``x``; None for a misshaped ``x``.
     start : float
         ``time.perf_counter()`` when the certification began.
@@ -179,11 +179,9 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
         ``verified_with``, ``row_violation`` and ``active_rows`` of the
         :class:`~.base.StepSolution`.
     """
-    if reading is None:
+    if reading is None or not reading.finite:
         return None
-    (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up, active) = reading
-    if not finite:
-        return None
+    eq, box, rows, limit = reading.eq, reading.box, reading.row, reading.eq_limit
     if status.usable:
         if status is not Status.RELAXED and status is not Status.ESCAPING and eq > limit:
             status = Status.VIOLATION
@@ -191,23 +189,25 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
         elif max(box, rows) > tol.bounds:
             status = Status.VIOLATION
             message = message or _worst_breach(problem, x, box >= rows, claims_bounds)
-        elif status is Status.OPTIMAL and kkt != 1:  # not confirmed (or not computed)
+        elif status is Status.OPTIMAL and reading.kkt != 1:  # not confirmed (or not computed)
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
-    return dict(x=x, status=status, objective=objective, eq_residual=eq,
-                bound_violation=box, active_lower=active_lo.view(np.bool_),
-                active_upper=active_up.view(np.bool_), build_time=problem.build_time,
-                message=message, verified_with=tol, row_violation=rows,
+    active = reading.active_rows
+    return dict(x=x, status=status, objective=reading.objective, eq_residual=eq,
+                bound_violation=box, active_lower=reading.active_lower.view(np.bool_),
+                active_upper=reading.active_upper.view(np.bool_),
+                build_time=problem.build_time, message=message, verified_with=tol,
+                row_violation=rows,
                 active_rows=(inequalities or problem.inequalities()).labels(active)
                 if active else ())
 
 
-#: The kernel's certificate of one ``x`` (``kernel.certificate``'s tuple): finite, the
-#: equality, box and row residuals, the equality's limit, the KKT test (-1 not asked, 0
-#: fails, 1 holds), the objective, the active lower and upper bounds, the active rows.
-Reading = tuple[bool, float, float, float, float, int, float, NDArray[np.uint8],
-                NDArray[np.uint8], list[int]]
+#: The kernel's certificate of one ``x`` (``kernel.certificate``'s answer): whether it is
+#: finite, the equality, box and row residuals, the equality's limit, the KKT test (-1
+#: not asked, 0 fails, 1 holds), the objective, the active lower and upper bounds, the
+#: active rows.
+Reading = kernel.Certificate
 
 #: What the kernel's certificate takes for A's basis when no KKT test is asked.
 _NO_BASIS = (np.zeros((0, 0)), np.zeros((0, 0)), 0, 0.0)

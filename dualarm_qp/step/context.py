@@ -232,8 +232,8 @@ def smallest_singular_values(J_leader: FloatArray, J_follower: FloatArray
     One kernel call for both (a one-sided Jacobi on each Jacobian's rows); 0 for a
     Jacobian with fewer columns than rows, NaN for one that holds NaN or infinity.
     """
-    sv: tuple[float, float] = kernel.smallest_singular_values(J_leader, J_follower)
-    return sv
+    sv = kernel.smallest_singular_values(J_leader, J_follower)
+    return sv.leader, sv.follower
 
 
 __all__ = ["ArmKinematics", "StepContext", "smallest_singular_values"]

@@ -165,39 +165,6 @@ void array_property(nb::class_<T>& cls, const char* name, M T::*member, const ch
       doc);
 }
 
-inline nb::tuple factor_tuple(const dqk::Factor& f) {
-  return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
-}
-
-// basis(A) as Python holds it: (P, N, rank, sigma_max, qr).
-inline nb::tuple basis_tuple(dqk::Basis&& f) {
-  return nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max, f.qr);
-}
-
-// inequalities(...) as Python holds them: (C, e, kind, index).
-inline nb::tuple rows_tuple(dqk::Rows&& r) {
-  return nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
-                        out(std::move(r.index)));
-}
-
-// A certificate as dualarm_qp/solvers/certify.py reads it (its Reading).
-inline nb::tuple certificate_tuple(dqk::Certificate&& c) {
-  return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
-                        c.objective, out(std::move(c.active_lower)),
-                        out(std::move(c.active_upper)), c.active_rows);
-}
-
-// solve_certified's answer as dualarm_qp/solvers/nullspace.py reads it: (code, x,
-// conflicts, nullity, iterations, basis, rows, certificate or None).
-inline nb::tuple certified_tuple(dqk::CertifiedStep&& s) {
-  nb::object cert = nb::none();
-  if (s.certified) cert = certificate_tuple(std::move(s.cert));
-  return nb::make_tuple(s.empty_box ? dqk::EMPTY_BOX_CODE : static_cast<int>(s.answer.code),
-                        out(std::move(s.answer.x)), s.answer.conflicts, s.answer.nullity,
-                        s.answer.iterations, basis_tuple(std::move(s.basis)),
-                        rows_tuple(std::move(s.rows)), cert);
-}
-
 // A step's collision rows as dualarm_qp/step/limits/collision.py reads them: (finite,
 // pairs, G, h).
 inline nb::tuple damper_tuple(dqk::DamperRows&& d) {
