@@ -172,10 +172,42 @@ def carry_equality(n_l: int, J_object: ArrayLike, J_target: ArrayLike, J_f: Arra
 def scale_lp(M: ArrayLike, a: ArrayLike, g: ArrayLike, s_lo: float, s_hi: float
              ) -> ScaleLPResult: ...
 
+class ClosestPoints:
+    s: _F
+    t: _F
+    x: _F
+    y: _F
+
+class CapsuleProximities:
+    distance: _F
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class CapsuleProximity:
+    distance: float
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class SceneProximities:
+    finite: bool
+    pairs: NDArray[np.int64]
+    distance: _F
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class DamperRows:
+    finite: bool
+    pairs: NDArray[np.int64]
+    G: _F
+    h: _F
+
 def segment_closest_points(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike
-                           ) -> tuple[_F, _F, _F, _F]: ...
+                           ) -> ClosestPoints: ...
 def capsule_proximities(a0: ArrayLike, a1: ArrayLike, ra: ArrayLike, b0: ArrayLike,
-                        b1: ArrayLike, rb: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
+                        b1: ArrayLike, rb: ArrayLike) -> CapsuleProximities: ...
 class CoalPairs:
     def __init__(self, kinds: Sequence[int], params: ArrayLike, local: ArrayLike,
                  ia: Sequence[int], ib: Sequence[int], boxed: Sequence[bool],
@@ -183,12 +215,11 @@ class CoalPairs:
     @property
     def n_pairs(self) -> int: ...
     def measure(self, pair: int, frame_a: ArrayLike, frame_b: ArrayLike
-                ) -> tuple[float, _F, _F, _F]: ...
+                ) -> CapsuleProximity: ...
 def scene_proximities(frames: ArrayLike, body_frame: Sequence[int], a_local: ArrayLike,
                       b_local: ArrayLike, r: ArrayLike, sphere: ArrayLike,
                       ia: Sequence[int], ib: Sequence[int], within: float,
-                      exact: CoalPairs | None = None
-                      ) -> tuple[bool, NDArray[np.int64], _F, _F, _F, _F]: ...
+                      exact: CoalPairs | None = None) -> SceneProximities: ...
 class DamperScene:
     def __init__(self, body_frame: Sequence[int], a_local: ArrayLike, b_local: ArrayLike,
                  r: ArrayLike, sphere: ArrayLike, ia: Sequence[int], ib: Sequence[int],
@@ -197,7 +228,7 @@ class DamperScene:
                  d_s: float, gain: float, zero_row: float, n_l: int, n_f: int,
                  grasp_start: int, n: int) -> None: ...
     def rows(self, leader: Chain, follower: Chain, J_object: ArrayLike, T_object: ArrayLike
-             ) -> tuple[bool, NDArray[np.int64], _F, _F]: ...
+             ) -> DamperRows: ...
 def damper_rows(leader: Chain, follower: Chain, J_object: ArrayLike,
                 object_origin: ArrayLike, owners: Sequence[int], frames: Sequence[int],
                 point_a: ArrayLike, point_b: ArrayLike, normal: ArrayLike, n_l: int,

@@ -241,13 +241,13 @@ class CollisionScene(KernelHolder):
         NonFiniteError
             A body's frame is not finite (its pairs are never skipped as far).
         """
-        finite, keep, *near = kernel.scene_proximities(
+        p = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
             self._a, self._b, self._r, self._sphere, self._ia_list, self._ib_list,
             float(within), self._exact)
-        if not finite:
+        if not p.finite:
             raise NonFiniteError("the collision scene's frames")
-        return Measured(keep, Proximities(*near))
+        return Measured(p.pairs, Proximities(p.distance, p.point_a, p.point_b, p.normal))
 
     def measured_as(self) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray,
                                    list[int], list[int], Any]:

@@ -1,7 +1,8 @@
 // What every binding file of dualarm_qp._kernel shares: nanobind, NumPy's C API for the
-// arrays the kernel returns (out() for a result of its own, view() and array_property()
-// for the arrays of a bound struct), and the conversions of its arguments. module.cpp
-// makes the module and calls each file's bind_*() function.
+// arrays the kernel returns (out() for a function that returns one array, view() and
+// array_property() for the arrays of a bound struct: a result of several values is a
+// struct with named properties, never a tuple), and the conversions of its arguments.
+// module.cpp makes the module and calls each file's bind_*() function.
 #pragma once
 
 #include <stdexcept>
@@ -163,15 +164,6 @@ void array_property(nb::class_<T>& cls, const char* name, M T::*member, const ch
   cls.def_prop_ro(
       name, [member](nb::handle self) { return view(nb::cast<const T&>(self).*member, self); },
       doc);
-}
-
-// A step's collision rows as dualarm_qp/step/limits/collision.py reads them: (finite,
-// pairs, G, h).
-inline nb::tuple damper_tuple(dqk::DamperRows&& d) {
-  dqk::IndexVec pairs(static_cast<Index>(d.pairs.size()));
-  for (size_t k = 0; k < d.pairs.size(); ++k) pairs[static_cast<Index>(k)] = d.pairs[k];
-  return nb::make_tuple(d.finite, out(std::move(pairs)), out(std::move(d.G)),
-                        out(std::move(d.h)));
 }
 
 inline void require(bool ok, const char* what) {
