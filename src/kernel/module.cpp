@@ -33,6 +33,29 @@
 using namespace dqk_binding;
 using namespace nb::literals;
 
+namespace {
+
+// grasp_rate_range's and grasp_rates's answer: a grasp's sliding rates [m/s].
+struct RateRange {
+  double lower;
+  double upper;
+};
+
+void bind_results(nb::module_& m) {
+  nb::class_<RateRange>(m, "RateRange", "A grasp's sliding rates over one sample [m/s].")
+      .def_ro("lower", &RateRange::lower, "rho_min [m/s].")
+      .def_ro("upper", &RateRange::upper, "rho_max [m/s].");
+  using I = dqk::IKAnswer;
+  nb::class_<I>(m, "IKAnswer", "Where ik_dls stopped.")
+      .def_ro("iterations", &I::iterations, "Linear solves performed.")
+      .def_ro("position_error", &I::position_error, "|p* - p(q)| [m].")
+      .def_ro("rotation_error", &I::rotation_error, "The angle of R* R(q)^T [rad].")
+      .def_prop_ro("stop", [](const I& a) { return static_cast<int>(a.stop); },
+                   "0 converged, 1 iteration limit, 2 local minimum, 3 no descent.");
+}
+
+}  // namespace
+
 
 NB_MODULE(_kernel, m) {
   m.doc() = "The compiled exact step solver, the certificate's numeric core and the arms' kinematics.";
@@ -51,6 +74,7 @@ NB_MODULE(_kernel, m) {
   m.attr("PIVOT_TOL") = dqk::PIVOT_TOL;
   m.attr("PINOCCHIO_VERSION") = dqk::pinocchio_version();
   m.attr("COAL_VERSION") = COAL_VERSION;
+  bind_results(m);
 
   nb::class_<dqk::Chain>(m, "Chain",
                          "A chain of one-dof joints with frames, rebuilt as a pinocchio::Model.")
@@ -122,10 +146,11 @@ NB_MODULE(_kernel, m) {
       [](const Eigen::Vector3d& r, const Eigen::Vector3d& s_star, const Eigen::Vector3d& r_min,
          const Eigen::Vector3d& r_max, double dt) {
         const auto [lo, hi] = dqk::grasp_rate_range(r, s_star, r_min, r_max, dt);
-        return nb::make_tuple(lo, hi);
+        return RateRange{lo, hi};
       },
       "r"_a, "s_star"_a, "r_min"_a, "r_max"_a, "dt"_a,
-      "Eqs. 30-31: (rho_min, rho_max) [m/s] keeping r in [r_min, r_max] sliding along s*.");
+      "Eqs. 30-31: the rates (a RateRange) [m/s] keeping r in [r_min, r_max] sliding "
+      "along s*.");
 
   m.def(
       "grasp_rates",
@@ -134,11 +159,12 @@ NB_MODULE(_kernel, m) {
          double sigma_max, double dt) {
         const auto [lo, hi] = dqk::grasp_rates(point, tangent, sigma, r_min, r_max, sigma_min,
                                                sigma_max, dt);
-        return nb::make_tuple(lo, hi);
+        return RateRange{lo, hi};
       },
       "point"_a, "tangent"_a, "sigma"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a,
       "dt"_a,
-      "One grasp's rates to the ends of its range [m/s]: Eqs. 30-31 cut by sigma's range.");
+      "One grasp's rates to the ends of its range (a RateRange) [m/s]: Eqs. 30-31 cut by "
+      "sigma's range.");
 
   m.def("step_errors", &dqk::step_errors, "carry"_a, "q_carry"_a, "carry_frames"_a,
         "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
@@ -155,17 +181,14 @@ NB_MODULE(_kernel, m) {
       [](dqk::Chain& chain, int tool, const dqk::Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
          const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos, double tol_rot,
          std::int64_t max_iter, double damping, double mu_min, double mu_max) {
-        const dqk::IKAnswer a = dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot,
-                                            max_iter, damping, mu_min, mu_max);
-        return nb::make_tuple(a.iterations, a.position_error, a.rotation_error,
-                              static_cast<int>(a.stop));
+        return dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot, max_iter,
+                           damping, mu_min, mu_max);
       },
       "chain"_a, "tool"_a, "T_target"_a, "q"_a.noconvert(), "lo"_a, "hi"_a, "tol_pos"_a,
       "tol_rot"_a, "max_iter"_a, "damping"_a, "mu_min"_a, "mu_max"_a,
       "Damped least squares of the pose of frame tool toward T_target, from q (clipped "
-      "into [lo, hi]); the best iterate is written into q. Returns (iterations, position "
-      "error [m], rotation error [rad], stop: 0 converged, 1 iteration limit, 2 local "
-      "minimum, 3 no descent).");
+      "into [lo, hi]); the best iterate is written into q. Returns where it stopped (an "
+      "IKAnswer).");
 
   nb::class_<dqk::WaypointPath>(m, "WaypointPath",
                                 "A waypoint path with minimum-jerk timing (WaypointTrajectory).")
