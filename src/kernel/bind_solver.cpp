@@ -111,7 +111,9 @@ void bind_certificate(nb::module_& m) {
       "EMPTY_BOX_CODE, x zero, no conflicts, an empty basis and rows.");
   step.def_prop_ro(
       "code",
-      [](const S& s) { return s.empty_box ? dqk::EMPTY_BOX_CODE : static_cast<int>(s.answer.code); },
+      [](const S& s) {
+        return s.empty_box ? dqk::EMPTY_BOX_CODE : static_cast<int>(s.answer.code);
+      },
       "StepAnswer's code, or EMPTY_BOX_CODE (not solved).");
   array_property(step, "x", [](const S& s) -> const Vec& { return s.answer.x; }, "(n)");
   step.def_prop_ro("conflicts", [](const S& s) { return s.answer.conflicts; },
