@@ -246,11 +246,12 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             print(f"      warning: {warning}")
     if rep.interrupted is not None:
         _err(f"interrupted in case ({rep.interrupted}); the cases done are written, "
-             "without the figures; see reproduce.json")
+             "without the figures; see report.html and reproduce.json")
         return EXIT_INTERRUPTED
     for claim, held in rep.checks["claims"].items():
         print(f"  {'yes' if held else 'NO '}  {claim.replace('_', ' ')}")
-    print("  figures: fig5_joint3.png, fig6_grasp.png; details in reproduce.json")
+    print(f"  open {args.out}/report.html: each case, the claims and the figures "
+          "(fig5_joint3.png, fig6_grasp.png); every number in reproduce.json")
     return EXIT_OK if rep.ok else EXIT_FAILED
 
 
@@ -468,7 +469,8 @@ def build_parser() -> argparse.ArgumentParser:
     ph.set_defaults(func=_cmd_physics)
 
     rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases and the "
-                        "same task with hard limits, draw Figs. 5-6")
+                        "same task with hard limits, draw Figs. 5-6; report.html leads "
+                        "to each case")
     rp.add_argument("--out", default="reproduction", help="output folder (default reproduction)")
     rp.add_argument("--configs", type=Path, default=None,
                     help="folder with the three YAML files (default: the bundled copies)")
