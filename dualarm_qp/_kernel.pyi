@@ -278,6 +278,19 @@ class CollisionLimit(Limit):
     def __init__(self, damper: DamperScene, names: Sequence[str], nonfinite: str) -> None: ...
     def constraint(self, ctx: object) -> Constraint: ...
 
+class SlidePath:
+    def __init__(self, revolute: bool, axis: int, placement: ArrayLike, child: ArrayLike,
+                 rate: float) -> None: ...
+    def at(self, sigma: float) -> _F: ...
+
+class TorqueLimit(Limit):
+    def __init__(self, leader: Chain, leader_tool: int, follower: Chain, follower_tool: int,
+                 tau_max: ArrayLike, row_names: Sequence[str], mass: float | None,
+                 mass_centre: ArrayLike, gravity: ArrayLike, follower_path: SlidePath,
+                 leader_path: SlidePath | None, grasp_step: float, fallback_length: float,
+                 rcond_min: float) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
 class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,

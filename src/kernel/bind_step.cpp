@@ -13,6 +13,7 @@
 
 #include "standard_parts.hpp"
 #include "step.hpp"
+#include "torque_limit.hpp"
 
 namespace dqk_binding {
 
@@ -416,6 +417,32 @@ void bind_parts(nb::module_& m) {
       },
       "damper"_a, "names"_a, "nonfinite"_a, nb::keep_alive<1, 2>());
   bind_limit_method<dqk::CollisionLimit>(collision);
+
+  nb::class_<dqk::SlidePath>(
+      m, "SlidePath",
+      "A sliding path as one joint: the hand's pose on the object H(sigma) = P M(rate sigma) C.")
+      .def(
+          "__init__",
+          [](dqk::SlidePath* self, bool revolute, int axis, const dqk::Pose& placement,
+             const dqk::Pose& child, double rate) {
+            new (self) dqk::SlidePath{revolute, axis, placement, child, rate};
+          },
+          "revolute"_a, "axis"_a, "placement"_a, "child"_a, "rate"_a,
+          "revolute: a rotation (else a translation) about or along axis 0 (x) or 1 (y) of "
+          "the joint frame; placement P and child C (4, 4) [m]; rate d theta / d sigma.")
+      .def("at", &dqk::SlidePath::at, "sigma"_a, "H(sigma) (4, 4) [m], object coordinates.");
+
+  auto torque = nb::class_<dqk::TorqueLimit, dqk::Limit, PyLimit<dqk::TorqueLimit>>(
+      m, "TorqueLimit",
+      "|tau + dt D x| <= tau_max: both arms' quasi-static torques from the step's context.");
+  torque.def(nb::init<dqk::Chain*, int, dqk::Chain*, int, Vec, std::vector<std::string>,
+                      std::optional<double>, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                      dqk::SlidePath, std::optional<dqk::SlidePath>, double, double, double>(),
+             "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "tau_max"_a,
+             "row_names"_a, "mass"_a.none(), "mass_centre"_a, "gravity"_a, "follower_path"_a,
+             "leader_path"_a.none(), "grasp_step"_a, "fallback_length"_a, "rcond_min"_a,
+             nb::keep_alive<1, 2>(), nb::keep_alive<1, 4>());
+  bind_limit_method<dqk::TorqueLimit>(torque);
 }
 
 void bind_loop(nb::module_& m) {
