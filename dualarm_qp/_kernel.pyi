@@ -291,6 +291,24 @@ class TorqueLimit(Limit):
                  rcond_min: float) -> None: ...
     def constraint(self, ctx: object) -> Constraint: ...
 
+class SupportLine:
+    held: bool
+    sigma_min: float
+    sigma_max: float
+    sigma_inf: float
+    lever: float
+    gravity: _F
+    origin: _F
+    direction: _F
+    pose0: _F
+    def push(self, sigma: float) -> float: ...
+
+class SupportPlane:
+    def __init__(self, mass: float, mass_centre: ArrayLike, gravity: ArrayLike, r1: ArrayLike,
+                 normal: ArrayLike, offset: float, r_min: ArrayLike, r_max: ArrayLike,
+                 gravity_min: float) -> None: ...
+    def line(self, R_world_object: ArrayLike) -> SupportLine: ...
+
 class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
@@ -300,6 +318,9 @@ class Step:
     def add_limit(self, limit: Limit) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
+    def set_grasp_line(self, grasp: int, origin: ArrayLike, direction: ArrayLike,
+                       r_min: ArrayLike, r_max: ArrayLike, sigma_min: float,
+                       sigma_max: float) -> None: ...
     @property
     def n(self) -> int: ...
     @property

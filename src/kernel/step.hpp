@@ -75,6 +75,8 @@ class Step {
   // The next grasp's straight path (in the grasps' order). With every grasp's line
   // given, build computes the grasps' rates to their range ends from sigmas itself.
   void add_grasp_line(const GraspLine& line);
+  // Replace grasp g's line (a Case 2 support's moves with the object's orientation).
+  void set_grasp_line(Index g, const GraspLine& line);
 
   Index n() const { return n_; }
   bool grasp_lines() const { return static_cast<Index>(lines_.size()) == k_; }
