@@ -8,6 +8,7 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/trampoline.h>
 
+#include <cmath>
 #include <optional>
 #include <utility>
 
@@ -426,6 +427,9 @@ void bind_parts(nb::module_& m) {
           "__init__",
           [](dqk::SlidePath* self, bool revolute, int axis, const dqk::Pose& placement,
              const dqk::Pose& child, double rate) {
+            require((axis == 0 || axis == 1) && std::isfinite(rate) && placement.allFinite() &&
+                        child.allFinite(),
+                    "SlidePath: axis 0 (x) or 1 (y), finite placements and rate");
             new (self) dqk::SlidePath{revolute, axis, placement, child, rate};
           },
           "revolute"_a, "axis"_a, "placement"_a, "child"_a, "rate"_a,

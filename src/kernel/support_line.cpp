@@ -1,5 +1,6 @@
 #include "support_line.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -65,11 +66,12 @@ SupportPlane::SupportPlane(double mass, const Eigen::Vector3d& mass_centre,
       r_max_(r_max),
       gravity_min_(gravity_min) {
   if (!(std::isfinite(mass) && mass > 0.0 && mass_centre.allFinite() && gravity.allFinite() &&
-        r1.allFinite() && std::isfinite(offset) && !r_min.hasNaN() && !r_max.hasNaN() &&
-        gravity_min >= 0.0 && unit(normal, normal_)))
+        r1.allFinite() && normal.allFinite() && std::isfinite(offset) && !r_min.hasNaN() &&
+        !r_max.hasNaN() && gravity_min >= 0.0))
     throw std::invalid_argument(
-        "SupportPlane: a finite mass > 0, mass centre, gravity, hand point and offset, a "
-        "non-zero normal, a box without NaN and gravity_min >= 0");
+        "SupportPlane: a finite mass > 0, mass centre, gravity, hand point, normal and "
+        "offset, a box without NaN and gravity_min >= 0");
+  if (!unit(normal, normal_)) throw std::invalid_argument("SupportPlane: a zero normal");
 }
 
 SupportLine SupportPlane::line(const Eigen::Matrix3d& R_world_object) const {
