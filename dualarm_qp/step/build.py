@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -64,6 +64,7 @@ from .support import SupportPlacement
 from .tasks import GraspClosureTask, ObjectPathTask
 
 FloatArray = NDArray[np.float64]
+Surfaces = tuple[GraspSurface, ...]
 
 #: What a failed standard task names (its rows are not finite).
 _EQUALITY = "the step's equality (D(t), its twist or the arms' poses)"
@@ -284,7 +285,7 @@ class StepBuilder(KernelHolder):
         T_D = trajectory.pose(state.t)
         step = self._step
         support_force = math.nan
-        surfaces: Any = tuple(self._surfaces)
+        surfaces: Surfaces | Callable[[], Surfaces] = tuple(self._surfaces)
         if self._support is not None:
             # The support line follows the object's orientation at this state: placed
             # first, then the step's kinematics follow.
@@ -369,7 +370,7 @@ class StepBuilder(KernelHolder):
         return lo, hi
 
     def _supported(self, support: SupportPlacement, state: DualArmState
-                   ) -> tuple[float, Any]:
+                   ) -> tuple[float, Callable[[], Surfaces]]:
         """Case 2: put the follower's path on the support line of this step; its push.
 
         The line is computed for the object's orientation at ``state`` and frozen for
