@@ -283,6 +283,37 @@ class CollisionLimit(Limit):
 def problem_check(A: _F, b: _F, weights: _F, center: _F, lower: _F, upper: _F, G: _F,
                   h: _F) -> int: ...
 
+class SlidePath:
+    def __init__(self, revolute: bool, axis: int, placement: ArrayLike, child: ArrayLike,
+                 rate: float) -> None: ...
+    def at(self, sigma: float) -> _F: ...
+
+class TorqueLimit(Limit):
+    def __init__(self, leader: Chain, leader_tool: int, follower: Chain, follower_tool: int,
+                 tau_max: ArrayLike, row_names: Sequence[str], mass: float | None,
+                 mass_centre: ArrayLike, gravity: ArrayLike, follower_path: SlidePath,
+                 leader_path: SlidePath | None, grasp_step: float, fallback_length: float,
+                 rcond_min: float) -> None: ...
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class SupportLine:
+    held: bool
+    sigma_min: float
+    sigma_max: float
+    sigma_inf: float
+    lever: float
+    gravity: _F
+    origin: _F
+    direction: _F
+    pose0: _F
+    def push(self, sigma: float) -> float: ...
+
+class SupportPlane:
+    def __init__(self, mass: float, mass_centre: ArrayLike, gravity: ArrayLike, r1: ArrayLike,
+                 normal: ArrayLike, offset: float, r_min: ArrayLike, r_max: ArrayLike,
+                 gravity_min: float) -> None: ...
+    def line(self, R_world_object: ArrayLike) -> SupportLine: ...
+
 class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
@@ -293,6 +324,9 @@ class Step:
     def set_labels(self, labels: Sequence[str]) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
+    def set_grasp_line(self, grasp: int, origin: ArrayLike, direction: ArrayLike,
+                       r_min: ArrayLike, r_max: ArrayLike, sigma_min: float,
+                       sigma_max: float) -> None: ...
     @property
     def n(self) -> int: ...
     @property
