@@ -55,11 +55,11 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
+from dualarm_qp._compiled import kernel
 from dualarm_qp.bench.runner import machine_info
 from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
@@ -498,7 +498,7 @@ class SamePinkStep:
         lo[n_l] = max(rho_min, (surf.sigma_min - s) / dt)
         hi[n_l] = min(rho_max, (surf.sigma_max - s) / dt)
         # The step's own range and speed limits on these rate ranges, intersected.
-        ctx = SimpleNamespace(rate_lo=lo, rate_hi=hi)
+        ctx = kernel.Context(lo, hi)
         box = [RangeLimit("range", self.everything, self.v_max, self.recovery).constraint(ctx),
                SpeedLimit("speed", self.v_max).constraint(ctx)]
         lower = np.maximum(box[0].lower, box[1].lower)

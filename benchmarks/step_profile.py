@@ -5,26 +5,29 @@ one rollout's controller inputs are recorded and replayed through a fresh contro
 cycling over them. Every step is timed whole, and inside it the compiled kernel's
 calls that the step makes:
 
-* the step in one call (``kernel.StepParts.prepare_solved``: both arms' kinematics, the
-  rates to the range ends, the equality, the centres, the compiled limits' boxes and
-  rows, the exact solve with its certificate, the look-ahead's bound), which a step with
-  the exact solver and no limit of Python's makes; and inside it, by the kernel's own
-  clock, its kinematics and its solve with the certificate;
-* otherwise the standard parts (``kernel.StepParts.prepare``) and the exact solve with
-  its certificate (``kernel.solve_certified``);
-* the two calls that replace the solve on a scaled copy of a solved step (a slowed step);
-* the look-ahead's prediction (``kernel.predicted_errors``), on the steps that need it.
+* the step's one loop (``kernel.Step.build``: both arms' kinematics, every task, cost
+  term and limit asked in turn, their pieces stacked); and inside it, by the kernel's
+  own clock, its kinematics;
+* the exact solve with its certificate (``kernel.solve_certified``, or the calls one by
+  one on a scaled copy of a slowed step);
+* the look-ahead's bound (``kernel.negligible``) and prediction
+  (``kernel.predicted_errors``), on the steps that need them.
 
-What is left is Python: the builder, the solver's wrappers, the policy, the
-look-ahead's bound, the output objects (and the few other kernel calls a step may make,
-such as a slowed step's task-scale LP, which are not split out). A second pass counts
-the Python function calls a step makes (``sys.setprofile``; calls into C are counted
-apart). The kernel's times
+What is left is Python: the builder, the solver's wrappers, the policy, the output
+objects (and the few other kernel calls a step may make, such as a slowed step's
+task-scale LP, which are not split out). A second pass counts the Python function calls
+a step makes (``sys.setprofile``; calls into C are counted apart). The kernel's times
 include their arguments' and results' crossing of the binding (timed around the call);
 the wrappers that time them add well under a microsecond each.
 
-Run it with ``python benchmarks/step_profile.py [config ...] [--passes 3]`` (about 10 s).
-It is a benchmark, not a test: it asserts nothing about speed.
+``--parts`` measures the door a part goes through, on the PUMA beam's states, each
+variant timed interleaved with the standard step: a limit written in Python that gives
+nothing (what the kernel's call back into Python costs), and the standard limits asked
+one by one from Python with ``limit.constraint(ctx)`` (what a loop in Python would
+cross instead of the kernel's loop).
+
+Run it with ``python benchmarks/step_profile.py [config ...] [--passes 3] [--parts]``
+(about 10 s). It is a benchmark, not a test: it asserts nothing about speed.
 """
 
 from __future__ import annotations
@@ -50,13 +53,13 @@ KERNEL_CALLS = {
     "solve_certified": "solve + certificate",
     "solve_nullspace": "solve + certificate",
     "certificate": "solve + certificate",
-    "predicted_errors": "look-ahead prediction",
+    "negligible": "look-ahead",
+    "predicted_errors": "look-ahead",
 }
-PREPARE = "standard parts"
-ONE_CALL = "the step in one call"
-PARTS = (ONE_CALL, PREPARE, "solve + certificate", "look-ahead prediction")
-#: Inside the one call, by the kernel's own clock (not subtracted again from the Python).
-INNER = ("  its kinematics", "  its solve + certificate")
+LOOP = "the step's loop"
+PARTS = (LOOP, "solve + certificate", "look-ahead")
+#: Inside the loop, by the kernel's own clock (not subtracted again from the Python).
+INNER = ("  its kinematics",)
 
 
 class _Clock:
@@ -74,15 +77,13 @@ class _Clock:
         for part in INNER:
             self.inner[part] = np.nan
 
-    def one_call(self, fn: Callable[..., Any]) -> Callable[..., Any]:
-        """``prepare_solved`` timed whole, and its kernel clock's kinematics and solve."""
-        timed = self.timed(ONE_CALL, fn)
+    def loop(self, fn: Callable[..., Any]) -> Callable[..., Any]:
+        """``Step.build`` timed whole, and its kernel clock's kinematics."""
+        timed = self.timed(LOOP, fn)
 
-        def call(*args: Any, **kwargs: Any) -> Any:
-            parts, solved = timed(*args, **kwargs)
-            self.inner[INNER[0]] = parts[-1]
-            self.inner[INNER[1]] = np.nan if solved is None else solved[1]
-            return parts, solved
+        def call(out: Any, *args: Any, **kwargs: Any) -> Any:
+            timed(out, *args, **kwargs)
+            self.inner[INNER[0]] = out.kinematics_seconds
         return call
 
     def timed(self, part: str, fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -98,16 +99,15 @@ class _Clock:
         return call
 
 
-class _Parts:
-    """The builder's ``kernel.StepParts`` with its ``prepare`` and ``prepare_solved`` timed."""
+class _Step:
+    """The builder's ``kernel.Step`` with its ``build`` timed."""
 
-    def __init__(self, parts: Any, clock: _Clock) -> None:
-        self._parts = parts
-        self.prepare = clock.timed(PREPARE, parts.prepare)
-        self.prepare_solved = clock.one_call(parts.prepare_solved)
+    def __init__(self, step: Any, clock: _Clock) -> None:
+        self._step = step
+        self.build = clock.loop(step.build)
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(self._parts, name)
+        return getattr(self._step, name)
 
 
 def profile(name: str, passes: int) -> dict[str, Any]:
@@ -118,16 +118,16 @@ def profile(name: str, passes: int) -> dict[str, Any]:
     clock = _Clock()
     saved = {attr: getattr(kernel, attr) for attr in KERNEL_CALLS if hasattr(kernel, attr)}
     builder = ctrl.builder
-    real_parts = builder._parts
+    real_step = builder._step
     try:
         for attr, fn in saved.items():
             setattr(kernel, attr, clock.timed(KERNEL_CALLS[attr], fn))
-        builder._parts = _Parts(real_parts, clock)
+        builder._step = _Step(real_step, clock)
         rows = _timed(ctrl, states, passes, clock)
     finally:
         for attr, fn in saved.items():
             setattr(kernel, attr, fn)
-        builder._parts = real_parts
+        builder._step = real_step
     calls = _counted(ctrl, states)  # without the timing wrappers, which are calls too
     return {"name": name, "states": len(states), "info": info, "rows": rows, **calls}
 
@@ -149,7 +149,7 @@ def _timed(ctrl: Any, states: list[State], passes: int, clock: _Clock
             for part in PARTS:
                 # NaN where the step made no such call (the median is over those that did).
                 parts[part].append(clock.spent[part] if clock.calls[part] else np.nan)
-                if part == ONE_CALL:
+                if part == LOOP:
                     for inner in INNER:
                         parts[inner].append(clock.inner[inner])
     return {"whole step": np.array(total), **{f"kernel: {p}": np.array(v)
@@ -185,12 +185,63 @@ def _line(label: str, values: np.ndarray, steps: int) -> str:
             f"p99 {np.percentile(done, 99) * 1e6:7.1f} us{share}")
 
 
+class _Nothing:
+    """A limit written in Python that gives nothing: the door's own cost."""
+
+    name = "nothing"
+    gives_rows = False
+
+    def constraint(self, ctx: Any) -> Any:
+        return kernel.Constraint()
+
+
+def parts(passes: int) -> None:
+    """The door a part goes through (see the module docstring)."""
+    from dualarm_qp.step.build import StepBuilder
+
+    exp = experiment("puma_beam_limits")
+    states, _ = record_states(exp)
+    standard = StepBuilder(exp.task, exp.options)
+    with_python = StepBuilder(exp.task, exp.options, limits=[_Nothing()])
+    perf = time.perf_counter
+    base, door, one_by_one = [], [], []
+    for _ in range(passes):
+        for state, scale_max in states:
+            t0 = perf()
+            build = standard.build(state, scale_max=scale_max)
+            t1 = perf()
+            with_python.build(state, scale_max=scale_max)
+            t2 = perf()
+            ctx = build.context
+            for limit in standard.limits:
+                limit.constraint(ctx)
+            for task in standard.tasks:
+                task.equality(ctx)
+            standard.cost.quadratic(ctx)
+            t3 = perf()
+            base.append(t1 - t0)
+            door.append(t2 - t1 - (t1 - t0))
+            one_by_one.append(t3 - t2)
+    n_parts = len(standard.limits) + len(standard.tasks) + 1
+    print(f"== the door a part goes through, puma_beam_limits ({len(states)} states, "
+          f"{passes} passes; {n_parts} standard parts)")
+    print(_line("the standard step's loop", np.array(base), len(base)))
+    print(_line("one Python part (gives nothing)", np.array(door), len(door)))
+    print(_line("the parts asked one by one", np.array(one_by_one), len(one_by_one)))
+    print()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("configs", nargs="*",
                         default=["puma_beam_limits", "panda_pair", "both_sliding_bar"])
     parser.add_argument("--passes", type=int, default=3, help="replays of the states")
+    parser.add_argument("--parts", action="store_true",
+                        help="measure the door a part goes through instead")
     args = parser.parse_args(argv)
+    if args.parts:
+        parts(args.passes)
+        return 0
     for name in args.configs:
         res = profile(name, args.passes)
         rows = res["rows"]

@@ -74,7 +74,7 @@ if _TYPE_CHECKING:
     from .solvers.registry import SolverOptionError
     from .step.context import StepContext
     from .step.layout import Layout
-    from .step.parts import Constraint, Limit
+    from .step.parts import Constraint, CostTerm, Equality, Limit, Quadratic, Task
 
 __version__ = "0.1.0"
 
@@ -92,7 +92,11 @@ _LAZY = {
     "get_solver": "solvers",
     "list_solvers": "solvers",
     "Constraint": "step.parts",
+    "CostTerm": "step.parts",
+    "Equality": "step.parts",
     "Limit": "step.parts",
+    "Quadratic": "step.parts",
+    "Task": "step.parts",
     "StepContext": "step.context",
     "Layout": "step.layout",
     "solve_step": "solvers",
@@ -131,12 +135,16 @@ __all__ = [
     "WaypointTrajectory",
     # step
     "Constraint",
+    "CostTerm",
     "DualArmState",
+    "Equality",
     "Layout",
     "Limit",
+    "Quadratic",
     "StepContext",
     "StepOptions",
     "StepProblem",
+    "Task",
     # solvers
     "Status",
     "StepSolution",

@@ -16,26 +16,27 @@ OUT = Path(__file__).with_name("architecture.png")
 BOXES = {
     # name: (x, y, w, h, colour, text)
     "state": (0.2, 6.2, 2.4, 0.9, "#dbe9f6", "measured state\njoints, grasps, path time"),
-    "context": (3.3, 6.2, 3.2, 0.9, "#dbe9f6",
-                "StepContext\nkinematics once: poses, Jacobians,\nrate ranges, last command\n"
-                "(one kernel call with the standard parts)"),
-    "tasks": (0.2, 4.3, 2.4, 1.3, "#e6f4e6",
-              "tasks (equality rows)\nobject follows D(t)\ngrasp closure"),
-    "cost": (2.8, 4.3, 1.9, 1.3, "#e6f4e6", "cost term\ncentring\n(Eqs. 37-40)"),
-    "limits": (4.9, 4.3, 3.8, 1.3, "#e6f4e6",
-               "limits (boxes and rows)\ncompiled boxes: joint and grasp range,\n"
-               "joint and grasp speed, acceleration;\nin Python: collision, torque, your own"),
-    "builder": (2.0, 2.9, 4.6, 0.8, "#fff2cc", "StepBuilder: stacks the parts"),
+    "context": (3.3, 6.2, 3.6, 0.9, "#dbe9f6",
+                "1. context (kernel.Context)\nkinematics once: poses, Jacobians,\n"
+                "rate ranges, last command"),
+    "tasks": (0.2, 4.3, 2.6, 1.3, "#e6f4e6",
+              "2. tasks: equality(ctx)\nobject follows D(t)\ngrasp closure\nyours (rows or weighted)"),
+    "cost": (3.0, 4.3, 2.0, 1.3, "#e6f4e6", "3. cost terms:\nquadratic(ctx)\ncentring\nyours"),
+    "limits": (5.2, 4.3, 4.3, 1.3, "#e6f4e6",
+               "4. limits: constraint(ctx)\nrange, speed, acceleration, collision\n"
+               "(compiled), torque, yours (Python,\nasked by the same loop)"),
+    "builder": (1.2, 2.9, 6.6, 0.8, "#fff2cc",
+                "5. stack: rows under rows, costs summed, boxes intersected (named)"),
     "problem": (2.0, 1.8, 4.6, 0.8, "#fff2cc",
                 "StepProblem: A x = s b, lower <= x <= upper, G x <= h, cost"),
     "pairing": (7.0, 1.8, 2.5, 0.8, "#f8d7da",
-                "pairing check\n(rows need a solver\nthat takes rows)"),
-    "policy": (0.2, 0.6, 3.0, 0.9, "#fde2cf", "policy: scale / relax / stop\nfallback"),
+                "pairing check\n(rows, a full cost:\na solver that takes them)"),
+    "policy": (0.2, 0.6, 3.0, 0.9, "#fde2cf", "6. solve_step: policy\nscale / relax / stop, fallback"),
     "solver": (3.5, 0.6, 2.6, 0.9, "#fde2cf", "solver (registry)\nnullspace, qp:*, SNS, ..."),
     "certify": (6.4, 0.6, 3.1, 0.9, "#f8d7da",
-                "certify once: feasibility +\nexact optimum (KKT) -> status"),
+                "7. certify once: feasibility +\nexact optimum (KKT) -> status"),
     "controller": (0.2, -0.8, 4.6, 0.9, "#dbe9f6",
-                   "controller: lookahead (error budget),\nescape at a singularity, command"),
+                   "8. guards: look-ahead (error budget),\nescape at a singularity; 9. apply"),
     "rollout": (5.1, -0.8, 4.4, 0.9, "#dbe9f6",
                 "rollout: record trajectory.csv,\nrealised check (ranges, speeds, accelerations)"),
 }
@@ -44,7 +45,7 @@ ARROWS = [("state", "right", "context", "left"), ("context", "bottom", "tasks", 
           ("context", "bottom", "cost", "top"), ("context", "bottom", "limits", "top"),
           ("tasks", "bottom", "builder", "top"), ("cost", "bottom", "builder", "top"),
           ("limits", "bottom", "builder", "top"), ("builder", "bottom", "problem", "top"),
-          ("limits", "bottom", "pairing", "top"), ("problem", "bottom", "policy", "top"),
+          ("builder", "bottom", "pairing", "top"), ("problem", "bottom", "policy", "top"),
           ("policy", "right", "solver", "left"), ("solver", "right", "certify", "left"),
           ("policy", "bottom", "controller", "top"),
           ("controller", "right", "rollout", "left")]
@@ -79,7 +80,12 @@ def main() -> None:
                                  arrowstyle="-|>", mutation_scale=12, color="#1f4e79"))
     ax.text(9.95, 3.0, "next sample", rotation=90, va="center", fontsize=8,
             color="#1f4e79")
-    ax.text(5.0, 7.45, "One control step: parts read the context, the builder stacks them, "
+    # Steps 1-5 are one kernel call: kernel.Step.build, the one loop.
+    ax.add_patch(FancyBboxPatch((0.05, 2.75), 9.6, 4.5, boxstyle="round,pad=0.05",
+                                facecolor="none", edgecolor="#1f4e79", linestyle=":"))
+    ax.text(9.6, 2.82, "one kernel call: kernel.Step.build", ha="right", fontsize=8,
+            color="#1f4e79")
+    ax.text(5.0, 7.45, "One control step: one loop asks every part in turn, stacks them, "
             "one certified solve", ha="center", fontsize=11, weight="bold")
     ax.set_xlim(-0.1, 10.1)
     ax.set_ylim(-1.1, 7.7)

@@ -47,7 +47,7 @@ from .._remade import KernelHolder
 from ..errors import InvalidInputError, NonFiniteError
 from ..geometry.distance import EPA_TOLERANCE, GJK_TOLERANCE, Proximities, coal_parts
 from ..geometry.links import arm_capsules
-from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
+from ..geometry.shapes import Box, Capsule
 from ..kinematics.arm import SerialArm
 from .settings import CollisionSettings
 
@@ -213,10 +213,7 @@ class CollisionScene(KernelHolder):
         """Every body in the world (its shape placed by its frame in ``frames``)."""
         out: list[Capsule | Box] = []
         for body, f in zip(self.bodies, self._frame_list, strict=True):
-            T = frames[f]
-            shape = body.shape
-            out.append(placed_capsule(shape, T) if isinstance(shape, Capsule)
-                       else placed_box(shape, T))
+            out.append(body.shape.placed(frames[f]))
         return out
 
     def measure(self, frames: FloatArray, within: float = np.inf) -> Measured:

@@ -30,7 +30,7 @@ from ..solvers.registry import certified, check_pairing
 from ..step.build import StepBuild, StepBuilder
 from ..step.layout import Layout
 from ..step.options import StepOptions
-from ..step.parts import Limit
+from ..step.parts import CostTerm, Limit, Task
 from ..step.problem import StepProblem
 from ..step.state import DualArmState
 from ..task.scene import DualArmTask
@@ -175,10 +175,17 @@ class DualArmController:
         ESCAPING); default 1e-3. None never escapes. Only for a solver that claims
         hard limits.
     limits : sequence of Limit
-        Limits of the user's, stacked after the standard ones
+        Limits of the user's, asked after the standard ones
         (:mod:`dualarm_qp.step.parts`; ``examples/custom_limit.py``). A limit that gives
         rows needs a solver that takes rows (:class:`~dualarm_qp.errors.PairingError`
         otherwise).
+    tasks : sequence of Task
+        Tasks of the user's, asked after the standard ones: equality rows, or with a
+        ``weight`` a term of the cost (``examples/custom_task.py``). A weighted task
+        makes the cost a full matrix: a solver that takes a diagonal cost only refuses
+        it.
+    costs : sequence of CostTerm
+        Cost terms of the user's, summed with the paper's centring.
 
     Raises
     ------
@@ -208,6 +215,8 @@ class DualArmController:
         error_budget: tuple[float, float] | None = None,
         singularity_escape: float | None = 1e-3,
         limits: Sequence[Limit] = (),
+        tasks: Sequence[Task] = (),
+        costs: Sequence[CostTerm] = (),
     ) -> None:
         if policy not in POLICIES:
             raise InvalidInputError(f"policy must be one of {POLICIES}, got {policy!r}")
@@ -221,8 +230,8 @@ class DualArmController:
         self.on_step = on_step
         self._hard_bounds = self.solver.info.hard_bounds
         self._builder = StepBuilder(task, options, leader_bounds=self._hard_bounds,
-                                    limits=limits)
-        check_pairing(self.solver.info, self._builder.row_limits)
+                                    limits=limits, tasks=tasks, costs=costs)
+        check_pairing(self.solver.info, self._builder.row_limits, self._builder.full_cost)
         if leader_gain is not None:  # else the builder's, from the options
             self.leader_gain = leader_gain
         self._x_prev: FloatArray | None = None

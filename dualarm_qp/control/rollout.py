@@ -31,10 +31,11 @@ from ..kinematics.arm import SerialArm
 from ..kinematics.ik import ik_dls
 from ..solvers._affine import factor
 from ..step.state import DualArmState
-from .collisions import blocked_by_pair, path_collision_of, record_clearance
+from .collisions import blocked_by_pair, clearance_at_start, path_collision_of, record_clearance
+from .conflicts import plainly
 from .controller import DualArmController
 from .loads import record_loads
-from .plant import Plant
+from .plant import Plant, not_followed, planned_errors
 from .preflight import REACH_TOLERANCE, unreachable_waypoint
 from .realised import LimitReport, measure
 from .torques import TorqueReport, blocked_by_torque, record_torques, torque_at_start
@@ -340,8 +341,12 @@ def rollout(
         exception propagates (and the samples are lost).
     preflight : bool
         Before the first sample, check that both arms can reach the path at its
-        waypoints (:mod:`.preflight`); a waypoint out of reach fails the run on
-        criterion ``"unreachable"`` with no sample run. Default True.
+        waypoints (:mod:`.preflight`; criterion ``"unreachable"``), that no joint needs
+        more than its torque limit at the start (with torque limits; ``"torque"``), that
+        no collision pair is closer than the safety distance less the allowance at the
+        start and that ``D(t)`` keeps the object off the obstacles (with collision
+        avoidance; ``"collision"``, ``"path_collision"``): a check that fails fails the
+        run with no sample run. Default True.
     initial_rates : ndarray, optional
         The rates the pair moves at when the run starts [rad/s, m/s], in the
         controller's decision order (:attr:`DualArmController.layout`); default zero (the
@@ -401,36 +406,13 @@ def rollout(
     corr = (0.0, 0.0)
     controller.reset(initial_rates)
     v_start = controller.applied
-    if preflight:
-        miss = unreachable_waypoint(task, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
-                                    path_end, within_ranges=hard)
-        if miss is not None:
-            return RolloutResult(
-                tr.truncate(0), Failure("unreachable", 0, path_start, miss.position_error,
-                                        REACH_TOLERANCE[0], f"before the run: {miss.message}"),
-                controller.solver.name, dt, path_start, path_end,
-                _realised(controller, tr.truncate(0), dt, v_start), hard,
-                extras={"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint,
-                                        "t_s": miss.t}})
-        heavy = torque_at_start(controller, DualArmState(path_start, q_l, q_f, sigma, sigma_l))
-        if heavy is not None:
-            return RolloutResult(
-                tr.truncate(0), Failure("torque", 0, path_start, heavy.torque, heavy.limit,
-                                        f"before the run: {heavy.message}"),
-                controller.solver.name, dt, path_start, path_end,
-                _realised(controller, tr.truncate(0), dt, v_start), hard,
-                extras={"torque_at_start": {"joint": heavy.joint, "torque_N_m": heavy.torque,
-                                            "limit_N_m": heavy.limit}})
-        blocked = path_collision_of(task, path_start, path_end, dt)
-        if blocked is not None:
-            return RolloutResult(
-                tr.truncate(0), Failure("path_collision", 0, blocked.t, blocked.distance,
-                                        blocked.safety_distance,
-                                        f"before the run: {blocked.message}"),
-                controller.solver.name, dt, path_start, path_end,
-                _realised(controller, tr.truncate(0), dt, v_start), hard,
-                extras={"path_collision": {"obstacle": blocked.obstacle, "t_s": blocked.t,
-                                           "distance_m": blocked.distance}})
+    refused = (_before_the_run(controller, DualArmState(path_start, q_l, q_f, sigma, sigma_l),
+                               path_end) if preflight else None)
+    if refused is not None:
+        return RolloutResult(tr.truncate(0), refused[0], controller.solver.name, dt,
+                             path_start, path_end,
+                             _realised(controller, tr.truncate(0), dt, v_start), hard,
+                             extras=refused[1])
     if plant is not None:  # after the preflight: a run it refuses does not pay the settle
         plant.reset(DualArmState(path_start, q_l, q_f, sigma, sigma_l), dt)
     failure: Failure | None = None
@@ -440,6 +422,8 @@ def rollout(
     end_tol = 1e-9 * max(1.0, abs(path_end))
     rows = 0  # samples recorded whole
     interrupted: KeyboardInterrupt | None = None
+    planned: dict[str, tuple[float, float]] | None = None  # the plan's own errors (plant)
+    plant_lag = False  # the failure is the plant's: it did not follow the command
     try:
         for k in range(max_rows):
             state = DualArmState(tau, q_l, q_f, sigma, sigma_l)
@@ -458,6 +442,8 @@ def rollout(
                 else:
                     failure = Failure("support" if isinstance(err, SupportLostError)
                                       else "solver", k, t_wall, math.nan, math.nan, message)
+                    if isinstance(err, InfeasibleStepError):  # policy "stop": say why
+                        failure = plainly(controller, state, failure, None, err.conflicts)
                 break
             record(tr, k, t_wall, state, out, controller)
             if at_end and k:  # not applied: keep the task scale the path ended at
@@ -470,6 +456,15 @@ def rollout(
             failure = _sample_failure(tr, k, out.applied or at_end, out.status.value,
                                       out.solution.message, limits, warnings,
                                       speed_limited=controller.options.velocity_limits)
+            if failure is not None and planned is not None and failure.criterion in (
+                    "closure", "tracking"):  # measured: was it the plan's own error?
+                lagged = not_followed(failure, planned, limits.closure
+                                      if failure.criterion == "closure" else limits.tracking)
+                failure = failure if lagged is None else lagged
+                plant_lag = lagged is not None
+            if failure is not None and failure.criterion == "solver":  # say why, plainly
+                failure = plainly(controller, state, failure, out.build.problem,
+                                  out.solution.extras.get("conflicts", ()))
             if failure is None and t_wall - window[0] >= limits.stall_time - 1e-9:
                 if tau - window[1] < 0.01 * (t_wall - window[0]):
                     failure = Failure(
@@ -488,7 +483,11 @@ def rollout(
                          _time_lost(t_wall - path_start, tau - path_start, dt))
             if at_end or k == max_rows - 1:
                 break
-            nxt = state.advanced(out, dt) if plant is None else plant.advance(state, out, dt)
+            if plant is None:
+                nxt = state.advanced(out, dt)
+            else:
+                nxt = plant.advance(state, out, dt)
+                planned = planned_errors(task, state, out, dt)
             tau, q_l, q_f, sigma, sigma_l = (nxt.t, nxt.q_l, nxt.q_f, nxt.sigma,
                                              nxt.sigma_leader)
             t_wall = t_wall + dt
@@ -559,7 +558,7 @@ def rollout(
         # With a plant, a failure at a measured state may be the plant's own (a diverged
         # simulation): it is not relabelled.
         failure = blocked_by_torque(controller, trace, failure)
-    if failure is not None and failure.criterion in EXPLAINED and len(trace):
+    if failure is not None and failure.criterion in EXPLAINED and len(trace) and not plant_lag:
         failure = _explained(controller, trace, failure)
     return RolloutResult(
         trace, failure, controller.solver.name, dt, path_start, path_end, realised, hard,
@@ -572,6 +571,42 @@ def rollout(
                 "tracking_tolerance_m_rad": list(limits.tracking),
                 "singular_value_min": limits.singular_value_min,
                 "duration_cap_s": cap})
+
+
+def _before_the_run(controller: DualArmController, start: DualArmState, path_end: float
+                    ) -> tuple[Failure, dict[str, Any]] | None:
+    """Return the failure of a run refused before its first sample, and its record.
+
+    In order: a waypoint out of reach (``"unreachable"``), a joint beyond its torque
+    limit at the start (``"torque"``), a collision pair closer than the safety distance
+    less the allowance at the start (``"collision"``), a path through an obstacle
+    (``"path_collision"``). None when the run may start.
+    """
+    task, dt, t0 = controller.task, controller.options.dt, float(start.t)
+    miss = unreachable_waypoint(task, start, path_end, within_ranges=controller.hard_bounds)
+    if miss is not None:
+        return (Failure("unreachable", 0, t0, miss.position_error, REACH_TOLERANCE[0],
+                        f"before the run: {miss.message}"),
+                {"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint, "t_s": miss.t}})
+    heavy = torque_at_start(controller, start)
+    if heavy is not None:
+        return (Failure("torque", 0, t0, heavy.torque, heavy.limit,
+                        f"before the run: {heavy.message}"),
+                {"torque_at_start": {"joint": heavy.joint, "torque_N_m": heavy.torque,
+                                     "limit_N_m": heavy.limit}})
+    close = clearance_at_start(task, start)
+    if close is not None:
+        return (Failure("collision", 0, t0, close.distance, close.limit,
+                        f"before the run: {close.message}"),
+                {"collision_at_start": {"pair": close.pair, "distance_m": close.distance,
+                                        "safety_distance_m": close.safety_distance}})
+    blocked = path_collision_of(task, t0, path_end, dt)
+    if blocked is not None:
+        return (Failure("path_collision", 0, blocked.t, blocked.distance,
+                        blocked.safety_distance, f"before the run: {blocked.message}"),
+                {"path_collision": {"obstacle": blocked.obstacle, "t_s": blocked.t,
+                                    "distance_m": blocked.distance}})
+    return None
 
 
 def _time_lost(elapsed: float, advanced: float, dt: float) -> float:

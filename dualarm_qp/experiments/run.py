@@ -23,6 +23,7 @@ from .._signals import SignalHold, raise_if_interrupted
 from ..control.controller import DualArmController
 from ..control.plant import Plant
 from ..control.rollout import RolloutResult, rollout
+from .limits_kept import limits_kept
 from .outputs import remove_owned, write_json, write_trace_csv
 from .setup import Experiment
 
@@ -233,6 +234,7 @@ def make_summary(exp: Experiment, result: RolloutResult, wall_s: float) -> dict[
             "centre_horizon_s": opts.centre_horizon,
         },
         "reconstruction": exp.notes,
+        "limits_kept": limits_kept(exp, result.hard_bounds),
         "status": run_status(result),
         **result.summary(),
         "wall_time_s": wall_s,

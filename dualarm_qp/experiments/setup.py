@@ -42,7 +42,7 @@ from ..solvers.registry import (
 )
 from ..step.build import StepBuilder
 from ..step.options import StepOptions
-from ..step.parts import Limit
+from ..step.parts import CostTerm, Limit, Task
 from ..step.state import DualArmState
 from ..task.contact import GRAVITY_ALONG_PUSH_MIN, SupportContact
 from ..task.loads import ObjectLoad, UnbalancedLoadError
@@ -62,6 +62,7 @@ from .config import (
     SurfaceSpec,
 )
 from .options import SolverFlagError, SolverOptions, flag_error, options_for
+from .setup_checks import check_acceleration_limits, check_physics_tau_max, check_within_reach
 from .setup_scene import scene_of
 
 #: A start further than this from its pose at t0 (leader: D(t0) H1^-1; follower: the
@@ -121,6 +122,10 @@ class Experiment:
         (:meth:`start_rates`).
     limits_extra : tuple of Limit
         Limits of the user's added to the step (``limits=`` of the controller).
+    tasks_extra : tuple of Task
+        Tasks of the user's added to the step (``tasks=`` of the controller).
+    costs_extra : tuple of CostTerm
+        Cost terms of the user's added to the step (``costs=`` of the controller).
     """
 
     name: str
@@ -139,6 +144,8 @@ class Experiment:
     notes: dict[str, Any] = field(default_factory=dict)
     initial_rates: str = "rest"
     limits_extra: tuple[Limit, ...] = ()
+    tasks_extra: tuple[Task, ...] = ()
+    costs_extra: tuple[CostTerm, ...] = ()
 
     def controller(
         self,
@@ -190,7 +197,8 @@ class Experiment:
                                  tolerance=DEFAULT_TOLERANCE if tolerance is None else tolerance,
                                  fallback=backup, on_step=on_step, error_budget=budget,
                                  singularity_escape=self.limits.singular_value_min or 1e-3,
-                                 limits=self.limits_extra)
+                                 limits=self.limits_extra, tasks=self.tasks_extra,
+                                 costs=self.costs_extra)
 
     def start_rates(self) -> FloatArray | None:
         """Return the rates the run starts with [rad/s, m/s] (decision order), or None.
@@ -461,6 +469,8 @@ def build_experiment(
     solver: str | None = None,
     solver_options: SolverOptions | None = None,
     limits: Sequence[Limit] = (),
+    tasks: Sequence[Task] = (),
+    costs: Sequence[CostTerm] = (),
     dt: float | None = None,
 ) -> Experiment:
     """Build the task, initial state and controller settings of an experiment.
@@ -481,6 +491,11 @@ def build_experiment(
         Limits of the user's added to the step (:mod:`dualarm_qp.step.parts`), checked
         against the solver here (a limit that gives rows needs a solver that takes
         rows).
+    tasks : sequence of Task
+        Tasks of the user's added to the step: equality rows, or with a ``weight`` a
+        term of the cost (``examples/custom_task.py``).
+    costs : sequence of CostTerm
+        Cost terms of the user's, summed with the paper's centring.
     dt : float, optional
         Sampling interval [s] instead of the file's ``controller.dt`` (e.g. 1e-3 for a
         1 kHz loop). The gains and the range-centring horizon the file leaves to their
@@ -512,10 +527,11 @@ def build_experiment(
                                 f"got {dt!r}")
     try:
         exp = _build(cfg, path, solver, solver_options, dt)
-        if limits:
-            exp.limits_extra = tuple(limits)
-        check_pairing(solver_info(exp.solver_name),
-                      StepBuilder(exp.task, exp.options, limits=exp.limits_extra).row_limits)
+        exp.limits_extra, exp.tasks_extra, exp.costs_extra = (
+            tuple(limits), tuple(tasks), tuple(costs))
+        builder = StepBuilder(exp.task, exp.options, limits=exp.limits_extra,
+                              tasks=exp.tasks_extra, costs=exp.costs_extra)
+        check_pairing(solver_info(exp.solver_name), builder.row_limits, builder.full_cost)
         return exp
     except ConfigError as err:
         if err.path is None:
@@ -623,6 +639,8 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
             raise ConfigError(f"the {role} has {arm.n} joints; it needs at least {least} "
                               "to carry the object along a 6-DoF path", path=path,
                               key=_model_key(getattr(cfg, role), role))
+    check_acceleration_limits(cfg, {"leader": leader, "follower": follower}, path)
+    check_physics_tau_max(cfg, {"leader": leader, "follower": follower}, path)
 
     # Follower: its base may be recovered from the grasp closure at t0 (the paper's case).
     f_spec = cfg.follower
@@ -651,6 +669,8 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
         task = DualArmTask(leader, follower, H1, surface, trajectory,
                            leader_surface=leader_surface, contact=contact,
                            load=None if cfg.object.mass is None else _load(cfg, sc, path))
+    check_within_reach(cfg, task.leader, "leader", _path_targets(cfg, task, sigma_l0, path),
+                       path)
     q_l0 = _leader_initial(cfg, task, sc, path, notes, limits.tracking, sigma_l0)
     if q_f0 is None:
         q_f0 = _follower_initial(cfg, task, sc, path, notes, q_l0, sigma0, limits.closure,
@@ -796,6 +816,24 @@ def _solve_initial(spec: InitialSpec, arm: SerialArm, preset: str | None, T: Flo
     return q
 
 
+def _path_targets(cfg: ExperimentConfig, task: DualArmTask, sigma_l0: float, path: str
+                  ) -> list[tuple[str, FloatArray]]:
+    """Return the leader's targets ``D(t) H1^-1`` at the path's ends or waypoints, named."""
+    trajectory = task.trajectory
+    hand = "object.H1" if task.leader_surface is None else "object.leader_grasp_initial"
+    if cfg.trajectory.type == "linear":
+        named = [(trajectory.t0, f"D(t0) H1^-1 at the path's start (trajectory.start, {hand})"),
+                 (trajectory.tf, "D(t) H1^-1 at the path's end (trajectory.start, "
+                                 f"trajectory.velocity, {hand})")]
+    else:
+        times = (trajectory.times.tolist() if isinstance(trajectory, WaypointTrajectory)
+                 else [trajectory.t0, trajectory.tf])
+        named = [(float(t), f"D(t) H1^-1 at t = {t:g} s (trajectory.waypoints.{i}.pose, "
+                            f"{hand})") for i, t in enumerate(times)]
+    with _at("trajectory", path):
+        return [(what, task.leader_target(t, sigma_l0)) for t, what in named]
+
+
 def _leader_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path: str,
                     notes: dict[str, Any], tracking: tuple[float, float],
                     sigma_l0: float) -> FloatArray:
@@ -826,6 +864,9 @@ def _follower_initial(cfg: ExperimentConfig, task: DualArmTask, sc: Scales, path
     follower = task.follower
     with _at("object.grasp_initial", path):
         T = task.follower_target(q_l0, sigma0, sigma_l0)
+    check_within_reach(cfg, follower, "follower", [
+        ("D(t0) H2(grasp_initial) (object.grasp_initial, object.surface, follower.base)", T)],
+        path)
     if spec.joints is None:
         return _solve_initial(spec, follower, cfg.follower.preset, T, sc, "follower",
                               "the grasp D(t0) H2(grasp_initial)", path, notes)

@@ -1,6 +1,8 @@
 """Serial arms: a Pinocchio model with a base placement and a tool frame.
 
-An arm is one chain of revolute joints. Its kinematics (forward kinematics, the
+An arm is one chain of revolute joints, one angle each (a continuous joint of a model
+becomes a revolute joint with the range +-inf, :mod:`~dualarm_qp.kinematics.continuous`).
+Its kinematics (forward kinematics, the
 geometric Jacobian, the link frames) are computed by Pinocchio on a model whose
 *universe* is the arm's base frame (frame 0): the base placement ``T_world_base`` is
 folded into the placements of the joints and frames attached to the universe, and the
@@ -50,6 +52,7 @@ from .._remade import KernelHolder
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
 from .compiled import compiled_chain, set_frame_placement, set_joint_placement
+from .continuous import is_continuous, one_angle_model
 
 FloatArray = NDArray[np.float64]
 Convention = Literal["standard", "modified"]
@@ -133,14 +136,17 @@ class SerialArm(KernelHolder):
     ----------
     source : DHTable or pinocchio.Model
         A DH table, or a Pinocchio model of one chain of revolute joints (one coordinate
-        each, joint i+1 the child of joint i) whose universe is the arm's base frame
-        (see :func:`~dualarm_qp.kinematics.urdf_arm` for one chain of a URDF).
+        each, or continuous: made revolute with the range +-inf,
+        :func:`~dualarm_qp.kinematics.continuous.one_angle_model`; joint i+1 the child
+        of joint i) whose universe is the arm's base frame (see
+        :func:`~dualarm_qp.kinematics.urdf_arm` for one chain of a URDF).
     tip : str, optional
         Pinocchio model only: the frame that carries the tool (the flange). Default:
         the frame of the last joint. A DH arm's flange is DH frame n.
     q_min, q_max : array_like, shape (n,)
         Joint position limits [rad]. Default: the model's limits for a Pinocchio model
-        (from its URDF), no limit (-inf, inf) for a DH table.
+        (from its URDF; none, -inf and inf, for a continuous joint), no limit (-inf, inf)
+        for a DH table.
     qd_max : array_like, shape (n,)
         Joint speed limits [rad/s], symmetric: ``|qd_i| <= qd_max_i``. Default: the
         model's ``velocityLimit`` (a zero there means no limit), inf for a DH table.
@@ -511,7 +517,7 @@ def _chain_model(source: Any, tip: str | None, name: str) -> tuple[Any, list[int
                 f"{label}: not a single chain: the parent of joint {source.names[j]!r} is "
                 f"{source.names[source.parents[j]]!r}, not the joint before it")
         check_revolute(source, j, label)
-    model = pin.Model(source)
+    model = pin.Model(one_angle_model(source))  # a continuous joint: one angle, +-inf
     last = model.njoints - 1
     if tip is None:
         flange = model.addFrame(pin.Frame(f"{_LINK}_flange", last, 0, pin.SE3.Identity(),
@@ -531,19 +537,21 @@ def _chain_model(source: Any, tip: str | None, name: str) -> tuple[Any, list[int
 
 
 def check_revolute(model: Any, j: int, label: str) -> None:
-    """Raise :class:`InvalidInputError` unless joint ``j`` of ``model`` is revolute, 1 dof."""
+    """Raise :class:`InvalidInputError` unless joint ``j`` of ``model`` turns about one axis.
+
+    A revolute joint with one coordinate, or a continuous one (which the arm makes a
+    revolute joint of range +-inf, :mod:`~dualarm_qp.kinematics.continuous`).
+    """
     joint = model.joints[j]
     kind = joint.shortname()
-    if kind in REVOLUTE_JOINTS and joint.nq == 1 and joint.nv == 1:
+    if (kind in REVOLUTE_JOINTS and joint.nq == 1 and joint.nv == 1) or is_continuous(joint):
         return
     what = kind.removeprefix("JointModel")
-    if kind.startswith("JointModelRUB"):
-        what = "continuous (an unbounded revolute joint, nq = 2)"
-    elif kind.startswith(("JointModelP", "JointModelPrismatic")):
+    if kind.startswith(("JointModelP", "JointModelPrismatic")):
         what = "prismatic"
     raise InvalidInputError(
-        f"{label}: joint {model.names[j]!r} is {what}; an arm has revolute joints with one "
-        "coordinate only (give a continuous joint limits in the URDF, type 'revolute')")
+        f"{label}: joint {model.names[j]!r} is {what}; an arm has revolute (or continuous) "
+        "joints only")
 
 
 def frame_id(model: Any, frame: str, what: str, label: str) -> int:

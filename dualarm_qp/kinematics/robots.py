@@ -5,7 +5,9 @@ The chain runs from a ``root`` frame to a ``tip`` frame (link names of the URDF)
 joints between them are the arm's joints, every other joint of the robot (the other arm
 of a dual-arm robot, a head, grippers) is locked at its neutral position (zero), and
 the root becomes the arm's base frame (frame 0), so ``base`` places the root in the
-world. Joint ranges and speed limits are the URDF's unless given.
+world. Joint ranges and speed limits are the URDF's unless given. A ``continuous`` joint
+becomes a revolute joint with no range (-inf, inf), one angle, not wrapped
+(:mod:`~dualarm_qp.kinematics.continuous`), unless ``q_min`` / ``q_max`` give it one.
 
 Robot files of ``example-robot-data`` (``pip install "dualarm-qp[robots]"``) are found
 by path under the installed package's ``share/example-robot-data/robots`` folder; its
@@ -30,6 +32,7 @@ from .arm import SerialArm, check_revolute, frame_id
 #: Robots of example-robot-data by name: URDF path under its ``robots`` folder.
 EXAMPLE_ROBOTS: dict[str, str] = {
     "baxter": "baxter_description/urdf/baxter.urdf",
+    "kinova": "kinova_description/robots/kinova.urdf",
     "panda": "panda_description/urdf/panda.urdf",
     "ur3": "ur_description/urdf/ur3_robot.urdf",
     "ur5": "ur_description/urdf/ur5_robot.urdf",
@@ -104,7 +107,8 @@ def urdf_arm(
         ``tip`` must lie below ``root`` in the robot's tree.
     q_min, q_max, qd_max : array_like, shape (n,), optional
         Joint ranges [rad] and speed limits [rad/s]; default the URDF's ``limit``
-        tags (a zero ``velocity`` means no speed limit).
+        tags (a zero ``velocity`` means no speed limit; a ``continuous`` joint has no
+        range: -inf, inf).
     base : array_like, shape (4, 4), optional
         ``T_world_root`` [m]; identity by default.
     tool : array_like, shape (4, 4), optional
@@ -120,8 +124,8 @@ def urdf_arm(
     ------
     RobotModelError
         No such file, unreadable URDF, unknown frame, ``tip`` not below ``root``, or a
-        joint between them that is not revolute with one coordinate (continuous or
-        prismatic joints); ``field`` says which.
+        joint between them that is neither revolute nor continuous (a prismatic
+        joint); ``field`` says which.
     """
     path = Path(file)
     if not path.is_file():
@@ -243,8 +247,10 @@ def example_robot_arm(
     """Build one chain of an example-robot-data robot (see :func:`urdf_arm`).
 
     Examples: ``example_robot_arm("ur5", "base_link", "tool0")``,
-    ``example_robot_arm("panda", "panda_link0", "panda_link8")`` and
-    ``example_robot_arm("baxter", "left_arm_mount", "left_gripper")``.
+    ``example_robot_arm("panda", "panda_link0", "panda_link8")``,
+    ``example_robot_arm("baxter", "left_arm_mount", "left_gripper")`` and
+    ``example_robot_arm("kinova", "base", "j2s6s200_end_effector")`` (three continuous
+    joints: no range unless ``q_min`` / ``q_max`` give one).
     """
     arm = urdf_arm(example_robot_urdf(robot), root, tip, q_min=q_min, q_max=q_max,
                    qd_max=qd_max, base=base, tool=tool, name=name or f"{robot}:{tip}")

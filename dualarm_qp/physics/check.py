@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -43,8 +43,9 @@ from numpy.typing import NDArray
 from ..control.rollout import RolloutResult, RunLimits, rollout
 from ..experiments.setup import Experiment
 from ..step.state import DualArmState
+from .cause import Event, first_cause, oscillation_event, stop_message, threshold_events
 from .plant import MujocoPlant
-from .settings import PhysicsSettings
+from .settings import SUBSTEP, PhysicsSettings
 
 FloatArray = NDArray[np.float64]
 
@@ -69,6 +70,18 @@ class PhysicsRun:
         Joint torque limits [N m] per arm.
     result : RolloutResult or None
         The closed loop's rollout.
+    worst : tuple of (float, str, float)
+        The largest torque ratio, its joint (``leader.<joint>``) and its time [s].
+    joints : list of str
+        The arm joints, ``leader.<joint>`` then ``follower.<joint>``.
+    velocity_error : ndarray, shape (substeps, joints)
+        Each arm joint's ``qd - qd_ref`` at every substep [rad/s]
+        (:attr:`MujocoPlant.velocity_error
+        <dualarm_qp.physics.plant.MujocoPlant.velocity_error>`).
+    substep : float
+        The simulator's time step [s].
+    substeps : int
+        Substeps per controller sample.
     """
 
     name: str
@@ -78,6 +91,27 @@ class PhysicsRun:
     limits: dict[str, FloatArray]
     result: RolloutResult | None = None
     worst: tuple[float, str, float] = (0.0, "", 0.0)
+    joints: list[str] = field(default_factory=list)
+    velocity_error: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    substep: float = SUBSTEP
+    substeps: int = 1
+
+    @classmethod
+    def of(cls, name: str, plant: MujocoPlant, started: float,
+           result: RolloutResult | None = None) -> PhysicsRun:
+        """Return the run ``plant`` simulated since ``started`` (``time.perf_counter``)."""
+        names = [f"{role}.{n}" for role, arm in (("leader", plant.task.leader),
+                                                  ("follower", plant.task.follower))
+                 for n in arm.joint_names]
+        ratio, j, t = plant.worst
+        error = np.asarray(plant.velocity_error, dtype=float).reshape(-1, len(names))
+        return cls(name, plant.arrays(), time.perf_counter() - started, plant.notes,
+                   plant.limits, result, (ratio, names[j] if j >= 0 else "", t), names,
+                   error, float(plant.model.opt.timestep), plant.substeps)
+
+    def joint_name(self, j: int) -> str:
+        """Return the name of arm joint ``j`` (over both arms, the leader's first)."""
+        return self.joints[j] if j < len(self.joints) else f"joint {j}"
 
     def summary(self) -> dict[str, Any]:
         """Peaks of the run (JSON-ready, SI)."""
@@ -135,8 +169,7 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
         h = float(t[k + 1] - t[k])
         plant.replay_step(np.r_[q_l[k], q_f[kf]], np.r_[q_l[k + 1], q_f[kf1]], h,
                           float(path_t[k + 1]), float(grasp[kf1]))
-    return PhysicsRun("replay", plant.arrays(), time.perf_counter() - t0, plant.notes,
-                      plant.limits, worst=_worst(plant))
+    return PhysicsRun.of("replay", plant, t0)
 
 
 def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | None = None
@@ -154,8 +187,7 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
                      stop_on_interrupt=True)
     if not plant.log:  # refused before its first sample (the preflight): record the start
         plant.reset(exp.initial, exp.options.dt)
-    return PhysicsRun("closed_loop", plant.arrays(), time.perf_counter() - t0, plant.notes,
-                      plant.limits, result, _worst(plant))
+    return PhysicsRun.of("closed_loop", plant, t0, result)
 
 
 def arm_tau_max(exp: Experiment) -> dict[str, FloatArray | None]:
@@ -177,27 +209,79 @@ def closed_loop_limits(limits: RunLimits, settings: PhysicsSettings) -> RunLimit
                  max(limits.closure[1], settings.rotation_max)))
 
 
-def _worst(plant: MujocoPlant) -> tuple[float, str, float]:
-    """Return the largest torque ratio, its joint (``leader.<joint>``) and its time [s]."""
-    ratio, j, t = plant.worst
-    names = [f"{role}.{n}" for role, arm in (("leader", plant.task.leader),
-                                              ("follower", plant.task.follower))
-             for n in arm.joint_names]
-    return ratio, (names[j] if j >= 0 else ""), t
+@dataclass(frozen=True)
+class Verdict:
+    """The verdict of the closed loop and what the simulation saw first.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`STATUSES`.
+    reasons : list of str
+        Every reason found, not only the worst's (empty when ``ok``).
+    cause : Event or None
+        What began first (:func:`~dualarm_qp.physics.cause.first_cause`); ``controller``
+        when the controller stopped the loop before the simulation passed a threshold
+        or oscillated; None when ``ok``.
+    oscillation : Event or None
+        A growing oscillation of the servos, also when it passed no threshold.
+    message : str
+        One line: the cause, then what it led to ("" when ``ok``).
+    """
+
+    status: str
+    reasons: list[str]
+    cause: Event | None
+    oscillation: Event | None
+    message: str
 
 
-def verdict(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSettings
-            ) -> tuple[str, list[str]]:
-    """Return the status (:data:`STATUSES`) of the closed loop and every reason found.
+def diagnose(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSettings
+             ) -> Verdict:
+    """Judge the closed loop (:data:`STATUSES`) and find what the simulation saw first.
 
     Without a baseline (a run that recorded fewer than two samples) the squeeze is
     judged against zero.
     """
-    c = closed.summary()
     base_internal = 0.0 if baseline is None else baseline.summary()["internal_force_max_N"]
+    oscillation = oscillation_event(closed)
+    seen = threshold_events(closed, base_internal, settings)
+    cause = first_cause(seen + ([] if oscillation is None else [oscillation]))
+    reasons = _reasons(closed, base_internal, settings, seen=cause is not None)
+    if not reasons:
+        return Verdict("ok", [], None, oscillation, "")
+    status = min(reasons, key=lambda r: STATUSES.index(r[0]))[0]
+    texts = [text for _, text in reasons]
+    if oscillation is not None:
+        texts.insert(0, oscillation.message)
+    if cause is None:  # only the controller's stop: the simulation saw nothing go wrong
+        failure = None if closed.result is None else closed.result.failure
+        last = closed.log["t"].size - 1
+        sample, t = ((failure.sample, failure.t) if failure is not None
+                     else (last, float(closed.log["t"][last])))
+        cause = Event("controller", sample, t, texts[0])
+        return Verdict(status, texts, cause, oscillation, cause.message)
+    led_to = next(text for kind, text in reasons if kind == status)
+    message = cause.message
+    if status == "stopped":
+        message += f"; then {led_to}"
+    elif status != cause.kind:
+        message += f"; then: {led_to}"
+    return Verdict(status, texts, cause, oscillation, message)
+
+
+def _reasons(closed: PhysicsRun, base_internal: float, settings: PhysicsSettings, *,
+             seen: bool) -> list[tuple[str, str]]:
+    """Every (status, reason) of the closed loop's peaks.
+
+    ``seen``: the simulation saw something go wrong; a stop of the controller is then
+    told without its explanation from the plan's kinematics.
+    """
+    c = closed.summary()
     reasons: list[tuple[str, str]] = []
     if closed.result is not None and not closed.result.completed:
-        reasons.append(("stopped", f"the closed loop stopped: {closed.result.message}"))
+        reasons.append(("stopped", "the controller stopped the closed loop: "
+                        + stop_message(closed.result.message, seen=seen)))
     if c["deviation_pos_max_m"] > settings.deviation_max:
         reasons.append(("dropped", f"the object left D(t) by "
                         f"{c['deviation_pos_max_m'] * 1e3:.2f} mm (deviation_max "
@@ -214,27 +298,44 @@ def verdict(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSe
         reasons.append(("slipped", f"a grasp slipped by {slip * 1e3:.2f} mm (slip_max "
                         f"{settings.slip_max * 1e3:g} mm)"))
     if c["torque_ratio_max"] > settings.torque_ratio_max:
+        worst = c["torque_ratio_worst"]
         reasons.append(("torque", f"a joint torque reached {c['torque_ratio_max']:.3g} of "
-                        f"its limit (torque_ratio_max {settings.torque_ratio_max:g})"))
+                        f"its limit ({worst['joint']} at t = {worst['t_s']:.3f} s; "
+                        f"torque_ratio_max {settings.torque_ratio_max:g})"))
     excess = c["internal_force_max_N"] - base_internal
     if excess > settings.squeeze_max:
         reasons.append(("squeezed", f"the internal force peaked at "
                         f"{c['internal_force_max_N']:.1f} N, {excess:.1f} N above the rigid "
                         f"replay's (squeeze_max {settings.squeeze_max:g} N)"))
-    if not reasons:
-        return "ok", []
-    worst = min(reasons, key=lambda r: STATUSES.index(r[0]))[0]
-    return worst, [text for _, text in reasons]
+    return reasons
+
+
+def verdict(closed: PhysicsRun, baseline: PhysicsRun | None, settings: PhysicsSettings
+            ) -> tuple[str, list[str]]:
+    """Return the status (:data:`STATUSES`) of the closed loop and every reason found.
+
+    The status and reasons of :func:`diagnose`.
+    """
+    judged = diagnose(closed, baseline, settings)
+    return judged.status, judged.reasons
 
 
 def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
                     settings: PhysicsSettings) -> dict[str, Any]:
     """Return the ``physics`` section of ``summary.json`` (``replay`` None without one)."""
-    status, reasons = verdict(closed, baseline, settings)
+    judged = diagnose(closed, baseline, settings)
     c = closed.summary()
     b = None if baseline is None else baseline.summary()
+    cause = judged.cause
+    if "message" in c and cause is not None and cause.kind != "controller":
+        c["message"] = stop_message(c["message"], seen=True)  # the simulation saw why
     return {
-        "status": status, "reasons": reasons,
+        "status": judged.status, "reasons": judged.reasons,
+        "cause": None if cause is None else cause.kind,
+        "cause_sample": None if cause is None else cause.sample,
+        "cause_t_s": None if cause is None else cause.t,
+        "message": judged.message,
+        "oscillation": None if judged.oscillation is None else judged.oscillation.as_dict(),
         "internal_force_excess_N": c["internal_force_max_N"] - (
             0.0 if b is None else b["internal_force_max_N"]),
         "settings": settings.as_dict(),
@@ -245,5 +346,5 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
     }
 
 
-__all__ = ["STATUSES", "PhysicsRun", "closed_loop", "closed_loop_limits", "physics_summary",
-           "replay", "verdict"]
+__all__ = ["STATUSES", "PhysicsRun", "Verdict", "closed_loop", "closed_loop_limits",
+           "diagnose", "physics_summary", "replay", "verdict"]

@@ -20,12 +20,13 @@ from typing import Any
 
 from .._io import atomic_write_with, write_json, write_text
 from .._signals import SignalHold
-from ..errors import ConfigError, DualArmError, InvalidInputError
+from ..errors import DualArmError, InvalidInputError
 from ..experiments.animate import read_run_summary, run_config
 from ..experiments.config import ExperimentConfig, load_config
 from ..experiments.figures.rundata import RunData
 from ..experiments.html_report import REPORT_FILE, render_run_report
 from ..experiments.setup import Experiment, build_experiment
+from ..experiments.setup_checks import check_physics_tau_max
 from .check import closed_loop, physics_summary, replay
 from .report import PHYSICS_FIGURE, write_physics_figure
 from .settings import PhysicsSettings
@@ -46,14 +47,10 @@ def settings_for(cfg: ExperimentConfig, exp: Experiment, path: str) -> PhysicsSe
     ConfigError
         A ``physics.tau_max.<arm>`` with neither 1 value nor one per joint of the arm.
     """
-    settings = settings_of(cfg)
-    for role, arm in (("leader", exp.task.leader), ("follower", exp.task.follower)):
-        given = None if settings.tau_max is None else settings.tau_max.get(role)
-        if given is not None and given.size not in (1, arm.n):
-            raise ConfigError(f"needs 1 value (every joint) or {arm.n} (one per {role} "
-                              f"joint), got {given.size}", path=path,
-                              key=f"physics.tau_max.{role}", valid=("1", str(arm.n)))
-    return settings
+    # build_experiment checked it too (so that ``run`` refuses it); ``exp`` may be another's.
+    check_physics_tau_max(cfg, {"leader": exp.task.leader, "follower": exp.task.follower},
+                          path)
+    return settings_of(cfg)
 
 
 def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:

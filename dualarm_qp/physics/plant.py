@@ -19,7 +19,8 @@ puts it at the run's start and then, for each controller sample of ``dt``:
   the commanded sliding speed, with or without ``delay``), the object's pose, each
   hand's wrench on the object and its internal part (:mod:`.measure`), the joint
   torques (their peak share of the limits over the substeps), the welds' errors and a
-  support's gap, into :attr:`MujocoPlant.log`;
+  support's gap, into :attr:`MujocoPlant.log`, and each arm joint's velocity error at
+  every substep into :attr:`MujocoPlant.velocity_error`;
 * hands the controller the measured state, or the previous sample's with ``delay``.
 
 Contacts (:attr:`PhysicsSettings.contacts
@@ -234,6 +235,8 @@ class MujocoPlant:
         self.t = 0.0
         self.log = {k: [] for k in LOG_COLUMNS}
         self.log.update(w_leader=[], w_follower=[], torque=[], torque_peak=[], sigma=[])
+        #: Each arm joint's velocity error ``qd - qd_ref`` at every substep [rad/s].
+        self.velocity_error: list[FloatArray] = []
         #: Each arm joint's largest |torque| over the last sample's substeps [N m].
         self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
@@ -292,7 +295,8 @@ class MujocoPlant:
         """Servo the arms at ``rates`` [rad/s] for ``dt``; return the peak torque ratio.
 
         The ratio is |torque| / limit, the largest of every joint's over the substeps;
-        each joint's largest |torque| over them is left in :attr:`peak_torque` [N m].
+        each joint's largest |torque| over them is left in :attr:`peak_torque` [N m],
+        and each substep's ``qd - qd_ref`` is appended to :attr:`velocity_error`.
 
         ``q_ref`` resets the position reference first (a replay sets it to each recorded
         sample); otherwise it goes on from where the last call left it. With ``leak``
@@ -311,9 +315,11 @@ class MujocoPlant:
         qadr = self._arm_q
         for i in range(n):
             self.q_ref = self.q_ref + h * rates + pull * (d.qpos[qadr] - self.q_ref)
-            self._servo(start + (i + 1) / n * (rates - start))
+            ramp = start + (i + 1) / n * (rates - start)
+            self._servo(ramp)
             mj.mj_step(m, d)
             self.check_stable(f"at t = {self.t + (i + 1) * h:.4f} s")
+            self.velocity_error.append(d.qvel[dofs] - ramp)
             torque = np.abs(d.qfrc_actuator[dofs] + d.qfrc_applied[dofs])
             np.maximum(peak_abs, torque, out=peak_abs)
             ratio = torque / self._tau_max

@@ -64,7 +64,9 @@ def write_physics_figure(path: Path, runs: dict[str, dict[str, Any]],
         ax.grid(True, alpha=0.3)
     axes[0].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"physics check: {physics['status']}")
+    cause = physics.get("cause")
+    fig.suptitle(f"physics check: {physics['status']}" + (
+        "" if cause is None else f" ({cause} from t = {physics['cause_t_s']:.3g} s)"))
     save_png(fig, path)
 
 
@@ -78,6 +80,14 @@ def physics_html(physics: dict[str, Any]) -> str:
              f"<b>{html.escape(status)}</b>"
              + ("" if not reasons else ": " + html.escape("; ".join(map(str, reasons))))
              + "</p>"]
+    if physics.get("cause") is not None:
+        parts.append(f'<p class="note">Cause ({html.escape(str(physics["cause"]))}, from '
+                     f't = {_num(physics.get("cause_t_s"))} s, sample '
+                     f'{_num(physics.get("cause_sample"))}): '
+                     f'{html.escape(str(physics.get("message", "")))}.</p>')
+    elif physics.get("oscillation"):
+        parts.append('<p class="note">Below every threshold: '
+                     f'{html.escape(str(physics["oscillation"]["message"]))}.</p>')
     rows = []
     for key, label in (("deviation_pos_max_m", "object off D(t), max [m]"),
                        ("internal_force_max_N", "internal force, max [N]"),

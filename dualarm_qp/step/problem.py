@@ -128,7 +128,8 @@ def _c_array(value: Any) -> FloatArray:
     return arr if arr.flags.c_contiguous else np.ascontiguousarray(arr)
 
 
-#: The arrays :meth:`StepProblem.__post_init__` checks, in ``kernel.first_defect``'s order.
+#: The arrays :meth:`StepProblem.__post_init__` checks for NaN (and infinity, the first
+#: five), in ``kernel.problem_check``'s order.
 _CHECKED = ("A", "b", "weights", "center", "G", "lower", "upper", "h")
 
 
@@ -168,6 +169,11 @@ class StepProblem:
         The limit that set each variable's lower and upper bound (for messages).
     build_time : float
         Seconds the builder spent assembling this problem.
+    source : kernel.StepOut, optional
+        The kernel's step whose arrays these are (:class:`~dualarm_qp.step.build.StepBuilder`
+        gives it): the kernel made them, of the right shapes and checked (a part's
+        non-finite piece stops the build), so they are not checked again. None (the
+        default): the arrays are the caller's, checked here.
     """
 
     A: FloatArray
@@ -187,65 +193,69 @@ class StepProblem:
     lower_by: tuple[str, ...] = ()
     upper_by: tuple[str, ...] = ()
     build_time: float = 0.0
+    source: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        A = _c_array(self.A)
-        if A.ndim != 2:
-            raise ShapeError("A", (-1, -1), A.shape)
-        m, n = A.shape
-        set_ = object.__setattr__
-        set_(self, "A", A)
-        for name, shape in (("b", (m,)), ("center", (n,)), ("lower", (n,)),
-                            ("upper", (n,))):
-            arr = _c_array(getattr(self, name))
-            if arr.shape != shape:
-                raise ShapeError(name, shape, arr.shape)
-            set_(self, name, arr)
-        w = _c_array(self.weights)
-        if w.shape not in ((n,), (n, n)):
-            raise ShapeError("weights", (n,), w.shape)
-        set_(self, "weights", w)
-        G = _c_array(self.G)
-        if G.size == 0:
-            G = np.zeros((0, n))
-        if G.ndim != 2 or G.shape[1] != n:
-            raise ShapeError("G", (-1, n), G.shape)
-        h = _c_array(self.h)
-        if h.shape != (G.shape[0],):
-            raise ShapeError("h", (G.shape[0],), h.shape)
-        set_(self, "G", G)
-        set_(self, "h", h)
+        if self.source is not None:
+            # The kernel's own arrays, checked as it made them: checking them again here
+            # cost 11% of the PUMA beam's step (benchmarks/step_profile.py, docs/benchmarks.md).
+            return
+        arrays = (self.A, self.b, self.weights, self.center, self.lower, self.upper, self.G,
+                  self.h)
+        try:  # float64 C-ordered arrays (the builder's): checked in one kernel pass
+            code = kernel.problem_check(*arrays)
+        except TypeError:  # anything else: converted once, then checked
+            code = kernel.problem_check(*self._converted())
+        if code:
+            raise self._defect(code)
+        n = self.n
+        if self.G.size == 0 and self.G.shape != (0, n):  # no rows (the default)
+            object.__setattr__(self, "G", np.zeros((0, n)))
+            object.__setattr__(self, "h", np.zeros(0))
         if self.x_prev is not None:
             xp = _c_array(self.x_prev)
             if xp.shape != (n,):
                 raise ShapeError("x_prev", (n,), xp.shape)
-            set_(self, "x_prev", xp)
-        # One compiled pass over every array: the first that holds NaN or infinity is
-        # named. Bounds and row right-hand sides may be infinite (no limit), never NaN.
-        bad = kernel.first_defect([A, self.b, w, self.center, G], [self.lower, self.upper, h])
-        if bad >= 0:
-            raise NonFiniteError(_CHECKED[bad])
-        if n:
-            if w.ndim == 1:
-                if not float(w.min()) > 0.0:
-                    raise InvalidInputError("weights must be strictly positive")
-            elif not np.allclose(w, w.T, rtol=1e-12, atol=0.0):
-                raise InvalidInputError("a full weighting matrix must be symmetric")
+            object.__setattr__(self, "x_prev", xp)
         if not 0 <= self.n_grasp <= n:
             raise InvalidInputError(f"n_grasp must be in [0, {n}], got {self.n_grasp}")
-        for name, count, prefix in (("names", n, "x"), ("row_names", G.shape[0], "row"),
-                                    ("eq_names", m, "eq")):
+        for name, count, prefix in (("names", n, "x"), ("row_names", self.p, "row"),
+                                    ("eq_names", self.m, "eq")):
             given = getattr(self, name)
             if not given:
-                set_(self, name, tuple(f"{prefix}{i + 1}" for i in range(count)))
+                object.__setattr__(self, name, tuple(f"{prefix}{i + 1}" for i in range(count)))
             elif len(given) != count:
                 raise ShapeError(name, (count,), (len(given),))
         for name in ("lower_by", "upper_by"):
             given = getattr(self, name)
             if not given:
-                set_(self, name, ("",) * n)
+                object.__setattr__(self, name, ("",) * n)
             elif len(given) != n:
                 raise ShapeError(name, (n,), (len(given),))
+
+    def _converted(self) -> tuple[FloatArray, ...]:
+        """Set every array as a C-ordered float64 one (no rows: ``G`` of shape (0, n))."""
+        for name in ("A", "b", "weights", "center", "lower", "upper", "G", "h"):
+            object.__setattr__(self, name, _c_array(getattr(self, name)))
+        return (self.A, self.b, self.weights, self.center, self.lower, self.upper, self.G,
+                self.h)
+
+    def _defect(self, code: int) -> InvalidInputError:
+        """Return the error of ``kernel.problem_check``'s ``code`` (src/kernel/bind_step.cpp)."""
+        if code == 1:
+            return ShapeError("A", (-1, -1), np.shape(self.A))
+        m, n = self.A.shape
+        shapes = {2: ("b", (m,)), 3: ("center", (n,)), 4: ("lower", (n,)),
+                  5: ("upper", (n,)), 6: ("weights", (n,)), 7: ("G", (-1, n)),
+                  8: ("h", (np.shape(self.G)[0],))}
+        if code in shapes:
+            name, shape = shapes[code]
+            return ShapeError(name, shape, np.shape(getattr(self, name)))
+        if 10 <= code < 18:
+            return NonFiniteError(_CHECKED[code - 10])
+        if code == 20:
+            return InvalidInputError("weights must be strictly positive")
+        return InvalidInputError("a full weighting matrix must be symmetric")
 
     # -- sizes ---------------------------------------------------------------------------
     @property
@@ -283,9 +293,9 @@ class StepProblem:
                 b = scale * self.b
             if kernel.first_defect([b], []) >= 0:
                 raise NonFiniteError("b (scaled)")
-        # Everything else was checked when this problem was made; the constructor checks
-        # the new right-hand side and warm start.
-        return dataclasses.replace(self, b=b, x_prev=self.x_prev if x_prev is None else x_prev)
+        # A new right-hand side: no longer the kernel's step, checked by the constructor.
+        return dataclasses.replace(self, b=b, x_prev=self.x_prev if x_prev is None else x_prev,
+                                   source=None)
 
     def weight_matrix(self) -> FloatArray:
         """``W`` as an ``n x n`` matrix."""

@@ -8,11 +8,15 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/trampoline.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <utility>
 
 #include "standard_parts.hpp"
 #include "step.hpp"
+#include "support_line.hpp"
+#include "torque_limit.hpp"
 
 namespace dqk_binding {
 
@@ -269,6 +273,25 @@ void bind_out(nb::module_& m) {
   array_property(out, "G", [](const O& o) -> const dqk::RowMat& { return o.G; },
                  "The limits' rows (p, n).");
   array_property(out, "h", [](const O& o) -> const Vec& { return o.h; }, "(p)");
+  // The limit that set each bound, by name ("" where none did).
+  auto sources = [](const O& o, const dqk::IndexVec& by) {
+    const Index n = by.size();
+    nb::tuple names = nb::steal<nb::tuple>(PyTuple_New(n));
+    for (Index i = 0; i < n; ++i) {
+      const std::int64_t k = by(i);
+      nb::str name("");
+      if (k >= 0 && o.labels && size_t(k) < o.labels->size()) {
+        const std::string& s = (*o.labels)[size_t(k)];
+        name = nb::str(s.data(), s.size());
+      }
+      PyTuple_SET_ITEM(names.ptr(), i, name.release().ptr());
+    }
+    return names;
+  };
+  out.def_prop_ro("lower_names", [sources](const O& o) { return sources(o, o.box.lower_by); },
+                  "The name of the limit that set each lower bound.")
+      .def_prop_ro("upper_names", [sources](const O& o) { return sources(o, o.box.upper_by); },
+                   "The name of the limit that set each upper bound.");
   out.def_prop_ro("row_names", [](const O& o) { return names_tuple(o.row_names); })
       .def_prop_ro("row_limit", [](const O& o) { return o.row_limit; },
                    "The limit of each row (indices).");
@@ -377,6 +400,35 @@ void bind_parts(nb::module_& m) {
       },
       "damper"_a, "names"_a, "nonfinite"_a, nb::keep_alive<1, 2>());
   bind_limit_method<dqk::CollisionLimit>(collision);
+
+  nb::class_<dqk::SlidePath>(
+      m, "SlidePath",
+      "A sliding path as one joint: the hand's pose on the object H(sigma) = P M(rate sigma) C.")
+      .def(
+          "__init__",
+          [](dqk::SlidePath* self, bool revolute, int axis, const dqk::Pose& placement,
+             const dqk::Pose& child, double rate) {
+            require((axis == 0 || axis == 1) && std::isfinite(rate) && placement.allFinite() &&
+                        child.allFinite(),
+                    "SlidePath: axis 0 (x) or 1 (y), finite placements and rate");
+            new (self) dqk::SlidePath{revolute, axis, placement, child, rate};
+          },
+          "revolute"_a, "axis"_a, "placement"_a, "child"_a, "rate"_a,
+          "revolute: a rotation (else a translation) about or along axis 0 (x) or 1 (y) of "
+          "the joint frame; placement P and child C (4, 4) [m]; rate d theta / d sigma.")
+      .def("at", &dqk::SlidePath::at, "sigma"_a, "H(sigma) (4, 4) [m], object coordinates.");
+
+  auto torque = nb::class_<dqk::TorqueLimit, dqk::Limit, PyLimit<dqk::TorqueLimit>>(
+      m, "TorqueLimit",
+      "|tau + dt D x| <= tau_max: both arms' quasi-static torques from the step's context.");
+  torque.def(nb::init<dqk::Chain*, int, dqk::Chain*, int, Vec, std::vector<std::string>,
+                      std::optional<double>, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                      dqk::SlidePath, std::optional<dqk::SlidePath>, double, double, double>(),
+             "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "tau_max"_a,
+             "row_names"_a, "mass"_a.none(), "mass_centre"_a, "gravity"_a, "follower_path"_a,
+             "leader_path"_a.none(), "grasp_step"_a, "fallback_length"_a, "rcond_min"_a,
+             nb::keep_alive<1, 2>(), nb::keep_alive<1, 4>());
+  bind_limit_method<dqk::TorqueLimit>(torque);
 }
 
 void bind_loop(nb::module_& m) {
@@ -388,6 +440,8 @@ void bind_loop(nb::module_& m) {
       .def("add_task", &dqk::Step::add_task, "task"_a, nb::keep_alive<1, 2>())
       .def("add_cost", &dqk::Step::add_cost, "cost"_a, nb::keep_alive<1, 2>())
       .def("add_limit", &dqk::Step::add_limit, "limit"_a, nb::keep_alive<1, 2>())
+      .def("set_labels", &dqk::Step::set_labels, "labels"_a,
+           "The limits' names, in the order added (what the bounds' sources are called).")
       .def(
           "add_grasp_line",
           [](dqk::Step& self, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
@@ -397,6 +451,16 @@ void bind_loop(nb::module_& m) {
                                                sigma_max});
           },
           "origin"_a, "direction"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a)
+      .def(
+          "set_grasp_line",
+          [](dqk::Step& self, Index g, const Eigen::Vector3d& origin,
+             const Eigen::Vector3d& direction, const Eigen::Vector3d& r_min,
+             const Eigen::Vector3d& r_max, double sigma_min, double sigma_max) {
+            self.set_grasp_line(g, dqk::GraspLine{origin, direction, r_min, r_max, sigma_min,
+                                                  sigma_max});
+          },
+          "grasp"_a, "origin"_a, "direction"_a, "r_min"_a, "r_max"_a, "sigma_min"_a,
+          "sigma_max"_a, "Replace the line of grasp (an index in the grasps' order).")
       .def_prop_ro("n", &dqk::Step::n)
       .def_prop_ro("grasp_lines", &dqk::Step::grasp_lines)
       .def(
@@ -418,14 +482,105 @@ void bind_loop(nb::module_& m) {
           "(their context) or None.");
 }
 
+// A step problem's arrays as StepProblem holds them (float64, C-ordered; anything else is
+// refused with a TypeError and converted by the caller first).
+using Strict = nb::ndarray<const double, nb::c_contig, nb::device::cpu>;
+
+// StepProblem's checks of its arrays in one pass (dualarm_qp/step/problem.py names the
+// codes): 0 when they hold; 1 A is not 2-D; 2 to 7 the shape of b, center, lower, upper,
+// weights, G; 8 the length of h; 10 + k a NaN or infinity in the k-th of A, b, weights,
+// center, G (a NaN in lower, upper, h: 15 to 17); 20 a diagonal weight not > 0; 21 a
+// full weighting matrix that is not symmetric (to 1e-12 relative).
+int problem_check(const Strict& A, const Strict& b, const Strict& w, const Strict& c,
+                  const Strict& lower, const Strict& upper, const Strict& G, const Strict& h) {
+  if (A.ndim() != 2) return 1;
+  const size_t m = A.shape(0), n = A.shape(1);
+  auto vec = [](const Strict& a, size_t len) { return a.ndim() == 1 && a.shape(0) == len; };
+  if (!vec(b, m)) return 2;
+  if (!vec(c, n)) return 3;
+  if (!vec(lower, n)) return 4;
+  if (!vec(upper, n)) return 5;
+  const bool diagonal = vec(w, n);
+  if (!diagonal && !(w.ndim() == 2 && w.shape(0) == n && w.shape(1) == n)) return 6;
+  if (G.ndim() != 2 || (G.size() > 0 && G.shape(1) != n)) return 7;  // no rows: any width
+  if (G.size() == 0 && h.size() != 0) return 8;
+  if (G.size() > 0 && !vec(h, G.shape(0))) return 8;
+  auto finite = [](const Strict& a) {
+    const double* d = a.data();
+    for (size_t i = 0; i < a.size(); ++i)
+      if (!std::isfinite(d[i])) return false;
+    return true;
+  };
+  auto no_nan = [](const Strict& a) {
+    const double* d = a.data();
+    for (size_t i = 0; i < a.size(); ++i)
+      if (std::isnan(d[i])) return false;
+    return true;
+  };
+  const Strict* must_be_finite[] = {&A, &b, &w, &c, &G};
+  for (int k = 0; k < 5; ++k)
+    if (!finite(*must_be_finite[k])) return 10 + k;
+  const Strict* not_nan[] = {&lower, &upper, &h};
+  for (int k = 0; k < 3; ++k)
+    if (!no_nan(*not_nan[k])) return 15 + k;
+  const double* W = w.data();
+  if (diagonal) {
+    for (size_t i = 0; i < n; ++i)
+      if (!(W[i] > 0.0)) return 20;
+  } else {
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = 0; j < i; ++j)
+        if (std::abs(W[i * n + j] - W[j * n + i]) >
+            1e-12 * std::min(std::abs(W[i * n + j]), std::abs(W[j * n + i])))
+          return 21;
+  }
+  return 0;
+}
+
+void bind_support(nb::module_& m) {
+  auto line = nb::class_<dqk::SupportLine>(
+      m, "SupportLine", "A Case 2 support line at one orientation (object coordinates).");
+  using L = dqk::SupportLine;
+  line.def_ro("held", &L::held, "False: no line with h > 0 inside the box here.")
+      .def_ro("sigma_min", &L::sigma_min, "[m]")
+      .def_ro("sigma_max", &L::sigma_max, "[m]")
+      .def_ro("sigma_inf", &L::sigma_inf, "Where the push is infinite [m].")
+      .def_ro("lever", &L::lever, "|a* x c| [N m]: the push is lever / (sigma - sigma_inf).")
+      .def("push", &L::push, "sigma"_a, "The push h [N] at sigma [m] (inf at sigma_inf).");
+  array_property(line, "gravity", [](const L& l) -> const Eigen::Vector3d& { return l.gravity; },
+                 "Gravity in object coordinates [m/s^2].");
+  array_property(line, "origin", [](const L& l) -> const Eigen::Vector3d& { return l.origin; },
+                 "The line's point at sigma = 0 [m].");
+  array_property(line, "direction",
+                 [](const L& l) -> const Eigen::Vector3d& { return l.direction; },
+                 "The sliding direction s* (unit).");
+  array_property(line, "pose0", [](const L& l) -> const dqk::Pose& { return l.pose0; },
+                 "The hand's pose at sigma = 0 (4, 4) [m].");
+  nb::class_<dqk::SupportPlane>(
+      m, "SupportPlane", "A Case 2 support on a plane: its line for any orientation.")
+      .def(nb::init<double, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                    const Eigen::Vector3d&, const Eigen::Vector3d&, double,
+                    const Eigen::Vector3d&, const Eigen::Vector3d&, double>(),
+           "mass"_a, "mass_centre"_a, "gravity"_a, "r1"_a, "normal"_a, "offset"_a, "r_min"_a,
+           "r_max"_a, "gravity_min"_a)
+      .def("line", &dqk::SupportPlane::line, "R_world_object"_a,
+           "The support line for the object's orientation (3, 3).");
+}
+
 }  // namespace
 
 void bind_step(nb::module_& m) {
+  m.def("problem_check", &problem_check, "A"_a.noconvert(), "b"_a.noconvert(),
+        "weights"_a.noconvert(), "center"_a.noconvert(), "lower"_a.noconvert(),
+        "upper"_a.noconvert(), "G"_a.noconvert(), "h"_a.noconvert(),
+        "StepProblem's checks of its arrays in one pass: 0 when they hold, else the code "
+        "of the first that fails (src/kernel/bind_step.cpp); float64 C-ordered arrays only.");
   bind_values(m);
   bind_context(m);
   bind_out(m);
   bind_parts(m);
   bind_loop(m);
+  bind_support(m);
 }
 
 }  // namespace dqk_binding

@@ -8,6 +8,8 @@
 #define DQK_BINDING_MAIN  // imports NumPy's C API table (binding.hpp)
 #include "binding.hpp"
 
+#include <nanobind/stl/optional.h>
+
 #include <coal/config.hh>
 
 #include "boxes.hpp"
@@ -95,18 +97,19 @@ NB_MODULE(_kernel, m) {
       .def(
           "static_torques",
           [](dqk::Chain& chain, const Eigen::VectorXd& q, int frame, const dqk::Vec6& wrench,
-             bool derivatives) {
+             const std::optional<Eigen::Vector3d>& point, bool derivatives) {
             const Index n = chain.nq();
             Vec tau(n);
             dqk::RowMat dtau(derivatives ? n : 0, derivatives ? n : 0);
             dqk::RowMat J(derivatives ? 6 : 0, derivatives ? n : 0);
-            dqk::static_torques(chain, q, frame, wrench, tau, derivatives, dtau, J);
+            dqk::static_torques(chain, q, frame, wrench, point, tau, derivatives, dtau, J);
             return nb::make_tuple(out(std::move(tau)), out(std::move(dtau)), out(std::move(J)));
           },
-          "q"_a, "frame"_a, "wrench"_a, "derivatives"_a,
+          "q"_a, "frame"_a, "wrench"_a, "point"_a.none(), "derivatives"_a,
           "Joint torques holding the chain at q with the hand at frame applying wrench to "
-          "the object: (tau, dtau_dq at a fixed world wrench, J of the frame); the last two "
-          "empty without derivatives.")
+          "the object at point (world; the moment about it; None: the frame's origin): "
+          "(tau, dtau_dq with the wrench and point fixed in the world, J of the frame); the "
+          "last two empty without derivatives.")
       .def("set_frame_placement", &dqk::Chain::set_frame_placement, "frame"_a, "T"_a)
       .def("update", &dqk::Chain::update, "q"_a,
            "Forward kinematics, every joint's Jacobian and every frame's pose at q.")

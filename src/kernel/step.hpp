@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,7 @@ struct StepOut {
   std::int64_t failed_part = -1;
   std::string failed_kind;
   std::string failure;
+  std::shared_ptr<const std::vector<std::string>> labels;  // the step's limits' names
   double kinematics_seconds = 0.0;  // the context's share of the build
   double seconds = 0.0;             // the whole build
   // The arms' smallest singular values (of J_tool and J_f), computed when first asked.
@@ -75,6 +77,12 @@ class Step {
   // The next grasp's straight path (in the grasps' order). With every grasp's line
   // given, build computes the grasps' rates to their range ends from sigmas itself.
   void add_grasp_line(const GraspLine& line);
+  // The limits' names, in the order added: what a bound's and a row's source is called.
+  void set_labels(std::vector<std::string> labels) {
+    labels_ = std::make_shared<const std::vector<std::string>>(std::move(labels));
+  }
+  // Replace grasp g's line (a Case 2 support's moves with the object's orientation).
+  void set_grasp_line(Index g, const GraspLine& line);
 
   Index n() const { return n_; }
   bool grasp_lines() const { return static_cast<Index>(lines_.size()) == k_; }
@@ -109,6 +117,7 @@ class Step {
   std::vector<const CostTerm*> costs_;
   std::vector<const Limit*> limits_;
   std::vector<GraspLine> lines_;
+  std::shared_ptr<const std::vector<std::string>> labels_;
 };
 
 }  // namespace dqk

@@ -77,9 +77,10 @@ def test_a_start_within_d_s_is_pushed_out_step_by_step() -> None:
     assert out.applied
     d1 = _distance(exp.task, exp.initial.advanced(out, exp.options.dt), pair)
     assert d1 - d0 >= 0.9 * -h * exp.options.dt
-    # A short run: the recorded clearance widens at every sample.
+    # A short run: the recorded clearance widens at every sample (without the check
+    # before the run, which refuses this start: the record could not keep d_s there).
     res = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
-                  project=exp.project)
+                  project=exp.project, preflight=False)
     gap = res.trace.clearance_obstacles
     assert len(gap) > 5 and np.all(np.diff(gap) > 0.0), gap
 
@@ -131,3 +132,25 @@ def test_touching_and_overlapping_shapes_are_pushed_apart(nominal, offset: float
     assert out.applied, out.status
     d1 = _distance(exp.task, state.advanced(out, exp.options.dt))
     assert d1 - d0 >= 0.9 * -h * exp.options.dt, (d0, d1, h)
+
+
+def test_a_pair_that_cannot_be_pushed_apart_is_named_plainly(nominal) -> None:
+    """The ball on link2's axis, 120 mm deep, with the default influence distance: no step
+    separates them as fast as the row asks (the case above that needs 1 m). The run's
+    failure names the pair and how deep it is first (criterion ``collision``), then the
+    policy's "no common point" and the limits in conflict."""
+    state, on_axis, _ = nominal
+    exp = experiment("puma_beam_limits", merged(_ball(on_axis, 0.02),
+                                                {"controller": {"duration": 3.5}}))
+    d0 = _distance(exp.task, state)
+    assert abs(d0 + 0.12) < 1e-9
+    res = rollout(exp.controller(), state, duration=0.3, limits=exp.limits, preflight=False)
+    failure = res.failure
+    assert failure is not None and failure.criterion == "collision" and failure.sample == 0
+    assert failure.amount == pytest.approx(d0, abs=1e-12) and failure.limit == 0.02
+    assert failure.message.startswith(
+        f"step 0 at t = {state.t:.4f} s: no step keeps every limit: collision pair {PAIR} "
+        "overlaps by 120.00 mm, closer than its safety distance of 20 mm, and cannot be "
+        "moved apart as fast as its limit asks (solver status error: the limits admit no "
+        "common point: cannot relax; conflicting: "), failure.message
+    assert f"clearance {PAIR}" in failure.message

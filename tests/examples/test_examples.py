@@ -73,6 +73,12 @@ def _check_custom_limit(out: str) -> None:
                      r"gives rows; solvers that keep rows: nullspace", out, re.MULTILINE), out
 
 
+def _check_custom_task(out: str) -> None:
+    without = _number(r"without the task: completed; the elbow turned at most ([\d.]+) deg", out)
+    held = _number(r"with the task: completed; the elbow turned at most ([\d.]+) deg", out)
+    assert without > 20.0 and held < 2.0, out
+
+
 def _check_realtime_loop(out: str) -> None:
     assert "ticks: 1000 (" in out  # --seconds 1
     misses = _number(r"\nmisses: (\d+) ", out)
@@ -82,6 +88,7 @@ def _check_realtime_loop(out: str) -> None:
 
 CHECKS = {
     "custom_limit.py": _check_custom_limit,
+    "custom_task.py": _check_custom_task,
     "own_control_loop.py": _check_own_control_loop,
     "task_in_python.py": _check_task_in_python,
     "urdf_robot_pair.py": _check_urdf_robot_pair,
@@ -100,7 +107,7 @@ def test_every_example_is_checked_and_none_is_collected_as_a_test():
 
 
 #: Examples that take more than a few seconds (every solver in turn): the full suite only.
-SLOW = {"custom_limit.py"}
+SLOW = {"custom_limit.py", "custom_task.py"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW

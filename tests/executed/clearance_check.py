@@ -35,7 +35,7 @@ import dh_oracle
 import numpy as np
 from clearance_oracle import Placed, signed_distance
 from oracle import ROWS, inv_pose, is_puma
-from urdf_oracle import UrdfChain
+from urdf_oracle import TURNING, UrdfChain
 
 from dualarm_qp.collision.settings import CLEARANCE_ALLOWANCE
 from dualarm_qp.kinematics.robots import example_robot_urdf
@@ -82,7 +82,7 @@ def frames_function(arm: Any):
     else:
         raise ValueError(f"{arm.name}: no robot file to read ({arm.source!r})")
     chain = UrdfChain(file, root, tip)
-    moving = [i for i, j in enumerate(chain.joints) if j.kind == "revolute"]
+    moving = [i for i, j in enumerate(chain.joints) if j.kind in TURNING]
 
     def urdf_frames(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         all_frames = chain.frames(q, base)

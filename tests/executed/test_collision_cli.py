@@ -9,7 +9,9 @@ value is the process's exit code).
   table without capsule radii (``follower.link_radius``; the PUMA preset has defaults);
 * exit 1: a path D(t) that runs the object into a box (criterion ``path_collision``,
   the obstacle and the first t within d_s, checked here with the tests' own distance),
-  and a pillar that blocks the task (criterion ``collision``, naming the pair).
+  a start closer than d_s (less the allowance) to a ball, refused before the run
+  (criterion ``collision``, naming the pair and its distance), and a pillar that blocks
+  the task (criterion ``collision``, naming the pair).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from clearance_check import check_clearance
+from clearance_check import check_clearance, recompute
 from clearance_oracle import segment_box
 from csv_check import read_trajectory
 from executed_runs import PILLAR, load, merged, with_obstacles
@@ -189,3 +191,40 @@ def test_a_blocked_task_fails_naming_the_pair(tmp_path: Path,
     # It stopped short of the pillar: the record keeps d_s - allowance.
     exp = build_experiment(parse_config(data, "case"), "case")
     assert check_clearance(read_trajectory(out / "trajectory.csv"), exp) == []
+
+
+def test_a_start_within_the_safety_distance_is_refused_before_the_run(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A ball 18 mm from the follower's elbow (link3) at the start, d_s = 20 mm: refused
+    before the first sample (as a torque beyond its limit at the start is), naming the
+    pair and its distance, not run to the end and failed at sample 0 afterwards."""
+    ball = {"name": "ball", "sphere": {"radius": 50}, "pose": {"position": [155, 1145, -210]}}
+    data = with_obstacles(_beam({}, duration=3.0), [ball], enabled=True)
+    # The ball also overlaps the upper arm (link2), which would refuse the scene itself.
+    data["collision"]["exclude"] = [["follower.link2", "ball"]]
+    code, err, out = _run(tmp_path, data, capsys)
+    assert code == 1, err
+    summary = json.loads((out / "summary.json").read_text())
+    failure = summary["failure"]
+    assert failure["criterion"] == "collision" and summary["samples"] == 0
+    assert len(read_trajectory(out / "trajectory.csv")["t"]) == 0
+    # The pair and its distance, by the tests' own distance at the initial joints.
+    exp = build_experiment(parse_config(data, "case"), "case")
+    start = {"t": np.zeros(1), "grasp": np.array([exp.initial.sigma])}
+    for prefix, q in (("ql", exp.initial.q_l), ("qf", exp.initial.q_f)):
+        start.update({f"{prefix}{i + 1}": q[i:i + 1] for i in range(q.size)})
+    rec = recompute(start, exp)
+    d = dict(zip(rec.pairs, rec.distance[0], strict=True))["follower.link3 - ball"]
+    assert 0.0 < d < 0.019 and min(rec.distance[0]) == d
+    at_start = summary["collision_at_start"]
+    assert at_start["pair"] == "follower.link3 - ball"
+    assert abs(at_start["distance_m"] - d) < 1e-9 and at_start["safety_distance_m"] == 0.02
+    assert failure["message"].startswith("before the run: collision pair follower.link3 - "
+                                         f"ball is {d * 1e3:.2f} mm apart at the start")
+    assert "collision.safety_distance" in failure["message"]
+    # A ball 5 mm smaller (the pair 23.4 mm apart) is no reason to refuse: the run starts.
+    ball["sphere"]["radius"] = 45
+    data = with_obstacles(_beam({}), [ball], enabled=True)
+    data["collision"]["exclude"] = [["follower.link2", "ball"]]
+    code, err, out = _run(tmp_path, data, capsys, "--force")
+    assert json.loads((out / "summary.json").read_text())["samples"] > 0, err

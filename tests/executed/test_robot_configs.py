@@ -53,7 +53,7 @@ pytestmark = pytest.mark.skipif(
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 ROBOT_CONFIGS = ("ur5_pair_sliding_bar", "panda_pair", "baxter_tray", "both_sliding_bar",
-                 "panda_pair_accel")
+                 "panda_pair_accel", "kinova_pair", "ur10_panda_pair")
 #: Configs with collision avoidance (their clearance: test_collision_configs.py); their
 #: runs take a few seconds each, so they are checked in the slow loop.
 COLLISION_CONFIGS = ("ur5_pair_collision", "panda_pair_shelf")
@@ -83,9 +83,11 @@ class Spec:
         assert c.get("initial_rates", "rest") == "rest"  # the checks start from rest
 
     def joint_accelerations(self, role: str, n: int) -> np.ndarray:
-        """The YAML's ``qdd_max`` [rad/s^2] (a URDF states none: inf)."""
+        """The YAML's ``qdd_max`` [rad/s^2] (a URDF states none: with acceleration
+        limits on, the file must state them)."""
         arm = self.data[role]
         if "qdd_max" not in arm:
+            assert not self.acceleration_limits, f"{role}.qdd_max"
             return np.full(n, np.inf)
         return np.array(arm["qdd_max"], dtype=float) * self.angle
 
@@ -335,12 +337,24 @@ def test_config_does_what_its_header_says(name: str, runs: dict[str, Any]) -> No
         assert geometry(spec, traj)["tilt"] <= ANGLE_TOL  # the tray's x axis stays down
     elif name == "both_sliding_bar":
         assert spec.leader_slides and travel(traj["grasp_leader"]) > 0.01
-    elif name == "panda_pair_accel":
-        # From rest, a joint and the sliding reach their acceleration limits (recomputed
-        # here from the CSV), and the bar is slowed on some steps.
+    elif name == "kinova_pair":
+        # Continuous joints 1, 4, 6: no range in the oracle's reading of the URDF either.
+        for prefix in ("ql", "qf"):
+            for i in (1, 4, 6):
+                assert lim.bounds[f"{prefix}{i}"] == (-math.inf, math.inf)
+        # The leader's elbow reaches its speed limit and the bar is slowed; the grasp
+        # slides to the end of its range (250 mm).
+        assert speed_ratio["ql3"] > 0.99 and np.sum(traj["scale"] < 1 - 1e-9) > 0
+        assert traj["grasp"].min() == pytest.approx(0.25, abs=1e-6)
+    elif name in ("panda_pair_accel", "ur10_panda_pair"):
+        # From rest, the sliding (and for the Panda pair a joint) reaches its
+        # acceleration limit (recomputed here from the CSV); every joint has one.
         v = {c: np.concatenate([[0.0], np.diff(traj[c]) / spec.dt]) for c in lim.speeds}
+        accels = lim.accelerations or {}
+        assert all(math.isfinite(a) for a in accels.values())
         accel_ratio = {c: float(np.max(np.abs(np.diff(v[c])))) / spec.dt / a
-                       for c, a in (lim.accelerations or {}).items() if math.isfinite(a)}
-        assert max(accel_ratio.values()) > 0.99
-        assert accel_ratio["grasp"] > 0.99
-        assert np.sum(traj["scale"] < 1 - 1e-9) > 0
+                       for c, a in accels.items()}
+        assert accel_ratio["grasp"] > 0.99 and speed_ratio["grasp"] > 0.99
+        if name == "panda_pair_accel":  # and the bar is slowed on some steps
+            assert max(accel_ratio[c] for c in accels if c.startswith("q")) > 0.99
+            assert np.sum(traj["scale"] < 1 - 1e-9) > 0

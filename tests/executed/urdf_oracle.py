@@ -3,8 +3,9 @@
 Written from the URDF specification alone: the file is read as XML, and each joint's
 ``origin`` (``xyz``; ``rpy`` as R = Rz(yaw) Ry(pitch) Rx(roll)) and ``axis`` (default
 x) are chained from the ``root`` link to the ``tip`` link with plain numpy 4x4 products
-(a revolute joint turns by Rodrigues' formula about its axis). It shares no code with
-``dualarm_qp.kinematics`` nor with Pinocchio. Lengths in m, angles in rad.
+(a revolute or continuous joint turns by Rodrigues' formula about its axis; a continuous
+joint has no range, whatever its ``limit`` tag says, as the URDF specification has it).
+It shares no code with ``dualarm_qp.kinematics`` nor with Pinocchio. Lengths in m, angles in rad.
 """
 
 from __future__ import annotations
@@ -55,12 +56,16 @@ def homogeneous(R: np.ndarray, p: np.ndarray) -> np.ndarray:
     return T
 
 
+#: The joints that turn about their axis.
+TURNING = ("revolute", "continuous")
+
+
 @dataclass(frozen=True)
 class Joint:
     """One joint of the chain, as written in the URDF."""
 
     name: str
-    kind: str                  # "revolute", "fixed", ...
+    kind: str                  # "revolute", "continuous", "fixed", ...
     origin: np.ndarray         # 4x4, parent link -> joint frame at zero angle
     axis: np.ndarray           # (3,), in the joint frame
     lower: float
@@ -89,9 +94,9 @@ class UrdfChain:
             link = str(element.find("parent").get("link"))  # type: ignore[union-attr]
         self.joints = chain[::-1]
         for j in self.joints:
-            if j.kind not in ("revolute", "fixed"):
+            if j.kind not in (*TURNING, "fixed"):
                 raise ValueError(f"joint {j.name!r} is {j.kind}")
-        self.moving = [j for j in self.joints if j.kind == "revolute"]
+        self.moving = [j for j in self.joints if j.kind in TURNING]
 
     @staticmethod
     def _joint(element: ET.Element) -> Joint:
@@ -102,11 +107,15 @@ class UrdfChain:
         axis = _floats(None if axis_tag is None else axis_tag.get("xyz"), (1.0, 0.0, 0.0))
         limit = element.find("limit")
 
+        kind = str(element.get("type"))
+
         def bound(key: str, default: float) -> float:
             value = None if limit is None else limit.get(key)
+            if kind == "continuous" and key in ("lower", "upper"):
+                return default  # no range
             return default if value is None else float(value)
 
-        return Joint(str(element.get("name")), str(element.get("type")),
+        return Joint(str(element.get("name")), kind,
                      homogeneous(rpy_matrix(*rpy), xyz), axis,
                      bound("lower", -np.inf), bound("upper", np.inf),
                      bound("velocity", np.inf))
@@ -126,7 +135,7 @@ class UrdfChain:
         values = iter(q)
         for j in self.joints:
             T = T @ j.origin
-            if j.kind == "revolute":
+            if j.kind in TURNING:
                 T = T @ homogeneous(axis_rotation(j.axis, next(values)), np.zeros(3))
             out.append(T)
         return out

@@ -8,6 +8,8 @@ how it replaces its own earlier output, and what it refuses.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import os
 import signal
@@ -15,6 +17,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -23,6 +26,7 @@ from sigint import child_default_sigint
 
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.experiments.avoidance import Comparison, _checks, describe
 from dualarm_qp.experiments.figures import Curve, avoidance_figure
 from dualarm_qp.experiments.figures.avoidance import near_window
 
@@ -41,16 +45,19 @@ def _pillar(tmp_path: Path, name: str = "pillar.yaml", **controller) -> Path:
 
 @pytest.fixture(scope="module")
 def compared(tmp_path_factory):
-    """A comparison of the pillar file cut to 0.62 s (20 samples)."""
+    """A comparison of the pillar file cut to 0.62 s (20 samples): the pillar is still
+    far, so nothing penetrates, as in a file of your own with no demo story."""
     tmp = tmp_path_factory.mktemp("cmp")
     config = _pillar(tmp, duration=0.62)
     out = tmp / "out"
-    code = main(["collisions", str(config), "--out", str(out), "--quiet", "--no-plots"])
-    return config, out, code
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = main(["collisions", str(config), "--out", str(out), "--quiet", "--no-plots"])
+    return config, out, code, printed.getvalue()
 
 
 def test_the_comparison_writes_three_runs_a_figure_and_a_record(compared):
-    _, out, code = compared
+    _, out, code, _ = compared
     assert code == 0
     entries = {p.name + ("/" if p.is_dir() else "") for p in out.iterdir()}
     assert entries == {"collisions.json", "collisions.png", *(f"{f}/" for f in FOLDERS)}
@@ -66,14 +73,107 @@ def test_the_comparison_writes_three_runs_a_figure_and_a_record(compared):
         assert s["samples"] == runs[f]["samples"] == 21 and s["solver"] == runs[f]["solver"]
         assert runs[f]["clearance_min_m"] == s["realised_limits"]["clearance"]["min_m"]
         assert "joints.png" not in s["outputs"]  # --no-plots: the runs' own figures
-    # 0.6 s into the path the pillar is far: nothing penetrates yet.
+    # 0.6 s into the path the pillar is far: nothing penetrates yet. That is measured;
+    # the one claim made of any file is the avoiding run's.
+    assert record["claims"] == {"avoiding_completes_and_keeps_clearance": True}
+    assert [runs[f]["penetration"] for f in FOLDERS] == [False, False, False]
+    assert [runs[f]["failure"] for f in FOLDERS] == [None, None, None]
+
+
+def test_a_file_without_the_demos_story_prints_what_was_measured_and_no_NO(compared):
+    """Nothing penetrates without avoidance: measured and printed, not a failed claim."""
+    _, _, code, printed = compared
+    assert code == 0
+    assert "NO" not in printed and "penetrates" not in printed
+    lines = printed.splitlines()
+    for folder in FOLDERS:
+        line = next(x for x in lines if x.startswith(f"  {folder} "))
+        assert "21 samples, completed; nearest " in line and "; no penetration; " in line
+    assert "  yes  the run with avoidance completes and keeps the safety distance" in lines
+
+
+def _crate(tmp_path: Path) -> Path:
+    """The pillar file, cut to 0.31 s (10 mm of travel), with a crate 5 mm beside the
+    beam, across its path."""
+    d = yaml.safe_load(_pillar(tmp_path, duration=0.31).read_text())
+    d["scene"]["obstacles"].append({"name": "crate", "box": {"size": [30, 40, 30]},
+                                    "pose": {"position": [40, 900, 260]}})
+    path = tmp_path / "crate.yaml"
+    path.write_text(yaml.safe_dump(d))
+    return path
+
+
+@pytest.mark.slow
+def test_only_a_failed_claim_fails_the_comparison(tmp_path, capsys):
+    """The crate is 5 mm from the object at the start, within d_s: the avoiding run is
+    refused before its first sample (exit 1, NO); the runs without avoidance complete
+    and go into it (measured: penetration)."""
+    out = tmp_path / "out"
+    assert main(["collisions", str(_crate(tmp_path)), "--out", str(out), "--quiet",
+                 "--no-plots"]) == 1
+    captured = capsys.readouterr()
+    lines = captured.out.splitlines()
+    avoiding = next(x for x in lines if x.startswith("  avoiding "))
+    assert "0 samples, FAILED on collision at t = 0 s" in avoiding
+    assert any("object - crate is 5.30 mm apart at the start" in x for x in lines)  # below it
+    for folder in ("not_avoiding", "fixed_grasp"):
+        line = next(x for x in lines if x.startswith(f"  {folder} "))
+        assert "completed; nearest -" in line and "(object - crate); penetration;" in line
+    assert "  NO   the run with avoidance completes and keeps the safety distance" in lines
+    assert "claim not met: the run with avoidance completes" in captured.err
+    record = json.loads((out / "collisions.json").read_text())
+    assert record["status"] == "failed"
+    assert record["claims"] == {"avoiding_completes_and_keeps_clearance": False}
+    assert record["runs"]["avoiding"]["failure"]["criterion"] == "collision"
+    assert record["runs"]["not_avoiding"]["penetration"] is True
+
+
+@pytest.mark.slow
+def test_the_demos_story_is_claimed_only_on_request(compared, tmp_path, capsys):
+    """--expect-penetration claims the pillar demo's story: on the short file nothing
+    penetrates yet, so those claims fail (exit 1)."""
+    config, _, _, _ = compared
+    out = tmp_path / "out"
+    assert main(["collisions", str(config), "--out", str(out), "--quiet", "--no-plots",
+                 "--expect-penetration"]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert "  yes  the run with avoidance completes and keeps the safety distance" in lines
+    assert "  NO   the run without avoidance penetrates" in lines
+    assert "  NO   the fixed grasp penetrates" in lines
+    record = json.loads((out / "collisions.json").read_text())
     assert record["claims"] == {"avoiding_completes_and_keeps_clearance": True,
                                 "not_avoiding_penetrates": False,
                                 "fixed_grasp_penetrates": False}
 
 
+def test_a_run_without_avoidance_that_fails_is_a_measurement_with_its_reason():
+    """The fixed grasp cannot do the task of a file: printed with why; the claim holds."""
+    failure = {"criterion": "range", "sample": 40, "t_s": 1.24,
+               "message": "step 40 at t = 1.2400 s: follower joint 3 left its range"}
+
+    def outcome(ok, solver, **extra):
+        summary = {"solver": solver, "status": "completed" if ok else "failed",
+                   "samples": 41 if not ok else 101, "grasp_start_m": 0.45,
+                   "grasp_end_m": 0.3, "failure": None if ok else failure,
+                   "realised_limits": {"clearance": {
+                       "min_m": 0.05, "pair": "follower.link2 - pillar", "sample": 3,
+                       "kept": True, "enforced": solver == "nullspace" and ok, **extra}}}
+        return SimpleNamespace(ok=ok, summary=summary)
+
+    runs = {"avoiding": outcome(True, "nullspace"), "not_avoiding": outcome(True, "sns"),
+            "fixed_grasp": outcome(False, "fixed_grasp", min_m=-0.01)}
+    comparison = Comparison(runs, _checks(runs))
+    assert comparison.ok and comparison.status == "completed"
+    lines = describe(comparison)
+    fixed = next(x for x in lines if x.startswith("  fixed_grasp "))
+    assert "41 samples, FAILED on range at t = 1.24 s; nearest -10.0 mm" in fixed
+    assert "; penetration;" in fixed
+    assert lines[lines.index(fixed) + 1] == f"      {failure['message']}"
+    assert "NO" not in "\n".join(lines)
+
+
 def test_each_runs_config_yaml_rebuilds_that_run(compared):
-    _, out, _ = compared
+    _, out, _, _ = compared
     for folder, solver, enabled in zip(FOLDERS, ("nullspace", "nullspace", "fixed_grasp"),
                                        (True, False, False), strict=True):
         path = out / folder / "config.yaml"
@@ -84,7 +184,7 @@ def test_each_runs_config_yaml_rebuilds_that_run(compared):
 
 @pytest.mark.slow
 def test_a_comparison_replaces_its_own_output_and_keeps_other_files(compared, tmp_path):
-    config, _, _ = compared
+    config, _, _, _ = compared
     out = tmp_path / "out"
     argv = ["collisions", str(config), "--out", str(out), "--quiet", "--no-plots"]
     out.mkdir()

@@ -27,6 +27,10 @@ CURVED = CONFIGS / "curved_bar_waypoints.yaml"
 _BASE = {"paper": yaml.safe_load(PAPER.read_text()),
          "curved": yaml.safe_load(CURVED.read_text())}
 
+#: The PUMA 560 of Table 1 as a plain DH table (mm, deg): no acceleration limits.
+PUMA_DH = [[0, -90, 0], [431.8, 0, 149.09], [-20.32, 90, 0], [0, -90, 433.07], [0, 90, 0],
+           [0, 0, 56.25]]
+
 #: A follower base that is 50 mm and 2 deg away from the one that closes the grasp.
 WRONG_BASE = {"position": [350, 1380, 0], "rpy": [0, 0, 2]}
 
@@ -236,6 +240,19 @@ CASES: list[Case] = [
      ("exactly one",), ()),
     ("leader-joints-off-the-path", "paper", _set("leader.initial", {"joints": [0] * 6}),
      "leader.initial.joints", ("mm", "deg", "D(t0)"), ()),
+    # --- limits the arms do not state ----------------------------------------------------------
+    ("acceleration-limits-dh-arm-without-qdd_max", "paper",
+     _all(_set("controller.acceleration_limits", True),
+          lambda d: d["follower"].pop("preset"),
+          _set("follower.dh", {"rows": PUMA_DH})),
+     "follower.qdd_max", ("acceleration_limits", "any joint", "deg/s^2", "6"), ()),
+    ("physics-tau_max-wrong-length", "paper", _set("physics", {"tau_max": {"leader": [10, 20]}}),
+     "physics.tau_max.leader", ("1 value", "or 6", "got 2"), ()),
+    # --- units ---------------------------------------------------------------------------------
+    ("metres-in-a-mm-file", "paper", _set("trajectory.start.position", [-0.0003, 0.69, 0.2604]),
+     "units.length", ("units may be wrong", "units.length is mm", "trajectory.start"), ()),
+    ("mm-in-a-metres-file", "paper", _set("units.length", "m"),
+     "units.length", ("units may be wrong", "times the arm's reach", "metres"), ()),
     # --- names, surfaces, paths ---------------------------------------------------------------
     ("name-with-nul", "paper", _set("name", "run\x00x"), "name", ("control character",), ()),
     ("name-only-dots", "paper", _set("name", ".."), "name", ("letter or digit",), ()),

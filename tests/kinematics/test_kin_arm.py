@@ -220,3 +220,23 @@ def test_model_velocity_limits_are_symmetric_and_appendable():
     other.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), "extra")
     joined = pin.appendModel(arm.model, other, arm.tool_frame_id, pin.SE3.Identity())
     assert joined.nq == 7
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_reach_bounds_the_tool_and_is_reached_stretched_out(convention: str) -> None:
+    """A planar arm of links 0.5 and 0.3 m with a 0.1 m tool reaches 0.9 m, stretched out;
+    the PUMA's tool never leaves its bound, whatever the base."""
+    from dualarm_qp.kinematics.reach import arm_reach
+
+    rows = ([[0.5, 0, 0], [0.3, 0, 0]] if convention == "standard"
+            else [[0, 0, 0], [0.5, 0, 0], [0.3, 0, 0]])
+    planar = SerialArm(DHTable.from_rows(rows, convention), tool=trans(0.1), base=trans(1, 2))
+    assert arm_reach(planar) == pytest.approx(0.9, abs=1e-15)
+    stretched = planar.fk(np.zeros(planar.n))[:3, 3] - planar.base[:3, 3]
+    assert np.linalg.norm(stretched) == pytest.approx(0.9, abs=1e-15)
+    rng = np.random.default_rng(3)
+    arm = puma560(base=random_pose(rng), tool=trans(0, 0, 0.2))
+    reach = arm_reach(arm)
+    far = max(np.linalg.norm(arm.fk(q)[:3, 3] - arm.base[:3, 3])
+              for q in rng.uniform(-np.pi, np.pi, (500, 6)))
+    assert 0.9 * reach < far <= reach

@@ -41,6 +41,7 @@ CHAINS = [
     ("baxter", "left_arm_mount", "left_gripper"),
     ("baxter", "base", "left_gripper"),
     ("baxter", "base", "right_gripper"),
+    ("kinova", "base", "j2s6s200_end_effector"),  # three continuous joints
 ]
 
 
@@ -49,10 +50,18 @@ def random_pose(rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
 
 
 def urdf_limits(path: Path, joints: list[str]) -> tuple[np.ndarray, ...]:
-    """``lower``, ``upper`` and ``velocity`` of the joints' limit tags, read as XML."""
-    tags = {j.get("name"): j.find("limit") for j in ET.parse(path).getroot().findall("joint")}
+    """``lower``, ``upper`` and ``velocity`` of the joints' limit tags, read as XML.
+
+    A continuous joint has no range (-inf, inf), whatever its tag says.
+    """
+    found = {j.get("name"): j for j in ET.parse(path).getroot().findall("joint")}
+    tags = {name: j.find("limit") for name, j in found.items()}
+    endless = {name for name, j in found.items() if j.get("type") == "continuous"}
     lo, hi, vel = ([float(tags[name].get(k)) for name in joints]  # type: ignore[union-attr, arg-type]
                    for k in ("lower", "upper", "velocity"))
+    for i, name in enumerate(joints):
+        if name in endless:
+            lo[i], hi[i] = -np.inf, np.inf
     return np.array(lo), np.array(hi), np.array(vel)
 
 
@@ -197,13 +206,38 @@ def test_urdf_speed_zero_means_no_limit(tmp_path: Path) -> None:
     np.testing.assert_array_equal(arm.qd_max, [np.inf, 1.5])
 
 
-@pytest.mark.parametrize(("kind", "words"), [("continuous", "continuous"),
-                                             ("prismatic", "prismatic")])
-def test_urdf_joint_kinds_refused(tmp_path: Path, kind: str, words: str) -> None:
-    with pytest.raises(RobotModelError, match=f"joint 'a' is {words}") as err:
-        urdf_arm(write_urdf(tmp_path, kind_a=kind), "world", "tip")
+def test_urdf_prismatic_joint_refused(tmp_path: Path) -> None:
+    with pytest.raises(RobotModelError, match="joint 'a' is prismatic") as err:
+        urdf_arm(write_urdf(tmp_path, kind_a="prismatic"), "world", "tip")
     assert err.value.field == "chain"
-    urdf_arm(write_urdf(tmp_path, kind_a=kind), "l1", "tip")  # not in the chain: locked
+    urdf_arm(write_urdf(tmp_path, kind_a="prismatic"), "l1", "tip")  # not in the chain: locked
+
+
+@pytest.mark.parametrize("axis", ["0 0 1", "0 0.6 0.8", "0 -1 0"])
+def test_urdf_continuous_joint_is_one_angle_without_range(tmp_path: Path, axis: str) -> None:
+    """A continuous joint is a revolute joint of range +-inf: one angle, not wrapped, the
+    same kinematics as the revolute joint of the same axis, its speed and effort kept."""
+    text = TWO_LINK.format(kind_a="continuous", vel_a="2").replace(
+        '<axis xyz="0 0 1"/>', f'<axis xyz="{axis}"/>', 1)
+    (tmp_path / "continuous.urdf").write_text(text)
+    (tmp_path / "revolute.urdf").write_text(text.replace('"continuous"', '"revolute"'))
+    arm = urdf_arm(tmp_path / "continuous.urdf", "world", "tip")
+    same = urdf_arm(tmp_path / "revolute.urdf", "world", "tip")
+    assert arm.n == 2 and arm.model.nq == 2 and arm.joint_names == ["a", "b"]
+    np.testing.assert_array_equal(arm.q_min, [-np.inf, -3])
+    np.testing.assert_array_equal(arm.q_max, [np.inf, 0.5])
+    np.testing.assert_array_equal(arm.qd_max, [2, 1.5])
+    np.testing.assert_array_equal(arm.model.effortLimit, [1, 1])
+    rng = np.random.default_rng(4)
+    for q in ([0.0, 0.0], [7.5, -0.4], *rng.uniform(-10, 10, (10, 2))):
+        q = np.asarray(q, dtype=float)
+        np.testing.assert_allclose(arm.fk(q), same.fk(q), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(arm.jacobian(q), fd_jacobian(arm, q), atol=1e-9)
+    np.testing.assert_allclose(arm.fk([0.3 + 2 * np.pi, 0.2]), arm.fk([0.3, 0.2]),
+                               atol=1e-14)  # a turn on: the same pose, another angle
+    ranged = urdf_arm(tmp_path / "continuous.urdf", "world", "tip", q_min=[-4, -3],
+                      q_max=[4, 0.5])
+    np.testing.assert_array_equal(ranged.q_min, [-4, -3])
 
 
 def test_bad_urdf_files(tmp_path: Path) -> None:
@@ -218,3 +252,37 @@ def test_bad_urdf_files(tmp_path: Path) -> None:
     with pytest.raises(RobotModelError, match="tip frame 'hand' not found") as err:
         urdf_arm(write_urdf(tmp_path), "world", "hand")
     assert err.value.field == "tip"
+
+
+@needs_robots
+def test_kinova_continuous_joints_are_its_urdf_made_revolute(tmp_path: Path) -> None:
+    """The Jaco with its three continuous joints equals the same URDF with them typed
+    revolute: the same poses, Jacobians, inertias (hence joint torques), efforts and
+    speed limits, one coordinate per joint; only the ranges differ (none, where the
+    revolute copy reads the limit tags' +-2 pi)."""
+    from dualarm_qp.task.torques import ArmStatics
+
+    path = example_robot_urdf("kinova")
+    assert path.read_text().count('type="continuous"') == 3
+    copy = tmp_path / "kinova_revolute.urdf"
+    copy.write_text(path.read_text().replace('type="continuous"', 'type="revolute"'))
+    arm = example_robot_arm("kinova", "base", "j2s6s200_end_effector")
+    same = urdf_arm(copy, "base", "j2s6s200_end_effector")
+    assert arm.model.nq == arm.model.nv == 6 and arm.joint_names == same.joint_names
+    endless = [0, 3, 5]
+    np.testing.assert_array_equal(arm.q_min[endless], -np.inf)
+    np.testing.assert_array_equal(arm.q_max[endless], np.inf)
+    np.testing.assert_array_equal(same.q_max[endless], 6.28318530718)
+    np.testing.assert_array_equal(arm.q_min[[1, 2, 4]], same.q_min[[1, 2, 4]])
+    np.testing.assert_array_equal(arm.qd_max, same.qd_max)
+    np.testing.assert_array_equal(arm.model.effortLimit, same.model.effortLimit)
+    for j in range(1, arm.model.njoints):
+        assert arm.model.inertias[j] == same.model.inertias[j]
+    rng = np.random.default_rng(5)
+    g = np.array([0.0, 0.0, -9.81])
+    statics, statics_same = ArmStatics(arm, g), ArmStatics(same, g)
+    for q in rng.uniform(-7.0, 7.0, (10, 6)):
+        np.testing.assert_allclose(arm.fk(q), same.fk(q), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(arm.jacobian(q), same.jacobian(q), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(statics.torque(q, np.zeros(6)),
+                                   statics_same.torque(q, np.zeros(6)), rtol=0, atol=1e-12)

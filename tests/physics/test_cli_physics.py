@@ -56,6 +56,56 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     assert again["outputs"].count("physics.png") == 1
 
 
+def test_a_verdict_other_than_ok_exits_1_and_still_writes_everything(short_run, capsys):
+    """A torque over its limit: exit code 1, the cause named, every output written."""
+    resolved = short_run / "config.yaml"
+    data = yaml.safe_load(resolved.read_text())
+    data["physics"] = {"tau_max": {"leader": 1.0}}  # N m: far below what the beam needs
+    resolved.write_text(yaml.safe_dump(data))
+    assert main(["physics", str(short_run)]) == 1
+    captured = capsys.readouterr()
+    physics = json.loads((short_run / "summary.json").read_text())["physics"]
+    assert physics["status"] == "torque" and physics["cause"] == "torque"
+    assert physics["cause_sample"] == 0 and physics["cause_t_s"] == 0.0  # holding the load
+    assert physics["message"].startswith("leader.joint")
+    assert "passed its torque limit at t = 0.000 s (sample 0)" in physics["message"]
+    assert "physics.status: torque (cause: torque, from t = 0.000 s, sample 0)" in captured.out
+    assert f"physics check TORQUE: {physics['message']}" in captured.err
+    assert (short_run / "physics.png").is_file()
+    assert "physics.status: <b>torque</b>" in (short_run / "report.html").read_text()
+
+
+@pytest.mark.slow
+def test_a_servo_oscillation_is_named_and_fails_the_check(tmp_path, capsys):
+    """Servo gains too stiff for the PUMA's wrists without armature: the closed loop
+    oscillates at about 73 Hz, growing, until the controller stops it on the closure.
+    The check exits 1 and names the oscillation, not a second-order error of the plan."""
+    path = _short_beam(tmp_path, kp=5e4, armature=0, rotation_max=170)  # deg: stopped
+    data = yaml.safe_load(path.read_text())
+    data["controller"]["duration"] = 0.62  # 20 samples; the loop stops at the 16th
+    path.write_text(yaml.safe_dump(data))
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots"]) == 0
+    capsys.readouterr()
+    assert main(["physics", str(out)]) == 1
+    err = capsys.readouterr().err
+    physics = json.loads((out / "summary.json").read_text())["physics"]
+    assert physics["status"] == "stopped" and physics["cause"] == "oscillation"
+    assert physics["cause_t_s"] < 0.1 and physics["closed_loop"]["samples"] == 17
+    oscillation = physics["oscillation"]
+    assert 60.0 < oscillation["frequency_hz"] < 90.0
+    assert oscillation["largest_joint"] == "follower.joint3"
+    assert "oscillated" in err and "then the controller stopped the closed loop" in err
+    assert "second-order" not in err and "second-order" not in json.dumps(physics)
+    # The same file run against the simulator: the measured closure fails first; the
+    # plan, followed exactly, would have kept it, so the plan is not blamed.
+    assert main(["run", str(path), "--out", str(tmp_path / "mj"), "--quiet", "--no-plots",
+                 "--plant", "mujoco"]) == 1
+    err = capsys.readouterr().err
+    assert "grasp closure lost" in err and "the plant did not follow the command" in err
+    assert "second-order" not in err
+
+
 @pytest.mark.parametrize(("ratio", "words"), [(float("nan"), "no torque limits"),
                                                (None, "no torque limits"),
                                                (0.5, "torque/limit 0.5 ")])

@@ -74,3 +74,36 @@ def test_a_run_the_preflight_refuses_never_resets_the_plant():
     assert not result.completed and result.failure is not None
     assert result.failure.criterion == "unreachable" and len(result.trace) == 0
     assert plant.resets == [] and plant.calls == 0
+
+
+class RingingPlant(LaggingPlant):
+    """Follows every command, but a follower joint rings about it, growing each sample."""
+
+    def advance(self, state, command, dt):
+        moved = super().advance(state, command, dt)
+        q_f = moved.q_f.copy()
+        q_f[1] += 2e-4 * (-1.8) ** self.calls  # rad
+        return DualArmState(moved.t, moved.q_l, q_f, moved.sigma, moved.sigma_leader)
+
+
+def test_an_error_only_the_plant_made_is_not_blamed_on_the_plan():
+    """The measured closure breaks its tolerance, the command followed exactly would not
+    have: the failure says the plant did not follow, with no kinematic explanation."""
+    exp = _experiment("puma_beam_limits.yaml", 0.31)
+    result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
+                     plant=RingingPlant(1.0))
+    assert result.failure is not None and result.failure.criterion == "closure"
+    message = result.failure.message
+    assert "grasp closure lost" in message and "the plant did not follow the command" in message
+    assert "cause:" not in message and "second-order" not in message
+
+
+def test_an_error_the_plan_made_itself_keeps_its_explanation():
+    """The paper's method jumps at its first step: followed exactly, the command breaks
+    the closure tolerance itself, so the plan's kinematics are to blame."""
+    exp = _experiment("puma_beam_sliding_s7_100.yaml", 0.31)
+    result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
+                     plant=LaggingPlant(1.0))
+    assert result.failure is not None and result.failure.criterion == "closure"
+    assert "cause: " in result.failure.message
+    assert "the plant did not follow" not in result.failure.message

@@ -152,14 +152,16 @@ def test_a_physics_torque_limit_needs_one_value_or_one_per_joint(config):
     if config.startswith("ur5") and example_robots_dir() is None:
         pytest.skip("example-robot-data is not installed")
     data = yaml.safe_load((CONFIGS / config).read_text())
+    exp = build_experiment(parse_config(data, config), config)
     data["physics"] = {"tau_max": {"follower": [1, 2, 3]}}
     cfg = parse_config(data, config)
-    exp = build_experiment(cfg, config)
-    with pytest.raises(ConfigError) as err:
-        settings_for(cfg, exp, config)
-    text = str(err.value)
-    assert config in text and "physics.tau_max.follower" in text
-    assert f"1 value (every joint) or {exp.task.follower.n}" in text
+    for refuse in (lambda: build_experiment(cfg, config),  # at load, as run does
+                   lambda: settings_for(cfg, exp, config)):
+        with pytest.raises(ConfigError) as err:
+            refuse()
+        text = str(err.value)
+        assert config in text and "physics.tau_max.follower" in text
+        assert f"1 value (every joint) or {exp.task.follower.n}" in text
     with pytest.raises(InvalidInputError, match="follower: torque limits need 1 value"):
         torque_limits(exp.task, PhysicsSettings.from_spec(cfg.physics, 1e-3))
 

@@ -99,36 +99,6 @@ def test_an_empty_box_gives_the_two_calls_answer() -> None:
     assert one.status is Status.INFEASIBLE
 
 
-def test_the_call_keeps_the_basis_and_rows_it_computed(
-        monkeypatch: pytest.MonkeyPatch) -> None:
-    from dualarm_qp.solvers import _affine
-    from dualarm_qp.step import problem as problem_module
-
-    solved = random_problem(np.random.default_rng(5))
-    NullspaceSolver().solve_certified(solved, DEFAULT_TOLERANCE)
-    copy = solved.scaled(0.5)  # taken before anything read them: the kernel's tuples
-    ref = fresh(solved)
-    rows, basis = ref.inequalities(), _affine.problem_basis(ref)
-
-    def computed_again(*_: object) -> None:
-        raise AssertionError("computed again: the call's own was not kept")
-
-    # Kept as the kernel gave them, made objects when first read, never computed again.
-    monkeypatch.setattr(problem_module.kernel, "inequalities", computed_again)
-    monkeypatch.setattr(_affine.kernel, "basis", computed_again)
-    for problem in (copy, solved, copy, solved.scaled(0.25)):  # first reads, then again
-        kept = problem.inequalities()
-        assert kept is problem.inequalities()
-        for name in ("C", "e", "kind", "index"):
-            assert np.array_equal(getattr(kept, name), getattr(rows, name))
-        assert kept.labels(list(range(len(kept.e)))) == rows.labels(list(range(len(rows.e))))
-        kept_basis = _affine.problem_basis(problem)
-        assert kept_basis is _affine.problem_basis(problem)
-        assert np.array_equal(kept_basis.N, basis.N) and np.array_equal(kept_basis.P, basis.P)
-        assert (kept_basis.rank, kept_basis.sigma_max, kept_basis.qr) == (
-            basis.rank, basis.sigma_max, basis.qr)
-
-
 def test_the_registry_solver_takes_the_kernel_call(monkeypatch: pytest.MonkeyPatch) -> None:
     solver = get_solver("nullspace")
     calls = []
