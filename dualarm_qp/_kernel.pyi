@@ -246,7 +246,7 @@ def load_torques(leader: Chain, leader_tool: int, follower: Chain, follower_tool
                  q_l: ArrayLike, q_f: ArrayLike, gravity: ArrayLike, mass: float,
                  points: Sequence[ArrayLike], free: Sequence[Sequence[ArrayLike]],
                  centres: Sequence[ArrayLike], grasp_step: float, fallback_length: float,
-                 rcond_min: float) -> tuple[_F, _F, _F]: ...
+                 rcond_min: float) -> LoadTorques: ...
 
 PINOCCHIO_VERSION: str
 COAL_VERSION: str
@@ -276,7 +276,7 @@ class Chain:
                     inertia: ArrayLike) -> None: ...
     def set_gravity(self, g: ArrayLike) -> None: ...
     def static_torques(self, q: ArrayLike, frame: int, wrench: ArrayLike,
-                       point: ArrayLike | None, derivatives: bool) -> tuple[_F, _F, _F]: ...
+                       point: ArrayLike | None, derivatives: bool) -> StaticTorques: ...
 
 def braking_bound(D: ArrayLike, delta: ArrayLike, dt: ArrayLike) -> _F: ...
 class Context:
@@ -455,6 +455,16 @@ class Step:
               follower: Chain, q_f: ArrayLike, T_D: ArrayLike, twist: ArrayLike,
               sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
               x_applied: ArrayLike, t: float, scale_max: float, user: object) -> None: ...
+
+class StaticTorques:
+    tau: _F
+    dtau: _F
+    J: _F
+
+class LoadTorques:
+    tau: _F
+    D: _F
+    w: _F
 
 class RateRange:
     lower: float

@@ -182,7 +182,7 @@ class ArmStatics(KernelHolder):
             Where the force acts [m], world frame (the grasp point); default the tool
             point. The moment is moved from it to the tool point, whose Jacobian is used.
         """
-        tau, _, _ = self._chain.static_torques(q, self.frame, wrench, point, False)
+        tau = self._chain.static_torques(q, self.frame, wrench, point, False).tau
         return tau
 
     def linearised(self, q: FloatArray, wrench: FloatArray, point: FloatArray | None = None
@@ -206,7 +206,8 @@ class ArmStatics(KernelHolder):
         J : ndarray, shape (6, n)
             Tool-point Jacobian, world axes ``[v; omega]``.
         """
-        tau, dtau, J = self._chain.static_torques(q, self.frame, wrench, point, True)
+        st = self._chain.static_torques(q, self.frame, wrench, point, True)
+        tau, dtau, J = st.tau, st.dtau, st.J
         return tau, dtau, J
 
 
@@ -300,8 +301,8 @@ class LoadTorques:
         """
         load = self.task.load
         if load is not None and self.task.contact is None:
-            tau, D, w = self._with_split(load, q_l, q_f, sigma, sigma_l)
-            return TorqueState(tau, D, w)
+            lt = self._with_split(load, q_l, q_f, sigma, sigma_l)
+            return TorqueState(lt.tau, lt.D, lt.w)
         n_l, n_f, n_g = self.n_l, self.n_f, self.n_grasp
         w, c = self._split(q_l, sigma, sigma_l)
         tau_l, dl, J_l = self.leader.linearised(q_l, w[0], None if c is None else c[0])
@@ -319,8 +320,8 @@ class LoadTorques:
         return TorqueState(np.r_[tau_l, tau_f], D, w)
 
     def _with_split(self, load: ObjectLoad, q_l: FloatArray, q_f: FloatArray, sigma: float,
-                    sigma_l: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``(tau, D, w)`` of grasps: the hands at the state and at each moved grasp.
+                    sigma_l: float) -> kernel.LoadTorques:
+        """``tau``, ``D`` and ``w`` of grasps: the hands at the state and at each moved grasp.
 
         The follower's grasp moved by :data:`GRASP_STEP` moves only the follower's hand
         (the rest of the set-up is kept); a sliding leader's moves the object.

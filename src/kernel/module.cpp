@@ -43,6 +43,13 @@ struct RateRange {
   double upper;
 };
 
+// Chain.static_torques's answer: the torques and, when asked, their derivatives.
+struct StaticTorques {
+  Vec tau;           // n [N m]
+  dqk::RowMat dtau;  // n x n: d tau / d q at a fixed wrench (0 x 0 when not asked)
+  dqk::RowMat J;     // 6 x n: the frame's world Jacobian (0 x 0 when not asked)
+};
+
 void bind_results(nb::module_& m) {
   nb::class_<RateRange>(m, "RateRange", "A grasp's sliding rates over one sample [m/s].")
       .def_ro("lower", &RateRange::lower, "rho_min [m/s].")
@@ -54,6 +61,21 @@ void bind_results(nb::module_& m) {
       .def_ro("rotation_error", &I::rotation_error, "The angle of R* R(q)^T [rad].")
       .def_prop_ro("stop", [](const I& a) { return static_cast<int>(a.stop); },
                    "0 converged, 1 iteration limit, 2 local minimum, 3 no descent.");
+  nb::class_<StaticTorques> st(m, "StaticTorques",
+                               "Joint torques holding a chain still under a hand wrench.");
+  array_property(st, "tau", &StaticTorques::tau, "(n,) joint torques [N m].");
+  array_property(st, "dtau", &StaticTorques::dtau,
+                 "(n, n) d tau / d q at a fixed wrench [N m/rad]; (0, 0) when not asked.");
+  array_property(st, "J", &StaticTorques::J,
+                 "(6, n) the frame's world Jacobian; (0, 0) when not asked.");
+  nb::class_<dqk::LoadTorques> lt(m, "LoadTorques",
+                                  "Both arms' torques under the carried load, linearised.");
+  array_property(lt, "tau", &dqk::LoadTorques::tau,
+                 "(n_l + n_f,) the leader's joint torques, then the follower's [N m].");
+  array_property(lt, "D", &dqk::LoadTorques::D,
+                 "(n_l + n_f, n_l + n_f + n_grasp) d tau / d (q_l, q_f, grasps).");
+  array_property(lt, "w", &dqk::LoadTorques::w,
+                 "(2, 6) each hand's wrench on the object [N, N m], about its grasp point.");
 }
 
 }  // namespace
@@ -99,11 +121,11 @@ NB_MODULE(_kernel, m) {
           [](dqk::Chain& chain, const Eigen::VectorXd& q, int frame, const dqk::Vec6& wrench,
              const std::optional<Eigen::Vector3d>& point, bool derivatives) {
             const Index n = chain.nq();
-            Vec tau(n);
-            dqk::RowMat dtau(derivatives ? n : 0, derivatives ? n : 0);
-            dqk::RowMat J(derivatives ? 6 : 0, derivatives ? n : 0);
-            dqk::static_torques(chain, q, frame, wrench, point, tau, derivatives, dtau, J);
-            return nb::make_tuple(out(std::move(tau)), out(std::move(dtau)), out(std::move(J)));
+            StaticTorques r{Vec(n), dqk::RowMat(derivatives ? n : 0, derivatives ? n : 0),
+                            dqk::RowMat(derivatives ? 6 : 0, derivatives ? n : 0)};
+            dqk::static_torques(chain, q, frame, wrench, point, r.tau, derivatives, r.dtau,
+                                r.J);
+            return r;
           },
           "q"_a, "frame"_a, "wrench"_a, "point"_a.none(), "derivatives"_a,
           "Joint torques holding the chain at q with the hand at frame applying wrench to "
@@ -245,10 +267,8 @@ NB_MODULE(_kernel, m) {
                   "load_torques: each set's points are (2, 3)");
           sets[k] = {dqk::Points(points[k]), free[k], centres[k]};
         }
-        dqk::LoadTorques r = dqk::load_torques(leader, leader_tool, follower, follower_tool,
-                                               q_l, q_f, gravity, mass, sets, grasp_step,
-                                               fallback_length, rcond_min);
-        return nb::make_tuple(out(std::move(r.tau)), out(std::move(r.D)), out(std::move(r.w)));
+        return dqk::load_torques(leader, leader_tool, follower, follower_tool, q_l, q_f,
+                                 gravity, mass, sets, grasp_step, fallback_length, rcond_min);
       },
       "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "q_l"_a, "q_f"_a,
       "gravity"_a, "mass"_a, "points"_a, "free"_a, "centres"_a, "grasp_step"_a,

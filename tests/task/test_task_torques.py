@@ -250,7 +250,8 @@ def test_load_torques_kernel_refuses_malformed_sets() -> None:
     args = (torques.leader.chain, torques.leader.frame, torques.follower.chain,
             torques.follower.frame, s.q_l, s.q_f, load.gravity, load.mass)
     tail = (GRASP_STEP, FALLBACK_LENGTH, RCOND_MIN)
-    tau, _, w = kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, *tail)
+    loads = kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, *tail)
+    tau, w = loads.tau, loads.w
     np.testing.assert_allclose(tau, torques.torques(s.q_l, s.q_f, s.sigma), atol=1e-9)
     np.testing.assert_allclose(w, torques.wrenches(s.q_l, s.sigma), atol=1e-9)
     with pytest.raises(ValueError, match="one set per sliding grasp"):
