@@ -122,7 +122,8 @@ def _add_physics(sub: Any) -> None:
 def _add_reproduce(sub: Any) -> None:
     """Add the command for the paper's cases."""
     rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases and the "
-                        "same task with hard limits, draw Figs. 5-6")
+                        "same task with hard limits, draw Figs. 5-6; report.html leads "
+                        "to each case")
     rp.add_argument("--out", default="reproduction", help="output folder (default reproduction)")
     rp.add_argument("--configs", type=Path, default=None,
                     help="folder with the three YAML files (default: the bundled copies)")

@@ -240,11 +240,12 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
             print(f"      warning: {warning}")
     if rep.interrupted is not None:
         print_error(f"interrupted in case ({rep.interrupted}); the cases done are written, "
-                    "without the figures; see reproduce.json")
+                    "without the figures; see report.html and reproduce.json")
         return EXIT_INTERRUPTED
     for claim, held in rep.checks["claims"].items():
         print(f"  {'yes' if held else 'NO '}  {claim.replace('_', ' ')}")
-    print("  figures: fig5_joint3.png, fig6_grasp.png; details in reproduce.json")
+    print(f"  open {args.out}/report.html: each case, the claims and the figures "
+          "(fig5_joint3.png, fig6_grasp.png); every number in reproduce.json")
     return EXIT_OK if rep.ok else EXIT_FAILED
 
 

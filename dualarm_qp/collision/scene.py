@@ -48,7 +48,7 @@ from ..errors import InvalidInputError, NonFiniteError, ObstacleOverlapError
 from ..geometry.bounds import bounding_capsule, distance_to_point
 from ..geometry.distance import EPA_TOLERANCE, GJK_TOLERANCE, Proximities, coal_parts
 from ..geometry.links import arm_capsules
-from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
+from ..geometry.shapes import Box, Capsule
 from ..kinematics.arm import SerialArm
 from .settings import CollisionSettings
 
@@ -201,10 +201,7 @@ class CollisionScene(KernelHolder):
         """Every body in the world (its shape placed by its frame in ``frames``)."""
         out: list[Capsule | Box] = []
         for body, f in zip(self.bodies, self._frame_list, strict=True):
-            T = frames[f]
-            shape = body.shape
-            out.append(placed_capsule(shape, T) if isinstance(shape, Capsule)
-                       else placed_box(shape, T))
+            out.append(body.shape.placed(frames[f]))
         return out
 
     def measure(self, frames: FloatArray, within: float = np.inf) -> Measured:
@@ -229,13 +226,13 @@ class CollisionScene(KernelHolder):
         NonFiniteError
             A body's frame is not finite (its pairs are never skipped as far).
         """
-        finite, keep, *near = kernel.scene_proximities(
+        p = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
             self._a, self._b, self._r, self._sphere, self._ia_list, self._ib_list,
             float(within), self._exact)
-        if not finite:
+        if not p.finite:
             raise NonFiniteError("the collision scene's frames")
-        return Measured(keep, Proximities(*near))
+        return Measured(p.pairs, Proximities(p.distance, p.point_a, p.point_b, p.normal))
 
     def measured_as(self) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray,
                                    list[int], list[int], Any]:
