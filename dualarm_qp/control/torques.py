@@ -34,7 +34,7 @@ from ..errors import DualArmError
 from ..solvers._scale import max_task_scale
 from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
-from ..task.loads import hand_statics
+from ..task.hands import hand_statics
 from ..task.torques import LoadTorques, model_effort, torque_limits_of
 from .trace import Trace
 
