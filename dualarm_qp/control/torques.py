@@ -34,13 +34,13 @@ from ..errors import DualArmError
 from ..solvers._scale import max_task_scale
 from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
-from ..task.loads import hand_statics
+from ..task.hands import hand_statics
 from ..task.torques import LoadTorques, model_effort, torque_limits_of
 from .trace import Trace
 
 if TYPE_CHECKING:
     from .controller import DualArmController
-    from .rollout import Failure
+    from .failure import Failure
 
 FloatArray = NDArray[np.float64]
 

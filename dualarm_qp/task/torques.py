@@ -45,14 +45,8 @@ from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
-from .loads import (
-    FALLBACK_LENGTH,
-    GraspStatics,
-    ObjectLoad,
-    hand_statics,
-    sliding_statics,
-    split_load,
-)
+from .hands import hand_statics
+from .loads import FALLBACK_LENGTH, GraspStatics, ObjectLoad, sliding_statics, split_load
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]

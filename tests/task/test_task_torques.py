@@ -24,7 +24,8 @@ from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.experiments import build_experiment, parse_config
 from dualarm_qp.kinematics.puma560 import puma560
 from dualarm_qp.kinematics.robots import example_robot_arm, example_robots_dir
-from dualarm_qp.task.loads import hand_statics, split_load
+from dualarm_qp.task.hands import hand_statics
+from dualarm_qp.task.loads import split_load
 from dualarm_qp.task.torques import ArmStatics, LoadTorques, split_operator, torque_limits_of
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
