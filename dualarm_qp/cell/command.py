@@ -17,28 +17,11 @@ from .._signals import SignalHold, raise_if_interrupted
 from ..experiments.config import ExperimentConfig, load_config, safe_name
 from ..experiments.setup import Experiment, build_experiment
 from .base import Cell, CellSetupError
-from .loop import DriveResult, DriveSettings, Observer, drive
+from .loop import DriveResult, Observer, drive
+from .settings import drive_settings
 
 #: The cells ``drive --cell`` knows.
 CELLS = ("mujoco", "franka", "ros2")
-
-#: The watchdog's default: this many samples of ``dt``.
-WATCHDOG_SAMPLES = 3
-
-
-def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> DriveSettings:
-    """Return the loop's guards from the file's ``cell:`` section, in SI."""
-    from ..experiments.config import ANGLE_SCALE, TIME_SCALE
-
-    c = cfg.cell
-    angle, t = ANGLE_SCALE[cfg.units.angle], TIME_SCALE[cfg.units.time]
-    dt = exp.options.dt
-    return DriveSettings(
-        watchdog=WATCHDOG_SAMPLES * dt if c.watchdog is None else c.watchdog * t,
-        dry_run=dry_run,
-        start_tolerance=0.01 if c.start_tolerance is None else c.start_tolerance * angle,
-        range_margin=c.range_margin * angle)
-
 
 def check_drivable(exp: Experiment, path: str) -> None:
     """Refuse a task whose grasp the cell cannot estimate from the joints.
@@ -136,7 +119,7 @@ def _together(observers: list[Observer]) -> Observer | None:
 
 def cmd_drive(args: argparse.Namespace) -> int:
     """``dualarm-qp drive``: exit 0 completed, 1 failed or stopped, 130 interrupted."""
-    from ..cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, _err, _output_folder
+    from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
     from ..experiments.outputs import check_unused_folder
     from ..experiments.run import OUTPUT_FILES
 
@@ -156,7 +139,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
     check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
-    out = _output_folder(out)
+    out = output_folder(out)
     view = None
     if args.foxglove:
         from ..bag.live import open_drive_view
@@ -179,10 +162,11 @@ def cmd_drive(args: argparse.Namespace) -> int:
           f"{stop['samples']} samples, at rest: {stop['at_rest']}")
     print(f"  outputs: {out}/")
     if summary["status"] == "interrupted":
-        _err(f"{summary['message']}; the arms were brought to rest and the samples are written")
+        print_error(f"{summary['message']}; the arms were brought to rest and the samples "
+                    "are written")
         return EXIT_INTERRUPTED
     if not res.result.completed:
-        _err(summary["message"])
+        print_error(summary["message"])
         return EXIT_FAILED
     return EXIT_OK
 
@@ -214,5 +198,5 @@ def add_parsers(sub: Any) -> None:
     add_serve_parser(sub)
 
 
-__all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive",
-           "drive_and_write", "drive_settings", "open_cell"]
+__all__ = ["CELLS", "add_parsers", "check_drivable", "cmd_drive", "drive_and_write",
+           "open_cell"]

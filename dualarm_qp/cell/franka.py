@@ -165,7 +165,7 @@ def franka_cell(cfg: ExperimentConfig, exp: Experiment, path: str) -> FrankaCell
             raise CellSetupError(f"{path}: {role}: a Franka arm has 7 joints, the file's has "
                                  f"{getattr(exp.task, role).n}")
         addresses.append(address)
-    from .command import drive_settings
+    from .settings import drive_settings
 
     hold = drive_settings(cfg, exp, dry_run=False).watchdog
     limits = tuple((arm.qd_max, arm.qdd_max, arm.qddd_max)

@@ -32,7 +32,9 @@ from numpy.typing import NDArray
 
 from .._signals import SignalHold
 from ..control.controller import ControlOutput, DualArmController
-from ..control.rollout import Failure, RolloutResult, RunLimits
+from ..control.failure import Failure
+from ..control.result import RolloutResult
+from ..control.run_limits import RunLimits
 from ..control.trace import Trace, record, record_margins, record_state
 from ..errors import DualArmError, InfeasibleStepError
 from ..step.state import DualArmState
@@ -348,7 +350,7 @@ def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
     settings : DriveSettings
         Watchdog, dry run, start tolerance, range margin.
     limits : RunLimits, optional
-        Tolerances and cap (defaults: :class:`~dualarm_qp.control.rollout.RunLimits`).
+        Tolerances and cap (defaults: :class:`~dualarm_qp.control.run_limits.RunLimits`).
     progress : callable, optional
         Called as ``progress(path_done, 0.0)`` after every sample.
     observer : callable, optional

@@ -283,12 +283,12 @@ __all__ = ["LEAD", "OUTPUT_FILES", "Plan", "Watch", "plan_from_rollout", "plan_f
 
 def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str) -> int:
     """``drive --cell ros2 --send-run [RUN_DIR]``: exit 0 followed, 1 not, 130 interrupted."""
-    from ..cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, _err, _output_folder
+    from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
     from ..experiments.config import safe_name
     from ..experiments.outputs import check_unused_folder
-    from .command import drive_settings
     from .ros2 import ros2_settings
     from .ros2_node import ros_types
+    from .settings import drive_settings
 
     if args.dry_run:
         raise InvalidInputError("--send-run sends the run: it has no dry run")
@@ -299,7 +299,7 @@ def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str) -> int:
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / "cell_ros2_trajectory")
     check_unused_folder(out, force=args.force, what="a sent run", names=OUTPUT_FILES)
-    out = _output_folder(out)
+    out = output_folder(out)
     from ..bag.stream import StreamNames
 
     names = StreamNames.of(exp.task, cfg.cell.leader.joints, cfg.cell.follower.joints,
@@ -315,9 +315,9 @@ def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str) -> int:
           f"{summary['deviation_max_rad']:.3g} rad, at the end {summary['deviation_end_rad']:.3g}")
     print(f"  outputs: {out}/")
     if summary["status"] == "interrupted":
-        _err("interrupted; both controllers were told to hold the joints")
+        print_error("interrupted; both controllers were told to hold the joints")
         return EXIT_INTERRUPTED
     if summary["status"] != "completed":
-        _err(summary["message"])
+        print_error(summary["message"])
         return EXIT_FAILED
     return EXIT_OK
