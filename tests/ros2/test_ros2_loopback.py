@@ -210,7 +210,8 @@ def test_the_node_stops_when_the_joint_states_stop(ros_env, tmp_path) -> None:
 
 
 @pytest.mark.sigint
-def test_the_node_stops_safely_on_ctrl_c(ros_env, tmp_path) -> None:
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_the_node_stops_safely_on_ctrl_c(ros_env, tmp_path, signum) -> None:
     config = _config(tmp_path)
     cfg = load_config(config)
     stand_in = StandIn(ros_env, tmp_path, config)
@@ -221,7 +222,7 @@ def test_the_node_stops_safely_on_ctrl_c(ros_env, tmp_path) -> None:
             assert drive.poll() is None, drive.communicate()
             assert time.monotonic() < deadline
             time.sleep(0.2)
-        drive.send_signal(signal.SIGINT)
+        drive.send_signal(signum)
         out, err = drive.communicate(timeout=300)
     finally:
         log = stand_in.stop()
