@@ -12,6 +12,8 @@ positions. Three rules:
 * **jerk** (when the run keeps jerk limits): ``|a[k] - a[k-1]| / dt <= j_max (1 +
   JERK_RTOL)``, ``a`` the accelerations above (third differences of the positions),
   with ``a[-1] = 0`` (the run starts at rest or at constant rates);
+* with the samples' own times (a cell's clock, which can tick late), each difference
+  divides by its own interval instead of ``dt`` (:func:`_intervals`);
 * **range**: the distance outside ``[lo, hi]`` never exceeds its smallest earlier value
   by more than ``RANGE_TOL``: a variable that starts outside its range never moves
   further out, and one that is inside (or got back inside) never leaves it (compared
@@ -146,7 +148,30 @@ class LimitReport:
                 "jerk_ratio_max": self.jerk_ratio, "worst_jerk": self.worst_jerk}
 
 
-def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt: float,
+def _intervals(dt: float | FloatArray, rows: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Return the intervals [s] the differences of :func:`measure` divide by.
+
+    ``dt`` is the sampling interval, or the samples' times (one per row). Speeds ``v[k]``
+    (between samples ``k`` and ``k + 1``) divide by ``t[k + 1] - t[k]``; accelerations
+    (between ``v[k - 1]`` and ``v[k]``) by the distance of their midpoints; jerks (between
+    the accelerations at ``t[k - 1]`` and ``t[k]``) by ``t[k] - t[k - 1]``. Before the
+    first sample, the times repeat the first interval. Equal intervals give ``dt`` for all.
+    """
+    n = max(rows - 1, 0)
+    if np.ndim(dt) == 0:
+        h = np.full(n, float(dt))
+        return h, h, h
+    t = np.asarray(dt, dtype=np.float64)
+    h = np.diff(t)
+    if n == 0:
+        return h, h, h
+    mid = np.r_[h[0], 0.5 * (t[2:] - t[:-2])]
+    back = np.r_[h[0], h[:-1]]
+    return h, mid, back
+
+
+def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray,
+            dt: float | FloatArray,
             names: Sequence[str], *, speed_rule: bool = True,
             a_max: FloatArray | None = None, v_start: FloatArray | None = None,
             acceleration_rule: bool = False, j_max: FloatArray | None = None,
@@ -161,8 +186,9 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
         Ranges (may be infinite).
     v_max : ndarray, shape (n,)
         Speed limits [per s] (may be infinite).
-    dt : float
-        Sampling interval [s].
+    dt : float or ndarray, shape (rows,)
+        Sampling interval [s], or each sample's time [s] (a cell's clock: the
+        differences divide by the intervals between those, :func:`_intervals`).
     names : sequence of str
         Variable names for the report.
     speed_rule : bool
@@ -198,8 +224,9 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     speed_ratio = 0.0 if np.isfinite(v_max).any() else math.nan  # one sample: no motion
     js = 0
     speed = np.zeros((0, x.shape[1]))
+    h, h_mid, h_back = _intervals(dt, rows)
     if rows > 1 and np.isfinite(v_max).any():
-        speed = np.abs(np.diff(x, axis=0)) / dt
+        speed = np.abs(np.diff(x, axis=0)) / h[:, None]
         limited = np.isfinite(v_max)
         sratio = np.where(limited, speed / np.where(limited, v_max, 1.0), 0.0)
         js = int(np.argmax(sratio.max(axis=0)))
@@ -208,7 +235,7 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
             over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
             first += [(int(k), "speed", int(j)) for k, j in over[:1]]
     v0 = np.zeros(x.shape[1]) if v_start is None else np.asarray(v_start, dtype=np.float64)
-    jerk_ratio, jj, jerk = _jerks(x, v0, dt, j_max, jerk_rule, first)
+    jerk_ratio, jj, jerk = _jerks(x, v0, (h, h_mid, h_back), j_max, jerk_rule, first)
     accel_ratio, ja, accel = math.nan, 0, np.zeros((0, x.shape[1]))
     if a_max is not None:
         a_lim = np.broadcast_to(np.asarray(a_max, dtype=np.float64), x.shape[1:])
@@ -218,8 +245,8 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
             if rows > 1:
                 v0 = (np.zeros(x.shape[1]) if v_start is None
                       else np.asarray(v_start, dtype=np.float64))
-                v = np.vstack([v0, np.diff(x, axis=0) / dt])
-                accel = np.abs(np.diff(v, axis=0)) / dt  # row k: between v[k-1] and v[k]
+                v = np.vstack([v0, np.diff(x, axis=0) / h[:, None]])
+                accel = np.abs(np.diff(v, axis=0)) / h_mid[:, None]  # between v[k-1], v[k]
                 aratio = np.where(limited, accel / np.where(limited, a_lim, 1.0), 0.0)
                 ja = int(np.argmax(aratio.max(axis=0)))
                 accel_ratio = float(aratio[:, ja].max())
@@ -249,9 +276,12 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
                        jerk_ratio, names[jj] if rows > 1 and jerk_ratio == jerk_ratio else "")
 
 
-def _jerks(x: FloatArray, v0: FloatArray, dt: float, j_max: FloatArray | None, rule: bool,
+def _jerks(x: FloatArray, v0: FloatArray, steps: tuple[FloatArray, FloatArray, FloatArray],
+           j_max: FloatArray | None, rule: bool,
            first: list[tuple[int, str, int]]) -> tuple[float, int, FloatArray]:
-    """Third differences of ``x`` over ``dt`` against ``j_max``: (ratio, worst, jerks).
+    """Third differences of ``x`` (over ``steps``, :func:`_intervals`) against ``j_max``.
+
+    Returns (ratio, worst, jerks).
 
     Row ``k`` of the jerks is the change between the accelerations ``a[k-1]`` and
     ``a[k]`` of :func:`measure` (``a[-1] = 0``); a breach is appended to ``first``.
@@ -265,9 +295,10 @@ def _jerks(x: FloatArray, v0: FloatArray, dt: float, j_max: FloatArray | None, r
         return math.nan, 0, empty
     if x.shape[0] < 2:
         return 0.0, 0, empty
-    v = np.vstack([v0, np.diff(x, axis=0) / dt])
-    a = np.vstack([np.zeros(x.shape[1]), np.diff(v, axis=0) / dt])
-    jerk = np.abs(np.diff(a, axis=0)) / dt
+    h, h_mid, h_back = steps
+    v = np.vstack([v0, np.diff(x, axis=0) / h[:, None]])
+    a = np.vstack([np.zeros(x.shape[1]), np.diff(v, axis=0) / h_mid[:, None]])
+    jerk = np.abs(np.diff(a, axis=0)) / h_back[:, None]
     jratio = np.where(limited, jerk / np.where(limited, j_lim, 1.0), 0.0)
     jj = int(np.argmax(jratio.max(axis=0)))
     if rule:
