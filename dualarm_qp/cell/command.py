@@ -9,6 +9,7 @@ hardware log as they read a simulated run.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,23 @@ def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> 
         dry_run=dry_run,
         start_tolerance=0.01 if c.start_tolerance is None else c.start_tolerance * angle,
         range_margin=c.range_margin * angle)
+
+
+def commanded(exp: Experiment, headroom: float) -> Experiment:
+    """Return the experiment a cell's controller runs: the arms' limits with headroom.
+
+    Every joint's speed, acceleration and jerk limit is multiplied by ``1 - headroom``
+    (the step and the clamp keep those); the recorded motion is still judged against the
+    file's. The servos' tracking error (a lag, friction, the arms' coupling) has the rest.
+    """
+    if headroom == 0.0:
+        return exp
+    keep = 1.0 - headroom
+    leader, follower = (arm.with_limits(qd_max=arm.qd_max * keep, qdd_max=arm.qdd_max * keep,
+                                        qddd_max=arm.qddd_max * keep)
+                        for arm in (exp.task.leader, exp.task.follower))
+    task = dataclasses.replace(exp.task, leader=leader, follower=follower)
+    return dataclasses.replace(exp, task=task)
 
 
 def check_drivable(exp: Experiment, path: str) -> None:
@@ -95,14 +113,14 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
     from ..experiments.run import make_summary, write_outputs
 
     settings = drive_settings(cfg, exp, dry_run=dry_run)
-    controller = exp.controller()
+    controller = commanded(exp, cfg.cell.headroom).controller()
 
     def progress(done: float, lost: float) -> None:
         raise_if_interrupted()
 
     t0 = time.perf_counter()
     res = drive(cell, controller, exp.initial, duration=exp.duration, settings=settings,
-                limits=exp.limits, progress=progress)
+                limits=exp.limits, progress=progress, judged_by=exp.task)
     wall = time.perf_counter() - t0
     with SignalHold():
         summary = make_summary(exp, res.result, wall)
@@ -166,5 +184,5 @@ def add_parsers(sub: Any) -> None:
     add_serve_parser(sub)
 
 
-__all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive",
+__all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive", "commanded",
            "drive_and_write", "drive_settings", "open_cell"]
