@@ -5,7 +5,7 @@ yaw: franky-sim places a robot's base by position, and the cell turns it about t
 vertical as the file's base does), each at the file's start joints, each served on its
 own address with libfranka's network protocol (``cell.leader.address``,
 ``cell.follower.address``; loopback addresses such as 127.0.0.1 and 127.0.0.2). It
-runs until interrupted (Ctrl-C, SIGTERM). The simulation steps 1 ms per tick, as fast
+runs until interrupted (Ctrl-C, SIGTERM: exit code 130). The simulation steps 1 ms per tick, as fast
 as the machine allows (``--realtime``: no faster than the wall clock); the drive loop
 samples on the robots' own clock, so a slow simulation only takes longer.
 """
@@ -34,7 +34,7 @@ def _yaw(T: np.ndarray) -> float:
     return math.atan2(R[1, 0], R[0, 0])
 
 
-def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> None:
+def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
     """Serve the file's two arms until interrupted (see the module).
 
     Parameters
@@ -45,6 +45,11 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> None:
         Step no faster than the wall clock.
     ready : callable, optional
         Called with the addresses once both arms are served.
+
+    Returns
+    -------
+    str
+        What stopped it (``"SIGINT"``, ``"SIGTERM"``), once the arms are let go.
     """
     try:
         import franky_sim
@@ -70,19 +75,36 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> None:
                           position=tuple(float(v) for v in base[:3, 3]))
             yaw = _yaw(base)
             sim.worldbody[-1].set("quat", f"{math.cos(yaw / 2)} 0 0 {math.sin(yaw / 2)}")
-        with franky_sim.SimulationServer(sim, hostname_candidates=addresses) as server:
+        server = franky_sim.SimulationServer(sim, hostname_candidates=addresses)
+        try:
+            server.init()
+        except OSError as err:
+            server.cleanup()
+            raise CellSetupError(f"{config}: cell: cannot serve the arms on "
+                                 f"{', '.join(addresses)} ({err}): is another robot "
+                                 "simulator serving there?") from None
+        try:
             served = [rs.hostname for rs in server.robot_servers]
+            for role, address, got in zip(("leader", "follower"), addresses, served,
+                                          strict=True):
+                if got != address:
+                    raise CellSetupError(f"{config}: cell.{role}.address: {address} is "
+                                         "taken: is another robot simulator serving there?")
             if ready is not None:
                 ready(served)
-            try:
-                while True:
-                    server.run_once(realtime=realtime)
-            except KeyboardInterrupt:
-                pass
+            while True:
+                server.run_once(realtime=realtime)
+        except KeyboardInterrupt as stop:
+            why = str(stop) or "interrupt"
+        finally:
+            server.cleanup()
+    return why
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
-    """``dualarm-qp serve``: exit 0 when interrupted (the served arms are let go)."""
+    """``dualarm-qp serve``: exit 130 once interrupted and the served arms are let go."""
+    from ..cli import EXIT_INTERRUPTED
+
     if args.cell != "franka":
         raise CellSetupError(f"serve knows the cell 'franka' only, got {args.cell!r}")
 
@@ -90,9 +112,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
         print(f"serving {', '.join(addresses)} (libfranka's protocol, FR3); Ctrl-C stops",
               flush=True)
 
-    serve(args.config, realtime=args.realtime, ready=ready)
-    print("stopped", file=sys.stderr)
-    return 0
+    why = serve(args.config, realtime=args.realtime, ready=ready)
+    print(f"stopped ({why}): the served arms were let go", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def add_serve_parser(sub: Any) -> None:
