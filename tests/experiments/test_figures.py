@@ -288,6 +288,28 @@ def test_realised_rates_are_finite_differences():
     assert ax.get_yscale() == "symlog"
 
 
+def test_jerk_limits_add_rows_of_realised_jerks_from_third_differences():
+    data = synthetic()
+    jerk = data.realised_jerks("f")
+    # qf3: 0, 0, 2, 2, 2, 0 rad at 0.1 s: rates 0, 20, 0, 0, -20; accelerations 0, 200,
+    # -200, 0, -200; jerks their differences over 0.1 s
+    assert jerk[:5, 2] == pytest.approx([0.0, 2000.0, -4000.0, 2000.0, -2000.0])
+    assert np.isnan(jerk[-1]).all()
+    arm = ArmLimits(np.full(6, -1.0), np.full(6, 1.0), np.full(6, 3.0), np.full(6, 500.0),
+                    np.full(6, 3000.0))
+    limits = dataclasses.replace(synthetic_limits(), leader=arm, follower=arm,
+                                 acceleration_limits_enforced=True,
+                                 jerk_limits_enforced=True)
+    rates = rates_figure(data, limits, title="t")
+    assert "; accelerations against theirs; jerks against theirs" in rates.texts[-1].get_text()
+    ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3 jerk")
+    assert axis_levels(ax, "limit:qf_dddot3") == pytest.approx([-3000.0 * DEG, 3000.0 * DEG])
+    # over 3000 rad/s^3 at samples 2 (-4000) only among the first five
+    assert spans(ax, "outside:qf_dddot3")[:2] == pytest.approx([0.15, 0.25])
+    no_jerk = dataclasses.replace(limits, jerk_limits_enforced=False)
+    assert not [ax for ax in rates_figure(data, no_jerk).axes if "jerk" in ax.get_title()]
+
+
 def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():
     data, limits = synthetic(), synthetic_limits()
     ax = grasp_figure(data, limits).axes[1]
