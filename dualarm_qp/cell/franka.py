@@ -6,9 +6,10 @@ the newer pre-empts the older, and franky's 1 kHz loop (in C++) holds the new ra
 from when it has reached them until the next command (``between = "held"``). franky
 goes from the old rates to the new ones with its own trajectory generator, within the
 robot's own velocity, acceleration and jerk limits (franky's defaults, left as they
-are): a change the clamp allows takes it a few milliseconds, so the robot follows the
-commands as sent. The file's (tighter) limits are kept by the commands themselves,
-sample by sample (the clamp, :mod:`.safety`). Setting franky's limits to the file's
+are): it makes most of a change the clamp allows within a few milliseconds (the rest
+within the sample), so the robot follows the commands as sent. The file's (tighter)
+limits are kept by the commands themselves, sample by sample (the clamp,
+:mod:`.safety`). Setting franky's limits to the file's
 instead makes its generator reshape every change of rates into a jerk-limited ramp of
 several samples: the arms then lag their commands by 30-40 ms and the grasp does not
 hold.
@@ -22,9 +23,13 @@ each arm's counted from when the cell was opened; :meth:`FrankaCell.now` is the 
 of the two. :meth:`FrankaCell.wait_until` polls both arms' states until both have
 reached the time asked and keeps each arm's first state at or after it, which
 :meth:`FrankaCell.read` returns: a reading holds both arms at the sample's own tick of
-their clocks (on hardware, two robots' ticks are up to 1 ms apart), one tick later when
-the poll came late (the record's ``robot_t`` says so, and the realised limits are
-measured on those times). A robot that does not answer when the cell opens,
+their clocks (on hardware, two robots' ticks are up to 1 ms apart). When the poll came
+late for one arm (its first state seen is a tick or more past the sample), that arm's
+joints are brought back to the other's tick with its measured joint rates (the record's
+``state_late`` says by how much): two arms' joints a millisecond apart under one stamp
+would read, in the third differences of the record, as a jerk several times the limit.
+The reading is stamped with the earlier arm's clock (``robot_t``; the realised limits
+are measured on those times). A robot that does not answer when the cell opens,
 or whose limits are below the file's, is bad input; an error of franky or libfranka
 while the cell runs (a reflex, a lost connection) stops it.
 """
@@ -136,15 +141,18 @@ class FrankaCell:
 
         After :meth:`wait_until`: each arm's state at the first tick it saw at or after
         the time asked (the sample's own tick, unless the poll came late); otherwise the
-        newest.
+        newest. The later arm's joints are brought back to the stamp with its measured
+        rates (``Reading.late``: by how long).
         """
         states = self._states()
         states = [held if held is not None else s for held, s in zip(self._at, states,
                                                                        strict=True)]
         self._at = [None, None]
-        t = min(self._since_open(states))
-        return Reading(t, np.asarray(states[0].q, dtype=np.float64),
-                       np.asarray(states[1].q, dtype=np.float64))
+        clocks = self._since_open(states)
+        t = min(clocks)
+        q = [np.asarray(s.q, dtype=np.float64) - np.asarray(s.dq, dtype=np.float64) * (c - t)
+             for s, c in zip(states, clocks, strict=True)]
+        return Reading(t, q[0], q[1], late=max(clocks) - t)
 
     def now(self) -> float:
         """Return the robots' clock [s] since the cell was opened (the later arm's)."""

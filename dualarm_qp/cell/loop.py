@@ -26,7 +26,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,50 +41,9 @@ from .base import Cell, CellError, Reading
 from .grasp import estimate_grasp
 from .record import cell_columns, cell_realised, stop_summary
 from .safety import StopRamp, command_limits, stop_samples_bound
+from .settings import DriveResult, DriveSettings
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class DriveSettings:
-    """How the loop guards the cell.
-
-    Parameters
-    ----------
-    watchdog : float
-        Oldest state the controller may act on, on the cell's clock [s].
-    dry_run : bool
-        Read the robots and compute the commands, but send nothing.
-    start_tolerance : float
-        Largest distance of a measured joint from the file's start [rad].
-    range_margin : float
-        How far a measured joint may be outside its range before the cell stops [rad].
-    """
-
-    watchdog: float
-    dry_run: bool = False
-    start_tolerance: float = 0.01
-    range_margin: float = 0.0
-
-
-@dataclass
-class DriveResult:
-    """What the loop did: the run as ``run`` reports it, and the cell's own record.
-
-    Attributes
-    ----------
-    result : RolloutResult
-        The recorded samples (control samples, then the stop's), the failure if any and
-        the realised limits of the control samples.
-    columns : dict
-        The cell's columns of ``trajectory.csv`` (:func:`.record.cell_columns`).
-    cell : dict
-        The cell's part of ``summary.json`` (watchdog, clamp, stop, clock).
-    """
-
-    result: RolloutResult
-    columns: dict[str, Any]
-    cell: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass
@@ -98,6 +56,7 @@ class _Log:
     computed: list[FloatArray] = field(default_factory=list)
     sigma_measured: list[float] = field(default_factory=list)
     offset: list[float] = field(default_factory=list)
+    late: list[float] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -192,6 +151,7 @@ class _Loop:
         lg.sent.append(sent.copy())
         lg.computed.append(computed.copy())
         lg.sigma_measured.append(reading.sigma)
+        lg.late.append(reading.late)
         lg.offset.append(float(np.max(np.abs(np.r_[reading.q_l - state.q_l,
                                                    reading.q_f - state.q_f]), initial=0.0)))
 
@@ -433,7 +393,8 @@ def _result(loop: _Loop) -> DriveResult:
                                    "tracking_tolerance_m_rad": list(loop.limits.tracking)})
     lg = loop.log
     columns = cell_columns(lg.robot_t, lg.age, lg.sent, lg.computed, lg.sigma_measured,
-                           loop.n_l, offset=lg.offset if loop.settings.dry_run else None)
+                           loop.n_l, late=lg.late,
+                           offset=lg.offset if loop.settings.dry_run else None)
     cell = {"kind": loop.cell.kind, "between": loop.cell.between,
             "dry_run": loop.settings.dry_run, "watchdog_s": loop.settings.watchdog,
             "control_samples": loop.control_rows,

@@ -13,6 +13,9 @@ Columns added after those of ``run`` (which keep their names and order):
 * ``clamped`` [rad/s]: the largest change the clamp made to the computed rates;
 * ``grasp_measured`` [m]: the grasp coordinate a simulator measured (NaN on hardware;
   ``grasp`` is the estimate the controller used);
+* ``state_late`` [s]: how far past ``robot_t`` the later arm's state was stamped (two
+  arms' states read at the same sample may be a tick apart; that arm's joints are
+  brought back to ``robot_t`` with its measured rates);
 * ``measured_offset`` [rad] (dry run only): the largest distance between the measured
   joints and the model's state the controller acted on.
 """
@@ -38,7 +41,8 @@ FloatArray = NDArray[np.float64]
 
 def cell_columns(robot_t: Sequence[float], age: Sequence[float], sent: Sequence[FloatArray],
                  computed: Sequence[FloatArray], sigma_measured: Sequence[float], n_l: int,
-                 *, offset: Sequence[float] | None = None) -> dict[str, Any]:
+                 *, late: Sequence[float] | None = None,
+                 offset: Sequence[float] | None = None) -> dict[str, Any]:
     """Return the cell's columns of ``trajectory.csv`` (see the module), in order."""
     rows = len(robot_t)
     width = sent[0].size if rows else n_l
@@ -52,6 +56,8 @@ def cell_columns(robot_t: Sequence[float], age: Sequence[float], sent: Sequence[
         cols[f"qf_sent{j + 1}"] = s[:, n_l + j]
     cols["clamped"] = np.max(np.abs(s - c), axis=1, initial=0.0)
     cols["grasp_measured"] = np.asarray(sigma_measured, dtype=np.float64)
+    cols["state_late"] = (np.zeros(rows) if late is None
+                          else np.asarray(late, dtype=np.float64))
     if offset is not None:
         cols["measured_offset"] = np.asarray(offset, dtype=np.float64)
     return cols

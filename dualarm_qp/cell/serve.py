@@ -5,9 +5,11 @@ yaw: franky-sim places a robot's base by position, and the cell turns it about t
 vertical as the file's base does), each at the file's start joints, each served on its
 own address with libfranka's network protocol (``cell.leader.address``,
 ``cell.follower.address``; loopback addresses such as 127.0.0.1 and 127.0.0.2). It
-runs until interrupted (Ctrl-C, SIGTERM: exit code 130). The simulation steps 1 ms per tick, as fast
-as the machine allows (``--realtime``: no faster than the wall clock); the drive loop
-samples on the robots' own clock, so a slow simulation only takes longer.
+runs until interrupted (Ctrl-C, SIGTERM: exit code 130). The simulation steps 1 ms per
+tick, as fast as the machine allows (``--realtime``: no faster than the wall clock), and
+each tick waits for the command of every moving arm, as a real robot's client on a
+real-time kernel answers every tick (:func:`_tick`); the drive loop samples on the
+robots' own clock, so a slow simulation only takes longer.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +35,53 @@ def _yaw(T: np.ndarray) -> float:
         raise CellSetupError("franky-sim places a robot upright: a base may only be turned "
                              "about the vertical")
     return math.atan2(R[1, 0], R[0, 0])
+
+
+#: Wall time [s] a tick waits for a moving arm's command before it steps without it.
+COMMAND_WAIT = 0.1
+
+
+#: The robot server's own (private) attributes :func:`_answered` reads: its motion mode
+#: and whether a command came in this tick.
+_MODE, _NEW = "_FrankaRobotServer__control_mode", "_FrankaRobotServer__has_new_command"
+
+
+def _answered(rs: Any) -> bool:
+    """Whether robot server ``rs`` has its command for this tick (or needs none: idle)."""
+    return getattr(rs, _MODE).name == "IDLE" or bool(getattr(rs, _NEW))
+
+
+def _check_lockstep(server: Any) -> None:
+    """Refuse a franky-sim whose robot servers do not say when a command came in."""
+    for rs in server.robot_servers:
+        if not (hasattr(rs, _MODE) and hasattr(rs, _NEW)):
+            raise CellSetupError("this franky-sim does not say when a robot's command came "
+                                 "in: serving needs franky-sim 1.0.4 (pip install "
+                                 '"dualarm-qp[franka]")')
+
+
+def _tick(server: Any, realtime: bool) -> None:
+    """One 1 ms tick: every moving arm's command for the last state, a step, the states.
+
+    A real Franka runs its 1 kHz loop against a client on a real-time kernel, which
+    answers every state in time (a few missed answers in a row stop the robot on a
+    reflex). The simulator instead steps as fast as the machine allows, and on a busy
+    machine it would step past a command still on its way, repeating the last one: a
+    motion delayed by a tick here and there, which a real robot does not show. So each
+    tick waits for the command of every arm that is moving (up to :data:`COMMAND_WAIT`
+    of wall time: a client that stopped answering does not stop the simulation).
+    """
+    start = time.monotonic()
+    for rs in server.robot_servers:
+        rs.process_commands()
+        while not _answered(rs) and time.monotonic() - start < COMMAND_WAIT:
+            time.sleep(2e-5)
+            rs.process_commands()
+    server.sim.step()
+    for rs in server.robot_servers:
+        rs.send_state()
+    if realtime:
+        time.sleep(max(0.0, 1e-3 - (time.monotonic() - start)))
 
 
 def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
@@ -84,6 +134,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
                                  f"{', '.join(addresses)} ({err}): is another robot "
                                  "simulator serving there?") from None
         try:
+            _check_lockstep(server)
             served = [rs.hostname for rs in server.robot_servers]
             for role, address, got in zip(("leader", "follower"), addresses, served,
                                           strict=True):
@@ -93,7 +144,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
             if ready is not None:
                 ready(served)
             while True:
-                server.run_once(realtime=realtime)
+                _tick(server, realtime)
         except KeyboardInterrupt as stop:
             why = str(stop) or "interrupt"
         finally:
