@@ -16,7 +16,8 @@ from typing import Any
 
 from .._signals import SignalHold, raise_if_interrupted
 from ..experiments.config import ExperimentConfig, load_config, safe_name
-from ..experiments.setup import Experiment, build_experiment
+from ..experiments.experiment import Experiment
+from ..experiments.setup import build_experiment
 from .base import Cell, CellSetupError
 from .loop import DriveResult, DriveSettings, drive
 
@@ -94,7 +95,7 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> C
     if kind == "franka":
         from .franka import franka_cell
 
-        return franka_cell(cfg, exp, path)
+        return franka_cell(cfg, exp, path, drive_settings(cfg, exp, dry_run=False).watchdog)
     raise CellSetupError(f"unknown cell {kind!r}; the cells are {', '.join(CELLS)}")
 
 
@@ -133,7 +134,7 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
 
 def cmd_drive(args: argparse.Namespace) -> int:
     """``dualarm-qp drive``: exit 0 completed, 1 failed or stopped, 130 interrupted."""
-    from ..cli import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, _err, _output_folder
+    from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
     from ..experiments.outputs import check_unused_folder
     from ..experiments.run import OUTPUT_FILES
 
@@ -146,7 +147,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
     check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
-    out = _output_folder(out)
+    out = output_folder(out)
     res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
                                    plots=not args.no_plots)
     stop = summary["cell"]["stop"]
@@ -157,10 +158,11 @@ def cmd_drive(args: argparse.Namespace) -> int:
           f"{stop['samples']} samples, at rest: {stop['at_rest']}")
     print(f"  outputs: {out}/")
     if summary["status"] == "interrupted":
-        _err(f"{summary['message']}; the arms were brought to rest and the samples are written")
+        print_error(f"{summary['message']}; the arms were brought to rest and the samples "
+                    "are written")
         return EXIT_INTERRUPTED
     if not res.result.completed:
-        _err(summary["message"])
+        print_error(summary["message"])
         return EXIT_FAILED
     return EXIT_OK
 

@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..experiments.config import ExperimentConfig
-from ..experiments.setup import Experiment
+from ..experiments.experiment import Experiment
 from .base import CellError, CellSetupError, Reading
 
 FloatArray = NDArray[np.float64]
@@ -208,8 +208,11 @@ class FrankaCell:
                 raise CellError(f"closing the Franka arms: {err}") from None
 
 
-def franka_cell(cfg: ExperimentConfig, exp: Experiment, path: str) -> FrankaCell:
+def franka_cell(cfg: ExperimentConfig, exp: Experiment, path: str, hold: float
+                ) -> FrankaCell:
     """Build the Franka cell of the file's ``cell:`` section (not yet opened).
+
+    ``hold`` [s] is how long a command is held after it is reached (the watchdog's age).
 
     Raises
     ------
@@ -226,9 +229,6 @@ def franka_cell(cfg: ExperimentConfig, exp: Experiment, path: str) -> FrankaCell
             raise CellSetupError(f"{path}: {role}: a Franka arm has 7 joints, the file's has "
                                  f"{getattr(exp.task, role).n}")
         addresses.append(address)
-    from .command import drive_settings
-
-    hold = drive_settings(cfg, exp, dry_run=False).watchdog
     limits = tuple((arm.qd_max, arm.qdd_max, arm.qddd_max)
                    for arm in (exp.task.leader, exp.task.follower))
     return FrankaCell((addresses[0], addresses[1]), limits, hold)

@@ -154,7 +154,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     """``dualarm-qp serve``: exit 130 once interrupted and the served arms are let go."""
-    from ..cli import EXIT_INTERRUPTED
+    from ..cli_commands import EXIT_INTERRUPTED
 
     if args.cell != "franka":
         raise CellSetupError(f"serve knows the cell 'franka' only, got {args.cell!r}")
