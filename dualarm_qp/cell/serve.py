@@ -38,7 +38,7 @@ def _yaw(T: np.ndarray) -> float:
 
 
 #: Wall time [s] a tick waits for a moving arm's command before it steps without it.
-COMMAND_WAIT = 0.1
+COMMAND_WAIT = 1.0
 
 
 #: The robot server's own (private) attributes :func:`_answered` reads: its motion mode
@@ -60,7 +60,7 @@ def _check_lockstep(server: Any) -> None:
                                  '"dualarm-qp[franka]")')
 
 
-def _tick(server: Any, realtime: bool) -> None:
+def _tick(server: Any, realtime: bool) -> int:
     """One 1 ms tick: every moving arm's command for the last state, a step, the states.
 
     A real Franka runs its 1 kHz loop against a client on a real-time kernel, which
@@ -70,21 +70,25 @@ def _tick(server: Any, realtime: bool) -> None:
     motion delayed by a tick here and there, which a real robot does not show. So each
     tick waits for the command of every arm that is moving (up to :data:`COMMAND_WAIT`
     of wall time: a client that stopped answering does not stop the simulation).
+    Returns how many moving arms it stepped without their command.
     """
     start = time.monotonic()
+    missed = 0
     for rs in server.robot_servers:
         rs.process_commands()
         while not _answered(rs) and time.monotonic() - start < COMMAND_WAIT:
             time.sleep(2e-5)
             rs.process_commands()
+        missed += not _answered(rs)
     server.sim.step()
     for rs in server.robot_servers:
         rs.send_state()
     if realtime:
         time.sleep(max(0.0, 1e-3 - (time.monotonic() - start)))
+    return missed
 
 
-def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
+def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> tuple[str, int]:
     """Serve the file's two arms until interrupted (see the module).
 
     Parameters
@@ -98,8 +102,11 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
 
     Returns
     -------
-    str
+    why : str
         What stopped it (``"SIGINT"``, ``"SIGTERM"``), once the arms are let go.
+    missed : int
+        How many times a moving arm was stepped without its command (its client did
+        not answer within :data:`COMMAND_WAIT`).
     """
     try:
         import franky_sim
@@ -133,6 +140,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
             raise CellSetupError(f"{config}: cell: cannot serve the arms on "
                                  f"{', '.join(addresses)} ({err}): is another robot "
                                  "simulator serving there?") from None
+        missed = 0
         try:
             _check_lockstep(server)
             served = [rs.hostname for rs in server.robot_servers]
@@ -144,12 +152,12 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> str:
             if ready is not None:
                 ready(served)
             while True:
-                _tick(server, realtime)
+                missed += _tick(server, realtime)
         except KeyboardInterrupt as stop:
             why = str(stop) or "interrupt"
         finally:
             server.cleanup()
-    return why
+    return why, missed
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -163,8 +171,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
         print(f"serving {', '.join(addresses)} (libfranka's protocol, FR3); Ctrl-C stops",
               flush=True)
 
-    why = serve(args.config, realtime=args.realtime, ready=ready)
-    print(f"stopped ({why}): the served arms were let go", file=sys.stderr)
+    why, missed = serve(args.config, realtime=args.realtime, ready=ready)
+    print(f"stopped ({why}): the served arms were let go"
+          + (f"; {missed} ticks went without an arm's command" if missed else ""),
+          file=sys.stderr)
     return EXIT_INTERRUPTED
 
 

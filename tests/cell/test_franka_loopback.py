@@ -82,6 +82,7 @@ def _serve(config: Path) -> Iterator[subprocess.Popen[str]]:
             raise
     assert proc.returncode == 130, err
     assert "stopped (SIGTERM)" in err and "Traceback" not in err, err
+    print(err.strip().splitlines()[-1])  # the ticks without a command, if any
 
 
 def _drive(out: Path, **popen) -> subprocess.Popen[str]:

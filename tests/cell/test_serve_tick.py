@@ -54,7 +54,7 @@ def test_a_tick_waits_for_each_moving_arms_command() -> None:
     events: list[str] = []
     leader = _RobotServer(events, "leader", _Mode.VELOCITY, arrives=3)
     follower = _RobotServer(events, "follower", _Mode.VELOCITY, arrives=2)
-    serve._tick(_Server(events, leader, follower), realtime=False)
+    assert serve._tick(_Server(events, leader, follower), realtime=False) == 0
     assert events == ["leader looked"] * 3 + ["follower looked"] * 2 + [
         "step", "leader state", "follower state"]
 
@@ -65,7 +65,7 @@ def test_an_idle_arm_is_not_waited_for_and_a_silent_one_only_so_long(monkeypatch
     silent = _RobotServer(events, "silent", _Mode.VELOCITY, arrives=0)
     monkeypatch.setattr(serve, "COMMAND_WAIT", 0.05)
     start = time.monotonic()
-    serve._tick(_Server(events, idle, silent), realtime=False)
+    assert serve._tick(_Server(events, idle, silent), realtime=False) == 1  # counted
     assert time.monotonic() - start >= 0.05
     assert idle.looks == 1 and silent.looks > 1 and events[-3:] == [
         "step", "idle state", "silent state"]
