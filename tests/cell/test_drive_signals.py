@@ -23,6 +23,7 @@ CONFIG = ROOT / "configs" / "fr3_pair.yaml"
 
 
 @pytest.mark.slow
+@pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_the_drive_and_the_record_is_whole(tmp_path: Path, sig: int) -> None:
     out = tmp_path / "drive"
