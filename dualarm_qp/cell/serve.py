@@ -38,7 +38,7 @@ def _yaw(T: np.ndarray) -> float:
 
 
 #: Wall time [s] a tick waits for a moving arm's command before it steps without it.
-COMMAND_WAIT = 1.0
+COMMAND_WAIT = 0.25
 
 
 #: The robot server's own (private) attributes :func:`_answered` reads: its motion mode
@@ -46,9 +46,14 @@ COMMAND_WAIT = 1.0
 _MODE, _NEW = "_FrankaRobotServer__control_mode", "_FrankaRobotServer__has_new_command"
 
 
+def _moving(rs: Any) -> bool:
+    """Whether robot server ``rs`` runs a motion (its client answers every state)."""
+    return bool(getattr(rs, _MODE).name != "IDLE")
+
+
 def _answered(rs: Any) -> bool:
     """Whether robot server ``rs`` has its command for this tick (or needs none: idle)."""
-    return getattr(rs, _MODE).name == "IDLE" or bool(getattr(rs, _NEW))
+    return not _moving(rs) or bool(getattr(rs, _NEW))
 
 
 def _check_lockstep(server: Any) -> None:
@@ -60,7 +65,7 @@ def _check_lockstep(server: Any) -> None:
                                  '"dualarm-qp[franka]")')
 
 
-def _tick(server: Any, realtime: bool) -> int:
+def _tick(server: Any, realtime: bool, moving: set[int]) -> int:
     """One 1 ms tick: every moving arm's command for the last state, a step, the states.
 
     A real Franka runs its 1 kHz loop against a client on a real-time kernel, which
@@ -68,21 +73,26 @@ def _tick(server: Any, realtime: bool) -> int:
     reflex). The simulator instead steps as fast as the machine allows, and on a busy
     machine it would step past a command still on its way, repeating the last one: a
     motion delayed by a tick here and there, which a real robot does not show. So each
-    tick waits for the command of every arm that is moving (up to :data:`COMMAND_WAIT`
-    of wall time: a client that stopped answering does not stop the simulation).
+    tick waits for the command of every arm that was moving when the last state was
+    sent (``moving``: the robot servers' indices, updated here), up to
+    :data:`COMMAND_WAIT` of wall time: a client that stopped answering does not stop the
+    simulation. An arm whose motion has just started has had no state to answer yet.
     Returns how many moving arms it stepped without their command.
     """
     start = time.monotonic()
     missed = 0
-    for rs in server.robot_servers:
+    for i, rs in enumerate(server.robot_servers):
         rs.process_commands()
-        while not _answered(rs) and time.monotonic() - start < COMMAND_WAIT:
+        while i in moving and not _answered(rs) and time.monotonic() - start < COMMAND_WAIT:
             time.sleep(2e-5)
             rs.process_commands()
-        missed += not _answered(rs)
+        missed += i in moving and not _answered(rs)
     server.sim.step()
-    for rs in server.robot_servers:
+    moving.clear()
+    for i, rs in enumerate(server.robot_servers):
         rs.send_state()
+        if _moving(rs):
+            moving.add(i)
     if realtime:
         time.sleep(max(0.0, 1e-3 - (time.monotonic() - start)))
     return missed
@@ -140,7 +150,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> tuple[s
             raise CellSetupError(f"{config}: cell: cannot serve the arms on "
                                  f"{', '.join(addresses)} ({err}): is another robot "
                                  "simulator serving there?") from None
-        missed = 0
+        missed, moving = 0, set[int]()
         try:
             _check_lockstep(server)
             served = [rs.hostname for rs in server.robot_servers]
@@ -152,7 +162,7 @@ def serve(config: Path, *, realtime: bool = False, ready: Any = None) -> tuple[s
             if ready is not None:
                 ready(served)
             while True:
-                missed += _tick(server, realtime)
+                missed += _tick(server, realtime, moving)
         except KeyboardInterrupt as stop:
             why = str(stop) or "interrupt"
         finally:

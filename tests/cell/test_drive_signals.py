@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from record_checks import check_motion, check_sent, read_record, sent_names
 from sigint import child_default_sigint
 
@@ -26,8 +27,14 @@ CONFIG = ROOT / "configs" / "fr3_pair.yaml"
 @pytest.mark.sigint
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_the_drive_and_the_record_is_whole(tmp_path: Path, sig: int) -> None:
+    # the simulation no faster than the wall clock (cell.realtime): the signal comes in
+    # the middle of the path however fast the machine
+    data = yaml.safe_load(CONFIG.read_text())
+    data["cell"]["realtime"] = True
+    config = tmp_path / "fr3_pair_realtime.yaml"
+    config.write_text(yaml.safe_dump(data))
     out = tmp_path / "drive"
-    proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", "drive", str(CONFIG),
+    proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", "drive", str(config),
                              "--cell", "mujoco", "--out", str(out), "--no-plots"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=child_default_sigint)
@@ -36,7 +43,7 @@ def test_a_signal_stops_the_drive_and_the_record_is_whole(tmp_path: Path, sig: i
         while not out.exists():  # made just before the cell is opened
             assert proc.poll() is None and time.monotonic() < deadline, proc.stderr
             time.sleep(0.01)
-        time.sleep(4.0)  # the simulation runs about a third of the path per second
+        time.sleep(1.5)  # the cell is opened before the folder is made: 1.5 s of 3.4
         assert proc.poll() is None, "the drive ended before the signal"
         proc.send_signal(sig)
         _, stderr = proc.communicate(timeout=300)

@@ -91,11 +91,22 @@ def _drive(out: Path, **popen) -> subprocess.Popen[str]:
                             text=True, **popen)
 
 
+def _clients_connected() -> int:
+    """How many TCP connections to a Franka's port (1337) are established on this host."""
+    try:
+        lines = Path("/proc/net/tcp").read_text().splitlines()[1:]
+    except OSError:  # not Linux: the caller waits on the wall clock only
+        return 2
+    return sum(1 for line in lines
+               if line.split()[2].endswith(":0539") and line.split()[3] == "01")
+
+
 def _under_way(out: Path, proc: subprocess.Popen[str], seconds: float) -> None:
-    """Wait until the drive made its folder (just before it connects), then ``seconds``
-    of wall time: the simulator serves 0.1 to 0.5 s of the robots' time per second."""
+    """Wait until the drive has connected to both arms (its loop starts then), then
+    ``seconds`` of wall time: the simulator serves 0.1 to 0.5 s of the robots' time per
+    second here."""
     deadline = time.monotonic() + 120
-    while not out.exists():
+    while not out.exists() or _clients_connected() < 2:
         assert proc.poll() is None and time.monotonic() < deadline
         time.sleep(0.01)
     time.sleep(seconds)
@@ -134,7 +145,7 @@ def test_a_drive_killed_or_cut_off_leaves_a_whole_record(tmp_path: Path) -> None
     with served(CONFIG):
         out = tmp_path / "term"
         proc = _drive(out, preexec_fn=child_default_sigint)
-        _under_way(out, proc, 4.0)
+        _under_way(out, proc, 2.0)
         proc.send_signal(signal.SIGTERM)
         _, stderr = proc.communicate(timeout=300)
     assert proc.returncode == 130, stderr
@@ -151,7 +162,7 @@ def test_a_drive_killed_or_cut_off_leaves_a_whole_record(tmp_path: Path) -> None
     with served(CONFIG) as server:
         out = tmp_path / "frozen"
         proc = _drive(out)
-        _under_way(out, proc, 3.0)
+        _under_way(out, proc, 1.5)
         os.killpg(server.pid, signal.SIGSTOP)
         try:
             _, stderr = proc.communicate(timeout=120)

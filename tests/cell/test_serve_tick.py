@@ -54,9 +54,21 @@ def test_a_tick_waits_for_each_moving_arms_command() -> None:
     events: list[str] = []
     leader = _RobotServer(events, "leader", _Mode.VELOCITY, arrives=3)
     follower = _RobotServer(events, "follower", _Mode.VELOCITY, arrives=2)
-    assert serve._tick(_Server(events, leader, follower), realtime=False) == 0
+    moving = {0, 1}  # both were moving when the last state was sent
+    assert serve._tick(_Server(events, leader, follower), False, moving) == 0
     assert events == ["leader looked"] * 3 + ["follower looked"] * 2 + [
         "step", "leader state", "follower state"]
+    assert moving == {0, 1}
+
+
+def test_an_arm_whose_motion_just_started_is_not_waited_for() -> None:
+    """Its client answers the first state sent in motion: there was none yet (waiting
+    would hold back that very state)."""
+    events: list[str] = []
+    starting = _RobotServer(events, "starting", _Mode.VELOCITY, arrives=0)
+    moving: set[int] = set()
+    assert serve._tick(_Server(events, starting), False, moving) == 0
+    assert events == ["starting looked", "step", "starting state"] and moving == {0}
 
 
 def test_an_idle_arm_is_not_waited_for_and_a_silent_one_only_so_long(monkeypatch) -> None:
@@ -65,7 +77,9 @@ def test_an_idle_arm_is_not_waited_for_and_a_silent_one_only_so_long(monkeypatch
     silent = _RobotServer(events, "silent", _Mode.VELOCITY, arrives=0)
     monkeypatch.setattr(serve, "COMMAND_WAIT", 0.05)
     start = time.monotonic()
-    assert serve._tick(_Server(events, idle, silent), realtime=False) == 1  # counted
+    moving = {0, 1}  # the idle one's motion ended
+    assert serve._tick(_Server(events, idle, silent), False, moving) == 1  # counted
+    assert moving == {1}
     assert time.monotonic() - start >= 0.05
     assert idle.looks == 1 and silent.looks > 1 and events[-3:] == [
         "step", "idle state", "silent state"]
