@@ -24,14 +24,15 @@ of the two. :meth:`FrankaCell.wait_until` polls both arms' states until both hav
 reached the time asked and keeps each arm's first state at or after it, which
 :meth:`FrankaCell.read` returns: a reading holds both arms at the sample's own tick of
 their clocks (on hardware, two robots' ticks are up to 1 ms apart). When the poll came
-late for one arm (its first state seen is a tick or more past the sample), that arm's
-joints are brought back to the other's tick with its measured joint rates (the record's
-``state_late`` says by how much): two arms' joints a millisecond apart under one stamp
+late for an arm (its first state seen is a tick or more past the sample), its joints are
+brought back to the sample's tick with its measured joint rates (the record's
+``state_late`` says by how much): joints a millisecond off under the sample's stamp
 would read, in the third differences of the record, as a jerk several times the limit.
-The reading is stamped with the earlier arm's clock (``robot_t``; the realised limits
-are measured on those times). A robot that does not answer when the cell opens,
-or whose limits are below the file's, is bad input; an error of franky or libfranka
-while the cell runs (a reflex, a lost connection) stops it.
+The reading is stamped with the sample's tick (``robot_t``; the realised limits are
+measured on those times), or, when an arm's state stopped coming, the earlier clock. A
+robot that does not answer when the cell opens, or whose limits are below the file's,
+is bad input; an error of franky or libfranka while the cell runs (a reflex, a lost
+connection) stops it.
 """
 
 from __future__ import annotations
@@ -88,6 +89,8 @@ class FrankaCell:
         self._t0 = [0.0, 0.0]
         #: Each arm's state at the tick :meth:`wait_until` waited for (None: not kept).
         self._at: list[Any] = [None, None]
+        #: The time the last :meth:`wait_until` asked for [s].
+        self._asked = 0.0
 
     def _connect(self, franky: Any, role: str, address: str) -> Any:
         try:
@@ -137,19 +140,21 @@ class FrankaCell:
         return [float(s.time.to_sec()) - t0 for s, t0 in zip(states, self._t0, strict=True)]
 
     def read(self) -> Reading:
-        """Return both arms' joints, stamped with the older arm's clock.
+        """Return both arms' joints at the sample's tick (see the module).
 
         After :meth:`wait_until`: each arm's state at the first tick it saw at or after
-        the time asked (the sample's own tick, unless the poll came late); otherwise the
-        newest. The later arm's joints are brought back to the stamp with its measured
-        rates (``Reading.late``: by how long).
+        the time asked (the sample's own tick, unless the poll came late), its joints
+        brought back to the time asked with its measured rates (``Reading.late``: the
+        latest arm's distance from it) and stamped with it; otherwise the newest states,
+        stamped with the older arm's clock.
         """
         states = self._states()
-        states = [held if held is not None else s for held, s in zip(self._at, states,
-                                                                       strict=True)]
+        held = all(s is not None for s in self._at)
+        states = [kept if kept is not None else s for kept, s in zip(self._at, states,
+                                                                      strict=True)]
         self._at = [None, None]
         clocks = self._since_open(states)
-        t = min(clocks)
+        t = self._asked if held else min(clocks)
         q = [np.asarray(s.q, dtype=np.float64) - np.asarray(s.dq, dtype=np.float64) * (c - t)
              for s, c in zip(states, clocks, strict=True)]
         return Reading(t, q[0], q[1], late=max(clocks) - t)
@@ -182,6 +187,7 @@ class FrankaCell:
             Neither clock moved for :data:`CLOCK_TIMEOUT` seconds of wall time.
         """
         self._at = [None, None]
+        self._asked = t
         last, since = -np.inf, time.monotonic()
         while True:
             states = self._states()
@@ -196,7 +202,7 @@ class FrankaCell:
             elif time.monotonic() - since > CLOCK_TIMEOUT:
                 raise CellError(f"the Franka arms' clock stood still for {CLOCK_TIMEOUT:g} s "
                                 "of wall time: the robots stopped answering")
-            time.sleep(2e-4)
+            time.sleep(5e-5)
 
     def close(self) -> None:
         """Wait for the last motion to end, then let the robots go."""

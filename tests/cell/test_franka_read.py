@@ -66,6 +66,17 @@ def test_a_state_kept_late_is_brought_back_to_the_samples_tick() -> None:
     np.testing.assert_allclose(reading.q_f, 0.3 + 0.5 * 0.010, rtol=0, atol=1e-15)
 
 
+def test_both_arms_kept_late_are_brought_back_to_the_samples_tick() -> None:
+    leader = _Robot([0.009, 0.011], q0=0.1, speed=-0.2)
+    follower = _Robot([0.009, 0.012], q0=0.3, speed=0.5)
+    cell = _cell(leader, follower)
+    cell.wait_until(0.010)
+    reading = cell.read()
+    assert reading.t == pytest.approx(0.010) and reading.late == pytest.approx(0.002)
+    np.testing.assert_allclose(reading.q_l, 0.1 - 0.2 * 0.010, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(reading.q_f, 0.3 + 0.5 * 0.010, rtol=0, atol=1e-15)
+
+
 def test_states_at_the_samples_tick_are_read_as_they_are() -> None:
     cell = _cell(_Robot([0.020], q0=0.1, speed=0.3), _Robot([0.020], q0=0.2, speed=-0.4))
     cell.wait_until(0.020)
