@@ -55,7 +55,7 @@ def test_a_tick_waits_for_each_moving_arms_command() -> None:
     leader = _RobotServer(events, "leader", _Mode.VELOCITY, arrives=3)
     follower = _RobotServer(events, "follower", _Mode.VELOCITY, arrives=2)
     moving = {0, 1}  # both were moving when the last state was sent
-    assert serve._tick(_Server(events, leader, follower), False, moving) == 0
+    assert serve._tick(_Server(events, leader, follower), None, moving) == 0
     assert events == ["leader looked"] * 3 + ["follower looked"] * 2 + [
         "step", "leader state", "follower state"]
     assert moving == {0, 1}
@@ -67,7 +67,7 @@ def test_an_arm_whose_motion_just_started_is_not_waited_for() -> None:
     events: list[str] = []
     starting = _RobotServer(events, "starting", _Mode.VELOCITY, arrives=0)
     moving: set[int] = set()
-    assert serve._tick(_Server(events, starting), False, moving) == 0
+    assert serve._tick(_Server(events, starting), None, moving) == 0
     assert events == ["starting looked", "step", "starting state"] and moving == {0}
 
 
@@ -78,7 +78,7 @@ def test_an_idle_arm_is_not_waited_for_and_a_silent_one_only_so_long(monkeypatch
     monkeypatch.setattr(serve, "COMMAND_WAIT", 0.05)
     start = time.monotonic()
     moving = {0, 1}  # the idle one's motion ended
-    assert serve._tick(_Server(events, idle, silent), False, moving) == 1  # counted
+    assert serve._tick(_Server(events, idle, silent), None, moving) == 1  # counted
     assert moving == {1}
     assert time.monotonic() - start >= 0.05
     assert idle.looks == 1 and silent.looks > 1 and events[-3:] == [
