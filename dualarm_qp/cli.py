@@ -63,7 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sweep(sub)
     _add_sweep_report(sub)
     _add_solvers(sub)
-    from .cell.command import add_parsers  # drive, serve (docs/robots.md)
+    from .cell.command import add_parsers  # drive and serve (docs/robots.md)
 
     add_parsers(sub)
     from .bag.command import add_bag_parser  # bag (docs/ros2.md)

@@ -9,8 +9,8 @@ protocol through franky). ``docs/robots.md`` tells the whole story.
 
 from .base import Cell, CellError, CellSetupError, Reading
 from .grasp import GraspEstimate, estimate_grasp
-from .loop import DriveResult, DriveSettings, command_limits, drive
-from .safety import CommandLimits, StopRamp
+from .loop import DriveResult, DriveSettings, drive
+from .safety import CommandLimits, StopRamp, command_limits
 
 __all__ = ["Cell", "CellError", "CellSetupError", "CommandLimits", "DriveResult",
            "DriveSettings", "GraspEstimate", "Reading", "StopRamp", "command_limits", "drive",

@@ -53,12 +53,16 @@ class Reading:
         Leader and follower joints [rad], in the arms' own order.
     sigma : float
         The grasp coordinate a simulator measured [m] (NaN on hardware: no encoder).
+    late : float
+        How far past ``t`` the later arm's state was stamped [s] (0: both at ``t``);
+        the back-end brought its joints back to ``t``.
     """
 
     t: float
     q_l: FloatArray
     q_f: FloatArray
     sigma: float = float("nan")
+    late: float = 0.0
 
 
 class Cell(Protocol):

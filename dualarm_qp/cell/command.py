@@ -9,19 +9,55 @@ hardware log as they read a simulated run.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any
 
 from .._signals import SignalHold, raise_if_interrupted
 from ..experiments.config import ExperimentConfig, load_config, safe_name
-from ..experiments.setup import Experiment, build_experiment
+from ..experiments.experiment import Experiment
+from ..experiments.setup import build_experiment
 from .base import Cell, CellSetupError
-from .loop import DriveResult, Observer, drive
-from .settings import drive_settings
+from .loop import DriveResult, DriveSettings, Observer, drive
 
 #: The cells ``drive --cell`` knows.
 CELLS = ("mujoco", "franka", "ros2")
+
+#: The watchdog's default: this many samples of ``dt``.
+WATCHDOG_SAMPLES = 3
+
+
+def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> DriveSettings:
+    """Return the loop's guards from the file's ``cell:`` section, in SI."""
+    from ..experiments.config import ANGLE_SCALE, TIME_SCALE
+
+    c = cfg.cell
+    angle, t = ANGLE_SCALE[cfg.units.angle], TIME_SCALE[cfg.units.time]
+    dt = exp.options.dt
+    return DriveSettings(
+        watchdog=WATCHDOG_SAMPLES * dt if c.watchdog is None else c.watchdog * t,
+        dry_run=dry_run,
+        start_tolerance=0.01 if c.start_tolerance is None else c.start_tolerance * angle,
+        range_margin=c.range_margin * angle)
+
+
+def commanded(exp: Experiment, headroom: float) -> Experiment:
+    """Return the experiment a cell's controller runs: the arms' limits with headroom.
+
+    Every joint's speed, acceleration and jerk limit is multiplied by ``1 - headroom``
+    (the step and the clamp keep those); the recorded motion is still judged against the
+    file's. The servos' tracking error (a lag, friction, the arms' coupling) has the rest.
+    """
+    if headroom == 0.0:
+        return exp
+    keep = 1.0 - headroom
+    leader, follower = (arm.with_limits(qd_max=arm.qd_max * keep, qdd_max=arm.qdd_max * keep,
+                                        qddd_max=arm.qddd_max * keep)
+                        for arm in (exp.task.leader, exp.task.follower))
+    task = dataclasses.replace(exp.task, leader=leader, follower=follower)
+    return dataclasses.replace(exp, task=task)
+
 
 def check_drivable(exp: Experiment, path: str) -> None:
     """Refuse a task whose grasp the cell cannot estimate from the joints.
@@ -60,7 +96,7 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str, *,
     if kind == "franka":
         from .franka import franka_cell
 
-        return franka_cell(cfg, exp, path)
+        return franka_cell(cfg, exp, path, drive_settings(cfg, exp, dry_run=False).watchdog)
     if kind == "ros2":
         from .ros2 import ros2_cell
 
@@ -85,14 +121,14 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
     from ..experiments.run import make_summary, write_outputs
 
     settings = drive_settings(cfg, exp, dry_run=dry_run)
-    controller = exp.controller()
+    controller = commanded(exp, cfg.cell.headroom).controller()
 
     def progress(done: float, lost: float) -> None:
         raise_if_interrupted()
 
     t0 = time.perf_counter()
     res = drive(cell, controller, exp.initial, duration=exp.duration, settings=settings,
-                limits=exp.limits, progress=progress, observer=observer)
+                limits=exp.limits, progress=progress, judged_by=exp.task, observer=observer)
     wall = time.perf_counter() - t0
     with SignalHold():
         summary = make_summary(exp, res.result, wall)
@@ -134,7 +170,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
                                  "give --cell ros2")
         from .ros2_trajectory import cmd_send_run
 
-        return cmd_send_run(args, cfg, exp, path)
+        return cmd_send_run(args, cfg, exp, path, drive_settings(cfg, exp, dry_run=False))
     cell = open_cell(args.cell, cfg, exp, path, dry_run=args.dry_run)
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
@@ -198,5 +234,5 @@ def add_parsers(sub: Any) -> None:
     add_serve_parser(sub)
 
 
-__all__ = ["CELLS", "add_parsers", "check_drivable", "cmd_drive", "drive_and_write",
-           "open_cell"]
+__all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive", "commanded",
+           "drive_and_write", "drive_settings", "open_cell"]

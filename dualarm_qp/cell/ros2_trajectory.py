@@ -38,6 +38,7 @@ from ..errors import InvalidInputError
 from ..experiments.setup import Experiment
 from .base import CellError, Reading
 from .ros2 import Ros2Cell
+from .settings import DriveSettings
 
 FloatArray = NDArray[np.float64]
 
@@ -281,14 +282,17 @@ __all__ = ["LEAD", "OUTPUT_FILES", "Plan", "Watch", "plan_from_rollout", "plan_f
            "send_run", "trajectory_message", "write_watch"]
 
 
-def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str) -> int:
-    """``drive --cell ros2 --send-run [RUN_DIR]``: exit 0 followed, 1 not, 130 interrupted."""
+def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str, guards: DriveSettings
+                 ) -> int:
+    """``drive --cell ros2 --send-run [RUN_DIR]``: exit 0 followed, 1 not, 130 interrupted.
+
+    ``guards``: the file's watchdog and start tolerance (:func:`.command.drive_settings`).
+    """
     from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
     from ..experiments.config import safe_name
     from ..experiments.outputs import check_unused_folder
     from .ros2 import ros2_settings
     from .ros2_node import ros_types
-    from .settings import drive_settings
 
     if args.dry_run:
         raise InvalidInputError("--send-run sends the run: it has no dry run")
@@ -304,7 +308,6 @@ def cmd_send_run(args: Any, cfg: Any, exp: Experiment, path: str) -> int:
 
     names = StreamNames.of(exp.task, cfg.cell.leader.joints, cfg.cell.follower.joints,
                            path=path)
-    guards = drive_settings(cfg, exp, dry_run=False)
     cell = Ros2Cell(settings, exp.task, names, trajectories=True)
     summary, watch = send_run(cell, plan, watchdog=guards.watchdog,
                               start_tolerance=guards.start_tolerance, dt=exp.options.dt)

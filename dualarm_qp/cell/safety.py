@@ -7,8 +7,10 @@ leader's first), sampled at the controller's ``dt``:
   speed limits and within ``qdd_max dt`` of the last command sent (acceleration), and,
   when the arm states ``qddd_max``, within ``qddd_max dt^2`` of the last command's
   extrapolation ``2 v[k-1] - v[k-2]`` (jerk). Speed and acceleration always hold; where
-  the jerk box and the acceleration box do not meet (a command already braking as hard
-  as it may), the jerk box gives way.
+  the jerk box does not meet the speed and acceleration box (a command already braking
+  as hard as it may, a speed limit reached at full acceleration), the command is the
+  point of that box nearest to the jerk box: the jerk gives way no more than it must
+  (where the boxes touch, as near a speed limit, rounding alone can part them).
 * **The stop** (:class:`StopRamp`): both arms brought to rest together. Every joint's
   rate is the last command sent times one common factor ``s`` that falls from 1 to 0, so
   the arms keep moving along the direction they were moving in (the grasp closure, a
@@ -22,11 +24,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from ..control.controller import DualArmController
 
 FloatArray = NDArray[np.float64]
 
@@ -75,7 +81,8 @@ class CommandLimits:
     def box(self, v1: FloatArray, v2: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Return the rates a command after ``v1`` (and ``v2`` before it) may take [rad/s].
 
-        Speed and acceleration always; the jerk box where it meets them (see the module).
+        Speed and acceleration always; the jerk box where it meets them, else the one
+        rate of theirs nearest to it (see the module).
         """
         dt = self.dt
         lo = np.maximum(-self.v_max, v1 - self.a_max * dt)
@@ -86,7 +93,9 @@ class CommandLimits:
             jhi = np.where(np.isfinite(self.j_max), centre + self.j_max * dt * dt, np.inf)
         lo_j, hi_j = np.maximum(lo, jlo), np.minimum(hi, jhi)
         meet = lo_j <= hi_j
-        return np.where(meet, lo_j, lo), np.where(meet, hi_j, hi)
+        # Apart: the jerk box lies wholly above (jlo > hi) or below (jhi < lo) the other.
+        near = np.where(jlo > hi, hi, lo)
+        return np.where(meet, lo_j, near), np.where(meet, hi_j, near)
 
     def clamp(self, command: FloatArray, v1: FloatArray, v2: FloatArray) -> FloatArray:
         """Return ``command`` put inside :meth:`box` (``v1``: last sent, ``v2``: before)."""
@@ -104,6 +113,25 @@ def _ramp_out(d: float, J: float) -> float:
         return 0.0
     m = math.ceil(-d / J)  # samples until the increment reaches 0 (the m-th is 0)
     return (m - 1) * d + J * (m - 1) * m / 2.0
+
+
+def command_limits(controller: DualArmController) -> CommandLimits:
+    """Return the limits every sent command keeps: both arms' speeds, accelerations and jerks."""
+    task = controller.task
+    arms = (task.leader, task.follower)
+    return CommandLimits(np.concatenate([a.qd_max for a in arms]),
+                         np.concatenate([a.qdd_max for a in arms]),
+                         np.concatenate([a.qddd_max for a in arms]), controller.options.dt)
+
+
+def stop_samples_bound(lim: CommandLimits) -> int:
+    """Return an upper bound of the stop ramp's samples from any speed within the limits."""
+    dt = lim.dt
+    bound = 2.0
+    for v, a, j in zip(lim.v_max, lim.a_max, lim.j_max, strict=True):
+        if math.isfinite(v) and math.isfinite(a):
+            bound = max(bound, v / (a * dt) + (a / (j * dt) if math.isfinite(j) else 0.0))
+    return int(min(math.ceil(2.0 * bound) + 4, STOP_SAMPLES_MAX))
 
 
 class StopRamp:
@@ -183,4 +211,4 @@ class StopRamp:
         return command
 
 
-__all__ = ["STOP_SAMPLES_MAX", "CommandLimits", "StopRamp"]
+__all__ = ["STOP_SAMPLES_MAX", "CommandLimits", "StopRamp", "command_limits", "stop_samples_bound"]

@@ -1,29 +1,53 @@
-"""The drive loop's guards from the file's ``cell:`` section, in SI (``docs/robots.md``)."""
+"""What the drive loop (:mod:`.loop`) is given and gives back: its guards and its result."""
 
 from __future__ import annotations
 
-from ..experiments.config import ANGLE_SCALE, TIME_SCALE, ExperimentConfig
-from ..experiments.experiment import Experiment
-from .loop import DriveSettings
+from dataclasses import dataclass, field
+from typing import Any
 
-#: The watchdog's default: this many samples of ``dt``.
-WATCHDOG_SAMPLES = 3
+from ..control.rollout import RolloutResult
 
 
-def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> DriveSettings:
-    """Return the loop's guards from the file's ``cell:`` section, in SI.
+@dataclass(frozen=True)
+class DriveSettings:
+    """How the loop guards the cell.
 
-    ``watchdog`` is in the file's time unit (default :data:`WATCHDOG_SAMPLES` samples),
-    ``start_tolerance`` (default 0.01 rad) and ``range_margin`` in its angle unit.
+    Parameters
+    ----------
+    watchdog : float
+        Oldest state the controller may act on, on the cell's clock [s].
+    dry_run : bool
+        Read the robots and compute the commands, but send nothing.
+    start_tolerance : float
+        Largest distance of a measured joint from the file's start [rad].
+    range_margin : float
+        How far a measured joint may be outside its range before the cell stops [rad].
     """
-    c = cfg.cell
-    angle, t = ANGLE_SCALE[cfg.units.angle], TIME_SCALE[cfg.units.time]
-    dt = exp.options.dt
-    return DriveSettings(
-        watchdog=WATCHDOG_SAMPLES * dt if c.watchdog is None else c.watchdog * t,
-        dry_run=dry_run,
-        start_tolerance=0.01 if c.start_tolerance is None else c.start_tolerance * angle,
-        range_margin=c.range_margin * angle)
+
+    watchdog: float
+    dry_run: bool = False
+    start_tolerance: float = 0.01
+    range_margin: float = 0.0
 
 
-__all__ = ["WATCHDOG_SAMPLES", "drive_settings"]
+@dataclass
+class DriveResult:
+    """What the loop did: the run as ``run`` reports it, and the cell's own record.
+
+    Attributes
+    ----------
+    result : RolloutResult
+        The recorded samples (control samples, then the stop's), the failure if any and
+        the realised limits of the control samples.
+    columns : dict
+        The cell's columns of ``trajectory.csv`` (:func:`.record.cell_columns`).
+    cell : dict
+        The cell's part of ``summary.json`` (watchdog, clamp, stop, clock).
+    """
+
+    result: RolloutResult
+    columns: dict[str, Any]
+    cell: dict[str, Any] = field(default_factory=dict)
+
+
+__all__ = ["DriveResult", "DriveSettings"]

@@ -3,8 +3,8 @@
 How ``dualarm-qp drive`` reaches the two arms: the watchdog and the other guards, and per
 arm its joint names and topics (ROS 2) or its address (Franka). ``watchdog`` is in the
 file's time unit, ``start_tolerance`` and ``range_margin`` in its angle unit; rates are
-in Hz. Every key is optional: a file without a ``cell:`` section drives the MuJoCo cell
-with the defaults.
+in Hz; ``headroom`` is a fraction. Every key is optional: a file without a ``cell:``
+section drives the MuJoCo cell with the defaults.
 """
 
 from __future__ import annotations
@@ -14,6 +14,10 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from .config_types import Flag, Model, Num, keyed
+
+#: The default share of every joint speed, acceleration and jerk limit a cell's commands
+#: leave to the servos (their tracking error): commands keep ``1 - headroom`` of each.
+HEADROOM = 0.1
 
 JointNames = Annotated[list[Annotated[str, Field(min_length=1, max_length=200)]],
                        Field(min_length=1, max_length=64)]
@@ -59,6 +63,7 @@ class CellSpec(Model):
     watchdog: Num | None = None
     start_tolerance: Num | None = None
     range_margin: Num = 0.0
+    headroom: Num = HEADROOM
     realtime: Flag = False
     interface: Literal["velocity", "position"] = "velocity"
     node: Text = "dualarm_qp"
@@ -74,7 +79,9 @@ class CellSpec(Model):
                 raise keyed(key, f"must be > 0 (got {value:g})")
         if not self.range_margin >= 0:
             raise keyed("range_margin", f"must be >= 0 (got {self.range_margin:g})")
+        if not 0 <= self.headroom < 1:
+            raise keyed("headroom", f"must be in [0, 1) (got {self.headroom:g})")
         return self
 
 
-__all__ = ["CellArmSpec", "CellSpec"]
+__all__ = ["HEADROOM", "CellArmSpec", "CellSpec"]

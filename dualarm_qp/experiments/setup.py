@@ -149,10 +149,10 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
                            load=None if cfg.object.mass is None else load_of(cfg, sc, path))
     task, q_l0, q_f0 = _started(cfg, sc, task, grasps, q_f0, limits, dt, path, notes)
     options = step_options_of(cfg, sc, dt, task.leader, task.follower, path)
-    task, options = with_jerk_limits(cfg, task, options, sc.angle, sc.length, sc.time, path)
     fallback = fallback_of(cfg, path)
     solver_name = solver or cfg.solver.name
     check_projection(cfg, solver_name, path)
+    task, options = with_jerk_limits(cfg, task, options, sc.angle, sc.length, sc.time, path)
     return Experiment(
         name=cfg.name,
         path=path,

@@ -31,8 +31,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validate import as_array, as_pose, check_limits
-from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
+from .._validate import as_array, as_pose, check_limits, limit_array
+from ..errors import InvalidInputError, LimitsError
 from .chain import (
     REVOLUTE_JOINTS,
     TOOL_FRAME,
@@ -151,16 +151,19 @@ class SerialArm:
 
     def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int, *,
                     qddd_max: Any = None) -> None:
-        self.q_min = _limit(q_min, "q_min", n)
-        self.q_max = _limit(q_max, "q_max", n)
+        self.q_min = limit_array(q_min, "q_min", n)
+        self.q_max = limit_array(q_max, "q_max", n)
         check_limits(self.q_min, self.q_max, f"{self.name} joint limits")
-        self.qd_max = _limit(qd_max, "qd_max", n)
-        self.qdd_max = _limit(qdd_max, "qdd_max", n)
-        self.qddd_max = _limit(np.full(n, np.inf) if qddd_max is None else qddd_max, "qddd_max", n)
-        for key in ("qd_max", "qdd_max", "qddd_max"):  # speed, acceleration, jerk
-            if (getattr(self, key) <= 0).any():
-                raise LimitsError(f"{self.name}: {key} must be positive, got "
-                                  f"{getattr(self, key)}")
+        self.qd_max, self.qdd_max, self.qddd_max = (
+            self._rate_limit(v, key, n) for key, v in (
+                ("qd_max", qd_max), ("qdd_max", qdd_max),
+                ("qddd_max", np.inf if qddd_max is None else qddd_max)))
+
+    def _rate_limit(self, value: Any, key: str, n: int) -> FloatArray:
+        limit = limit_array(value, key, n)
+        if (limit <= 0).any():
+            raise LimitsError(f"{self.name}: {key} must be positive, got {limit}")
+        return limit
 
     def _place(self, base: Any, tool: Any) -> None:
         """Copy the template model, allocate its data, set the limits, base and tool."""
@@ -272,8 +275,9 @@ class SerialArm:
         new._place(base, self._tool)
         return new
 
-    def with_limits(self, q_min: Any = None, q_max: Any = None, qd_max: Any = None,
-                    qdd_max: Any = None, *, qddd_max: Any = None) -> SerialArm:
+    def with_limits(self, q_min: Any = None, q_max: Any = None,
+                    qd_max: Any = None, qdd_max: Any = None, *,
+                    qddd_max: Any = None) -> SerialArm:
         """Return a copy of this arm with other limits (None keeps a limit as it is).
 
         Raises
@@ -417,21 +421,6 @@ def _frozen_pose(value: Any, name: str) -> FloatArray:
     T = np.eye(4) if value is None else as_pose(value, name).copy()
     T.flags.writeable = False
     return T
-
-
-def _limit(value: Any, name: str, n: int) -> FloatArray:
-    """Limits may be infinite but not NaN; a scalar is broadcast to all joints."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError) as err:
-        raise InvalidInputError(f"{name} must be numbers: {err}") from err
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ShapeError(name, (n,), arr.shape)
-    if np.isnan(arr).any():
-        raise NonFiniteError(name)
-    return arr
 
 
 # DHTable, frame_id, check_revolute and REVOLUTE_JOINTS are importable from here too.

@@ -2,7 +2,7 @@
 
 It can stop updating its state after a given sample (a stalled driver, for the
 watchdog), raise KeyboardInterrupt while waiting for a given sample (Ctrl-C), and
-records every send.
+records every send and the cell's time it came at.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ class KinematicCell:
         self.t = 0.0
         self.v = (np.zeros(self.q_l.size), np.zeros(self.q_f.size))
         self.sends: list[np.ndarray] = []
+        self.send_times: list[float] = []
         self.freeze_after = freeze_after
         self.interrupt_at = interrupt_at
         self.fail_at = fail_at
@@ -43,6 +44,7 @@ class KinematicCell:
     def send(self, ql_dot, qf_dot):
         self.v = (np.asarray(ql_dot, dtype=float).copy(), np.asarray(qf_dot, dtype=float).copy())
         self.sends.append(np.r_[self.v[0], self.v[1]])
+        self.send_times.append(self.t)
 
     def wait_until(self, t):
         k = round(t / self.dt)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from fake import KinematicCell
 
-from dualarm_qp.cell.loop import DriveSettings, command_limits, drive
+from dualarm_qp.cell.loop import DriveSettings, drive
+from dualarm_qp.cell.safety import command_limits
 from dualarm_qp.experiments.config import load_config
 from dualarm_qp.experiments.setup import build_experiment
 
@@ -53,11 +54,17 @@ def test_a_cell_that_follows_exactly_completes_the_path(exp) -> None:
     assert np.nanmax(tr.closure_pos_err) < 1e-4  # the estimated grasp closes
     _sent_within_limits(exp, res)
     assert cell.closed
-    # what was sent is what the cell received, row for row (the row at the path's end
-    # holds the command in force: the stop ramp's first command comes after it)
+    # what was sent is what the cell received, row for row, one command per sample on
+    # the cell's clock (the row at the path's end carries the stop's first command)
     sent = np.column_stack([v for k, v in res.columns.items() if "_sent" in k])
-    end = res.cell["control_samples"] - 1
-    assert np.array_equal(np.array(cell.sends), np.delete(sent, end, axis=0))
+    assert np.array_equal(np.array(cell.sends), sent)
+    _on_the_grid(exp, cell)
+
+
+def _on_the_grid(exp, cell):
+    """Command k went out at the cell's time k dt: one per sample, the stop's too."""
+    dt = exp.options.dt
+    assert np.allclose(cell.send_times, dt * np.arange(len(cell.sends)), atol=1e-9)
 
 
 def test_a_stale_state_stops_the_cell_and_the_arms_come_to_rest(exp) -> None:
@@ -71,6 +78,10 @@ def test_a_stale_state_stops_the_cell_and_the_arms_come_to_rest(exp) -> None:
     assert res.cell["stop"]["samples"] > 1
     assert res.result.trace.status[-1] == "stopping"
     assert len(res.result.trace) == len(res.columns["robot_t"])
+    _on_the_grid(exp, cell)
+    # the states read again (one stamp) are measured once: no 0/0 in the realised limits
+    for report in res.result.realised.values():
+        assert np.isfinite(report.speed_ratio)
 
 
 def test_an_interrupt_stops_the_cell_and_keeps_the_record(exp) -> None:
@@ -79,6 +90,7 @@ def test_an_interrupt_stops_the_cell_and_keeps_the_record(exp) -> None:
     assert res.result.failure is not None and res.result.failure.criterion == "interrupted"
     assert res.cell["control_samples"] == 30
     _sent_within_limits(exp, res)
+    _on_the_grid(exp, cell)
 
 
 def test_a_lost_connection_stops_the_cell(exp) -> None:
@@ -103,3 +115,28 @@ def test_robots_away_from_the_start_are_refused_before_anything_is_sent(exp) -> 
     assert res.result.failure.criterion == "start"
     assert cell.sends == []
     assert len(res.result.trace) == 0
+
+
+def _jerk_within(lim, sent, rows):
+    """The sent commands' third differences (from rest) within the jerk limits."""
+    v = np.vstack([np.zeros((2, lim.n)), sent])
+    jerk = np.abs(np.diff(v, n=2, axis=0))[rows] / lim.dt**2
+    assert np.all(jerk <= lim.j_max * (1 + 1e-9)), np.max(jerk / lim.j_max)
+
+
+@pytest.mark.parametrize("when", [40, 120])
+def test_a_stop_keeps_the_jerk_limits_from_the_last_commands(when) -> None:
+    pytest.importorskip("franky_sim")  # the FR3's description
+    config = ROOT / "configs" / "fr3_pair.yaml"
+    exp = build_experiment(load_config(config), str(config))
+    cell = _cell(exp, interrupt_at=when)
+    res = _drive(exp, cell)
+    assert res.result.failure.criterion == "interrupted"
+    sent = _sent_within_limits(exp, res)
+    first = res.cell["control_samples"]
+    assert np.any(sent[first - 1])  # moving when it stopped
+    lim = command_limits(exp.controller())
+    _jerk_within(lim, sent, slice(first - 2, None))  # the stop's, and the two before
+    assert res.cell["stop"]["jerk_ratio_max"] <= 1 + 1e-9
+    assert res.cell["stop"]["acceleration_ratio_max"] <= 1 + 1e-9
+    _on_the_grid(exp, cell)

@@ -52,6 +52,29 @@ def test_clamp_leaves_a_command_within_the_limits_as_it_is() -> None:
     assert np.array_equal(lim.clamp(asked, v1, v2), asked)
 
 
+def test_clamp_gives_way_on_jerk_no_more_than_it_must() -> None:
+    # At the speed limit while still accelerating at the full rate: the jerk box lies
+    # wholly above the speed limit, so the jerk cannot be kept. The command stays at
+    # the limit (the least change of acceleration), whatever was asked.
+    lim = _limits(True)
+    v1 = lim.v_max.copy()
+    v2 = v1 - lim.a_max * DT
+    assert np.all(2 * v1 - v2 - lim.j_max * DT * DT > lim.v_max)  # the boxes are apart
+    for asked in (np.full(4, -10.0), np.zeros(4), v1 - 0.5 * lim.a_max * DT):
+        assert np.array_equal(lim.clamp(asked, v1, v2), lim.v_max)
+    # and parted by rounding only (the boxes touch): the touching point
+    v1 = lim.v_max - lim.a_max * DT / 4  # a quarter of an acceleration step below
+    v2 = 2 * v1 - lim.j_max * DT * DT - lim.v_max
+    for _ in range(100):
+        apart = 2 * v1 - v2 - lim.j_max * DT * DT > lim.v_max
+        if apart.all():
+            break
+        v2 = np.where(apart, v2, np.nextafter(v2, -np.inf))
+    assert apart.all()
+    out = lim.clamp(np.zeros(4), v1, v2)
+    assert np.allclose(out, lim.v_max, rtol=0, atol=1e-12)
+
+
 def _stop(lim: CommandLimits, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     ramp = StopRamp(lim, v1, v2)
     out = []

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from dualarm_qp.errors import ConfigError
 from dualarm_qp.experiments.config import load_config, parse_config
 from dualarm_qp.experiments.run import run_experiment
 from dualarm_qp.experiments.setup import build_experiment
-from dualarm_qp.step.limits.jerk import speed_bound
+from dualarm_qp.step.limits.jerk import JerkLimit, speed_bound
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "configs" / "fr3_pair.yaml"
@@ -70,6 +71,26 @@ def test_speed_bound_leaves_room_to_ease_off() -> None:
             inc -= J[0]
             rate += max(inc, 0.0)
         assert rate > v[0]
+
+
+def test_a_jerk_box_that_touches_the_speed_limit_holds_through_rounding() -> None:
+    # Accelerating at the most the jerk allows into the speed limit: the jerk box's low
+    # end is the limit itself, up to rounding. It must not give way (any rate at all).
+    dt, v, j, a = 0.01, 1.0, 200.0, 5.0
+    half = j * dt * dt
+    x_a = 0.99
+    x_p = 2.0 * x_a - half - v
+    while 2.0 * x_a - x_p - half <= v:  # part the boxes by rounding only
+        x_p = np.nextafter(x_p, -np.inf)
+    assert 2.0 * x_a - x_p - half - v < 1e-14
+    limit = JerkLimit(np.array([j]), np.array([a]), np.array([v]), dt)
+    ctx = SimpleNamespace(x_applied=np.array([x_a]), x_applied_prev=np.array([x_p]),
+                          rate_lo=np.array([-np.inf]), rate_hi=np.array([np.inf]))
+    box = limit.constraint(ctx)
+    lower, upper = np.asarray(box.lower), np.asarray(box.upper)
+    assert np.isfinite(lower).all() and np.isfinite(upper).all()
+    assert lower[0] <= upper[0] <= v
+    assert upper[0] == pytest.approx(v, abs=1e-12)
 
 
 def test_jerk_limits_need_a_jerk_limit_for_every_joint() -> None:

@@ -135,7 +135,11 @@ class JerkLimit(kernel.Limit):
                               -braking_bound(d_lo, delta, dt))
         other_hi = np.minimum(np.minimum(self.v_max, x_a + delta),
                               braking_bound(d_hi, delta, dt))
-        meets = (lo <= other_hi) & (hi >= other_lo)
+        # Boxes that touch (a speed limit reached at the most the jerk allows) can be
+        # parted by rounding alone: within a few ulps they meet, at the touching point.
+        tol = 1e-12 * np.maximum(1.0, np.abs(x_a))
+        meets = (lo <= other_hi + tol) & (hi >= other_lo - tol)
+        lo, hi = np.minimum(lo, other_hi), np.maximum(hi, other_lo)
         return kernel.Constraint(lower=np.where(meets, lo, -np.inf),
                                  upper=np.where(meets, hi, np.inf))
 
