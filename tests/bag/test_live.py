@@ -130,7 +130,7 @@ def test_a_drive_is_served_live_as_it_is_recorded() -> None:
         client.close()
         view.view.close()
     assert res.result.completed, res.result.message
-    assert res.cell["stop"]["samples"] > 0  # the stop's rows are served too
+    assert res.cell["stop"]["samples"] > 0  # a stop ran: its rows are served as recorded
     states = [STORE.deserialize_cdr(data, TOPICS["/joint_states"])
               for sub, _, data in got if by_sub[sub] == "/joint_states"]
     assert len(states) == len(trace)
@@ -139,8 +139,7 @@ def test_a_drive_is_served_live_as_it_is_recorded() -> None:
         assert js.velocity.tolist() == [*trace.ql_dot[k], *trace.qf_dot[k], trace.m[k]]
     diags = [STORE.deserialize_cdr(data, TOPICS["/diagnostics"])
              for sub, _, data in got if by_sub[sub] == "/diagnostics"]
-    assert [d.status[0].message for d in diags] == list(trace.status)
-    assert diags[-1].status[0].message == "stopping"
+    assert [d.status[0].message for d in diags] == list(trace.status)  # stop rows too
 
 
 def test_a_port_in_use_is_bad_input(capsys) -> None:
