@@ -63,6 +63,9 @@ FloatArray = NDArray[np.float64]
 CONNECT_TIMEOUT = 30.0
 #: Wall time [s] the ROS clock may stand still before the cell stops.
 CLOCK_STALL = 2.0
+#: Longest wall time [s] the cell waits, when it closes, for the controllers to
+#: acknowledge its last commands.
+CLOSE_WAIT = 2.0
 #: Longest wait [s] of one spin of the node (an interrupt is seen within it).
 SPIN = 0.005
 #: Longest wall time [s] a read waits for the state of its sample instant (a clock
@@ -358,9 +361,18 @@ class Ros2Cell:
         self._sample_t = t
 
     def close(self) -> None:
-        """Destroy the node."""
+        """Destroy the node once the controllers have its last commands.
+
+        It waits at most :data:`CLOSE_WAIT` for their acknowledgement: the stop's last
+        command, at rest, must not be lost with the node, as a controller holds the last
+        command it heard.
+        """
         if self.node is not None:
             node, self.node = self.node, None
+            from rclpy.duration import Duration
+
+            for pub in self._commands:
+                pub.wait_for_all_acked(Duration(seconds=CLOSE_WAIT))
             node.close()
 
     # -- what the node publishes ------------------------------------------------------
@@ -423,5 +435,5 @@ def ros2_cell(cfg: ExperimentConfig, exp: Experiment, path: str, *, dry_run: boo
     return Ros2Cell(settings, exp.task, names, dry_run=dry_run)
 
 
-__all__ = ["CLOCK_STALL", "CONNECT_TIMEOUT", "ArmTopics", "JointStates", "Ros2Cell",
+__all__ = ["CLOCK_STALL", "CLOSE_WAIT", "CONNECT_TIMEOUT", "ArmTopics", "JointStates", "Ros2Cell",
            "Ros2Settings", "ros2_cell", "ros2_settings"]
