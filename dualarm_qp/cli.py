@@ -21,11 +21,14 @@ import tempfile
 import traceback
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from . import __version__
 from ._signals import InterruptHandlers, SignalHold, interrupt_requested
 from .errors import DualArmError, InvalidInputError
+
+if TYPE_CHECKING:
+    from .experiments.figures.process import FigureProcess
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141  # 128 + SIGINT, 128 + SIGPIPE
@@ -51,6 +54,20 @@ def _output_folder(path: str | Path) -> Path:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    # The figures' process starts first: it imports matplotlib while this one imports
+    # the rest and runs (docs/benchmarks.md, "The cost of the plots").
+    from .experiments.figures.process import FigureProcess
+
+    figures = None if args.no_plots else FigureProcess.start()
+    try:
+        return _run(args, figures)
+    finally:
+        if figures is not None:
+            figures.close()
+
+
+def _run(args: argparse.Namespace, figures: FigureProcess | None) -> int:
+    """Run one experiment file (``dualarm-qp run``); figures drawn by ``figures``."""
     from .experiments.config import load_config, safe_name
     from .experiments.options import check_solver_options, parse_solver_options
     from .experiments.outputs import check_unused_folder
@@ -81,7 +98,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                                  plots=not args.no_plots, animate=args.animate,
-                                 controller=controller, plant=plant)
+                                 controller=controller, plant=plant, figures=figures)
     except blown_up as err:  # the simulation blew up: a failed run, not bad input
         if new_folder and not any(out.iterdir()):
             out.rmdir()  # nothing was written: leave no empty folder
