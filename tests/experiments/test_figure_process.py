@@ -107,6 +107,7 @@ def test_a_drawing_process_that_died_is_replaced_by_the_run(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.sigint  # sends SIGINT (to the drawing processes only)
 @forking
 def test_the_drawing_processes_leave_interrupts_to_the_command(tmp_path):
     """A Ctrl-C at the terminal reaches the foreground process group, the command's: the
