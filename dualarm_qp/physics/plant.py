@@ -42,7 +42,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..control.loads import hand_wrenches
-from ..errors import DualArmError, InvalidInputError, SupportLostError
+from ..errors import DualArmError, SupportLostError
 from ..step.state import Command, DualArmState
 from ..task.loads import (
     ObjectLoad,
@@ -52,7 +52,7 @@ from ..task.loads import (
     support_push,
 )
 from ..task.scene import DualArmTask
-from ..task.torques import model_effort
+from .limits import torque_limits
 from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
 from .settings import SUBSTEP, PhysicsSettings
@@ -95,38 +95,6 @@ def _mujoco() -> Any:
         raise PhysicsError('the physics check needs MuJoCo: pip install "dualarm-qp[physics]"'
                            ) from None
     return mujoco
-
-
-def torque_limits(task: DualArmTask, settings: PhysicsSettings,
-                  arm_tau_max: dict[str, FloatArray | None] | None = None
-                  ) -> dict[str, FloatArray]:
-    """Each arm's joint torque limits [N m].
-
-    The ``physics.tau_max`` of the file, else the arm's own ``tau_max`` (``arm_tau_max``:
-    the controller's, :class:`~dualarm_qp.step.options.StepOptions`), else the model's: a
-    URDF's ``effort``; a joint without one (a DH arm) gets inf. A given limit is one
-    value (every joint) or one per joint; ``inf`` leaves a joint unlimited.
-
-    Raises
-    ------
-    InvalidInputError
-        A given limit with another count.
-    """
-    out = {}
-    for role, arm in (("leader", task.leader), ("follower", task.follower)):
-        given = None if settings.tau_max is None else settings.tau_max.get(role)
-        if given is None and arm_tau_max is not None:
-            given = arm_tau_max.get(role)
-        if given is not None:
-            given = np.asarray(given, dtype=float).ravel()
-            if given.size not in (1, arm.n):
-                raise InvalidInputError(f"{role}: torque limits need 1 value or {arm.n} (one "
-                                        f"per joint), got {given.size}")
-            lim = np.broadcast_to(given, (arm.n,)).copy()
-        else:
-            lim = model_effort(arm)
-        out[role] = lim
-    return out
 
 
 class MujocoPlant:
