@@ -63,6 +63,12 @@ class StepOptions:
     leader_tau_max, follower_tau_max : ndarray, shape (n,), optional
         Joint torque limits [N m] (``inf``: none); default the arm's model's ``effort``
         (a URDF's), which a DH arm does not have.
+    jerk_limits : bool
+        Keep every joint's jerk within its arm's ``qddd_max`` and every grasp's within
+        ``grasp_jerk_max``: each rate within ``j dt^2`` of the last two commands'
+        extrapolation (:mod:`dualarm_qp.step.limits.jerk`). Default False.
+    grasp_jerk_max : float
+        Limit on every grasp's sliding jerk [m/s^3]; ``inf`` for none.
     """
 
     dt: float
@@ -81,6 +87,8 @@ class StepOptions:
     torque_limits: bool = False
     leader_tau_max: FloatArray | None = None
     follower_tau_max: FloatArray | None = None
+    jerk_limits: bool = False
+    grasp_jerk_max: float = float("inf")
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -98,6 +106,8 @@ class StepOptions:
             raise InvalidInputError("grasp_speed_max must be positive")
         if not self.grasp_acc_max > 0:
             raise InvalidInputError("grasp_acc_max must be positive")
+        if not self.grasp_jerk_max > 0:
+            raise InvalidInputError("grasp_jerk_max must be positive")
         for name in ("correction_gain", "leader_gain"):
             gain = getattr(self, name)
             if gain is None:

@@ -262,6 +262,13 @@ def test_realised_rates_are_finite_differences():
     assert real[1, 2] == pytest.approx((2.0 - 0.0) / 0.1)
     assert real[4, 2] == pytest.approx(-20.0)
     assert np.isnan(real[-1]).all()
+def test_realised_jerks_are_third_differences():
+    data = synthetic()
+    jerk = data.realised_jerks("f")
+    # qf3: 0, 0, 2, 2, 2, 0 rad at 0.1 s: rates 0, 20, 0, 0, -20; accelerations 0, 200,
+    # -200, 0, -200; jerks their differences over 0.1 s (their lanes: test_lanes.py)
+    assert jerk[:5, 2] == pytest.approx([0.0, 2000.0, -4000.0, 2000.0, -2000.0])
+    assert np.isnan(jerk[-1]).all()
 
 
 def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():

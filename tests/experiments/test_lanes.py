@@ -105,6 +105,30 @@ def test_accelerations_get_an_axis_of_lanes_beside_the_rates():
     assert trace(fig, "realised:qf_dot3").axes is rates
 
 
+def test_jerk_limits_add_an_axis_of_jerk_lanes():
+    data = synthetic()
+    arm = ArmLimits(np.full(6, -1.0), np.full(6, 1.0), np.full(6, 3.0), np.full(6, 500.0),
+                    np.full(6, 3000.0))
+    plain = dataclasses.replace(synthetic_limits(), leader=arm, follower=arm)
+    assert len(rates_figure(data, plain).axes) == 1  # none kept: no axis
+    limits = dataclasses.replace(plain, jerk_limits_enforced=True)
+    fig = rates_figure(data, limits, title="t")
+    assert fig.texts[-1].get_text().endswith("(dashed); jerks against theirs")
+    rates, jerks = fig.axes
+    assert trace(fig, "realised:qf_dot3").axes is rates
+    assert "jerk" in jerks.get_title()
+    mid = middle(fig, "qf_dddot3")
+    assert limit_heights(fig, "qf_dddot3") == pytest.approx([mid - LIMIT, mid + LIMIT])
+    jerk = data.realised_jerks("f")[:, 2]
+    line = trace(fig, "realised:qf_dddot3")
+    assert line.axes is jerks
+    assert line.get_ydata() == pytest.approx(scaled(jerk, -3000.0, 3000.0, mid), nan_ok=True)
+    # over 3000 rad/s^3 at sample 2 (-4000) only among the first five
+    assert lane_spans(fig, "qf_dddot3")[:2] == pytest.approx([0.15, 0.25])
+    both = rates_figure(data, dataclasses.replace(limits, acceleration_limits_enforced=True))
+    assert [ax.get_title().split()[1] for ax in both.axes[1:]] == ["accelerations", "jerks"]
+
+
 # --- the experiment's limits on the lines -----------------------------------------------
 
 def test_joint_lanes_put_each_range_on_the_lines(limits_run):  # noqa: F811

@@ -66,8 +66,8 @@ LANE_HEIGHT = 0.3
 #: Widths [in]: the arms' names and the lanes' labels left of an axis, the right margin.
 LABEL_WIDTH, RIGHT = 1.3, 0.2
 
-#: Width [in] of the axis of a figure of one axis, and of each of a figure of two.
-AXIS_WIDTH = {1: 7.6, 2: 5.0}
+#: Width [in] of the axis of a figure of one axis, and of each of a figure of two or three.
+AXIS_WIDTH = {1: 7.6, 2: 5.0, 3: 4.2}
 
 
 @dataclass(frozen=True)
@@ -326,11 +326,13 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
 
 
 def _rate_lanes(ax: Any, t: Any, arms: Sequence[tuple[Any, Any, Any, str]], *,
-                per_rad: float, counts: Sequence[int]) -> None:
+                per_rad: float, counts: Sequence[int], colour: str = "C1") -> None:
     """Draw both arms' rate lanes in ``ax``.
 
-    ``arms`` holds, per arm, the commanded rates (None for accelerations), the realised
-    values [rad/s or rad/s^2], their limits and the columns' pattern (``"qf_dot{}"``).
+    ``arms`` holds, per arm, the commanded rates (None for accelerations and jerks),
+    the realised values [rad/s, rad/s^2 or rad/s^3], their limits and the columns'
+    pattern (``"qf_dot{}"``). ``colour`` is the realised values' (dotted beside the
+    commanded rates, solid alone).
     """
     lanes = sum(counts)
     drawn: list[Lane] = []
@@ -343,7 +345,7 @@ def _rate_lanes(ax: Any, t: Any, arms: Sequence[tuple[Any, Any, Any, str]], *,
                 traces.append((t[:-1], commanded[:-1, j] * per_rad,
                                {"color": "C0", "lw": 1.0, "gid": f"commanded:{column}"}))
             traces.append((t, realised[:, j] * per_rad,
-                           {"color": "C1" if commanded is not None else "C4", "lw": 0.9,
+                           {"color": colour, "lw": 0.9,
                             "ls": ":" if commanded is not None else "-",
                             "gid": f"realised:{column}"}))
             lane = speed_lane(column, f"q{j + 1}", [v for _, v, _ in traces],
@@ -354,61 +356,81 @@ def _rate_lanes(ax: Any, t: Any, arms: Sequence[tuple[Any, Any, Any, str]], *,
     label_lanes(ax, drawn, counts, zero=True)
 
 
-def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Joint rates against the speed limits (and accelerations against theirs), in lanes.
+#: The derivatives of the rates a run may limit: their name, columns' letters, colour
+#: and the power of the unit's seconds.
+DERIVATIVES = {"acceleration": ("ddot", "C4", "\N{SUPERSCRIPT TWO}"),
+               "jerk": ("dddot", "C5", "\N{SUPERSCRIPT THREE}")}
 
-    Angles in the file's unit (deg or rad) per second (per second squared), named in
-    the titles.
+
+def _derivative_lanes(ax: Any, data: RunData, limits: PlotLimits, kind: str,
+                      counts: Sequence[int]) -> None:
+    """Draw both arms' realised accelerations or jerks against their limits in ``ax``."""
+    letters, colour, _ = DERIVATIVES[kind]
+    rows = []
+    for arm, _, _ in ARMS:
+        value = (data.realised_accelerations(arm) if kind == "acceleration"
+                 else data.realised_jerks(arm))
+        lim = limits.arm(arm)
+        given = lim.qdd_max if kind == "acceleration" else lim.qddd_max
+        rows.append((None, value, given if given is not None
+                     else np.full(value.shape[1], np.inf), f"q{arm}_{letters}{{}}"))
+    _rate_lanes(ax, data.t, rows, per_rad=limits.units.per_rad, counts=counts, colour=colour)
+
+
+def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
+    """Joint rates against the speed limits (and accelerations, jerks against theirs).
+
+    Angles in the file's unit (deg or rad) per second (per second squared, cubed),
+    named in the titles.
 
     The realised rate is the finite difference of the recorded joints; it differs
     from the commanded one where a position-level correction moved the joints. The
     shading marks the samples whose realised rate is over the limit. The last row's
     command, computed but never applied, is left out. When the run kept acceleration
-    limits, a second axis beside the first shows the realised accelerations (finite
-    differences of the realised rates, the first from rest) against ``qdd_max``. Traces
-    carry the gids ``commanded:<column>`` and ``realised:<column>``.
+    limits, an axis beside the first shows the realised accelerations (finite
+    differences of the realised rates, the first from rest) against ``qdd_max``; when it
+    kept jerk limits, one more the realised jerks (the accelerations' differences)
+    against ``qddd_max``. Traces carry the gids ``commanded:<column>`` and
+    ``realised:<column>``.
     """
-    accel = limits.acceleration_limits_enforced
+    blocks = [b for b, on in (("acceleration", limits.acceleration_limits_enforced),
+                              ("jerk", limits.jerk_limits_enforced)) if on]
     counts = _counts(data)
     lanes = max(sum(counts), 1)
-    fig, axes = lane_axes(2 if accel else 1, lanes, top=0.7 if accel else 0.45, bottom=0.8)
-    t = data.t
+    fig, axes = lane_axes(1 + len(blocks), lanes, top=0.7 if blocks else 0.45, bottom=0.8)
     per_rad, unit = limits.units.per_rad, limits.units.angle
-    _rate_lanes(axes[0], t, [(data.commanded_rates(arm), data.realised_rates(arm),
-                              limits.arm(arm).qd_max, f"q{arm}_dot{{}}")
-                             for arm, _, _ in ARMS], per_rad=per_rad, counts=counts)
-    if accel:
-        rows = []
-        for arm, _, _ in ARMS:
-            acc = data.realised_accelerations(arm)
-            a_max = limits.arm(arm).qdd_max
-            rows.append((None, acc, a_max if a_max is not None
-                         else np.full(acc.shape[1], np.inf), f"q{arm}_ddot{{}}"))
-        _rate_lanes(axes[1], t, rows, per_rad=per_rad, counts=counts)
+    _rate_lanes(axes[0], data.t, [(data.commanded_rates(arm), data.realised_rates(arm),
+                                   limits.arm(arm).qd_max, f"q{arm}_dot{{}}")
+                                  for arm, _, _ in ARMS], per_rad=per_rad, counts=counts)
+    for ax, block in zip(axes[1:], blocks, strict=True):
+        _derivative_lanes(ax, data, limits, block, counts)
+        panel_title(ax, f"realised {block}s [{unit}/s{DERIVATIVES[block][2]}]", fontsize=9)
+    if blocks:
         panel_title(axes[0], f"rates [{unit}/s]", fontsize=9)
-        panel_title(axes[1], f"realised accelerations [{unit}/s\N{SUPERSCRIPT TWO}]",
-                    fontsize=9)
-    _legend(fig, limits, accel)
+    _legend(fig, limits, blocks)
     _title(fig, title, "joint rates against their speed limits (dashed)"
-           + ("; accelerations against theirs" if accel else f" [{unit}/s]"))
+           + ("".join(f"; {b}s against theirs" for b in blocks) if blocks
+              else f" [{unit}/s]"))
     return fig
 
 
-def _legend(fig: Figure, limits: PlotLimits, accel: bool) -> None:
+def _legend(fig: Figure, limits: PlotLimits, blocks: Sequence[str]) -> None:
     """One legend under the axes: the traces, the limit lines and the shading."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     speed = ("speed limit" if limits.speed_limits_enforced
              else "speed limit (not enforced in this run)")
-    handles = [Line2D([], [], color="C0", lw=1.0), Line2D([], [], color="C1", lw=0.9, ls=":"),
-               Line2D([], [], color=LIMIT_COLOUR, ls="--", lw=0.8),
-               Patch(color=LIMIT_COLOUR, alpha=0.15, lw=0)]
-    labels = ["commanded", "realised", speed + (", acceleration limit" if accel else ""),
-              "realised over the limit"]
-    if accel:
-        handles.insert(2, Line2D([], [], color="C4", lw=0.9))
-        labels.insert(2, "realised acceleration")
+    handles: list[Any] = [Line2D([], [], color="C0", lw=1.0),
+                          Line2D([], [], color="C1", lw=0.9, ls=":")]
+    labels = ["commanded", "realised"]
+    for block in blocks:
+        handles.append(Line2D([], [], color=DERIVATIVES[block][1], lw=0.9))
+        labels.append(f"realised {block}")
+    handles += [Line2D([], [], color=LIMIT_COLOUR, ls="--", lw=0.8),
+                Patch(color=LIMIT_COLOUR, alpha=0.15, lw=0)]
+    labels += [", ".join([speed, *(f"{b} limit" for b in blocks)]),
+               "realised over the limit"]
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7,
                frameon=False)
 

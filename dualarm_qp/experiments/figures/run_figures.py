@@ -6,7 +6,8 @@ can read what was drawn); :func:`write_run_figures` writes them all as PNG files
 - ``joints.png``: every joint against its range, shaded where outside;
 - ``rates.png``: every joint rate, commanded and realised (finite differences
   of the recorded joints), against its speed limit, shaded where the realised rate is
-  over it (both in lanes, one lane per joint in one axis: :mod:`.lanes`);
+  over it; with acceleration (jerk) limits, the realised accelerations (jerks) against
+  theirs (all in lanes, one lane per joint in one axis each: :mod:`.lanes`);
 - ``grasp.png``: the grasp coordinate against its range, and the sliding speed
   against its limit;
 - ``tracking.png``: the leader's tracking error, the smallest singular value of each
