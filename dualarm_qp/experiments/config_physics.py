@@ -49,8 +49,10 @@ class PhysicsSpec(Model):
     servo: Literal["position", "velocity"] = "position"
     reference: Literal["measured", "integrated"] = "measured"
     reference_time: Num | None = None
-    kp: Num = 100000.0
-    kv: Num = 300.0
+    servo_frequency: Num = 40.0
+    damping_ratio: Num = 1.0
+    kp: Num | None = None
+    kv: Num | None = None
     armature: Num = 0.05
     delay: Flag = False
     contacts: Literal["obstacles", "all", "none"] = "obstacles"
@@ -66,14 +68,20 @@ class PhysicsSpec(Model):
 
     @model_validator(mode="after")
     def _ranges(self) -> PhysicsSpec:
-        for key in ("kv", "object_mass", "link_density", "squeeze_max", "torque_ratio_max"):
+        for key in ("servo_frequency", "damping_ratio", "object_mass", "link_density",
+                    "squeeze_max", "torque_ratio_max"):
             if not getattr(self, key) > 0:
                 raise keyed(key, f"must be > 0 (got {getattr(self, key):g})")
-        for key in ("kp", "armature"):
-            if getattr(self, key) < 0:
-                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
-        if self.servo == "position" and not self.kp > 0:
-            raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
+        if self.kv is not None and not self.kv > 0:
+            raise keyed("kv", f"must be > 0 (got {self.kv:g}; leave it out for each "
+                        "joint's from its inertia)")
+        if self.armature < 0:
+            raise keyed("armature", f"must be >= 0 (got {self.armature:g})")
+        if self.kp is not None and self.kp < 0:
+            raise keyed("kp", f"must be >= 0 (got {self.kp:g})")
+        if self.servo == "position" and self.kp is not None and not self.kp > 0:
+            raise keyed("kp", "a position servo needs kp > 0 (or leave it out for each "
+                        "joint's from its inertia, or servo: velocity)")
         for key in ("reference_time", "deviation_max", "rotation_max", "slip_max"):
             value = getattr(self, key)
             if value is not None and not value > 0:

@@ -82,6 +82,9 @@ class PhysicsRun:
         The simulator's time step [s].
     substeps : int
         Substeps per controller sample.
+    gains : dict or None
+        The servos' gains (:meth:`ServoGains.as_dict
+        <dualarm_qp.physics.gains.ServoGains.as_dict>`).
     """
 
     name: str
@@ -95,6 +98,7 @@ class PhysicsRun:
     velocity_error: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
     substep: float = SUBSTEP
     substeps: int = 1
+    gains: dict[str, Any] | None = None
 
     @classmethod
     def of(cls, name: str, plant: MujocoPlant, started: float,
@@ -107,7 +111,8 @@ class PhysicsRun:
         error = np.asarray(plant.velocity_error, dtype=float).reshape(-1, len(names))
         return cls(name, plant.arrays(), time.perf_counter() - started, plant.notes,
                    plant.limits, result, (ratio, names[j] if j >= 0 else "", t), names,
-                   error, float(plant.model.opt.timestep), plant.substeps)
+                   error, float(plant.model.opt.timestep), plant.substeps,
+                   None if plant.gains is None else plant.gains.as_dict())
 
     def joint_name(self, j: int) -> str:
         """Return the name of arm joint ``j`` (over both arms, the leader's first)."""
@@ -339,6 +344,7 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
         "internal_force_excess_N": c["internal_force_max_N"] - (
             0.0 if b is None else b["internal_force_max_N"]),
         "settings": settings.as_dict(),
+        "servo_gains": closed.gains,
         "torque_limits_N_m": {k: [float(x) if np.isfinite(x) else None for x in v]
                               for k, v in closed.limits.items()},
         "model_notes": closed.notes,

@@ -388,12 +388,19 @@ def _contact_bits(settings: PhysicsSettings, *, obstacle: bool) -> str:
 
 
 def _actuators(joints: dict[str, tuple[str, ...]], settings: PhysicsSettings) -> list[str]:
-    """Each arm joint's servo: a position actuator (kp) and a velocity actuator (kv)."""
+    """Each arm joint's servo: a position actuator (kp) and a velocity actuator (kv).
+
+    The gains written are the file's ``kp`` and ``kv`` (1 where it states none): the
+    plant sets each joint's from the arm's inertia once the model is compiled
+    (:mod:`~dualarm_qp.physics.gains`).
+    """
+    kp = 1.0 if settings.kp is None else settings.kp
+    kv = 1.0 if settings.kv is None else settings.kv
     out = []
     for name in (*joints["leader"], *joints["follower"]):
         if settings.servo == "position":
-            out.append(f'<position name="{name}_p" joint="{name}" kp="{settings.kp!r}"/>')
-        out.append(f'<velocity name="{name}_v" joint="{name}" kv="{settings.kv!r}"/>')
+            out.append(f'<position name="{name}_p" joint="{name}" kp="{kp!r}"/>')
+        out.append(f'<velocity name="{name}_v" joint="{name}" kv="{kv!r}"/>')
     return out
 
 

@@ -53,6 +53,7 @@ from ..task.loads import (
 )
 from ..task.scene import DualArmTask
 from ..task.torques import model_effort
+from .gains import ServoGains, servo_gains, set_gains
 from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
 from .settings import SUBSTEP, PhysicsSettings
@@ -160,6 +161,8 @@ class MujocoPlant:
         self._ff = np.zeros(task.leader.n + task.follower.n)
         self.log: dict[str, list[Any]] = {}
         self.substeps = 1
+        #: Each arm joint's servo gains (set by :meth:`reset`, :mod:`.gains`).
+        self.gains: ServoGains | None = None
 
     # -- building ---------------------------------------------------------------------
     def _compile(self, xml: str) -> None:
@@ -227,6 +230,7 @@ class MujocoPlant:
             self._place(state)
         self.substeps = max(1, math.ceil(dt / SUBSTEP - 1e-9))
         self.model.opt.timestep = dt / self.substeps
+        self._set_gains()
         self.q_ref = np.r_[state.q_l, state.q_f].astype(float)
         self._rates = np.zeros(self.q_ref.size)
         #: The largest torque ratio, the joint (index over both arms) and the time [s].
@@ -241,6 +245,14 @@ class MujocoPlant:
         self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
         self._record(state.t, state.sigma, 0.0)
+
+    def _set_gains(self) -> None:
+        """Give each arm joint's servo its gains from the inertia at the start (:mod:`.gains`)."""
+        mj, m, d = self._mj, self.model, self.data
+        M = np.zeros((m.nv, m.nv))
+        mj.mj_fullM(m, d, M)
+        self.gains = servo_gains(M, self._dadr, self.settings, float(m.opt.timestep))
+        set_gains(m, self.gains, self.settings.servo)
 
     def _settle(self) -> None:
         """Hold the start for :data:`SETTLE` s, so that the run starts from rest under load.
@@ -280,14 +292,27 @@ class MujocoPlant:
                           f"under {WELD_ERROR_DIVERGED * 1e3:g} mm)")
         if reason is None:
             return
-        st = self.settings
-        gains = (f"kp {st.kp:g} N m/rad, kv {st.kv:g} N m s/rad" if st.servo == "position"
-                 else f"kv {st.kv:g} N m s/rad")
-        raise DivergedError(
-            f"the simulation diverged {when}: {reason}. The servo gains ({gains}) are "
-            f"unstable with armature {st.armature:g} kg m^2 at substeps of "
-            f"{self.model.opt.timestep * 1e3:.3g} ms: lower physics.kp (or physics.kv), "
-            "or raise physics.armature")
+        raise DivergedError(f"the simulation diverged {when}: {reason}. "
+                            + self._gains_text())
+
+    def _gains_text(self) -> str:
+        """Return what the divergence message says of the gains, and what to change."""
+        st, g = self.settings, self.gains
+        h = f"{self.model.opt.timestep * 1e3:.3g} ms"
+        if st.kp is None and st.kv is None:
+            span = "" if g is None else (f"; kp {g.kp.min():.3g}..{g.kp.max():.3g} N m/rad, "
+                                         f"kv {g.kv.min():.3g}..{g.kv.max():.3g} N m s/rad")
+            return (f"The servo gains (each joint's from its inertia at "
+                    f"{st.servo_frequency:g} Hz, damping ratio {st.damping_ratio:g}{span}) "
+                    "are unstable with armature "
+                    f"{st.armature:g} kg m^2 at substeps of {h}: lower "
+                    "physics.servo_frequency, or raise physics.armature")
+        given = ", ".join(f"{k} {v:g}" for k, v in (("kp", st.kp), ("kv", st.kv))
+                          if v is not None and (k == "kv" or st.servo == "position"))
+        return (f"The servo gains ({given}, the same on every joint) are unstable with "
+                f"armature {st.armature:g} kg m^2 at substeps of {h}: lower physics.kp "
+                "(or physics.kv), leave them out (each joint's gains from its inertia), "
+                "or raise physics.armature")
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,

@@ -8,8 +8,11 @@ The defaults, as written in a file with ``units: {length: mm, angle: rad, time: 
       reference: measured      # the position reference leaks towards the measured
                                # joints (measured) or only integrates (integrated)
       reference_time: 0.03     # time unit (here s): the leak's time constant
-      kp: 100000               # N m/rad, position gain (SI whatever the file's units)
-      kv: 300                  # N m s/rad, velocity gain
+      servo_frequency: 40      # Hz: each joint's servo is a second-order system of this
+                               # natural frequency on the arm's own inertia (gains.py)
+      damping_ratio: 1.0       # of that system
+      kp:                      # N m/rad: one position gain for every joint instead (SI)
+      kv:                      # N m s/rad: one velocity gain for every joint instead
       armature: 0.05           # kg m^2, rotor inertia added to every arm joint
       delay: false             # closed loop: the controller sees the previous sample
       contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
@@ -65,6 +68,9 @@ GEOMETRIES = ("meshes", "capsules")
 #: MuJoCo's time step [s]: the controller's ``dt`` is cut into substeps of at most this.
 SUBSTEP = 1e-3
 
+#: Default natural frequency of the joint servos [Hz] (:mod:`~dualarm_qp.physics.gains`).
+SERVO_FREQUENCY = 40.0
+
 @dataclass(frozen=True)
 class PhysicsSettings:
     """The physics check's settings in SI units (built from :class:`PhysicsSpec`).
@@ -79,10 +85,17 @@ class PhysicsSettings:
         (``integrated``: the commands integrated since the start).
     reference_time : float
         Time constant of that pull [s] (default 0.03 s).
-    kp : float
-        Position gain [N m/rad] (position servo only).
-    kv : float
-        Velocity gain [N m s/rad].
+    servo_frequency : float
+        Natural frequency of every joint's servo on the arm's own inertia [Hz]
+        (:mod:`~dualarm_qp.physics.gains`; lowered where the integrator needs it).
+    damping_ratio : float
+        Damping ratio of every joint's servo.
+    kp : float or None
+        One position gain for every joint [N m/rad] (position servo only); None: each
+        joint's from its inertia.
+    kv : float or None
+        One velocity gain for every joint [N m s/rad]; None: each joint's from its
+        inertia.
     armature : float
         Rotor inertia added to every arm joint [kg m^2].
     delay : bool
@@ -116,8 +129,10 @@ class PhysicsSettings:
     servo: str = "position"
     reference: str = "measured"
     reference_time: float = 0.03
-    kp: float = 100000.0
-    kv: float = 300.0
+    servo_frequency: float = SERVO_FREQUENCY
+    damping_ratio: float = 1.0
+    kp: float | None = None
+    kv: float | None = None
     armature: float = 0.05
     delay: bool = False
     contacts: str = "obstacles"
@@ -140,13 +155,16 @@ class PhysicsSettings:
             raise ValueError(f"contacts must be one of {CONTACTS}, got {self.contacts!r}")
         if self.geometry not in GEOMETRIES:
             raise ValueError(f"geometry must be one of {GEOMETRIES}, got {self.geometry!r}")
-        for key in ("kv", "reference_time", "object_mass", "link_density", "deviation_max",
-                    "rotation_max",
-                    "slip_max",
+        for key in ("servo_frequency", "damping_ratio", "reference_time", "object_mass",
+                    "link_density", "deviation_max", "rotation_max", "slip_max",
                     "squeeze_max", "torque_ratio_max"):
             value = float(getattr(self, key))
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{key} must be a finite number > 0, got {value}")
+        if self.kv is not None and not (math.isfinite(self.kv) and self.kv > 0):
+            raise ValueError(f"kv must be None or a finite number > 0, got {self.kv}")
+        if self.kp is not None and not (math.isfinite(self.kp) and self.kp >= 0):
+            raise ValueError(f"kp must be None or a finite number >= 0, got {self.kp}")
 
     @classmethod
     def from_spec(cls, spec: PhysicsSpec, length_scale: float, angle_scale: float = 1.0,
@@ -164,7 +182,8 @@ class PhysicsSettings:
         return cls(servo=spec.servo, reference=spec.reference,
                    reference_time=(0.03 if spec.reference_time is None
                                    else spec.reference_time * time_scale),
-                   kp=spec.kp, kv=spec.kv,
+                   servo_frequency=spec.servo_frequency,
+                   damping_ratio=spec.damping_ratio, kp=spec.kp, kv=spec.kv,
                    armature=spec.armature,
                    delay=spec.delay, contacts=spec.contacts,
                    geometry=spec.geometry, object_mass=spec.object_mass,
@@ -178,7 +197,9 @@ class PhysicsSettings:
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, SI."""
         return {"servo": self.servo, "reference": self.reference,
-                "reference_time_s": self.reference_time, "kp_N_m_rad": self.kp,
+                "reference_time_s": self.reference_time,
+                "servo_frequency_hz": self.servo_frequency,
+                "damping_ratio": self.damping_ratio, "kp_N_m_rad": self.kp,
                 "kv_N_m_s_rad": self.kv,
                 "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
                 "contacts": self.contacts, "geometry": self.geometry,
@@ -189,4 +210,5 @@ class PhysicsSettings:
                 "link_density_kg_m3": self.link_density}
 
 
-__all__ = ["CONTACTS", "GEOMETRIES", "REFERENCES", "SERVOS", "SUBSTEP", "PhysicsSettings"]
+__all__ = ["CONTACTS", "GEOMETRIES", "REFERENCES", "SERVOS", "SERVO_FREQUENCY", "SUBSTEP",
+           "PhysicsSettings"]

@@ -93,7 +93,7 @@ def test_hands_off_their_grasps_are_a_divergence(beam, monkeypatch):
 
     monkeypatch.setattr("dualarm_qp.physics.plant.WELD_ERROR_DIVERGED", 1e-9)
     plant = MujocoPlant(beam.task, PhysicsSettings())
-    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.kp"):
+    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.servo_frequency"):
         plant.reset(beam.initial, beam.options.dt)
 
 

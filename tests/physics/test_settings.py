@@ -28,7 +28,8 @@ def _with_physics(physics: object) -> dict:
 def test_defaults_are_documented_values():
     s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
     assert (s.servo, s.reference, s.reference_time, s.kp, s.kv, s.armature, s.delay) == (
-        "position", "measured", 0.03, 1e5, 300.0, 0.05, False)
+        "position", "measured", 0.03, None, None, 0.05, False)
+    assert (s.servo_frequency, s.damping_ratio) == (40.0, 1.0)
     assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
         0.01, 0.005, 20.0, 1.0)
 
