@@ -199,12 +199,23 @@ def _physics_line(name: str, r: dict[str, Any] | None) -> str:
             f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
 
 
+def _samples(text: str) -> int:
+    """Return ``--delay``'s number of samples (>= 0)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a whole number of samples >= 0, not {text!r}")
+    return value
+
+
 def _cmd_physics(args: argparse.Namespace) -> int:
     from .physics.command import check_run
     from .physics.plant import DivergedError
 
     try:
-        p = check_run(args.run_dir, delay=True if args.delay else None)
+        p = check_run(args.run_dir, delay=args.delay)
     except DivergedError as err:  # the simulation blew up: a failed check, not bad input
         _err(str(err))
         return EXIT_FAILED
@@ -463,8 +474,9 @@ def build_parser() -> argparse.ArgumentParser:
                                         "closed loop, with a verdict (docs/physics.md)")
     ph.add_argument("run_dir", type=Path, metavar="RUN_DIR",
                     help="output folder of 'dualarm-qp run'")
-    ph.add_argument("--delay", action="store_true",
-                    help="closed loop one sample late (overrides the file's physics.delay)")
+    ph.add_argument("--delay", nargs="?", const=1, default=None, type=_samples,
+                    metavar="N", help="closed loop N samples late (1 when N is left out; "
+                    "overrides the file's physics.delay)")
     ph.set_defaults(func=_cmd_physics)
 
     rp = sub.add_parser("reproduce", help="run the paper's three PUMA beam cases and the "

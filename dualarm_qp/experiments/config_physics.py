@@ -10,11 +10,28 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
 from .config_types import Flag, LimitNum, Model, Num, keyed, scalar_to_list
 
 LimitList = Annotated[list[LimitNum], Field(min_length=1)]
+
+#: Most samples of delay a file may ask for.
+DELAY_MAX = 100
+
+
+def _samples(value: Any) -> int:
+    """Return a delay's samples: ``true`` 1 (the former meaning), ``false`` 0, or a number."""
+    if isinstance(value, bool):
+        return int(value)
+    if isinstance(value, int) and 0 <= value <= DELAY_MAX:
+        return value
+    raise ValueError(f"must be true (1 sample), false or a whole number of samples from 0 "
+                     f"to {DELAY_MAX}, got {value!r}")
+
+
+#: The closed loop's delay in samples (``true`` is 1, as it was before it took a number).
+Samples = Annotated[int, BeforeValidator(_samples)]
 
 
 class TorqueLimitSpec(Model):
@@ -54,7 +71,8 @@ class PhysicsSpec(Model):
     kp: Num | None = None
     kv: Num | None = None
     armature: Num = 0.05
-    delay: Flag = False
+    delay: Samples = 0
+    predict: Flag = True
     contacts: Literal["obstacles", "all", "none"] = "obstacles"
     geometry: Literal["meshes", "capsules"] = "meshes"
     object_mass: Num = 3.0

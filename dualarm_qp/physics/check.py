@@ -8,7 +8,7 @@
 * The **closed loop** runs the controller against the simulator at the controller's
   ``dt`` (:func:`~dualarm_qp.control.rollout.rollout` with a
   :class:`~dualarm_qp.physics.plant.MujocoPlant`): it measures the joints and the sliding
-  coordinate from MuJoCo (optionally one sample late) and sends its rates back.
+  coordinate from MuJoCo (optionally some samples late) and sends its rates back.
 
 The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 
@@ -122,9 +122,11 @@ class PhysicsRun:
         """Peaks of the run (JSON-ready, SI)."""
         g = self.log
 
+        none = np.zeros(0)
+
         def peak(key: str) -> float:
-            v = g[key]
-            return float(np.max(v)) if v.size and not np.isnan(v).all() else float("nan")
+            v = g.get(key, none)
+            return float(np.nanmax(v)) if v.size and not np.isnan(v).all() else float("nan")
 
         torque = g["torque_peak"]  # each joint's largest |torque| over a sample's substeps
         n_l = len(self.limits["leader"])
@@ -138,6 +140,9 @@ class PhysicsRun:
             "slip_max_m": peak("slip"),
             "weld_error_max_m": max(peak("weld_leader"), peak("weld_follower")),
             "support_gap_max_m": peak("gap"),
+            "load_share_follower": _span(g.get("share", none)),
+            "load_share_follower_planned": _span(g.get("share_plan", none)),
+            "split_error_max": peak("split_error"),
             "torque_ratio_max": peak("torque_ratio_peak"),
             "torque_ratio_worst": {"joint": self.worst[1], "t_s": self.worst[2]},
             "torque_max_N_m": {"leader": np.max(torque[:, :n_l], axis=0).tolist(),
@@ -148,6 +153,12 @@ class PhysicsRun:
             out["message"] = self.result.message
             out["path_completed_pct"] = 100.0 * self.result.path_completed
         return out
+
+
+def _span(values: FloatArray) -> list[float] | None:
+    """Return ``[min, max]`` of the finite values (None when there are none)."""
+    finite = values[np.isfinite(values)]
+    return [float(finite.min()), float(finite.max())] if finite.size else None
 
 
 def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: FloatArray,
@@ -164,7 +175,7 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
         Replay the follower this many samples late (a deliberately lagged follower).
     """
     t0 = time.perf_counter()
-    plant = MujocoPlant(exp.task, settings, delay=False, arm_tau_max=arm_tau_max(exp))
+    plant = MujocoPlant(exp.task, settings, delay=0, arm_tau_max=arm_tau_max(exp))
     sl = np.zeros_like(grasp) if grasp_leader is None else np.nan_to_num(grasp_leader)
     dt = float(t[1] - t[0]) if t.size > 1 else exp.options.dt
     plant.reset(DualArmState(float(path_t[0]), q_l[0], q_f[0], float(grasp[0]), float(sl[0])),
@@ -177,9 +188,11 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
     return PhysicsRun.of("replay", plant, t0)
 
 
-def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | None = None
+def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: int | None = None
                 ) -> PhysicsRun:
     """Run the controller against MuJoCo (the run starts at rest).
+
+    ``delay`` [samples] overrides ``settings.delay``.
 
     The run's tracking and closure tolerances are widened to the check's thresholds
     (:func:`closed_loop_limits`): the controller goes on while the verdict's thresholds

@@ -24,6 +24,10 @@
   every motion free but one: the hand's motion into the object along the normal, a
   one-sided joint limit (the hand pushes, never pulls).
 * **Obstacles** are the collision scene's, fixed in the world.
+* A **force/torque sensor** at each tool frame (site ``<role>_ft``, sensors
+  ``<role>_force`` and ``<role>_torque``), between the arm's last link and its tool
+  body (:data:`CHAIN_MASS`), as a wrist sensor between a robot's flange and its hand
+  (:mod:`dualarm_qp.physics.sensors` reads them).
 
 Nothing here imports MuJoCo: the model is text (:func:`build_mjcf`).
 """
@@ -210,7 +214,8 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
             tool = model.frames[arm.tool_frame_id].placement
             lines.append(f'<body name="{role}_tool" {_pose_attrs(tool)}>'
                          f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-                         f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/></body>')
+                         f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>'
+                         f'<site name="{role}_ft" pos="0 0 0"/></body>')
         xml += lines
         close.append("</body>")
     if fallback:
@@ -359,6 +364,9 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
         "<equality>", *welds, "</equality>",
         "<contact>", *excludes, "</contact>",
         "<actuator>", *_actuators(joints, settings), "</actuator>",
+        "<sensor>", *(f'<force name="{role}_force" site="{role}_ft"/>'
+                      f'<torque name="{role}_torque" site="{role}_ft"/>'
+                      for role in ("leader", "follower")), "</sensor>",
         "</mujoco>", ""])
     return PhysicsModel(
         xml=xml, joints=joints, grasps=grasps, support_gap=support_gap,

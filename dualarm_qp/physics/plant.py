@@ -17,11 +17,15 @@ puts it at the run's start and then, for each controller sample of ``dt``:
 * measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
   chain joint) and its slip (off the coordinate at the sample's start plus ``dt`` times
   the commanded sliding speed, with or without ``delay``), the object's pose, each
-  hand's wrench on the object and its internal part (:mod:`.measure`), the joint
-  torques (their peak share of the limits over the substeps), the welds' errors and a
-  support's gap, into :attr:`MujocoPlant.log`, and each arm joint's velocity error at
-  every substep into :attr:`MujocoPlant.velocity_error`;
-* hands the controller the measured state, or the previous sample's with ``delay``.
+  hand's wrench on the object from its force/torque sensor, their internal part and
+  the follower's share of the load against the plan's split (:mod:`.readout`), the
+  joint torques (their peak share of the limits over the substeps), the welds' errors
+  and a support's gap, into :attr:`MujocoPlant.log`, and each arm joint's velocity
+  error at every substep into :attr:`MujocoPlant.velocity_error`;
+* hands the controller the measured state, or with ``delay`` ``d`` the one measured
+  ``d`` samples earlier (brought forward by the commands applied since, with
+  ``predict``: :mod:`dualarm_qp.control.predict`), and keeps the sensors' reading of
+  that state in :attr:`MujocoPlant.readings`.
 
 Contacts (:attr:`PhysicsSettings.contacts
 <dualarm_qp.physics.settings.PhysicsSettings.contacts>`): by default the links and the
@@ -35,6 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import deque
 from typing import Any
 
 import numpy as np
@@ -42,20 +47,16 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from ..control.loads import hand_wrenches
+from ..control.measured import HandReading, load_share
+from ..control.predict import CommandHistory
 from ..errors import DualArmError, InvalidInputError, SupportLostError
 from ..step.state import Command, DualArmState
-from ..task.loads import (
-    ObjectLoad,
-    UnbalancedLoadError,
-    rigid_grasp,
-    sliding_grasp,
-    support_push,
-)
+from ..task.loads import ObjectLoad, UnbalancedLoadError
 from ..task.scene import DualArmTask
 from ..task.torques import model_effort
 from .gains import ServoGains, servo_gains, set_gains
-from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
+from .readout import Readout
 from .settings import SUBSTEP, PhysicsSettings
 
 FloatArray = NDArray[np.float64]
@@ -65,6 +66,7 @@ LOG_COLUMNS = {
     "t": "s", "tau": "s", "deviation_pos": "m", "deviation_rot": "rad",
     "internal": "N", "support": "N", "slip": "m",
     "weld_leader": "m", "weld_follower": "m", "gap": "m", "torque_ratio_peak": "1",
+    "share": "1", "share_plan": "1", "split_error": "1",
 }
 
 
@@ -143,14 +145,25 @@ class MujocoPlant:
         Override ``settings.delay``.
     arm_tau_max : dict of str to ndarray, optional
         Each arm's configured ``tau_max`` [N m] (:func:`torque_limits`).
+
+    Attributes
+    ----------
+    delay : int
+        Samples the measurement handed to the controller is late (0: the latest).
+    readings : list of HandReading
+        What the sensors measured with each state handed to the controller (the
+        reset's first, then one per :meth:`advance`; as late as the state).
     """
 
     def __init__(self, task: DualArmTask, settings: PhysicsSettings, *,
-                 delay: bool | None = None,
+                 delay: int | None = None,
                  arm_tau_max: dict[str, FloatArray | None] | None = None) -> None:
         self.task = task
         self.settings = settings
-        self.delay = settings.delay if delay is None else bool(delay)
+        self.delay = settings.delay if delay is None else int(delay)
+        if self.delay < 0:
+            raise InvalidInputError(f"delay must be a whole number of samples >= 0, got "
+                                    f"{self.delay}")
         self.physics: PhysicsModel = build_mjcf(task, settings)
         self.notes: list[str] = list(self.physics.notes)
         self.limits = torque_limits(task, settings, arm_tau_max)
@@ -163,6 +176,9 @@ class MujocoPlant:
         self.substeps = 1
         #: Each arm joint's servo gains (set by :meth:`reset`, :mod:`.gains`).
         self.gains: ServoGains | None = None
+        self.readings: list[HandReading] = []
+        self._history: deque[tuple[DualArmState, HandReading]] = deque()
+        self._commands = CommandHistory(self.delay)
 
     # -- building ---------------------------------------------------------------------
     def _compile(self, xml: str) -> None:
@@ -179,11 +195,8 @@ class MujocoPlant:
                       for role, names in self.physics.joints.items()}
         self._arm_dofs = np.r_[self._dadr["leader"], self._dadr["follower"]]
         self._arm_q = np.r_[self._qadr["leader"], self._qadr["follower"]]
-        self._obj = m.body("object").id
         self._obj_q = m.jnt_qposadr[m.joint("object_free").id]
-        self._obj_dof = m.jnt_dofadr[m.joint("object_free").id]
-        self._points = {r: m.body(b).id for r, b in self.physics.points.items()}
-        self._tools = {r: m.body(b).id for r, b in self.physics.tools.items()}
+        self.readout = Readout(m, self.data, self.physics, self.task)
         self._grasp_q = {r: (m.jnt_qposadr[m.joint(g.joint).id], g.rate)
                          for r, g in self.physics.grasps.items()}
         gap = self.physics.support_gap
@@ -244,7 +257,10 @@ class MujocoPlant:
         #: Each arm joint's largest |torque| over the last sample's substeps [N m].
         self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
-        self._record(state.t, state.sigma, 0.0)
+        reading = self._record(state.t, state.sigma, 0.0)
+        self._history = deque([(self._measured, reading)], maxlen=self.delay + 1)
+        self._commands = CommandHistory(self.delay)
+        self.readings = [reading]
 
     def _set_gains(self) -> None:
         """Give each arm joint's servo its gains from the inertia at the start (:mod:`.gains`)."""
@@ -286,7 +302,8 @@ class MujocoPlant:
         elif d.warning[self._mj.mjtWarning.mjWARN_BADQACC].number > 0:
             reason = "MuJoCo found an infinite or huge acceleration and reset the state"
         elif welds:
-            error = max(self._weld_error(self.physics.welds[r]) for r in ("leader", "follower"))
+            error = max(self.readout.weld_error(self.physics.welds[r])
+                        for r in ("leader", "follower"))
             if error > WELD_ERROR_DIVERGED:
                 reason = (f"a hand is {error * 1e3:.0f} mm off its grasp (a sound run keeps "
                           f"under {WELD_ERROR_DIVERGED * 1e3:g} mm)")
@@ -387,7 +404,13 @@ class MujocoPlant:
         d.qfrc_applied[self._arm_dofs] = d.qfrc_bias[self._arm_dofs] + self._ff
 
     def advance(self, state: DualArmState, command: Command, dt: float) -> DualArmState:
-        """Apply the command's rates for ``dt``; return the measured state (see the module)."""
+        """Apply the command's rates for ``dt``; return the measured state (see the module).
+
+        With :attr:`delay` ``d`` the state (and the reading appended to
+        :attr:`readings`) is the one measured ``d`` samples ago (the start's, until
+        there are ``d``), brought forward by the commands applied since when
+        ``settings.predict`` (:mod:`dualarm_qp.control.predict`).
+        """
         rates = np.r_[command.ql_dot, command.qf_dot]
         self._feedforward(self._measured)
         peak_tau = self.drive(rates, dt, leak=self.settings.reference == "measured")
@@ -396,10 +419,16 @@ class MujocoPlant:
         self._measured = self._measure(tau)
         # The slip's reference: where the sample's command moved the grasp from where it
         # was at the sample's start, measured (previous), not from the state the controller
-        # was handed (with delay a sample older: one sample of sliding would count as slip).
-        self._record(tau, previous.sigma + dt * command.m, peak_tau)
-        out = previous if self.delay else self._measured
-        return DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
+        # was handed (with delay older: its sliding since would count as slip).
+        reading = self._record(tau, previous.sigma + dt * command.m, peak_tau)
+        self._history.append((self._measured, reading))
+        out, handed = self._history[0]
+        self.readings.append(handed)
+        self._commands.push(command, dt)
+        late = DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
+        if not self.settings.predict:
+            return late
+        return self._commands.predict(late, len(self._history) - 1)
 
     def replay_step(self, q_from: FloatArray, q_to: FloatArray, dt: float, tau: float,
                     sigma_ref: float) -> None:
@@ -422,69 +451,68 @@ class MujocoPlant:
                             sig.get("leader", 0.0))
 
     def wrenches(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Return the hands' wrenches on the object and their grasp points (world)."""
-        m, d = self.model, self.data
-        p_l, p_f = d.xpos[self._points["leader"]].copy(), d.xpos[self._points["follower"]].copy()
-        w_l = weld_wrench(m, d, self.physics.welds["leader"], self._obj, self._obj_dof, p_l)
-        w_f = weld_wrench(m, d, self.physics.welds["follower"], self._obj, self._obj_dof, p_f)
-        return w_l, w_f, p_l, p_f
+        """Return the hands' wrenches on the object from the welds, and the grasp points.
 
-    def _spaces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Each hand's wrench space (world) and the follower's push direction."""
-        task, d = self.task, self.data
-        R = d.xmat[self._obj].reshape(3, 3)
-        spaces = []
-        for role, surface in (("leader", task.leader_surface), ("follower", task.surface)):
-            p = d.xpos[self._points[role]]
-            if surface is None:
-                spaces.append(space_of(rigid_grasp(p).free))
-                continue
-            sigma = self._measured.sigma if role == "follower" else self._measured.sigma_leader
-            if role == "follower" and task.contact is not None:
-                spaces.append(space_of(support_push(p, R @ surface.normal(sigma), 1.0).free))
-                continue
-            g = sliding_grasp(p, R @ surface.tangent(sigma), R @ surface.angular_rate(sigma))
-            spaces.append(space_of(g.free))
-        normal = (R @ task.surface.normal(self._measured.sigma) if task.contact is not None
-                  else -self.physics.gravity / np.linalg.norm(self.physics.gravity))
-        return spaces[0], spaces[1], normal
+        The simulator's own account of the forces (the welds' constraint forces); what
+        the plant measures and hands on is the sensors' (:meth:`Readout.sensed
+        <dualarm_qp.physics.readout.Readout.sensed>`).
+        """
+        return self.readout.welds()
 
-    def _weld_error(self, eq: int) -> float:
-        d = self.data
-        nefc = int(d.nefc)
-        rows = np.flatnonzero((d.efc_type[:nefc] == 0) & (d.efc_id[:nefc] == eq))
-        return float(np.linalg.norm(d.efc_pos[rows[:3]])) if rows.size else 0.0
+    def _planned(self, state: DualArmState) -> tuple[FloatArray, FloatArray] | None:
+        """Return the plan's split of the load at ``state`` (None where it has none)."""
+        try:
+            split = hand_wrenches(self._load_task, state.q_l, state.sigma,
+                                  state.sigma_leader).wrenches
+        except (UnbalancedLoadError, SupportLostError):
+            return None
+        return split[0], split[1]
 
-    def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> None:
-        d, log = self.data, self.log
-        D = self.task.trajectory.pose(tau)
-        R = d.xmat[self._obj].reshape(3, 3)
+    def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> HandReading:
+        """Log the sample just simulated; return its reading (:class:`HandReading`)."""
+        d, log, ro, state = self.data, self.log, self.readout, self._measured
         log["t"].append(self.t)
         log["tau"].append(tau)
-        log["deviation_pos"].append(float(np.linalg.norm(d.xpos[self._obj] - D[:3, 3])))
-        log["deviation_rot"].append(float(np.linalg.norm(pin.log3(D[:3, :3].T @ R))))
-        w_l, w_f, p_l, p_f = self.wrenches()
-        s_l, s_f, normal = self._spaces()
-        internal, _ = internal_force((p_l, p_f), (s_l, s_f), (w_l, w_f))
-        log["internal"].append(internal)
-        log["support"].append(float(w_f[:3] @ normal))
-        log["slip"].append(abs(self._measured.sigma - sigma_ref))
-        log["weld_leader"].append(self._weld_error(self.physics.welds["leader"]))
-        log["weld_follower"].append(self._weld_error(self.physics.welds["follower"]))
+        dev = ro.deviation(self.task.trajectory.pose(tau))
+        log["deviation_pos"].append(dev[0])
+        log["deviation_rot"].append(dev[1])
+        reading = ro.reading(state.sigma, state.sigma_leader)
+        push = ro.spaces(state.sigma, state.sigma_leader)[2]
+        log["internal"].append(reading.internal)
+        log["support"].append(float(reading.follower[:3] @ push))
+        log["share"].append(reading.share)
+        planned = self._planned(state)
+        share_plan, split = float("nan"), float("nan")
+        if planned is not None:
+            share_plan = load_share(planned[0], planned[1], push)
+            split = max(_relative(float(w[:3] @ push), float(p[:3] @ push))
+                        for w, p in zip((reading.leader, reading.follower), planned,
+                                        strict=True))
+        log["share_plan"].append(share_plan)
+        log["split_error"].append(split)
+        log["slip"].append(abs(state.sigma - sigma_ref))
+        log["weld_leader"].append(ro.weld_error(self.physics.welds["leader"]))
+        log["weld_follower"].append(ro.weld_error(self.physics.welds["follower"]))
         log["gap"].append(0.0 if self._gap_q is None else float(-d.qpos[self._gap_q]))
         tau_j = d.qfrc_actuator[self._arm_dofs] + d.qfrc_applied[self._arm_dofs]
         ratio = np.abs(tau_j) / self._tau_max
         log["torque_ratio_peak"].append(max(peak_tau, float(np.max(ratio)))
                                         if np.isfinite(self._tau_max).any() else np.nan)
-        log["w_leader"].append(w_l)
-        log["w_follower"].append(w_f)
+        log["w_leader"].append(reading.leader)
+        log["w_follower"].append(reading.follower)
         log["torque"].append(tau_j.copy())
         log["torque_peak"].append(np.maximum(self.peak_torque, np.abs(tau_j)))
-        log["sigma"].append(self._measured.sigma)
+        log["sigma"].append(state.sigma)
+        return reading
 
     def arrays(self) -> dict[str, FloatArray]:
         """Return the log as arrays (one row per controller sample)."""
         return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
+
+
+def _relative(measured: float, planned: float) -> float:
+    """Return ``|measured - planned| / |planned|`` (NaN when the plan carries nothing)."""
+    return abs(measured - planned) / abs(planned) if abs(planned) > 1e-9 else float("nan")
 
 
 __all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",

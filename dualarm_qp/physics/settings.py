@@ -14,7 +14,10 @@ The defaults, as written in a file with ``units: {length: mm, angle: rad, time: 
       kp:                      # N m/rad: one position gain for every joint instead (SI)
       kv:                      # N m s/rad: one velocity gain for every joint instead
       armature: 0.05           # kg m^2, rotor inertia added to every arm joint
-      delay: false             # closed loop: the controller sees the previous sample
+      delay: 0                 # closed loop: the controller sees the measurement this
+                               # many samples late (true: 1, false: 0)
+      predict: true            # with delay: the late measurement brought forward by the
+                               # commands applied since
       contacts: obstacles      # which geoms touch: obstacles (with the arms, the object),
                                # all (also arm-arm, arm-object) or none
       geometry: meshes         # a URDF arm's links: its collision meshes (convex hulls)
@@ -98,8 +101,11 @@ class PhysicsSettings:
         inertia.
     armature : float
         Rotor inertia added to every arm joint [kg m^2].
-    delay : bool
-        Closed loop: the controller is handed the measurement of the previous sample.
+    delay : int
+        Closed loop: the controller is handed the measurement this many samples late.
+    predict : bool
+        With ``delay``: the late joints and grasps are brought forward by the commands
+        applied since (:mod:`dualarm_qp.control.predict`); False: handed as measured.
     contacts : {"obstacles", "all", "none"}
         Which contacts are simulated (:data:`CONTACTS`).
     geometry : {"meshes", "capsules"}
@@ -134,7 +140,8 @@ class PhysicsSettings:
     kp: float | None = None
     kv: float | None = None
     armature: float = 0.05
-    delay: bool = False
+    delay: int = 0
+    predict: bool = True
     contacts: str = "obstacles"
     geometry: str = "meshes"
     object_mass: float = 3.0
@@ -161,6 +168,8 @@ class PhysicsSettings:
             value = float(getattr(self, key))
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{key} must be a finite number > 0, got {value}")
+        if isinstance(self.delay, bool) or not (isinstance(self.delay, int) and self.delay >= 0):
+            raise ValueError(f"delay must be a whole number of samples >= 0, got {self.delay!r}")
         if self.kv is not None and not (math.isfinite(self.kv) and self.kv > 0):
             raise ValueError(f"kv must be None or a finite number > 0, got {self.kv}")
         if self.kp is not None and not (math.isfinite(self.kp) and self.kp >= 0):
@@ -185,7 +194,7 @@ class PhysicsSettings:
                    servo_frequency=spec.servo_frequency,
                    damping_ratio=spec.damping_ratio, kp=spec.kp, kv=spec.kv,
                    armature=spec.armature,
-                   delay=spec.delay, contacts=spec.contacts,
+                   delay=spec.delay, predict=spec.predict, contacts=spec.contacts,
                    geometry=spec.geometry, object_mass=spec.object_mass,
                    link_density=spec.link_density,
                    deviation_max=length(spec.deviation_max, 0.01),
@@ -201,7 +210,8 @@ class PhysicsSettings:
                 "servo_frequency_hz": self.servo_frequency,
                 "damping_ratio": self.damping_ratio, "kp_N_m_rad": self.kp,
                 "kv_N_m_s_rad": self.kv,
-                "armature_kg_m2": self.armature, "delay_samples": int(self.delay),
+                "armature_kg_m2": self.armature, "delay_samples": self.delay,
+                "predict": self.predict,
                 "contacts": self.contacts, "geometry": self.geometry,
                 "substep_s": SUBSTEP, "deviation_max_m": self.deviation_max,
                 "rotation_max_rad": self.rotation_max,

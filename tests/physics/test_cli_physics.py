@@ -229,6 +229,16 @@ def test_the_delay_option_reaches_the_closed_loop(short_run):
     assert main(["physics", str(short_run), "--delay"]) == 0
     physics = json.loads((short_run / "summary.json").read_text())["physics"]
     assert physics["settings"]["delay_samples"] == 1
+    assert main(["physics", str(short_run), "--delay", "3"]) == 0
+    physics = json.loads((short_run / "summary.json").read_text())["physics"]
+    assert physics["settings"]["delay_samples"] == 3
+
+
+def test_a_delay_option_that_is_no_number_of_samples_exits_2(short_run, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["physics", str(short_run), "--delay", "-2"])
+    assert stop.value.code == 2
+    assert "whole number of samples" in capsys.readouterr().err
 
 
 @pytest.mark.slow

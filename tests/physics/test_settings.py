@@ -184,3 +184,17 @@ def test_the_modules_example_is_the_defaults_in_the_units_it_states():
     assert dataclasses.replace(got, tau_max=None) == PhysicsSettings()
     degrees = float(re.search(r"``rotation_max`` is ([0-9.]+)", doc).group(1))
     assert np.radians(degrees) == pytest.approx(PhysicsSettings().rotation_max, rel=2e-3)
+
+
+@pytest.mark.parametrize(("given", "samples"), [(True, 1), (False, 0), (0, 0), (3, 3)])
+def test_the_delay_is_a_number_of_samples_and_true_is_one(given, samples):
+    cfg = parse_config(_with_physics({"delay": given}), "beam.yaml")
+    s = PhysicsSettings.from_spec(cfg.physics, 1e-3)
+    assert s.delay == samples and s.as_dict()["delay_samples"] == samples
+
+
+@pytest.mark.parametrize("given", [-1, 1.5, "2", 101])
+def test_a_delay_that_is_no_whole_number_of_samples_names_the_key(given):
+    with pytest.raises(ConfigError) as err:
+        parse_config(_with_physics({"delay": given}), "beam.yaml")
+    assert "physics.delay" in str(err.value) and "whole number of samples" in str(err.value)
