@@ -63,6 +63,10 @@ class StepOptions:
     leader_tau_max, follower_tau_max : ndarray, shape (n,), optional
         Joint torque limits [N m] (``inf``: none); default the arm's model's ``effort``
         (a URDF's), which a DH arm does not have.
+    torque_approach : float, optional
+        Time constant [s] with which a joint's torque may approach its limit: each
+        sample closes at most ``dt / torque_approach`` of the margin (None: all of it,
+        in one sample).
     """
 
     dt: float
@@ -81,6 +85,7 @@ class StepOptions:
     torque_limits: bool = False
     leader_tau_max: FloatArray | None = None
     follower_tau_max: FloatArray | None = None
+    torque_approach: float | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -98,6 +103,10 @@ class StepOptions:
             raise InvalidInputError("grasp_speed_max must be positive")
         if not self.grasp_acc_max > 0:
             raise InvalidInputError("grasp_acc_max must be positive")
+        if self.torque_approach is not None and not (np.isfinite(self.torque_approach)
+                                                     and self.torque_approach > 0):
+            raise InvalidInputError("torque_approach must be a positive number of seconds, "
+                                    f"got {self.torque_approach}")
         for name in ("correction_gain", "leader_gain"):
             gain = getattr(self, name)
             if gain is None:
