@@ -70,9 +70,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from .physics.plant import DivergedError, MujocoPlant
 
         blown_up = (DivergedError,)
+        from .physics.compliant import compliant_experiment
+
         plant = MujocoPlant(exp.task, settings_for(load_config(args.config), exp,
                                                    str(args.config)),
                             arm_tau_max=arm_tau_max(exp))
+        if plant.settings.compliance is not None:  # the compliant follower's step
+            exp = compliant_experiment(exp, plant)
+            controller = exp.controller()
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)

@@ -60,6 +60,34 @@ class TorqueLimitSpec(Model):
         return self
 
 
+class ComplianceSpec(Model):
+    """``physics.compliance``: the compliant follower's gains (SI; docs/physics.md)."""
+
+    force_gain: Num = 2e-4
+    moment_gain: Num = 2e-3
+    filter_time: Num = 0.02
+
+    @model_validator(mode="after")
+    def _signs(self) -> ComplianceSpec:
+        for key in ("force_gain", "moment_gain", "filter_time"):
+            if getattr(self, key) < 0:
+                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
+        return self
+
+
+def _switch(value: Any) -> Any:
+    """Return ``compliance: true`` as the default gains, ``false`` as none."""
+    if value is True:
+        return {}
+    if value is False:
+        return None
+    return value
+
+
+#: ``physics.compliance``: ``true`` (the default gains), ``false`` or the gains.
+Compliance = Annotated[ComplianceSpec | None, BeforeValidator(_switch)]
+
+
 class PhysicsSpec(Model):
     """The ``physics:`` section, as written (lengths in the file's length unit)."""
 
@@ -83,6 +111,7 @@ class PhysicsSpec(Model):
     squeeze_max: Num = 20.0
     torque_ratio_max: Num = 1.0
     tau_max: TorqueLimitSpec = Field(default_factory=TorqueLimitSpec)
+    compliance: Compliance = None
 
     @model_validator(mode="after")
     def _ranges(self) -> PhysicsSpec:
@@ -108,4 +137,4 @@ class PhysicsSpec(Model):
 
 
 
-__all__ = ["PhysicsSpec", "TorqueLimitSpec"]
+__all__ = ["ComplianceSpec", "PhysicsSpec", "TorqueLimitSpec"]

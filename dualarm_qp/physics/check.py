@@ -44,6 +44,7 @@ from ..control.rollout import RolloutResult, RunLimits, rollout
 from ..experiments.setup import Experiment
 from ..step.state import DualArmState
 from .cause import Event, first_cause, oscillation_event, stop_message, threshold_events
+from .compliant import compliant_experiment
 from .plant import MujocoPlant
 from .settings import SUBSTEP, PhysicsSettings
 
@@ -200,6 +201,7 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: int | None
     """
     t0 = time.perf_counter()
     plant = MujocoPlant(exp.task, settings, delay=delay, arm_tau_max=arm_tau_max(exp))
+    exp = compliant_experiment(exp, plant)
     result = rollout(exp.controller(), exp.initial, duration=exp.duration,
                      limits=closed_loop_limits(exp.limits, settings), plant=plant,
                      stop_on_interrupt=True)

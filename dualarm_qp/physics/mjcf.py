@@ -52,8 +52,13 @@ FloatArray = NDArray[np.float64]
 
 #: Radius [m] of the default object.
 OBJECT_RADIUS = 0.02
-#: Mass [kg] and inertia [kg m^2] of the bodies of a grasp chain (nearly massless).
+#: Mass [kg] and inertia [kg m^2] of each arm's tool body and of the bodies of a grasp
+#: chain (nearly massless).
 CHAIN_MASS, CHAIN_INERTIA = 0.1, 1e-4
+#: Inertia [kg m^2] of a grasp chain's bodies: MuJoCo sets a weld's stiffness from the
+#: inertia of the bodies it joins, and a chain's spin joint with :data:`CHAIN_INERTIA`
+#: made the follower's weld turn 15 times as far as the leader's under one moment.
+CHAIN_BODY_INERTIA = 1e-2
 #: Weld and joint-limit stiffness: MuJoCo's ``solref`` time constant [s] and damping ratio.
 SOLREF = (2 * SUBSTEP, 1.0)
 #: How many bodies at the tip of each arm never touch the object (the grasping wrist).
@@ -230,7 +235,7 @@ def _chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint]:
     axis = "1 0 0" if sj.axis == "x" else "0 1 0"
     kind = "slide" if sj.kind == "prismatic" else "hinge"
     light = (f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-             f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>')
+             f'diaginertia="{_f([CHAIN_BODY_INERTIA] * 3)}"/>')
     xml = (f'<body name="{name}_path" {_pose_attrs(sj.placement)}>{light}'
            f'<joint name="{name}_slide" type="{kind}" axis="{axis}" limited="false"/>'
            f'<body name="{name}_point" {_pose_attrs(sj.child)}>{light}'
@@ -242,7 +247,7 @@ def _chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint]:
 def _support_chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint, str]:
     """Return a support: free in every motion but into the object along the normal (one-sided)."""
     light = (f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-             f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>')
+             f'diaginertia="{_f([CHAIN_BODY_INERTIA] * 3)}"/>')
     sr = f'solreflimit="{_f(SOLREF)}"'
     xml = (f'<body name="{name}_path" {_pose_attrs(surface.pose(0.0))}>{light}'
            f'<joint name="{name}_slide" type="slide" axis="1 0 0" limited="false"/>'

@@ -46,6 +46,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from ..control.compliance import WrenchMeasurement
 from ..control.loads import hand_wrenches
 from ..control.measured import HandReading, load_share
 from ..control.predict import CommandHistory
@@ -145,6 +146,9 @@ class MujocoPlant:
         Override ``settings.delay``.
     arm_tau_max : dict of str to ndarray, optional
         Each arm's configured ``tau_max`` [N m] (:func:`torque_limits`).
+    measurement : WrenchMeasurement, optional
+        Updated with the reading of each state handed to the controller (a compliant
+        follower's, :mod:`dualarm_qp.control.compliance`).
 
     Attributes
     ----------
@@ -157,7 +161,8 @@ class MujocoPlant:
 
     def __init__(self, task: DualArmTask, settings: PhysicsSettings, *,
                  delay: int | None = None,
-                 arm_tau_max: dict[str, FloatArray | None] | None = None) -> None:
+                 arm_tau_max: dict[str, FloatArray | None] | None = None,
+                 measurement: WrenchMeasurement | None = None) -> None:
         self.task = task
         self.settings = settings
         self.delay = settings.delay if delay is None else int(delay)
@@ -169,14 +174,18 @@ class MujocoPlant:
         self.limits = torque_limits(task, settings, arm_tau_max)
         self._mj = _mujoco()
         pm = self.physics
-        self._load_task = task if task.load is not None else dataclasses.replace(
-            task, load=ObjectLoad(pm.mass, pm.mass_centre, pm.gravity))
+        #: The object's mass, mass centre and gravity as simulated (the file's, else
+        #: ``physics.object_mass`` at the middle of its shape).
+        self.load = task.load if task.load is not None else ObjectLoad(
+            pm.mass, pm.mass_centre, pm.gravity)
+        self._load_task = dataclasses.replace(task, load=self.load)
         self._ff = np.zeros(task.leader.n + task.follower.n)
         self.log: dict[str, list[Any]] = {}
         self.substeps = 1
         #: Each arm joint's servo gains (set by :meth:`reset`, :mod:`.gains`).
         self.gains: ServoGains | None = None
         self.readings: list[HandReading] = []
+        self.measurement = measurement
         self._history: deque[tuple[DualArmState, HandReading]] = deque()
         self._commands = CommandHistory(self.delay)
 
@@ -261,6 +270,9 @@ class MujocoPlant:
         self._history = deque([(self._measured, reading)], maxlen=self.delay + 1)
         self._commands = CommandHistory(self.delay)
         self.readings = [reading]
+        if self.measurement is not None:
+            self.measurement.reset()
+            self.measurement.update(reading, dt)
 
     def _set_gains(self) -> None:
         """Give each arm joint's servo its gains from the inertia at the start (:mod:`.gains`)."""
@@ -424,6 +436,8 @@ class MujocoPlant:
         self._history.append((self._measured, reading))
         out, handed = self._history[0]
         self.readings.append(handed)
+        if self.measurement is not None:
+            self.measurement.update(handed, dt)
         self._commands.push(command, dt)
         late = DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
         if not self.settings.predict:

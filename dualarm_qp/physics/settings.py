@@ -46,7 +46,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..experiments.config_physics import PhysicsSpec
+from ..control.compliance import ComplianceGains
+from ..experiments.config_physics import ComplianceSpec, PhysicsSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -130,6 +131,9 @@ class PhysicsSettings:
     tau_max : dict of str to ndarray or None
         Torque limits [N m] per arm (``"leader"``, ``"follower"``) given in the file;
         None: the arm's own ``tau_max``, else its model's (a URDF's ``effort``), if any.
+    compliance : ComplianceGains or None
+        The closed loop's follower is compliant with these gains
+        (:mod:`dualarm_qp.control.compliance`); None: the standard grasp closure.
     """
 
     servo: str = "position"
@@ -152,6 +156,7 @@ class PhysicsSettings:
     squeeze_max: float = 20.0
     torque_ratio_max: float = 1.0
     tau_max: dict[str, FloatArray | None] | None = None
+    compliance: ComplianceGains | None = None
 
     def __post_init__(self) -> None:
         if self.servo not in SERVOS:
@@ -201,7 +206,8 @@ class PhysicsSettings:
                    rotation_max=(0.05 if spec.rotation_max is None
                                  else spec.rotation_max * angle_scale),
                    slip_max=length(spec.slip_max, 0.005), squeeze_max=spec.squeeze_max,
-                   torque_ratio_max=spec.torque_ratio_max, tau_max=tau)
+                   torque_ratio_max=spec.torque_ratio_max, tau_max=tau,
+                   compliance=_compliance(spec.compliance))
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, SI."""
@@ -217,7 +223,15 @@ class PhysicsSettings:
                 "rotation_max_rad": self.rotation_max,
                 "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
                 "torque_ratio_max": self.torque_ratio_max,
-                "link_density_kg_m3": self.link_density}
+                "link_density_kg_m3": self.link_density,
+                "compliance": None if self.compliance is None else self.compliance.as_dict()}
+
+
+def _compliance(spec: ComplianceSpec | None) -> ComplianceGains | None:
+    """Return the file's compliant follower's gains (None: the standard closure)."""
+    if spec is None:
+        return None
+    return ComplianceGains(spec.force_gain, spec.moment_gain, spec.filter_time)
 
 
 __all__ = ["CONTACTS", "GEOMETRIES", "REFERENCES", "SERVOS", "SERVO_FREQUENCY", "SUBSTEP",
