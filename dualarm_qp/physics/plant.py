@@ -52,7 +52,7 @@ from ..control.measured import HandReading, load_share
 from ..control.predict import CommandHistory
 from ..errors import DualArmError, InvalidInputError, SupportLostError
 from ..step.state import Command, DualArmState
-from ..task.loads import ObjectLoad, UnbalancedLoadError
+from ..task.loads import ObjectLoad, UnbalancedLoadError, hand_statics, split_load
 from ..task.scene import DualArmTask
 from ..task.torques import model_effort
 from .gains import ServoGains, servo_gains, set_gains
@@ -390,20 +390,25 @@ class MujocoPlant:
         """Set the load feed-forward: the torques that hold each hand's share of the load.
 
         The share is the quasi-static split of :func:`dualarm_qp.control.loads.hand_wrenches`
-        at the measured state (zero where the grasps cannot hold the load), and the torque
-        ``J^T w`` with ``J`` the hand's Jacobian at its grasp point.
+        at the measured state (zero where the grasps cannot hold the load), its moment
+        about each hand's grasp point (the leader's tool point, the follower's contact
+        point on the object). ``J`` is the Jacobian of the tool point, so the moment is
+        moved there first, ``m_t = m + (p - t) x f``, and the torque is ``J^T [f; m_t]``
+        (the follower's contact point is its tool point only up to the closure error).
         """
         task = self._load_task
         try:
-            split = hand_wrenches(task, state.q_l, state.sigma, state.sigma_leader).wrenches
+            hands, T_obj = hand_statics(task, state.q_l, state.sigma, state.sigma_leader)
+            split = split_load(hands, self.load, T_obj).wrenches
         except (UnbalancedLoadError, SupportLostError):
             self._ff = np.zeros(self._arm_dofs.size)
             return
         parts = []
-        for arm, q, w in ((task.leader, state.q_l, split[0]), (task.follower, state.q_f,
-                                                              split[1])):
-            _, J = arm.fk_jacobian(q)
-            parts.append(J.T @ w)
+        for arm, q, w, hand in ((task.leader, state.q_l, split[0], hands[0]),
+                                (task.follower, state.q_f, split[1], hands[1])):
+            T, J = arm.fk_jacobian(q)
+            f, m = w[:3], w[3:]
+            parts.append(J.T @ np.r_[f, m + np.cross(hand.point - T[:3, 3], f)])
         self._ff = np.concatenate(parts)
 
     def _servo(self, rates: FloatArray) -> None:
