@@ -12,7 +12,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Field, model_validator
 
-from .config_types import Flag, LimitNum, Model, Num, keyed, scalar_to_list
+from .config_types import Flag, LimitNum, Model, Num, Vec3, keyed, scalar_to_list
 
 LimitList = Annotated[list[LimitNum], Field(min_length=1)]
 
@@ -88,6 +88,17 @@ def _switch(value: Any) -> Any:
 Compliance = Annotated[ComplianceSpec | None, BeforeValidator(_switch)]
 
 
+class BaseErrorSpec(Model):
+    """``physics.base_error``: the simulated follower's base off the model's.
+
+    In the base's own frame: ``position`` in the file's length unit, ``rpy`` in its
+    angle unit.
+    """
+
+    position: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rpy: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
 class PhysicsSpec(Model):
     """The ``physics:`` section, as written (lengths in the file's length unit)."""
 
@@ -112,6 +123,7 @@ class PhysicsSpec(Model):
     torque_ratio_max: Num = 1.0
     tau_max: TorqueLimitSpec = Field(default_factory=TorqueLimitSpec)
     compliance: Compliance = None
+    base_error: BaseErrorSpec | None = None
 
     @model_validator(mode="after")
     def _ranges(self) -> PhysicsSpec:
@@ -137,4 +149,4 @@ class PhysicsSpec(Model):
 
 
 
-__all__ = ["ComplianceSpec", "PhysicsSpec", "TorqueLimitSpec"]
+__all__ = ["BaseErrorSpec", "ComplianceSpec", "PhysicsSpec", "TorqueLimitSpec"]

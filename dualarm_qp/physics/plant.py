@@ -133,6 +133,21 @@ def torque_limits(task: DualArmTask, settings: PhysicsSettings,
     return out
 
 
+def simulated_task(task: DualArmTask, base_error: FloatArray | None) -> DualArmTask:
+    """Return ``task`` with its follower's base off by ``base_error`` (its own frame).
+
+    ``base_error`` is ``[x, y, z]`` [m] and roll, pitch, yaw [rad] (``R = Rz Ry Rx``):
+    ``T_base_simulated = T_base [R, p; 0, 1]``. None: ``task`` as it is.
+    """
+    if base_error is None:
+        return task
+    error = np.eye(4)
+    error[:3, :3] = pin.rpy.rpyToMatrix(*np.asarray(base_error[3:], dtype=float))
+    error[:3, 3] = base_error[:3]
+    return dataclasses.replace(task, follower=task.follower.with_base(
+        np.asarray(task.follower.base) @ error))
+
+
 class MujocoPlant:
     """The task in MuJoCo, driven by joint servos (see the module docstring).
 
@@ -169,7 +184,10 @@ class MujocoPlant:
         if self.delay < 0:
             raise InvalidInputError(f"delay must be a whole number of samples >= 0, got "
                                     f"{self.delay}")
-        self.physics: PhysicsModel = build_mjcf(task, settings)
+        #: What MuJoCo simulates: the task, its follower's base moved by
+        #: ``settings.base_error`` (the controller keeps the model's).
+        self.world = simulated_task(task, settings.base_error)
+        self.physics: PhysicsModel = build_mjcf(self.world, settings)
         self.notes: list[str] = list(self.physics.notes)
         self.limits = torque_limits(task, settings, arm_tau_max)
         self._mj = _mujoco()
@@ -535,4 +553,4 @@ def _relative(measured: float, planned: float) -> float:
 
 
 __all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",
-           "MujocoPlant", "PhysicsError", "torque_limits"]
+           "MujocoPlant", "PhysicsError", "simulated_task", "torque_limits"]

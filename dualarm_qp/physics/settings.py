@@ -134,6 +134,11 @@ class PhysicsSettings:
     compliance : ComplianceGains or None
         The closed loop's follower is compliant with these gains
         (:mod:`dualarm_qp.control.compliance`); None: the standard grasp closure.
+    base_error : ndarray, shape (6,), optional
+        The simulated follower's base off the model's (a calibration error), in the
+        base's own frame: ``[x, y, z]`` [m] and roll, pitch, yaw [rad]
+        (``T_base_simulated = T_base Rz(yaw) Ry(pitch) Rx(roll)`` moved by ``[x, y, z]``);
+        the controller keeps the model's base.
     """
 
     servo: str = "position"
@@ -157,8 +162,15 @@ class PhysicsSettings:
     torque_ratio_max: float = 1.0
     tau_max: dict[str, FloatArray | None] | None = None
     compliance: ComplianceGains | None = None
+    base_error: FloatArray | None = None
 
     def __post_init__(self) -> None:
+        if self.base_error is not None:
+            error = np.asarray(self.base_error, dtype=float)
+            if error.shape != (6,) or not np.all(np.isfinite(error)):
+                raise ValueError("base_error must be 6 finite numbers [x, y, z (m), roll, "
+                                 f"pitch, yaw (rad)], got {self.base_error!r}")
+            object.__setattr__(self, "base_error", error)
         if self.servo not in SERVOS:
             raise ValueError(f"servo must be one of {SERVOS}, got {self.servo!r}")
         if self.reference not in REFERENCES:
@@ -207,7 +219,10 @@ class PhysicsSettings:
                                  else spec.rotation_max * angle_scale),
                    slip_max=length(spec.slip_max, 0.005), squeeze_max=spec.squeeze_max,
                    torque_ratio_max=spec.torque_ratio_max, tau_max=tau,
-                   compliance=_compliance(spec.compliance))
+                   compliance=_compliance(spec.compliance),
+                   base_error=(None if spec.base_error is None else np.r_[
+                       np.asarray(spec.base_error.position) * length_scale,
+                       np.asarray(spec.base_error.rpy) * angle_scale]))
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, SI."""
@@ -224,7 +239,10 @@ class PhysicsSettings:
                 "slip_max_m": self.slip_max, "squeeze_max_N": self.squeeze_max,
                 "torque_ratio_max": self.torque_ratio_max,
                 "link_density_kg_m3": self.link_density,
-                "compliance": None if self.compliance is None else self.compliance.as_dict()}
+                "compliance": None if self.compliance is None else self.compliance.as_dict(),
+                "base_error": None if self.base_error is None else {
+                    "position_m": self.base_error[:3].tolist(),
+                    "rpy_rad": self.base_error[3:].tolist()}}
 
 
 def _compliance(spec: ComplianceSpec | None) -> ComplianceGains | None:
