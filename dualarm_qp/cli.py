@@ -201,7 +201,9 @@ def _physics_line(name: str, r: dict[str, Any] | None) -> str:
     return (f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
             f"internal force {r['internal_force_max_N']:.3g} N, follower support "
             f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
-            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
+            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)"
+            + ("" if not r.get("cause") else
+               f"; first past a threshold: {r['cause']['kind']} at {r['cause']['t_s']:.3g} s"))
 
 
 def _samples(text: str) -> int:

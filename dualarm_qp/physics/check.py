@@ -33,6 +33,7 @@ The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -349,6 +350,11 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
     cause = judged.cause
     if "message" in c and cause is not None and cause.kind != "controller":
         c["message"] = stop_message(c["message"], seen=True)  # the simulation saw why
+    # Each simulation with what it saw first (the replay is the squeeze's baseline).
+    c["cause"] = None if cause is None else cause.as_dict()
+    if b is not None and baseline is not None:
+        first = first_cause(threshold_events(baseline, math.inf, settings))
+        b["cause"] = None if first is None else first.as_dict()
     return {
         "status": judged.status, "reasons": judged.reasons,
         "cause": None if cause is None else cause.kind,
