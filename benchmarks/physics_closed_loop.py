@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from dualarm_qp.control.compliance import ComplianceGains
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.physics.check import closed_loop, diagnose
 from dualarm_qp.physics.command import settings_of
+from dualarm_qp.physics.compliance import ComplianceGains
 from dualarm_qp.physics.plant import DivergedError
 from dualarm_qp.physics.settings import PhysicsSettings
 

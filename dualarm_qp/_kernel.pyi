@@ -18,45 +18,130 @@ PRICE_TOL: float
 PIVOT_TOL: float
 EMPTY_BOX_CODE: int
 
-def factor(A: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
-def affine(A: ArrayLike, b: ArrayLike) -> tuple[_F, _F, _F, _F, _F] | None: ...
-def inequalities(lower: ArrayLike, upper: ArrayLike, G: ArrayLike, h: ArrayLike
-                 ) -> tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]]: ...
+class Factor:
+    U: _F
+    sigma: _F
+    V: _F
+    N: _F
+
+class Affine:
+    x0: _F
+    factor: Factor
+
+class Basis:
+    P: _F
+    N: _F
+    rank: int
+    sigma_max: float
+    qr: bool
+
+class Rows:
+    C: _F
+    e: _F
+    kind: NDArray[np.int8]
+    index: NDArray[np.int64]
+
+class Residuals:
+    eq: float
+    box: float
+    row: float
+
+class Certificate:
+    finite: bool
+    eq: float
+    box: float
+    row: float
+    eq_limit: float
+    kkt: int
+    objective: float
+    active_lower: NDArray[np.uint8]
+    active_upper: NDArray[np.uint8]
+    active_rows: list[int]
+
+class StepAnswer:
+    code: int
+    x: _F
+    conflicts: list[int]
+    nullity: int
+    iterations: int
+
+class CertifiedStep:
+    code: int
+    x: _F
+    conflicts: list[int]
+    nullity: int
+    iterations: int
+    basis: Basis
+    rows: Rows
+    certificate: Certificate | None
+
+class DenseQPResult:
+    status: int
+    t: _F
+    active: list[int]
+    multipliers: list[float]
+    blocking: int
+    iterations: int
+
+class NNLSResult:
+    x: _F
+    rnorm: float
+    converged: bool
+
+class ScaleLPResult:
+    status: int
+    t: _F
+    s: float
+    rows: list[int]
+
+class Box:
+    lower: _F
+    upper: _F
+    lower_by: NDArray[np.int64]
+    upper_by: NDArray[np.int64]
+    nan_limit: int
+
+class RateBox:
+    lower: _F
+    upper: _F
+
+class SingularValues:
+    leader: float
+    follower: float
+
+def factor(A: ArrayLike) -> Factor: ...
+def affine(A: ArrayLike, b: ArrayLike) -> Affine | None: ...
+def inequalities(lower: ArrayLike, upper: ArrayLike, G: ArrayLike, h: ArrayLike) -> Rows: ...
 def least_distance(N: ArrayLike, x0: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                    root_full: ArrayLike, center: ArrayLike) -> _F: ...
-def basis(A: ArrayLike) -> tuple[_F, _F, int, float, bool]: ...
+def basis(A: ArrayLike) -> Basis: ...
 def solve_nullspace(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                     sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
                     w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike,
-                    feas_tol: float, max_iter: int) -> tuple[int, _F, list[int], int, int]: ...
+                    feas_tol: float, max_iter: int) -> StepAnswer: ...
 def dense_qp(R: ArrayLike, t_free: ArrayLike, M: ArrayLike, f: ArrayLike, feas_tol: float,
-             max_iter: int) -> tuple[int, _F, list[int], list[float], int, int]: ...
-def nnls(A: ArrayLike, b: ArrayLike, max_iter: int) -> tuple[_F, float, bool]: ...
+             max_iter: int) -> DenseQPResult: ...
+def nnls(A: ArrayLike, b: ArrayLike, max_iter: int) -> NNLSResult: ...
 def residuals(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
-              G: ArrayLike, h: ArrayLike, x: ArrayLike) -> tuple[float, float, float]: ...
+              G: ArrayLike, h: ArrayLike, x: ArrayLike) -> Residuals: ...
 def kkt_holds(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
               sigma_max: float, C: ArrayLike, e: ArrayLike, w_diag: ArrayLike,
               w_full: ArrayLike, root_full: ArrayLike, center: ArrayLike, x: ArrayLike,
               bounds: bool) -> bool: ...
-_Certificate = tuple[bool, float, float, float, float, int, float, NDArray[np.uint8],
-                     NDArray[np.uint8], list[int]]
 def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                 G: ArrayLike, h: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                 sigma_max: float, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
                 w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
                 center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
-                bounds_tol: float, ask_kkt: bool) -> _Certificate: ...
+                bounds_tol: float, ask_kkt: bool) -> Certificate: ...
 def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                     G: ArrayLike, h: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
                     root_full: ArrayLike, center: ArrayLike, feas_tol: float,
                     max_iter: int, bounds: bool, eq_rtol: float, bounds_tol: float
-                    ) -> _Solved: ...
-_Solved = tuple[int, _F, list[int], int, int, tuple[_F, _F, int, float, bool],
-                tuple[_F, _F, NDArray[np.int8], NDArray[np.int64]], _Certificate | None]
+                    ) -> CertifiedStep: ...
 
 def intersect_boxes(lowers: ArrayLike, lower_ids: Sequence[int], uppers: ArrayLike,
-                    upper_ids: Sequence[int], n: int, pin_rtol: float
-                    ) -> tuple[_F, _F, NDArray[np.int64], NDArray[np.int64], int]: ...
+                    upper_ids: Sequence[int], n: int, pin_rtol: float) -> Box: ...
 def first_defect(finite: Sequence[ArrayLike], not_nan: Sequence[ArrayLike]) -> int: ...
 def step_kinematics(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int],
                     follower: Chain, q_f: ArrayLike, follower_tool: int, T_D: ArrayLike,
@@ -74,24 +159,60 @@ def negligible(x: ArrayLike, n_l: int, n_f: int, dt: float, T_tool: ArrayLike,
                budget_rot: float, share: float) -> bool: ...
 def ik_dls(chain: Chain, tool: int, T_target: ArrayLike, q: _F, lo: ArrayLike,
            hi: ArrayLike, tol_pos: float, tol_rot: float, max_iter: int, damping: float,
-           mu_min: float, mu_max: float) -> tuple[int, float, float, int]: ...
-def range_box(lo: ArrayLike, hi: ArrayLike, rec: ArrayLike, off: ArrayLike
-              ) -> tuple[_F, _F]: ...
+           mu_min: float, mu_max: float) -> IKAnswer: ...
+class IKAnswer:
+    iterations: int
+    position_error: float
+    rotation_error: float
+    stop: int
+def range_box(lo: ArrayLike, hi: ArrayLike, rec: ArrayLike, off: ArrayLike) -> RateBox: ...
 def centre(lo: ArrayLike, hi: ArrayLike, centred: ArrayLike, shrink: float) -> _F: ...
 def smallest_singular_value(J: ArrayLike) -> float: ...
 def smallest_singular_values(J_leader: ArrayLike, J_follower: ArrayLike
-                             ) -> tuple[float, float]: ...
+                             ) -> SingularValues: ...
 def carry_equality(n_l: int, J_object: ArrayLike, J_target: ArrayLike, J_f: ArrayLike,
                    twist: ArrayLike, e_l: ArrayLike, e_c: ArrayLike, scale: float,
                    gain_l: float, gain_c: float, exact_orientation: bool, A: _F, b: _F
                    ) -> bool: ...
 def scale_lp(M: ArrayLike, a: ArrayLike, g: ArrayLike, s_lo: float, s_hi: float
-             ) -> tuple[int, _F, float, list[int]]: ...
+             ) -> ScaleLPResult: ...
+
+class ClosestPoints:
+    s: _F
+    t: _F
+    x: _F
+    y: _F
+
+class CapsuleProximities:
+    distance: _F
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class CapsuleProximity:
+    distance: float
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class SceneProximities:
+    finite: bool
+    pairs: NDArray[np.int64]
+    distance: _F
+    point_a: _F
+    point_b: _F
+    normal: _F
+
+class DamperRows:
+    finite: bool
+    pairs: NDArray[np.int64]
+    G: _F
+    h: _F
 
 def segment_closest_points(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike
-                           ) -> tuple[_F, _F, _F, _F]: ...
+                           ) -> ClosestPoints: ...
 def capsule_proximities(a0: ArrayLike, a1: ArrayLike, ra: ArrayLike, b0: ArrayLike,
-                        b1: ArrayLike, rb: ArrayLike) -> tuple[_F, _F, _F, _F]: ...
+                        b1: ArrayLike, rb: ArrayLike) -> CapsuleProximities: ...
 class CoalPairs:
     def __init__(self, kinds: Sequence[int], params: ArrayLike, local: ArrayLike,
                  ia: Sequence[int], ib: Sequence[int], boxed: Sequence[bool],
@@ -99,12 +220,11 @@ class CoalPairs:
     @property
     def n_pairs(self) -> int: ...
     def measure(self, pair: int, frame_a: ArrayLike, frame_b: ArrayLike
-                ) -> tuple[float, _F, _F, _F]: ...
+                ) -> CapsuleProximity: ...
 def scene_proximities(frames: ArrayLike, body_frame: Sequence[int], a_local: ArrayLike,
                       b_local: ArrayLike, r: ArrayLike, sphere: ArrayLike,
                       ia: Sequence[int], ib: Sequence[int], within: float,
-                      exact: CoalPairs | None = None
-                      ) -> tuple[bool, NDArray[np.int64], _F, _F, _F, _F]: ...
+                      exact: CoalPairs | None = None) -> SceneProximities: ...
 class DamperScene:
     def __init__(self, body_frame: Sequence[int], a_local: ArrayLike, b_local: ArrayLike,
                  r: ArrayLike, sphere: ArrayLike, ia: Sequence[int], ib: Sequence[int],
@@ -113,7 +233,7 @@ class DamperScene:
                  d_s: float, gain: float, zero_row: float, n_l: int, n_f: int,
                  grasp_start: int, n: int) -> None: ...
     def rows(self, leader: Chain, follower: Chain, J_object: ArrayLike, T_object: ArrayLike
-             ) -> tuple[bool, NDArray[np.int64], _F, _F]: ...
+             ) -> DamperRows: ...
 def damper_rows(leader: Chain, follower: Chain, J_object: ArrayLike,
                 object_origin: ArrayLike, owners: Sequence[int], frames: Sequence[int],
                 point_a: ArrayLike, point_b: ArrayLike, normal: ArrayLike, n_l: int,
@@ -126,7 +246,7 @@ def load_torques(leader: Chain, leader_tool: int, follower: Chain, follower_tool
                  q_l: ArrayLike, q_f: ArrayLike, gravity: ArrayLike, mass: float,
                  points: Sequence[ArrayLike], free: Sequence[Sequence[ArrayLike]],
                  centres: Sequence[ArrayLike], grasp_step: float, fallback_length: float,
-                 rcond_min: float) -> tuple[_F, _F, _F]: ...
+                 rcond_min: float) -> LoadTorques: ...
 
 PINOCCHIO_VERSION: str
 COAL_VERSION: str
@@ -156,7 +276,7 @@ class Chain:
                     inertia: ArrayLike) -> None: ...
     def set_gravity(self, g: ArrayLike) -> None: ...
     def static_torques(self, q: ArrayLike, frame: int, wrench: ArrayLike,
-                       derivatives: bool) -> tuple[_F, _F, _F]: ...
+                       point: ArrayLike | None, derivatives: bool) -> StaticTorques: ...
 
 def braking_bound(D: ArrayLike, delta: ArrayLike, dt: ArrayLike) -> _F: ...
 class Context:
@@ -283,6 +403,38 @@ class CollisionLimit(Limit):
 def problem_check(A: _F, b: _F, weights: _F, center: _F, lower: _F, upper: _F, G: _F,
                   h: _F) -> int: ...
 
+class SlidePath:
+    def __init__(self, revolute: bool, axis: int, placement: ArrayLike, child: ArrayLike,
+                 rate: float) -> None: ...
+    def at(self, sigma: float) -> _F: ...
+
+class TorqueLimit(Limit):
+    def __init__(self, leader: Chain, leader_tool: int, follower: Chain, follower_tool: int,
+                 tau_max: ArrayLike, row_names: Sequence[str], mass: float | None,
+                 mass_centre: ArrayLike, gravity: ArrayLike, follower_path: SlidePath,
+                 leader_path: SlidePath | None, grasp_step: float, fallback_length: float,
+                 rcond_min: float) -> None: ...
+    approach: float
+    def constraint(self, ctx: object) -> Constraint: ...
+
+class SupportLine:
+    held: bool
+    sigma_min: float
+    sigma_max: float
+    sigma_inf: float
+    lever: float
+    gravity: _F
+    origin: _F
+    direction: _F
+    pose0: _F
+    def push(self, sigma: float) -> float: ...
+
+class SupportPlane:
+    def __init__(self, mass: float, mass_centre: ArrayLike, gravity: ArrayLike, r1: ArrayLike,
+                 normal: ArrayLike, offset: float, r_min: ArrayLike, r_max: ArrayLike,
+                 gravity_min: float) -> None: ...
+    def line(self, R_world_object: ArrayLike) -> SupportLine: ...
+
 class Step:
     def __init__(self, n_l: int, n_f: int, carry_frames: Sequence[int], follower_tool: int,
                  cols: Sequence[int], q_min: ArrayLike, q_max: ArrayLike, dt: float,
@@ -293,6 +445,9 @@ class Step:
     def set_labels(self, labels: Sequence[str]) -> None: ...
     def add_grasp_line(self, origin: ArrayLike, direction: ArrayLike, r_min: ArrayLike,
                        r_max: ArrayLike, sigma_min: float, sigma_max: float) -> None: ...
+    def set_grasp_line(self, grasp: int, origin: ArrayLike, direction: ArrayLike,
+                       r_min: ArrayLike, r_max: ArrayLike, sigma_min: float,
+                       sigma_max: float) -> None: ...
     @property
     def n(self) -> int: ...
     @property
@@ -302,11 +457,25 @@ class Step:
               sigmas: ArrayLike, grasp_lo: ArrayLike, grasp_hi: ArrayLike,
               x_applied: ArrayLike, t: float, scale_max: float, user: object) -> None: ...
 
+class StaticTorques:
+    tau: _F
+    dtau: _F
+    J: _F
+
+class LoadTorques:
+    tau: _F
+    D: _F
+    w: _F
+
+class RateRange:
+    lower: float
+    upper: float
+
 def grasp_rate_range(r: ArrayLike, s_star: ArrayLike, r_min: ArrayLike, r_max: ArrayLike,
-                     dt: float) -> tuple[float, float]: ...
+                     dt: float) -> RateRange: ...
 def grasp_rates(point: ArrayLike, tangent: ArrayLike, sigma: float, r_min: ArrayLike,
                 r_max: ArrayLike, sigma_min: float, sigma_max: float, dt: float
-                ) -> tuple[float, float]: ...
+                ) -> RateRange: ...
 
 class WaypointPath:
     def __init__(self, times: Sequence[float], poses: ArrayLike) -> None: ...

@@ -59,6 +59,20 @@ class SupportLostError(InvalidInputError):
     """
 
 
+class ObstacleOverlapError(InvalidInputError):
+    """An obstacle overlaps an arm or the object at the start.
+
+    Attributes
+    ----------
+    obstacle : str
+        The obstacle's name.
+    """
+
+    def __init__(self, message: str, obstacle: str) -> None:
+        super().__init__(message)
+        self.obstacle = obstacle
+
+
 class ConfigError(DualArmError, ValueError):
     """A configuration file is malformed, has unknown keys or wrong types.
 

@@ -1,6 +1,9 @@
 """Shared test set-up: this folder is on ``sys.path``, so every test imports the one
 independent DH oracle (``dh_oracle``) the same way.
 
+Fitted capsules are kept in a folder of the test session (``DUALARM_QP_CACHE``), not in
+the user's cache folder.
+
 Tests marked ``@pytest.mark.sigint`` send or simulate SIGINT: they run with Python's
 own SIGINT handler installed, whatever SIGINT state pytest inherited (see ``sigint.py``).
 """
@@ -11,6 +14,19 @@ from collections.abc import Iterator
 
 import pytest
 from sigint import python_sigint
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _capsule_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Fitted capsules kept in a folder of this test session, not in the user's cache.
+
+    The processes the tests start inherit it.
+    """
+    from dualarm_qp.geometry.capsule_cache import CACHE_ENV
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv(CACHE_ENV, str(tmp_path_factory.mktemp("capsule_cache")))
+        yield
 
 
 @pytest.fixture(autouse=True)

@@ -44,10 +44,11 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from .._remade import KernelHolder
-from ..errors import InvalidInputError, NonFiniteError
+from ..errors import InvalidInputError, NonFiniteError, ObstacleOverlapError
+from ..geometry.bounds import bounding_capsule, distance_to_point
 from ..geometry.distance import EPA_TOLERANCE, GJK_TOLERANCE, Proximities, coal_parts
 from ..geometry.links import arm_capsules
-from ..geometry.shapes import Box, Capsule, placed_box, placed_capsule
+from ..geometry.shapes import Box, Capsule
 from ..kinematics.arm import SerialArm
 from .settings import CollisionSettings
 
@@ -66,19 +67,6 @@ OWNERS = ("leader", "follower", "object", "world")
 
 #: The reason recorded for a pair left out because it overlaps at the start.
 OVERLAPPING_AT_START = "overlapping at the start"
-
-class ObstacleOverlapError(InvalidInputError):
-    """An obstacle overlaps an arm or the object at the start.
-
-    Attributes
-    ----------
-    obstacle : str
-        The obstacle's name.
-    """
-
-    def __init__(self, message: str, obstacle: str) -> None:
-        super().__init__(message)
-        self.obstacle = obstacle
 
 
 @dataclass(frozen=True)
@@ -166,7 +154,7 @@ class CollisionScene(KernelHolder):
         # Every body as a capsule in its frame: its own, or one containing its box (the
         # box's longest axis, radius the half-diagonal of the other two): for a box the
         # closed form then gives a lower bound, and coal the distance.
-        bounds = [_bounding_capsule(b.shape) for b in self.bodies]
+        bounds = [bounding_capsule(b.shape) for b in self.bodies]
         self._a = np.array([c[0] for c in bounds]).reshape(-1, 3)
         self._b = np.array([c[1] for c in bounds]).reshape(-1, 3)
         self._r = np.array([c[2] for c in bounds])
@@ -213,10 +201,7 @@ class CollisionScene(KernelHolder):
         """Every body in the world (its shape placed by its frame in ``frames``)."""
         out: list[Capsule | Box] = []
         for body, f in zip(self.bodies, self._frame_list, strict=True):
-            T = frames[f]
-            shape = body.shape
-            out.append(placed_capsule(shape, T) if isinstance(shape, Capsule)
-                       else placed_box(shape, T))
+            out.append(body.shape.placed(frames[f]))
         return out
 
     def measure(self, frames: FloatArray, within: float = np.inf) -> Measured:
@@ -241,13 +226,13 @@ class CollisionScene(KernelHolder):
         NonFiniteError
             A body's frame is not finite (its pairs are never skipped as far).
         """
-        finite, keep, *near = kernel.scene_proximities(
+        p = kernel.scene_proximities(
             np.ascontiguousarray(frames, dtype=np.float64).reshape(-1, 4), self._frame_list,
             self._a, self._b, self._r, self._sphere, self._ia_list, self._ib_list,
             float(within), self._exact)
-        if not finite:
+        if not p.finite:
             raise NonFiniteError("the collision scene's frames")
-        return Measured(keep, Proximities(*near))
+        return Measured(p.pairs, Proximities(p.distance, p.point_a, p.point_b, p.normal))
 
     def measured_as(self) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray,
                                    list[int], list[int], Any]:
@@ -392,7 +377,7 @@ class CollisionScene(KernelHolder):
             a, b = self.bodies[pair.a], self.bodies[pair.b]
             if pair.group == "arm_object":
                 arm, k = (a, pair.a) if a.owner in grasp else (b, pair.b)
-                near = _distance_to_point(placed[k], grasp[arm.owner])
+                near = distance_to_point(placed[k], grasp[arm.owner])
                 if near <= self.settings.grasp_clearance:
                     excluded.append((pair.name, f"the grasping hand ({near * 1e3:.0f} mm from "
                                                 "its grasp point)"))
@@ -445,28 +430,6 @@ def _group(a: Body, b: Body, n_l: int, n_f: int) -> str | None:
 def _fixed(body: Body) -> bool:
     """Whether no joint moves ``body`` (an obstacle, or an arm's base)."""
     return body.owner == "world" or (body.owner in ("leader", "follower") and body.link == 0)
-
-
-def _bounding_capsule(shape: Capsule | Box) -> tuple[FloatArray, FloatArray, float]:
-    """Return a capsule containing ``shape``, in the shape's frame: (a, b, radius)."""
-    if isinstance(shape, Capsule):
-        return shape.a, shape.b, shape.radius
-    h = shape.half_size
-    k = int(np.argmax(h))
-    axis = shape.pose[:3, k] * h[k]
-    c = shape.centre
-    return c - axis, c + axis, float(np.sqrt(max(float(h @ h) - h[k] ** 2, 1e-24)))
-
-
-def _distance_to_point(shape: Capsule | Box, point: FloatArray) -> float:
-    """Distance [m] from ``point`` to ``shape`` (0 inside)."""
-    if isinstance(shape, Capsule):
-        ab = shape.b - shape.a
-        denom = float(ab @ ab)
-        t = 0.0 if denom == 0.0 else min(max(float((point - shape.a) @ ab) / denom, 0.0), 1.0)
-        return max(float(np.linalg.norm(point - (shape.a + t * ab))) - shape.radius, 0.0)
-    local = shape.pose[:3, :3].T @ (point - shape.pose[:3, 3])
-    return float(np.linalg.norm(np.maximum(np.abs(local) - shape.half_size, 0.0)))
 
 
 __all__ = ["GROUPS", "Body", "CollisionScene", "Measured", "ObstacleOverlapError", "Pair"]

@@ -34,7 +34,7 @@ from .trace import Trace
 
 if TYPE_CHECKING:
     from .controller import DualArmController
-    from .rollout import Failure
+    from .failure import Failure
 
 #: A task scale below this at the failing state counts as stopped by its blocking rows
 #: (the stall rule's share: a run stalls when its path advances by less than 1% of the

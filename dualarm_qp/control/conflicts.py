@@ -38,7 +38,7 @@ from .torques import joint_torque_limits
 
 if TYPE_CHECKING:
     from .controller import DualArmController
-    from .rollout import Failure
+    from .failure import Failure
 
 FloatArray = NDArray[np.float64]
 

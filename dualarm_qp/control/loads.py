@@ -19,7 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SupportLostError
-from ..task.loads import UnbalancedLoadError, hand_statics, hand_wrenches
+from ..task.hands import hand_statics, hand_wrenches
+from ..task.loads import UnbalancedLoadError
 from ..task.scene import DualArmTask
 from .trace import Trace
 

@@ -24,7 +24,7 @@ from ..step.state import Command, DualArmState
 from ..task.scene import DualArmTask
 
 if TYPE_CHECKING:
-    from .rollout import Failure
+    from .failure import Failure
 
 #: What :func:`not_followed` appends to a failure's message (after ``"; "``).
 NOT_FOLLOWED = "the plant did not follow the command"

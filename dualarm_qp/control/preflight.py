@@ -1,4 +1,12 @@
-"""Before a run: check that the arms can reach the path at its waypoints.
+"""Before a run: the checks that refuse it before its first sample.
+
+:func:`before_the_run` asks, in order: can the arms reach the path at its waypoints
+(``"unreachable"``, below), does a joint need more than its torque limit at the start
+(``"torque"``, :mod:`.torques`), is a collision pair closer than the safety distance less
+the allowance at the start (``"collision"``), does ``D(t)`` take the object through an
+obstacle (``"path_collision"``, :mod:`.collisions`).
+
+**The reach check.**
 
 A path that leaves the arms' reach is found by the run only when it gets there, as a
 tracking or closure failure whose cause is hard to read. This check finds it before the
@@ -23,6 +31,7 @@ checked for the leader only.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +41,10 @@ from ..kinematics.ik import ik_dls
 from ..step.state import DualArmState
 from ..task.scene import DualArmTask
 from ..task.trajectory import WaypointTrajectory
+from .collisions import clearance_at_start, path_collision_of
+from .controller import DualArmController
+from .failure import Failure
+from .torques import torque_at_start
 
 FloatArray = NDArray[np.float64]
 
@@ -203,4 +216,40 @@ def _reach(arm: SerialArm, T: FloatArray, seed: FloatArray, within: bool
     return best
 
 
-__all__ = ["Unreachable", "checkpoints", "unreachable_waypoint"]
+def before_the_run(controller: DualArmController, start: DualArmState, path_end: float
+                   ) -> tuple[Failure, dict[str, Any]] | None:
+    """Return the failure of a run refused before its first sample, and its record.
+
+    In order: a waypoint out of reach (``"unreachable"``), a joint beyond its torque
+    limit at the start (``"torque"``), a collision pair closer than the safety distance
+    less the allowance at the start (``"collision"``), a path through an obstacle
+    (``"path_collision"``). None when the run may start.
+    """
+    task, dt, t0 = controller.task, controller.options.dt, float(start.t)
+    miss = unreachable_waypoint(task, start, path_end, within_ranges=controller.hard_bounds)
+    if miss is not None:
+        return (Failure("unreachable", 0, t0, miss.position_error, REACH_TOLERANCE[0],
+                        f"before the run: {miss.message}"),
+                {"unreachable": {"arm": miss.arm, "waypoint": miss.waypoint, "t_s": miss.t}})
+    heavy = torque_at_start(controller, start)
+    if heavy is not None:
+        return (Failure("torque", 0, t0, heavy.torque, heavy.limit,
+                        f"before the run: {heavy.message}"),
+                {"torque_at_start": {"joint": heavy.joint, "torque_N_m": heavy.torque,
+                                     "limit_N_m": heavy.limit}})
+    close = clearance_at_start(task, start)
+    if close is not None:
+        return (Failure("collision", 0, t0, close.distance, close.limit,
+                        f"before the run: {close.message}"),
+                {"collision_at_start": {"pair": close.pair, "distance_m": close.distance,
+                                        "safety_distance_m": close.safety_distance}})
+    blocked = path_collision_of(task, t0, path_end, dt)
+    if blocked is not None:
+        return (Failure("path_collision", 0, blocked.t, blocked.distance,
+                        blocked.safety_distance, f"before the run: {blocked.message}"),
+                {"path_collision": {"obstacle": blocked.obstacle, "t_s": blocked.t,
+                                    "distance_m": blocked.distance}})
+    return None
+
+
+__all__ = ["Unreachable", "before_the_run", "checkpoints", "unreachable_waypoint"]

@@ -163,44 +163,14 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
     rows = x.shape[0]
     if rows == 0:
         return LimitReport(0.0, 0.0, math.nan, 0.0, "", "", None)
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    with np.errstate(invalid="ignore"):  # -inf + inf where a variable has no range
-        mid = np.where(finite, 0.5 * (lo + hi), 0.0)
-        half = np.where(finite, 0.5 * (hi - lo), 1.0)
-    ratio = np.where(finite, np.abs(x - mid) / np.where(half > 0, half, np.inf), 0.0)
-    ratio = np.where(finite & (half <= 0) & (x != mid), np.inf, ratio)
-    excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)
+    ratio, excess = _range_use(x, lo, hi)
     jr = int(np.argmax(ratio.max(axis=0)))
     first: list[tuple[int, str, int]] = []  # (sample, rule, variable) of each breach
-    speed_ratio = 0.0 if np.isfinite(v_max).any() else math.nan  # one sample: no motion
-    js = 0
-    speed = np.zeros((0, x.shape[1]))
-    if rows > 1 and np.isfinite(v_max).any():
-        speed = np.abs(np.diff(x, axis=0)) / dt
-        limited = np.isfinite(v_max)
-        sratio = np.where(limited, speed / np.where(limited, v_max, 1.0), 0.0)
-        js = int(np.argmax(sratio.max(axis=0)))
-        speed_ratio = float(sratio[:, js].max())
-        if speed_rule:
-            over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
-            first += [(int(k), "speed", int(j)) for k, j in over[:1]]
+    speed_ratio, js, speed = _speed_use(x, v_max, dt, first if speed_rule else None)
     accel_ratio, ja, accel = math.nan, 0, np.zeros((0, x.shape[1]))
     if a_max is not None:
-        a_lim = np.broadcast_to(np.asarray(a_max, dtype=np.float64), x.shape[1:])
-        limited = np.isfinite(a_lim)
-        if limited.any():
-            accel_ratio = 0.0
-            if rows > 1:
-                v0 = (np.zeros(x.shape[1]) if v_start is None
-                      else np.asarray(v_start, dtype=np.float64))
-                v = np.vstack([v0, np.diff(x, axis=0) / dt])
-                accel = np.abs(np.diff(v, axis=0)) / dt  # row k: between v[k-1] and v[k]
-                aratio = np.where(limited, accel / np.where(limited, a_lim, 1.0), 0.0)
-                ja = int(np.argmax(aratio.max(axis=0)))
-                accel_ratio = float(aratio[:, ja].max())
-                if acceleration_rule:
-                    over = np.argwhere(limited & (accel > a_lim * (1.0 + ACCEL_RTOL)))
-                    first += [(int(k), "acceleration", int(j)) for k, j in over[:1]]
+        accel_ratio, ja, accel = _acceleration_use(x, a_max, dt, v_start,
+                                                   first if acceleration_rule else None)
     best = np.minimum.accumulate(excess, axis=0)
     grew = np.argwhere(excess[1:] > best[:-1] + RANGE_TOL)
     first += [(int(k) + 1, "range", int(j)) for k, j in grew[:1]]
@@ -219,5 +189,65 @@ def measure(x: FloatArray, lo: FloatArray, hi: FloatArray, v_max: FloatArray, dt
                        breach, accel_ratio,
                        names[ja] if rows > 1 and accel_ratio == accel_ratio else "")
 
+
+def _range_use(x: FloatArray, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Return each sample's use of each range (``|x - mid| / half``) and its excess outside."""
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    with np.errstate(invalid="ignore"):  # -inf + inf where a variable has no range
+        mid = np.where(finite, 0.5 * (lo + hi), 0.0)
+        half = np.where(finite, 0.5 * (hi - lo), 1.0)
+    ratio = np.where(finite, np.abs(x - mid) / np.where(half > 0, half, np.inf), 0.0)
+    ratio = np.where(finite & (half <= 0) & (x != mid), np.inf, ratio)
+    excess = np.maximum(np.maximum(lo - x, x - hi), 0.0)
+    return ratio, excess
+
+
+def _speed_use(x: FloatArray, v_max: FloatArray, dt: float,
+               breaches: list[tuple[int, str, int]] | None) -> tuple[float, int, FloatArray]:
+    """Return the largest speed ratio, its variable and the speeds [per s].
+
+    The first speed over its limit is appended to ``breaches`` (None: not a breach).
+    """
+    speed_ratio = 0.0 if np.isfinite(v_max).any() else math.nan  # one sample: no motion
+    js = 0
+    speed = np.zeros((0, x.shape[1]))
+    if x.shape[0] > 1 and np.isfinite(v_max).any():
+        speed = np.abs(np.diff(x, axis=0)) / dt
+        limited = np.isfinite(v_max)
+        sratio = np.where(limited, speed / np.where(limited, v_max, 1.0), 0.0)
+        js = int(np.argmax(sratio.max(axis=0)))
+        speed_ratio = float(sratio[:, js].max())
+        if breaches is not None:
+            over = np.argwhere(limited & (speed > v_max * (1.0 + SPEED_RTOL)))
+            breaches += [(int(k), "speed", int(j)) for k, j in over[:1]]
+    return speed_ratio, js, speed
+
+
+def _acceleration_use(x: FloatArray, a_max: FloatArray, dt: float,
+                      v_start: FloatArray | None,
+                      breaches: list[tuple[int, str, int]] | None
+                      ) -> tuple[float, int, FloatArray]:
+    """Return the largest acceleration ratio, its variable and the accelerations [per s^2].
+
+    The first acceleration over its limit is appended to ``breaches`` (None: not a
+    breach); the ratio is NaN when no limit is finite.
+    """
+    accel_ratio, ja, accel = math.nan, 0, np.zeros((0, x.shape[1]))
+    a_lim = np.broadcast_to(np.asarray(a_max, dtype=np.float64), x.shape[1:])
+    limited = np.isfinite(a_lim)
+    if limited.any():
+        accel_ratio = 0.0
+        if x.shape[0] > 1:
+            v0 = (np.zeros(x.shape[1]) if v_start is None
+                  else np.asarray(v_start, dtype=np.float64))
+            v = np.vstack([v0, np.diff(x, axis=0) / dt])
+            accel = np.abs(np.diff(v, axis=0)) / dt  # row k: between v[k-1] and v[k]
+            aratio = np.where(limited, accel / np.where(limited, a_lim, 1.0), 0.0)
+            ja = int(np.argmax(aratio.max(axis=0)))
+            accel_ratio = float(aratio[:, ja].max())
+            if breaches is not None:
+                over = np.argwhere(limited & (accel > a_lim * (1.0 + ACCEL_RTOL)))
+                breaches += [(int(k), "acceleration", int(j)) for k, j in over[:1]]
+    return accel_ratio, ja, accel
 
 __all__ = ["ACCEL_RTOL", "RANGE_TOL", "SPEED_RTOL", "Breach", "LimitReport", "measure"]

@@ -8,8 +8,10 @@
   state (the load is beyond the arms there), the failure becomes criterion
   ``"torque"``, naming the joint and its torque;
 * after the last, :func:`record_torques` computes every recorded sample's quasi-static
-  joint torques (:mod:`dualarm_qp.task.torques`) into the trace's ``tau_leader`` and
-  ``tau_follower`` and reports the largest use of each limit. With torque limits on, a
+  joint torques (:mod:`dualarm_qp.task.torques`: each hand's wrench moved from its grasp
+  point to the tool point whose Jacobian carries it, as the step's torque rows do) into
+  the trace's ``tau_leader`` and ``tau_follower`` and reports the largest use of each
+  limit. With torque limits on, a
   run completes only if every recorded torque stays within ``tau_max + allowance``.
 
 The **allowance** is :data:`TORQUE_RTOL` of each joint's limit. The step keeps the
@@ -32,12 +34,13 @@ from ..errors import DualArmError
 from ..solvers._scale import max_task_scale
 from ..step.limits.torque import ROW_PREFIX
 from ..step.state import DualArmState
+from ..task.hands import hand_statics
 from ..task.torques import LoadTorques, model_effort, torque_limits_of
 from .trace import Trace
 
 if TYPE_CHECKING:
     from .controller import DualArmController
-    from .rollout import Failure
+    from .failure import Failure
 
 FloatArray = NDArray[np.float64]
 
@@ -133,7 +136,8 @@ class TorqueReport:
                 "first_breach_joint": self.breach_joint or None,
                 "unbalanced_samples": self.unbalanced,
                 "model": "quasi-static: g(q) + J^T w, the arms' link inertias and the "
-                         "hands' shares of the load (minimum-norm split)"}
+                         "hands' shares of the load (minimum-norm split), each hand's "
+                         "moment moved from its grasp point to its tool point (J's point)"}
 
 
 def _names(controller: DualArmController) -> list[str]:
@@ -156,8 +160,10 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
     n = len(trace)
     tau = np.full((n, n_l + task.follower.n), np.nan)
     unbalanced, first_unbalanced = 0, -1
-    # The hands' wrenches are the trace's (record_loads wrote them): the same split.
+    # The hands' wrenches are the trace's (record_loads wrote them): the same split, the
+    # moments about the grasp points, which are posed again here.
     no_load = np.zeros(6)
+    sliding_leader = task.leader_surface is not None
     for k in range(n):
         w_l, w_f = ((no_load, no_load) if task.load is None
                     else (trace.f_leader[k], trace.f_follower[k]))
@@ -165,8 +171,13 @@ def record_torques(controller: DualArmController, trace: Trace) -> TorqueReport 
             unbalanced += 1  # the grasps cannot hold the load here
             first_unbalanced = k if first_unbalanced < 0 else first_unbalanced
             continue
-        tau[k, :n_l] = statics.leader.torque(trace.q_l[k], w_l)
-        tau[k, n_l:] = statics.follower.torque(trace.q_f[k], w_f)
+        c_l = c_f = None
+        if task.load is not None:
+            sigma_l = float(trace.grasp_leader[k]) if sliding_leader else 0.0
+            hands, _ = hand_statics(task, trace.q_l[k], float(trace.grasp[k]), sigma_l)
+            c_l, c_f = hands[0].point, hands[1].point
+        tau[k, :n_l] = statics.leader.torque(trace.q_l[k], w_l, c_l)
+        tau[k, n_l:] = statics.follower.torque(trace.q_f[k], w_f, c_f)
     trace.tau_leader[:] = tau[:, :n_l]
     trace.tau_follower[:] = tau[:, n_l:]
     limit = joint_torque_limits(controller)

@@ -24,7 +24,8 @@ REPORT_FILE = "report.html"
 #: The 3D animation's file name, linked when present in the run folder.
 ANIMATION_FILE = "animation.html"
 
-_STYLE = """
+#: The style sheet of the report pages (inline: the pages need no other file).
+STYLE = """
 body { font-family: sans-serif; margin: 1.5em auto; max-width: 1200px; color: #222; }
 h1 { font-size: 1.4em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
 table { border-collapse: collapse; font-size: 0.9em; margin: 0.4em 0; }
@@ -293,7 +294,7 @@ def render_run_report(out: Path, summary: dict[str, Any], figures: Sequence[str]
     name = f"{summary.get('experiment', '')} ({summary.get('solver', '')})"
     status = str(summary.get("status", ""))
     head = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{html.escape(name)}</title><style>{_STYLE}</style></head><body>")
+            f"<title>{html.escape(name)}</title><style>{STYLE}</style></head><body>")
     summary = jsonable(summary)
     parts = [head, f"<h1>{html.escape(name)}: <span class=\"{html.escape(status)}\">"
              f"{html.escape(status)}</span></h1>", verdict(summary), glance(summary)]

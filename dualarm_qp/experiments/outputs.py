@@ -127,12 +127,7 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     hand's grasp point; NaN where the grasps cannot hold it). With a load or torque
     limits, ``tau_leader_1 ..`` and ``tau_follower_1 ..`` are each joint's quasi-static
     torque [N m] (the arm's weight and its hand's share of the load). Against a plant
-    that measures the hands' wrenches (``run --plant mujoco``), ``wrench_leader_fx ..
-    wrench_leader_mz`` and ``wrench_follower_fx .. wrench_follower_mz`` are the measured
-    wrenches (the same convention), ``internal_force`` [N] the size of their internal
-    part and ``internal_follower_fx .. internal_follower_mz`` the follower's internal
-    wrench, ``load_share_follower`` the follower's share of the load, and ``object_x,
-    object_y, object_z`` [m], ``object_qw .. object_qz`` the object's measured pose.
+    that measures the hands' wrenches, what it measured (:func:`_measured_columns`).
     ``scale`` is the task scale (:class:`~dualarm_qp.control.trace.Trace`): the share
     of the path rate asked for that the limits allowed, 1 when not slowed, the last row
     included.
@@ -188,16 +183,8 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         if np.isfinite(trace.clearance_self).any():  # arms with self-collision pairs
             cols["clearance_self"] = trace.clearance_self
         cols["clearance_pair"] = trace.clearance_pair
-    if len(trace) and not np.isnan(trace.f_leader).all():  # a task with a load
-        for role, wrench in (("leader", trace.f_leader), ("follower", trace.f_follower)):
-            for j, part in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
-                cols[f"f_{role}_{part}"] = wrench[:, j]
-    if len(trace) and not np.isnan(trace.tau_leader).all():  # joint torques recorded
-        for role, tau in (("leader", trace.tau_leader), ("follower", trace.tau_follower)):
-            for j in range(tau.shape[1]):
-                cols[f"tau_{role}_{j + 1}"] = tau[:, j]
-    if len(trace) and not np.isnan(trace.internal_force).all():  # wrenches measured
-        _measured_columns(cols, trace)
+    if len(trace):
+        _load_columns(cols, trace)
     return cols
 
 
@@ -205,8 +192,31 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
 _WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
+def _load_columns(cols: dict[str, Any], trace: Trace) -> None:
+    """Add the load's columns: the planned wrenches, the torques, what was measured."""
+    if not np.isnan(trace.f_leader).all():  # a task with a load
+        for role, wrench in (("leader", trace.f_leader), ("follower", trace.f_follower)):
+            for j, part in enumerate(_WRENCH):
+                cols[f"f_{role}_{part}"] = wrench[:, j]
+    if not np.isnan(trace.tau_leader).all():  # joint torques recorded
+        for role, tau in (("leader", trace.tau_leader), ("follower", trace.tau_follower)):
+            for j in range(tau.shape[1]):
+                cols[f"tau_{role}_{j + 1}"] = tau[:, j]
+    if not np.isnan(trace.internal_force).all():  # wrenches measured
+        _measured_columns(cols, trace)
+
+
 def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
-    """Add the columns of what a plant measured at the hands (:mod:`..control.measured`)."""
+    """Add the columns of what a plant measured at the hands (:mod:`..control.measured`).
+
+    Against a plant that measures the hands' wrenches (``run --plant mujoco``):
+    ``wrench_leader_fx .. wrench_leader_mz`` and ``wrench_follower_fx ..
+    wrench_follower_mz`` the measured wrenches (the convention of the ``f_*`` columns),
+    ``internal_force`` [N] the size of their internal part and ``internal_follower_fx ..
+    internal_follower_mz`` the follower's internal wrench, ``load_share_follower`` the
+    follower's share of the load, and ``object_x, object_y, object_z`` [m],
+    ``object_qw .. object_qz`` the object's measured pose.
+    """
     for role, wrench in (("leader", trace.wrench_leader), ("follower", trace.wrench_follower)):
         for j, part in enumerate(_WRENCH):
             cols[f"wrench_{role}_{part}"] = wrench[:, j]

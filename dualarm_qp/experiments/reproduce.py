@@ -5,8 +5,9 @@ sliding speed limits and a hard-limit solver; the figures draw it with the other
 
 
 A reproduction owns, in its output folder, ``reproduce.json`` (written last: it lists
-what was written), the two figures and a folder per case with that case's run outputs.
-A new reproduction into the same folder first removes those (and only those).
+what was written), ``report.html`` (the page that leads to each case,
+:mod:`.reproduce_page`), the two figures and a folder per case with that case's run
+outputs. A new reproduction into the same folder first removes those (and only those).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 from .._signals import SignalHold
 from .config import load_config
 from .outputs import owned_entries, remove_owned, write_json
+from .reproduce_page import write_reproduction_report
 from .run import OUTPUT_FILES, RunOutcome, remove_run_outputs, run_and_write
 from .setup import Experiment, build_experiment
 
@@ -39,7 +41,7 @@ LIMITS_CASE = "d"
 
 
 #: Files a reproduction writes into its output folder, besides a folder per case.
-REPRODUCE_FILES = ("reproduce.json", "fig5_joint3.png", "fig6_grasp.png")
+REPRODUCE_FILES = ("reproduce.json", "report.html", "fig5_joint3.png", "fig6_grasp.png")
 
 #: The folders of the cases, in :data:`CASES` order.
 CASE_FOLDERS = tuple(f"case_{label}" for label, _ in CASES)
@@ -147,30 +149,34 @@ def _case_config(config_dir: str | Path | None, fname: str) -> Path:
 
 def _write_record(out: Path, runs: dict[str, RunOutcome], checks: dict[str, Any],
                   figures: list[str], interrupted: str | None) -> None:
-    """Write ``reproduce.json``: what this reproduction wrote, and how it ended."""
+    """Write ``report.html`` and then ``reproduce.json``: what was written, how it ended."""
     rep = Reproduction(runs, checks, interrupted)
-    write_json(out / "reproduce.json", {
+    record = {
         "status": rep.status,
         "interrupted_case": interrupted,
         "cases": {k: r.summary for k, r in runs.items()},
         "checks": checks,
         "figures": figures,
-        "outputs": [f"case_{k}/" for k in runs] + figures,
-    })
+    }
+    page = write_reproduction_report(out, record)
+    write_json(out / "reproduce.json", {
+        **record, "outputs": [f"case_{k}/" for k in runs] + figures + [page]})
 
 
 def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
               progress: bool | None = None) -> Reproduction:
-    """Run cases (a) to (d) and draw Fig. 5 (follower q3) and Fig. 6 (grasp).
+    """Run cases (a) to (d), draw Fig. 5 (follower q3) and Fig. 6 (grasp), write the page.
 
     An earlier reproduction in ``out_dir`` is replaced (:func:`remove_reproduction`);
-    other files there stay.
+    other files there stay. ``out_dir/report.html`` leads to each case (what it is,
+    how it ended, its key numbers, links to its report and animation), lists the
+    paper's claims and shows the figures; ``reproduce.json`` comes last.
 
     Parameters
     ----------
     out_dir : path
-        Each case goes to ``out_dir/case_<x>/``; the figures and ``reproduce.json``
-        to ``out_dir``.
+        Each case goes to ``out_dir/case_<x>/``; the figures, ``report.html`` and
+        ``reproduce.json`` to ``out_dir``.
     config_dir : path, optional
         Where the YAML files of :data:`CASES` are; default: the copies shipped with the
         package (identical to the repository's ``configs/``).
@@ -182,9 +188,9 @@ def reproduce(out_dir: str | Path, *, config_dir: str | Path | None = None,
     Reproduction
         When an interrupt (Ctrl-C, SIGTERM) stopped a case's rollout, that case is
         written as interrupted, the later ones are not run, no figure is drawn, and
-        ``reproduce.json`` says so (``status: interrupted``). An interrupt that comes
-        elsewhere (while files are written, between cases) is raised as
-        KeyboardInterrupt once ``reproduce.json`` records the same.
+        ``report.html`` and ``reproduce.json`` say so (``status: interrupted``). An
+        interrupt that comes elsewhere (while files are written, between cases) is
+        raised as KeyboardInterrupt once they record the same.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

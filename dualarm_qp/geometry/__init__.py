@@ -11,6 +11,8 @@
 * :mod:`~dualarm_qp.geometry.links`: the capsules of an arm, keyed like
   ``SerialArm.link_frames``: :func:`arm_capsules`, :func:`urdf_capsules`,
   :func:`example_robot_capsules`, :func:`dh_capsules`.
+* :mod:`~dualarm_qp.geometry.capsule_cache`: a URDF arm's fitted capsules kept on disk
+  (``$DUALARM_QP_CACHE``, else the user's cache folder), keyed by the geometry fitted.
 """
 
 from .distance import (

@@ -159,8 +159,8 @@ def segment_closest_points(
         shapes = ", ".join(str(a.shape) for a in ends)
         raise InvalidInputError(f"segment ends p0, p1, q0, q1 of shapes {shapes} do not "
                                 "broadcast to one (k, 3)") from err
-    s, t, x, y = kernel.segment_closest_points(*(np.ascontiguousarray(a) for a in wide))
-    return s, t, x, y
+    c = kernel.segment_closest_points(*(np.ascontiguousarray(a) for a in wide))
+    return c.s, c.t, c.x, c.y
 
 
 def capsule_proximities(
@@ -199,13 +199,14 @@ def capsule_proximities(
     ra = np.asarray(radius_a, dtype=np.float64)
     rb = np.asarray(radius_b, dtype=np.float64)
     _check_shapes(a0, a1, ra, b0, b1, rb)
-    distance, point_a, point_b, normal = kernel.capsule_proximities(a0, a1, ra, b0, b1, rb)
+    p = kernel.capsule_proximities(a0, a1, ra, b0, b1, rb)
+    distance = p.distance
     if not math.isfinite(float(distance.sum())):  # a NaN or infinity anywhere lands here
         _raise_non_finite(a0, a1, ra, b0, b1, rb)
     if ra.shape[0] and (ra.min() < 0.0 or rb.min() < 0.0):
         raise InvalidInputError("capsule radii must be non-negative [m], got "
                                 f"{min(ra.min(), rb.min())!r}")
-    return Proximities(distance, point_a, point_b, normal)
+    return Proximities(distance, p.point_a, p.point_b, p.normal)
 
 
 _BATCH_NAMES = ("a0", "a1", "radius_a", "b0", "b1", "radius_b")

@@ -31,7 +31,8 @@ from .._validate import as_array
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm, frame_id
 from ..kinematics.robots import RobotModelError, example_robot_urdf, frame_below, urdf_arm
-from .fit import fit_capsule, geometry_balls
+from .capsule_cache import cached_fit
+from .fit import geometry_balls
 from .shapes import Capsule
 
 #: Radii [m] of the PUMA 560 preset's capsules, one per DH segment (our choice, from the
@@ -83,10 +84,12 @@ def urdf_capsules(file: str | Path, root: str, tip: str, *,
 
     Notes
     -----
-    The fit reads the collision meshes and takes about a second for a 7-joint arm; its
-    result is kept for the life of the process, keyed by the file's path, size and
-    modification time, the chain and the package folders (a sweep or a bench builds the
-    same arms many times). Capsules are immutable, so the copies share them.
+    The fit takes about a second for a 7-joint arm. Its result is kept on disk, keyed by
+    the collision geometry read (:mod:`~dualarm_qp.geometry.capsule_cache`: every
+    process that builds the same arm reads it there), and for the life of the process,
+    keyed by the file's path, size and modification time, the chain and the package
+    folders (a sweep or a bench builds the same arms many times; this also skips
+    reading the meshes). Capsules are immutable, so the copies share them.
     """
     path = Path(file).resolve()
     try:
@@ -112,13 +115,11 @@ _FITTED_MAX = 32
 
 def _urdf_capsules(file: str | Path, root: str, tip: str, *,
                    package_dirs: Any = None) -> dict[int, Capsule]:
-    """Fit the capsules of :func:`urdf_capsules` (uncached)."""
+    """Fit the capsules of :func:`urdf_capsules`, or read them from the capsule cache."""
     balls: dict[int, list[tuple[Any, Any]]] = {}
     for key, obj, pose in chain_collision_objects(file, root, tip, package_dirs=package_dirs):
         balls.setdefault(key, []).append(geometry_balls(obj.geometry, pose.homogeneous))
-    return {key: fit_capsule(np.vstack([c for c, _ in parts]),
-                             np.concatenate([r for _, r in parts]))
-            for key, parts in sorted(balls.items())}
+    return cached_fit(balls)
 
 
 def chain_collision_objects(file: str | Path, root: str, tip: str, *,

@@ -95,7 +95,7 @@ class Capsule:
         """
         T = checked_pose(T_world_frame, "T_world_frame")
         R, p = T[:3, :3], T[:3, 3]
-        return _capsule(R @ self.a + p, R @ self.b + p, self.radius)
+        return Capsule(R @ self.a + p, R @ self.b + p, self.radius)
 
     def __repr__(self) -> str:
         return (f"Capsule(a={self.a.tolist()}, b={self.b.tolist()}, "
@@ -162,7 +162,7 @@ class Box:
         ShapeError, NonFiniteError, InvalidInputError
             ``T_world_frame`` is not a rigid transform.
         """
-        return placed_box(self, checked_pose(T_world_frame, "T_world_frame"))
+        return Box(self.size, checked_pose(T_world_frame, "T_world_frame") @ self.pose)
 
     def __repr__(self) -> str:
         return f"Box(size={self.size.tolist()}, pose={self.pose.tolist()})"
@@ -210,37 +210,6 @@ def transform_points(T: Any, points: Any) -> FloatArray:
     p = np.asarray(points, dtype=np.float64)
     out: FloatArray = np.einsum("kij,kj->ki", T[:, :3, :3], p) + T[:, :3, 3]
     return out
-
-
-def placed_capsule(capsule: Capsule, T: FloatArray) -> Capsule:
-    """:meth:`Capsule.placed` for a pose already known to be rigid (no validation; hot path).
-
-    Parameters
-    ----------
-    capsule : Capsule
-        A capsule in its frame.
-    T : ndarray, shape (4, 4)
-        World pose of its frame [m], a rigid transform (not checked).
-    """
-    R, p = T[:3, :3], T[:3, 3]
-    return _capsule(R @ capsule.a + p, R @ capsule.b + p, capsule.radius)
-
-
-def placed_box(box: Box, T: FloatArray) -> Box:
-    """:meth:`Box.placed` for a pose already known to be rigid (no validation; hot path)."""
-    out = object.__new__(Box)
-    object.__setattr__(out, "size", box.size)
-    object.__setattr__(out, "pose", _frozen(T @ box.pose))
-    return out
-
-
-def _capsule(a: FloatArray, b: FloatArray, radius: float) -> Capsule:
-    """Build a capsule from values already checked (no validation)."""
-    cap = object.__new__(Capsule)
-    object.__setattr__(cap, "a", _frozen(a))
-    object.__setattr__(cap, "b", _frozen(b))
-    object.__setattr__(cap, "radius", float(radius))
-    return cap
 
 
 def _positive(value: Any, name: str) -> float:

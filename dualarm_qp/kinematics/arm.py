@@ -13,36 +13,19 @@ computations run in the compiled kernel, on its copy of the model
 Where a model comes from does not matter above this module; the builders all return a
 :class:`SerialArm`:
 
-* a Denavit-Hartenberg table, ``SerialArm(DHTable(...))`` (this module);
+* a Denavit-Hartenberg table, ``SerialArm(DHTable(...))`` (:mod:`~dualarm_qp.kinematics.dh`);
 * :func:`~dualarm_qp.kinematics.puma560` (the paper's Table 1 PUMA 560, DH);
 * one chain of a URDF, :func:`~dualarm_qp.kinematics.urdf_arm`, or of a robot shipped by
   the ``example-robot-data`` package, :func:`~dualarm_qp.kinematics.example_robot_arm`.
 
-DH conventions, both for revolute joints:
-
-``standard`` (Denavit-Hartenberg; Fu, Gonzalez and Lee)
-    ``A_i = Rot_z(theta_i) Trans_z(d_i) Trans_x(a_i) Rot_x(alpha_i)``; joint i turns
-    about the z axis of frame i-1.
-``modified`` (Craig)
-    ``A_i = Rot_x(alpha_{i-1}) Trans_x(a_{i-1}) Rot_z(theta_i) Trans_z(d_i)``; joint i
-    turns about the z axis of frame i. Row i of the table holds
-    ``(a_{i-1}, alpha_{i-1}, d_i, offset_i)``.
-
-with ``theta_i = q_i + offset_i``. The pose of the tool in the world is
-``T_world_tool = base @ A_1 ... A_n @ tool``.
-
-Both are built as one Pinocchio chain: ``A_i = pre_i Rot_z(theta_i) post_i`` with
-``pre = I, post = Trans_z(d) Trans_x(a) Rot_x(alpha)`` (standard) or
-``pre = Rot_x(alpha) Trans_x(a), post = Trans_z(d)`` (modified). Joint i is a revolute
-joint about its local z axis placed at ``post_{i-1} pre_i Rot_z(offset_i)`` in joint
-i-1 (``post_0 = I``), and DH frame i is a frame at ``post_i`` on joint i.
+The Denavit-Hartenberg table is :mod:`~dualarm_qp.kinematics.dh`; a model from any
+other source must be one chain of revolute joints (:mod:`~dualarm_qp.kinematics.chain`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -51,81 +34,19 @@ from numpy.typing import NDArray
 from .._remade import KernelHolder
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
+from .chain import (
+    REVOLUTE_JOINTS,
+    TOOL_FRAME,
+    chain_model,
+    check_revolute,
+    frame_id,
+    model_limits,
+    se3,
+)
 from .compiled import compiled_chain, set_frame_placement, set_joint_placement
-from .continuous import is_continuous, one_angle_model
+from .dh import DHTable, dh_model
 
 FloatArray = NDArray[np.float64]
-Convention = Literal["standard", "modified"]
-
-#: Pinocchio joint kinds an arm may have: revolute, one coordinate (nq = nv = 1).
-REVOLUTE_JOINTS = frozenset({"JointModelRX", "JointModelRY", "JointModelRZ",
-                             "JointModelRevoluteUnaligned"})
-#: Limits at or beyond this magnitude mean "no limit" (Pinocchio's default is DBL_MAX).
-_NO_LIMIT = 1e300
-# Names of the frames SerialArm adds to a model.
-_BASE, _LINK, _TOOL = "dualarm_base", "dualarm_link", "dualarm_tool"
-
-
-@dataclass(frozen=True)
-class DHTable:
-    """Denavit-Hartenberg parameters, one row per joint (all revolute).
-
-    Parameters
-    ----------
-    a : ndarray, shape (n,)
-        Link lengths [m] (``a_i`` standard, ``a_{i-1}`` modified).
-    alpha : ndarray, shape (n,)
-        Link twists [rad] (``alpha_i`` standard, ``alpha_{i-1}`` modified).
-    d : ndarray, shape (n,)
-        Link offsets along z [m].
-    offset : ndarray, shape (n,)
-        Joint angle offsets [rad]: ``theta_i = q_i + offset_i``.
-    convention : {"standard", "modified"}
-        Which DH convention the rows follow.
-    """
-
-    a: FloatArray
-    alpha: FloatArray
-    d: FloatArray
-    offset: FloatArray
-    convention: Convention = "standard"
-
-    def __post_init__(self) -> None:
-        a = as_array(self.a, "a", (-1,))
-        n = a.shape[0]
-        if n == 0:
-            raise InvalidInputError("a DH table needs at least one joint")
-        for name in ("a", "alpha", "d", "offset"):
-            # Own read-only copies: SerialArm caches these values.
-            arr = as_array(getattr(self, name), name, (n,)).copy()
-            arr.flags.writeable = False
-            object.__setattr__(self, name, arr)
-        if self.convention not in ("standard", "modified"):
-            raise InvalidInputError(
-                f"convention must be 'standard' or 'modified', got {self.convention!r}"
-            )
-
-    @classmethod
-    def from_rows(cls, rows: Any, convention: Convention = "standard") -> DHTable:
-        """Build from an (n, 3) or (n, 4) array of rows ``(a, alpha, d[, offset])``.
-
-        Units: [m, rad, m, rad].
-
-        Raises
-        ------
-        ShapeError, NonFiniteError, InvalidInputError
-            Rows that are not an (n, 3) or (n, 4) array of finite numbers.
-        """
-        arr = as_array(rows, "DH rows", (-1, -1))  # numeric, finite, two-dimensional
-        if arr.shape[1] not in (3, 4):
-            raise ShapeError("DH rows", (-1, 4), tuple(arr.shape))
-        offset = arr[:, 3] if arr.shape[1] == 4 else np.zeros(arr.shape[0])
-        return cls(arr[:, 0], arr[:, 1], arr[:, 2], offset, convention)
-
-    @property
-    def n(self) -> int:
-        """Number of joints."""
-        return int(self.a.shape[0])
 
 
 
@@ -201,13 +122,13 @@ class SerialArm(KernelHolder):
                                         "flange of a DH arm is its last DH frame")
             self.dh = source
             self.source = f"dh:{source.convention}"
-            template, links, flange = _dh_model(source)
+            template, links, flange = dh_model(source)
             lo = hi = vel = None
         elif isinstance(source, pin.Model):
             self.dh = None
             self.source = f"pinocchio:{source.name or name}"
-            template, links, flange = _chain_model(source, tip, name)
-            lo, hi, vel = _model_limits(template)
+            template, links, flange = chain_model(source, tip, name)
+            lo, hi, vel = model_limits(template)
         else:
             raise InvalidInputError("an arm is built from a DHTable or a pinocchio.Model, "
                                     f"got {type(source).__name__}")
@@ -219,7 +140,7 @@ class SerialArm(KernelHolder):
                          np.full(n, np.inf) if qdd_max is None else qdd_max, n)
         frame = template.frames[flange]
         self._flange = pin.SE3(frame.placement)
-        self._tool_id = template.addFrame(pin.Frame(_TOOL, frame.parentJoint, flange,
+        self._tool_id = template.addFrame(pin.Frame(TOOL_FRAME, frame.parentJoint, flange,
                                                     pin.SE3(frame.placement),
                                                     pin.FrameType.OP_FRAME))
         self._links = links
@@ -331,7 +252,7 @@ class SerialArm(KernelHolder):
     @base.setter
     def base(self, value: Any) -> None:
         self._base = _frozen_pose(value, "base")
-        B = _se3(self._base)
+        B = se3(self._base)
         model, chain, template = self._model, self._chain, self._template
         for j in self._root_joints:
             set_joint_placement(model, chain, j, B * template.jointPlacements[j])
@@ -347,7 +268,7 @@ class SerialArm(KernelHolder):
     def tool(self, value: Any) -> None:
         self._tool = _frozen_pose(value, "tool")
         set_frame_placement(self._model, self._chain, self._tool_id,
-                            self._flange * _se3(self._tool))
+                            self._flange * se3(self._tool))
 
     def with_base(self, base: Any) -> SerialArm:
         """Return a copy of this arm placed at ``base`` (``T_world_base``)."""
@@ -468,126 +389,6 @@ class SerialArm(KernelHolder):
         return T, J
 
 
-# ------------------------------------------------------------------ model builders
-def _se3(T: FloatArray) -> Any:
-    """Convert a 4x4 pose to a ``pinocchio.SE3``."""
-    return pin.SE3(np.array(T[:3, :3]), np.array(T[:3, 3]))
-
-
-def _dh_model(dh: DHTable) -> tuple[Any, list[int], int]:
-    """Pinocchio chain of a DH table (see the module docstring).
-
-    Returns the model (universe = DH frame 0), the ids of its frames 0..n and the id of
-    the flange frame (frame n).
-    """
-    model = pin.Model()
-    model.name = f"dh_{dh.convention}"
-    links = [model.addFrame(pin.Frame(_BASE, 0, 0, pin.SE3.Identity(),
-                                      pin.FrameType.OP_FRAME))]
-    standard = dh.convention == "standard"
-    post_prev = np.eye(4)
-    for i in range(dh.n):
-        a, alpha, d, offset = (float(dh.a[i]), float(dh.alpha[i]), float(dh.d[i]),
-                               float(dh.offset[i]))
-        # Trans_x(a) Rot_x(alpha)
-        x_step = _trans(a, 0.0, 0.0) @ _rot(pin.rpy.rpyToMatrix(alpha, 0.0, 0.0))
-        pre, post = (np.eye(4), _trans(0.0, 0.0, d) @ x_step) if standard else (
-            x_step, _trans(0.0, 0.0, d))
-        placement = post_prev @ pre @ _rot(pin.rpy.rpyToMatrix(0.0, 0.0, offset))
-        joint = model.addJoint(model.njoints - 1, pin.JointModelRZ(),
-                               _se3(placement), f"joint{i + 1}")
-        links.append(model.addFrame(pin.Frame(f"{_LINK}{i + 1}", joint, links[-1],
-                                              _se3(post), pin.FrameType.OP_FRAME)))
-        post_prev = post
-    return model, links, links[-1]
-
-
-def _chain_model(source: Any, tip: str | None, name: str) -> tuple[Any, list[int], int]:
-    """Check that ``source`` is one chain of revolute joints and copy it with our frames.
-
-    Returns the copy, the ids of its frames 0..n (the base, then one frame on each
-    joint) and the id of the flange frame ``tip``.
-    """
-    label = source.name or name
-    if source.njoints < 2:
-        raise InvalidInputError(f"{label}: the model has no joints")
-    for j in range(1, source.njoints):
-        if source.parents[j] != j - 1:
-            raise InvalidInputError(
-                f"{label}: not a single chain: the parent of joint {source.names[j]!r} is "
-                f"{source.names[source.parents[j]]!r}, not the joint before it")
-        check_revolute(source, j, label)
-    model = pin.Model(one_angle_model(source))  # a continuous joint: one angle, +-inf
-    last = model.njoints - 1
-    if tip is None:
-        flange = model.addFrame(pin.Frame(f"{_LINK}_flange", last, 0, pin.SE3.Identity(),
-                                          pin.FrameType.OP_FRAME))
-    else:
-        flange = frame_id(model, tip, "tip", label)
-        if model.frames[flange].parentJoint != last:
-            raise InvalidInputError(
-                f"{label}: joint {model.names[last]!r} does not move the tip frame {tip!r}; "
-                "the chain must end at the tip")
-    links = [model.addFrame(pin.Frame(_BASE, 0, 0, pin.SE3.Identity(),
-                                      pin.FrameType.OP_FRAME))]
-    for j in range(1, model.njoints):
-        links.append(model.addFrame(pin.Frame(f"{_LINK}{j}", j, 0, pin.SE3.Identity(),
-                                              pin.FrameType.OP_FRAME)))
-    return model, links, flange
-
-
-def check_revolute(model: Any, j: int, label: str) -> None:
-    """Raise :class:`InvalidInputError` unless joint ``j`` of ``model`` turns about one axis.
-
-    A revolute joint with one coordinate, or a continuous one (which the arm makes a
-    revolute joint of range +-inf, :mod:`~dualarm_qp.kinematics.continuous`).
-    """
-    joint = model.joints[j]
-    kind = joint.shortname()
-    if (kind in REVOLUTE_JOINTS and joint.nq == 1 and joint.nv == 1) or is_continuous(joint):
-        return
-    what = kind.removeprefix("JointModel")
-    if kind.startswith(("JointModelP", "JointModelPrismatic")):
-        what = "prismatic"
-    raise InvalidInputError(
-        f"{label}: joint {model.names[j]!r} is {what}; an arm has revolute (or continuous) "
-        "joints only")
-
-
-def frame_id(model: Any, frame: str, what: str, label: str) -> int:
-    """Index of the frame named ``frame`` (a link's body frame first), or a clear error."""
-    ids = [i for i, f in enumerate(model.frames) if f.name == frame]
-    if not ids:
-        links = sorted(f.name for f in model.frames if f.type == pin.FrameType.BODY)
-        shown = ", ".join(links[:40]) + (", ..." if len(links) > 40 else "")
-        raise InvalidInputError(f"{label}: {what} frame {frame!r} not found (links: {shown})")
-    body = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
-    return (body or ids)[0]
-
-
-def _model_limits(model: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Read the model's joint ranges and speed limits; huge values (or zero speed): none."""
-    lo = np.array(model.lowerPositionLimit, dtype=np.float64)
-    hi = np.array(model.upperPositionLimit, dtype=np.float64)
-    vel = np.array(model.velocityLimit, dtype=np.float64)
-    lo[lo <= -_NO_LIMIT] = -np.inf
-    hi[hi >= _NO_LIMIT] = np.inf
-    vel[(vel <= 0.0) | (vel >= _NO_LIMIT)] = np.inf
-    return lo, hi, vel
-
-
-def _trans(x: float, y: float, z: float) -> FloatArray:
-    T = np.eye(4)
-    T[:3, 3] = (x, y, z)
-    return T
-
-
-def _rot(R: FloatArray) -> FloatArray:
-    T = np.eye(4)
-    T[:3, :3] = R
-    return T
-
-
 def checked_pose(value: Any, name: str) -> FloatArray:
     """:func:`dualarm_qp._validate.as_pose` with a scalar fast path for float arrays.
 
@@ -635,3 +436,8 @@ def _limit(value: Any, name: str, n: int) -> FloatArray:
     if np.isnan(arr).any():
         raise NonFiniteError(name)
     return arr
+
+
+# DHTable, frame_id, check_revolute and REVOLUTE_JOINTS are importable from here too.
+__all__ = ["REVOLUTE_JOINTS", "DHTable", "SerialArm", "check_revolute", "checked_pose",
+           "frame_id"]

@@ -134,15 +134,16 @@ def ik_dls(
     q = arm.check_q(q0, "q0").copy()
     lo = arm.q_min if respect_limits else np.full(arm.n, -math.inf)
     hi = arm.q_max if respect_limits else np.full(arm.n, math.inf)
-    iterations, ep, er, stop = kernel.ik_dls(
+    answer = kernel.ik_dls(
         arm.chain, arm.tool_frame_id, target, q, lo, hi, float(tol_pos), float(tol_rot),
         min(max_iter, _ITERATIONS_CAP), float(damping), _MU_MIN, _MU_MAX)
-    success = stop == _CONVERGED
+    iterations, ep, er = answer.iterations, answer.position_error, answer.rotation_error
+    success = answer.stop == _CONVERGED
     result = IKResult(q, success, iterations, ep, er)
     if not success and raise_on_failure:
         raise IKError(
             f"{arm.name}: ik_dls did not converge after {iterations} iterations "
-            f"({_STOPS[stop]}); best position error {ep:.3g} m, rotation error {er:.3g} rad",
+            f"({_STOPS[answer.stop]}); best position error {ep:.3g} m, rotation error {er:.3g} rad",
             position_error=ep,
             rotation_error=er,
         )

@@ -128,17 +128,34 @@ def urdf_arm(
         joint); ``field`` says which.
     """
     path = Path(file)
+    full = _read_urdf(path)
+    label = full.name or path.stem
+    model = _rerooted_chain(full, root, tip, label)
+    arm = SerialArm(model, tip=tip, q_min=q_min, q_max=q_max, qd_max=qd_max, base=base,
+                    tool=tool, name=name or f"{label}:{tip}")
+    arm.source = f"urdf:{path} {root}->{tip}"
+    return arm
+
+
+def _read_urdf(path: Path) -> Any:
+    """Return the Pinocchio model of the URDF file ``path`` (RobotModelError on field "file")."""
     if not path.is_file():
         raise RobotModelError(f"URDF file not found: {path}", "file")
     try:
         with _stderr_captured() as parser_said:  # urdfdom prints its errors on fd 2
-            full = pin.buildModelFromUrdf(str(path))
+            return pin.buildModelFromUrdf(str(path))
     except (RuntimeError, ValueError) as err:
         said = next((ln.strip().removeprefix("Error:").strip()
                      for ln in "".join(parser_said).splitlines() if ln.strip()), "")
         raise RobotModelError(f"cannot read URDF {path}: {err}"
                               + (f" (urdfdom: {said})" if said else ""), "file") from None
-    label = full.name or path.stem
+
+
+def _rerooted_chain(full: Any, root: str, tip: str, label: str) -> Any:
+    """Return the chain of ``full`` from ``root`` to ``tip``, the root frame its universe.
+
+    The joints outside the chain are locked at their neutral values.
+    """
     try:
         root_id = frame_id(full, root, "root", label)
     except InvalidInputError as err:
@@ -172,10 +189,7 @@ def urdf_arm(
     for frame in model.frames:
         if frame.parentJoint == 0:
             frame.placement = to_root * frame.placement
-    arm = SerialArm(model, tip=tip, q_min=q_min, q_max=q_max, qd_max=qd_max, base=base,
-                    tool=tool, name=name or f"{label}:{tip}")
-    arm.source = f"urdf:{path} {root}->{tip}"
-    return arm
+    return model
 
 
 def frame_below(model: Any, frame: int, ancestor: int) -> bool:

@@ -37,7 +37,7 @@ from .oscillation import growing_oscillation
 from .settings import PhysicsSettings
 
 if TYPE_CHECKING:
-    from .check import PhysicsRun
+    from .simulation import PhysicsRun
 
 #: The causes, in the order that breaks a tie on one sample.
 CAUSES = ("oscillation", "torque", "squeezed", "slipped", "dropped", "controller")

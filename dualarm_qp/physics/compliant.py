@@ -2,7 +2,7 @@
 
 With ``physics.compliance`` (:class:`~dualarm_qp.physics.settings.PhysicsSettings`), the
 closed loop's step takes the compliant grasp closure of
-:mod:`dualarm_qp.control.compliance` in place of the standard one, and the MuJoCo
+:mod:`dualarm_qp.physics.compliance` in place of the standard one, and the MuJoCo
 plant updates its wrench measurement with each state it hands the controller.
 """
 
@@ -11,9 +11,9 @@ from __future__ import annotations
 import dataclasses
 from typing import cast
 
-from ..control.compliance import ComplianceTask
 from ..experiments.setup import Experiment
 from ..step.parts import Task
+from .compliance import ComplianceTask
 from .plant import MujocoPlant
 
 

@@ -132,4 +132,27 @@ def set_gains(model: Any, gains: ServoGains, servo: str) -> None:
     model.actuator_biasprm[v, 2] = -gains.kv
 
 
-__all__ = ["INTEGRATOR_MARGIN", "SERVO_FREQUENCY", "ServoGains", "servo_gains", "set_gains"]
+def unstable_gains_advice(st: PhysicsSettings, g: ServoGains | None, timestep: float) -> str:
+    """Return what a divergence message says of the servo gains, and what to change.
+
+    ``st`` the settings, ``g`` the gains set (None: not yet), ``timestep`` the substep [s].
+    """
+    h = f"{timestep * 1e3:.3g} ms"
+    if st.kp is None and st.kv is None:
+        span = "" if g is None else (f"; kp {g.kp.min():.3g}..{g.kp.max():.3g} N m/rad, "
+                                     f"kv {g.kv.min():.3g}..{g.kv.max():.3g} N m s/rad")
+        return (f"The servo gains (each joint's from its inertia at "
+                f"{st.servo_frequency:g} Hz, damping ratio {st.damping_ratio:g}{span}) "
+                "are unstable with armature "
+                f"{st.armature:g} kg m^2 at substeps of {h}: lower "
+                "physics.servo_frequency, or raise physics.armature")
+    given = ", ".join(f"{k} {v:g}" for k, v in (("kp", st.kp), ("kv", st.kv))
+                      if v is not None and (k == "kv" or st.servo == "position"))
+    return (f"The servo gains ({given}, the same on every joint) are unstable with "
+            f"armature {st.armature:g} kg m^2 at substeps of {h}: lower physics.kp "
+            "(or physics.kv), leave them out (each joint's gains from its inertia), "
+            "or raise physics.armature")
+
+
+__all__ = ["INTEGRATOR_MARGIN", "SERVO_FREQUENCY", "ServoGains", "servo_gains", "set_gains",
+           "unstable_gains_advice"]

@@ -297,15 +297,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
     the origin; its pose is set with the joints.
     """
     notes: list[str] = []
-    load = task.load
-    if load is not None:
-        mass, centre, gravity = load.mass, load.mass_centre, load.gravity
-    else:
-        shape0, _ = _object_shape(task)
-        mid = (0.5 * (shape0.a + shape0.b) if isinstance(shape0, Capsule)
-               else shape0.centre)
-        mass, centre, gravity = settings.object_mass, np.asarray(mid), np.array(GRAVITY)
-        notes.append(f"the object states no mass: {mass:g} kg at the middle of its shape")
+    mass, centre, gravity = _object_mass(task, settings, notes)
     shape, given = _object_shape(task)
     if not given:
         notes.append(f"the object has no shape: a {OBJECT_RADIUS * 1e3:g} mm capsule from "
@@ -319,18 +311,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
                                                                   notes, assets)
         base.append(base_xml)
         tree.append(body_xml)
-    grasps: dict[str, GraspJoint] = {}
-    chains = []
-    support_gap = None
-    if task.contact is not None:
-        xml, grasps["follower"], support_gap = _support_chain("fgrasp", task.surface)
-        chains.append(xml)
-    else:
-        xml, grasps["follower"] = _chain("fgrasp", task.surface)
-        chains.append(xml)
-    if task.leader_surface is not None:
-        xml, grasps["leader"] = _chain("lgrasp", task.leader_surface)
-        chains.append(xml)
+    chains, grasps, support_gap = _grasp_chains(task)
     chain_mass = 2 * CHAIN_MASS * len(chains)
     notes.append(f"the grasp chains' bodies ride on the object: the hands carry "
                  f"{mass + chain_mass:g} kg ({chain_mass:g} kg of chain)")
@@ -341,14 +322,7 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
                      for b in task.scene.obstacles]
     points = {"leader": "leader_tool" if task.leader_surface is None else "lgrasp_point",
               "follower": "fgrasp_point"}
-    solref = f'solref="{_f(SOLREF)}"'
-    welds = ['<weld name="weld_leader" body1="leader_tool" body2="object" '
-             f'relpose="{_f(_pose_vec(task.H1))}" {solref}/>'
-             if task.leader_surface is None else
-             '<weld name="weld_leader" body1="leader_tool" body2="lgrasp_point" '
-             f'relpose="0 0 0 1 0 0 0" {solref}/>',
-             '<weld name="weld_follower" body1="follower_tool" body2="fgrasp_point" '
-             f'relpose="0 0 0 1 0 0 0" {solref}/>']
+    welds = _welds(task)
     excludes = [f'<exclude body1="object" body2="{b}"/>'
                 for role in ("leader", "follower") for b in
                 [*bodies[role][-WRIST_BODIES:], f"{role}_tool"]]
@@ -379,6 +353,53 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
         welds={"leader": 0, "follower": 1}, mass=float(mass),
         mass_centre=np.asarray(centre, dtype=float), gravity=np.asarray(gravity, float),
         carried=float(mass + chain_mass), notes=notes)
+
+
+def _object_mass(task: DualArmTask, settings: PhysicsSettings, notes: list[str]
+                 ) -> tuple[float, FloatArray, FloatArray]:
+    """Return the object's mass [kg], mass centre [m, object] and gravity [m/s^2].
+
+    The task's load; without one, the settings' mass at the middle of the object's shape
+    (noted in ``notes``).
+    """
+    load = task.load
+    if load is not None:
+        return load.mass, load.mass_centre, load.gravity
+    shape0, _ = _object_shape(task)
+    mid = (0.5 * (shape0.a + shape0.b) if isinstance(shape0, Capsule)
+           else shape0.centre)
+    mass, centre, gravity = settings.object_mass, np.asarray(mid), np.array(GRAVITY)
+    notes.append(f"the object states no mass: {mass:g} kg at the middle of its shape")
+    return mass, centre, gravity
+
+
+def _grasp_chains(task: DualArmTask) -> tuple[list[str], dict[str, GraspJoint], str | None]:
+    """Return the grasp chains' bodies, their joints, and a support's gap joint (or None)."""
+    grasps: dict[str, GraspJoint] = {}
+    chains = []
+    support_gap = None
+    if task.contact is not None:
+        xml, grasps["follower"], support_gap = _support_chain("fgrasp", task.surface)
+        chains.append(xml)
+    else:
+        xml, grasps["follower"] = _chain("fgrasp", task.surface)
+        chains.append(xml)
+    if task.leader_surface is not None:
+        xml, grasps["leader"] = _chain("lgrasp", task.leader_surface)
+        chains.append(xml)
+    return chains, grasps, support_gap
+
+
+def _welds(task: DualArmTask) -> list[str]:
+    """Return the welds of the hands: the leader's to the object (or its grasp point)."""
+    solref = f'solref="{_f(SOLREF)}"'
+    return ['<weld name="weld_leader" body1="leader_tool" body2="object" '
+            f'relpose="{_f(_pose_vec(task.H1))}" {solref}/>'
+            if task.leader_surface is None else
+            '<weld name="weld_leader" body1="leader_tool" body2="lgrasp_point" '
+            f'relpose="0 0 0 1 0 0 0" {solref}/>',
+            '<weld name="weld_follower" body1="follower_tool" body2="fgrasp_point" '
+            f'relpose="0 0 0 1 0 0 0" {solref}/>']
 
 
 def _pose_vec(T: FloatArray) -> FloatArray:

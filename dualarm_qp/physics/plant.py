@@ -46,19 +46,19 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..control.compliance import WrenchMeasurement
-from ..control.loads import hand_wrenches
-from ..control.measured import HandReading, load_share
+from ..control.measured import HandReading
 from ..control.predict import CommandHistory
-from ..errors import DualArmError, InvalidInputError, SupportLostError
+from ..errors import DualArmError, InvalidInputError
 from ..step.state import Command, DualArmState
-from ..task.loads import ObjectLoad, UnbalancedLoadError, hand_statics, split_load
+from ..task.loads import ObjectLoad
 from ..task.scene import DualArmTask
-from ..task.torques import model_effort
-from .gains import ServoGains, servo_gains, set_gains
+from .compliance import WrenchMeasurement
+from .gains import ServoGains, servo_gains, set_gains, unstable_gains_advice
+from .limits import torque_limits
 from .mjcf import PhysicsModel, build_mjcf
 from .readout import Readout
 from .settings import SUBSTEP, PhysicsSettings
+from .statics import against_plan, load_feedforward, simulated_task
 
 FloatArray = NDArray[np.float64]
 
@@ -101,53 +101,6 @@ def _mujoco() -> Any:
     return mujoco
 
 
-def torque_limits(task: DualArmTask, settings: PhysicsSettings,
-                  arm_tau_max: dict[str, FloatArray | None] | None = None
-                  ) -> dict[str, FloatArray]:
-    """Each arm's joint torque limits [N m].
-
-    The ``physics.tau_max`` of the file, else the arm's own ``tau_max`` (``arm_tau_max``:
-    the controller's, :class:`~dualarm_qp.step.options.StepOptions`), else the model's: a
-    URDF's ``effort``; a joint without one (a DH arm) gets inf. A given limit is one
-    value (every joint) or one per joint; ``inf`` leaves a joint unlimited.
-
-    Raises
-    ------
-    InvalidInputError
-        A given limit with another count.
-    """
-    out = {}
-    for role, arm in (("leader", task.leader), ("follower", task.follower)):
-        given = None if settings.tau_max is None else settings.tau_max.get(role)
-        if given is None and arm_tau_max is not None:
-            given = arm_tau_max.get(role)
-        if given is not None:
-            given = np.asarray(given, dtype=float).ravel()
-            if given.size not in (1, arm.n):
-                raise InvalidInputError(f"{role}: torque limits need 1 value or {arm.n} (one "
-                                        f"per joint), got {given.size}")
-            lim = np.broadcast_to(given, (arm.n,)).copy()
-        else:
-            lim = model_effort(arm)
-        out[role] = lim
-    return out
-
-
-def simulated_task(task: DualArmTask, base_error: FloatArray | None) -> DualArmTask:
-    """Return ``task`` with its follower's base off by ``base_error`` (its own frame).
-
-    ``base_error`` is ``[x, y, z]`` [m] and roll, pitch, yaw [rad] (``R = Rz Ry Rx``):
-    ``T_base_simulated = T_base [R, p; 0, 1]``. None: ``task`` as it is.
-    """
-    if base_error is None:
-        return task
-    error = np.eye(4)
-    error[:3, :3] = pin.rpy.rpyToMatrix(*np.asarray(base_error[3:], dtype=float))
-    error[:3, 3] = base_error[:3]
-    return dataclasses.replace(task, follower=task.follower.with_base(
-        np.asarray(task.follower.base) @ error))
-
-
 class MujocoPlant:
     """The task in MuJoCo, driven by joint servos (see the module docstring).
 
@@ -163,7 +116,7 @@ class MujocoPlant:
         Each arm's configured ``tau_max`` [N m] (:func:`torque_limits`).
     measurement : WrenchMeasurement, optional
         Updated with the reading of each state handed to the controller (a compliant
-        follower's, :mod:`dualarm_qp.control.compliance`).
+        follower's, :mod:`dualarm_qp.physics.compliance`).
 
     Attributes
     ----------
@@ -340,26 +293,8 @@ class MujocoPlant:
         if reason is None:
             return
         raise DivergedError(f"the simulation diverged {when}: {reason}. "
-                            + self._gains_text())
-
-    def _gains_text(self) -> str:
-        """Return what the divergence message says of the gains, and what to change."""
-        st, g = self.settings, self.gains
-        h = f"{self.model.opt.timestep * 1e3:.3g} ms"
-        if st.kp is None and st.kv is None:
-            span = "" if g is None else (f"; kp {g.kp.min():.3g}..{g.kp.max():.3g} N m/rad, "
-                                         f"kv {g.kv.min():.3g}..{g.kv.max():.3g} N m s/rad")
-            return (f"The servo gains (each joint's from its inertia at "
-                    f"{st.servo_frequency:g} Hz, damping ratio {st.damping_ratio:g}{span}) "
-                    "are unstable with armature "
-                    f"{st.armature:g} kg m^2 at substeps of {h}: lower "
-                    "physics.servo_frequency, or raise physics.armature")
-        given = ", ".join(f"{k} {v:g}" for k, v in (("kp", st.kp), ("kv", st.kv))
-                          if v is not None and (k == "kv" or st.servo == "position"))
-        return (f"The servo gains ({given}, the same on every joint) are unstable with "
-                f"armature {st.armature:g} kg m^2 at substeps of {h}: lower physics.kp "
-                "(or physics.kv), leave them out (each joint's gains from its inertia), "
-                "or raise physics.armature")
+                            + unstable_gains_advice(self.settings, self.gains,
+                                                    float(self.model.opt.timestep)))
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
@@ -405,29 +340,8 @@ class MujocoPlant:
         return peak_tau
 
     def _feedforward(self, state: DualArmState) -> None:
-        """Set the load feed-forward: the torques that hold each hand's share of the load.
-
-        The share is the quasi-static split of :func:`dualarm_qp.control.loads.hand_wrenches`
-        at the measured state (zero where the grasps cannot hold the load), its moment
-        about each hand's grasp point (the leader's tool point, the follower's contact
-        point on the object). ``J`` is the Jacobian of the tool point, so the moment is
-        moved there first, ``m_t = m + (p - t) x f``, and the torque is ``J^T [f; m_t]``
-        (the follower's contact point is its tool point only up to the closure error).
-        """
-        task = self._load_task
-        try:
-            hands, T_obj = hand_statics(task, state.q_l, state.sigma, state.sigma_leader)
-            split = split_load(hands, self.load, T_obj).wrenches
-        except (UnbalancedLoadError, SupportLostError):
-            self._ff = np.zeros(self._arm_dofs.size)
-            return
-        parts = []
-        for arm, q, w, hand in ((task.leader, state.q_l, split[0], hands[0]),
-                                (task.follower, state.q_f, split[1], hands[1])):
-            T, J = arm.fk_jacobian(q)
-            f, m = w[:3], w[3:]
-            parts.append(J.T @ np.r_[f, m + np.cross(hand.point - T[:3, 3], f)])
-        self._ff = np.concatenate(parts)
+        """Set the load feed-forward at the measured ``state`` (:mod:`.statics`)."""
+        self._ff = load_feedforward(self._load_task, state)
 
     def _servo(self, rates: FloatArray) -> None:
         """Set the servos' references and the arms' bias feed-forward."""
@@ -496,15 +410,6 @@ class MujocoPlant:
         """
         return self.readout.welds()
 
-    def _planned(self, state: DualArmState) -> tuple[FloatArray, FloatArray] | None:
-        """Return the plan's split of the load at ``state`` (None where it has none)."""
-        try:
-            split = hand_wrenches(self._load_task, state.q_l, state.sigma,
-                                  state.sigma_leader).wrenches
-        except (UnbalancedLoadError, SupportLostError):
-            return None
-        return split[0], split[1]
-
     def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> HandReading:
         """Log the sample just simulated; return its reading (:class:`HandReading`)."""
         d, log, ro, state = self.data, self.log, self.readout, self._measured
@@ -518,13 +423,7 @@ class MujocoPlant:
         log["internal"].append(reading.internal)
         log["support"].append(float(reading.follower[:3] @ push))
         log["share"].append(reading.share)
-        planned = self._planned(state)
-        share_plan, split = float("nan"), float("nan")
-        if planned is not None:
-            share_plan = load_share(planned[0], planned[1], push)
-            split = max(_relative(float(w[:3] @ push), float(p[:3] @ push))
-                        for w, p in zip((reading.leader, reading.follower), planned,
-                                        strict=True))
+        share_plan, split = against_plan(self._load_task, state, reading, push)
         log["share_plan"].append(share_plan)
         log["split_error"].append(split)
         log["slip"].append(abs(state.sigma - sigma_ref))
@@ -545,11 +444,6 @@ class MujocoPlant:
     def arrays(self) -> dict[str, FloatArray]:
         """Return the log as arrays (one row per controller sample)."""
         return {k: np.asarray(v, dtype=float) for k, v in self.log.items()}
-
-
-def _relative(measured: float, planned: float) -> float:
-    """Return ``|measured - planned| / |planned|`` (NaN when the plan carries nothing)."""
-    return abs(measured - planned) / abs(planned) if abs(planned) > 1e-9 else float("nan")
 
 
 __all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",

@@ -46,8 +46,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..control.compliance import ComplianceGains
 from ..experiments.config_physics import ComplianceSpec, PhysicsSpec
+from .compliance import ComplianceGains
 
 FloatArray = NDArray[np.float64]
 
@@ -133,7 +133,7 @@ class PhysicsSettings:
         None: the arm's own ``tau_max``, else its model's (a URDF's ``effort``), if any.
     compliance : ComplianceGains or None
         The closed loop's follower is compliant with these gains
-        (:mod:`dualarm_qp.control.compliance`); None: the standard grasp closure.
+        (:mod:`dualarm_qp.physics.compliance`); None: the standard grasp closure.
     base_error : ndarray, shape (6,), optional
         The simulated follower's base off the model's (a calibration error), in the
         base's own frame: ``[x, y, z]`` [m] and roll, pitch, yaw [rad]

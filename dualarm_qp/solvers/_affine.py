@@ -113,8 +113,8 @@ def factor(A: FloatArray) -> Factor:
     Factor
         Range, kept singular values, row space and null space of ``A``.
     """
-    U, sigma, V, N = kernel.factor(np.ascontiguousarray(A, dtype=np.float64))
-    return Factor(U, sigma, V, N)
+    f = kernel.factor(np.ascontiguousarray(A, dtype=np.float64))
+    return Factor(f.U, f.sigma, f.V, f.N)
 
 
 def least_distance(problem: StepProblem, N: FloatArray, x0: FloatArray) -> FloatArray:
@@ -246,13 +246,8 @@ class NullBasis:
 
 def null_basis(A: FloatArray) -> NullBasis:
     """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
-    return _as_basis(kernel.basis(np.ascontiguousarray(A, dtype=np.float64)))
-
-
-def _as_basis(basis: tuple[FloatArray, FloatArray, int, float, bool]) -> NullBasis:
-    """Return the kernel's ``(P, N, rank, sigma_max, qr)`` as a :class:`NullBasis`."""
-    P, N, rank, sigma_max, qr = basis
-    return NullBasis(P, N, int(rank), float(sigma_max), bool(qr))
+    f = kernel.basis(np.ascontiguousarray(A, dtype=np.float64))
+    return NullBasis(f.P, f.N, f.rank, f.sigma_max, f.qr)
 
 
 def problem_basis(problem: StepProblem) -> NullBasis:
@@ -318,5 +313,5 @@ def affine_solutions(A: FloatArray, b: FloatArray) -> AffineSet | None:
     out = kernel.affine(np.ascontiguousarray(A, dtype=np.float64), b)
     if out is None:
         return None
-    x0, U, sigma, V, N = out
-    return AffineSet(x0, N, Factor(U, sigma, V, N))
+    f = out.factor
+    return AffineSet(out.x0, f.N, Factor(f.U, f.sigma, f.V, f.N))

@@ -94,10 +94,10 @@ def solve_dense_qp(R: FloatArray, t_free: FloatArray, M: FloatArray, f: FloatArr
     -------
     DenseQPResult
     """
-    status, t, active, multipliers, blocking, iterations = kernel.dense_qp(
-        R, t_free, M, f, feas_tol, -1 if max_iter is None else max_iter)
-    return DenseQPResult(_STATUS[status], t, np.asarray(active, dtype=np.intp),
-                         np.asarray(multipliers, dtype=np.float64), blocking, iterations)
+    r = kernel.dense_qp(R, t_free, M, f, feas_tol, -1 if max_iter is None else max_iter)
+    return DenseQPResult(_STATUS[r.status], r.t, np.asarray(r.active, dtype=np.intp),
+                         np.asarray(r.multipliers, dtype=np.float64), r.blocking,
+                         r.iterations)
 
 
 #: The kernel's status codes.

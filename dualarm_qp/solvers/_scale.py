@@ -16,11 +16,25 @@ It is solved through its dual, ``min g^T y + s_hi y_hi - s_lo y_lo`` subject to
 ``d + 1`` equality rows, which always has the feasible basis ``y_hi = 1`` (with ``d``
 artificial columns held at zero). A revised primal simplex on it with Bland's rule
 (the smallest index enters; among ties of the ratio test the smallest index leaves)
-cannot cycle, so it is finite and exact up to the rounding of its
+cannot cycle in exact arithmetic, so it is finite and exact up to the rounding of its
 ``(d + 1) x (d + 1)`` basis solves. Its simplex multipliers are ``(t, s)`` itself; a
 dual ray (no blocking row) proves that no ``(t, s)`` exists. No scipy LP, no time
 limit. The simplex runs in the compiled kernel (``src/kernel/scale_lp.cpp``); this module
 reduces the step to the LP and maps the answer back.
+
+A row enters only when the multipliers violate it by more than they are known to: by
+more than :data:`PRICE_TOL` ``(1 + |g_j|)`` (units of ``x``: the rows are unit-norm in
+``x``), and by more than the rounding ``eps cond_1(B) |pi|_1 |E_j|_1`` that the
+basis ``B`` puts on the multipliers ``pi``. Degenerate steps need both: when ``x = 0``
+is infeasible the optimum is often a vertex where a pinned variable's two bounds, two
+opposite rows (a single feasible scale) or nearly parallel rows meet, and there a
+violation of 1e-12 is rounding (the opposite row then finds no pivot: a "ray" of
+rounding that called the step infeasible), and a basis of nearly opposite rows has a
+condition of 1e8 or more, whose multipliers carry 1e-9 of rounding (entering on it
+cycled to the iteration limit). The point returned meets every row to about that:
+within 1e-9 where the largest scale is well-posed; within 1e-7, with the scale within
+1e-7 of the largest, where rows less than 1e-7 from opposite meet at the optimum (there
+a violation of 1e-9 moves the largest scale by up to a tenth, for any solver).
 
 When ``A`` is rank-deficient (at :data:`~._affine.RANK_RTOL`) and ``direction`` has a
 part outside its range, only the one ``s`` that cancels that part can be feasible
@@ -47,8 +61,10 @@ FloatArray = NDArray[np.float64]
 #: verification tolerance.
 FEASIBLE_SCALE_TOL = 1e-9
 
-#: Reduced costs (primal slacks) above ``-PRICE_TOL (1 + |g_j|)`` count as met
-#: (1e-12, defined in ``src/kernel/constants.hpp``).
+#: A row violated by at most ``PRICE_TOL (1 + |g_j|)`` [units of x, unit-norm rows]
+#: counts as met: a reduced cost (primal slack) above minus that does not enter (1e-9,
+#: the size of :data:`~.certify.ACTIVE_TOL`; defined in
+#: ``src/kernel/constants.hpp``).
 PRICE_TOL: float = kernel.PRICE_TOL
 
 #: Pivot elements below this share of the column's largest entry are never pivoted on
@@ -163,10 +179,10 @@ def _lp(M: FloatArray, a: FloatArray, g: FloatArray, s_lo: float, s_hi: float
     hold ``s``); when infeasible, the rows of the dual ray. None when the iteration
     limit is reached (never seen; reported, not guessed).
     """
-    status, t, s, rows = kernel.scale_lp(M, a, g, s_lo, s_hi)
-    if status == _LP_LIMIT:
+    r = kernel.scale_lp(M, a, g, s_lo, s_hi)
+    if r.status == _LP_LIMIT:
         return None
-    return status == _LP_OPTIMAL, t, float(s), [int(j) for j in rows]
+    return r.status == _LP_OPTIMAL, r.t, r.s, r.rows
 
 
 #: The kernel's status codes of the LP.

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from ..step.problem import Inequalities, StepProblem
+from ..step.problem import Inequalities, Names, StepProblem
 from ._affine import cost_arrays, problem_basis
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance
 
@@ -75,9 +75,9 @@ def residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float]:
 
 def _residuals(problem: StepProblem, x: FloatArray) -> tuple[float, float, float]:
     """``max |A x - b|``, the largest box violation and :meth:`StepProblem.row_violation`."""
-    eq, box, rows = kernel.residuals(problem.A, problem.b, problem.lower, problem.upper,
-                                     problem.G, problem.h, x)
-    return float(eq), float(box), float(rows)
+    r = kernel.residuals(problem.A, problem.b, problem.lower, problem.upper, problem.G,
+                         problem.h, x)
+    return r.eq, r.box, r.row
 
 
 def equality_limit(problem: StepProblem, tol: Tolerance) -> float:
@@ -110,23 +110,23 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
     start = time.perf_counter()
     x = claim.x
     reading = None
-    ineq: Inequalities | None = None
+    rows = None
     if isinstance(x, np.ndarray) and x.shape == (problem.n,) and x.dtype.kind in "fiu":
         x = np.asarray(x, dtype=np.float64)
-        ineq = problem.inequalities()
+        rows = kernel.inequalities(problem.lower, problem.upper, problem.G, problem.h)
         w_diag, w_full, root_full = cost_arrays(problem)
         ask = claim.status is Status.OPTIMAL  # only an optimum needs A's basis (KKT test)
         reading = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *(problem_basis(problem).args() if ask else _NO_BASIS), ineq.C, ineq.e,
-            ineq.kind, w_diag, w_full, root_full,
+            *(problem_basis(problem).args() if ask else _NO_BASIS), rows.C, rows.e,
+            rows.kind, w_diag, w_full, root_full,
             problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
-    return verdict(problem, claim, x, reading, tol, claims_bounds, start, ineq)
+    return verdict(problem, claim, x, reading, tol, claims_bounds, start, rows)
 
 
 def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: Reading | None,
             tol: Tolerance, claims_bounds: bool, start: float,
-            inequalities: Inequalities | None = None) -> StepSolution:
+            rows: kernel.Rows | None = None) -> StepSolution:
     """Return what ``claim`` is worth from the kernel's reading of its ``x`` (the rules above).
 
     :func:`certify`'s decisions, for it and for the one kernel call that solves and
@@ -138,13 +138,15 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
     ----------
     x : ndarray
         ``claim.x`` as float64 (``reading`` not None).
-    reading : tuple or None
+    reading : kernel.Certificate or None
         The kernel's certificate of ``x``; None for a misshaped ``x``.
     start : float
         ``time.perf_counter()`` when the certification began.
+    rows : kernel.Rows or None
+        The rows ``reading`` was made with (:func:`named_rows`), to name the active ones.
     """
     fields = verdict_fields(problem, claim.status, claim.message, x, reading, tol,
-                            claims_bounds, inequalities)
+                            claims_bounds, rows)
     if fields is None:
         n = problem.n
         zeros = np.zeros(n, dtype=bool)
@@ -163,7 +165,7 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
 
 def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatArray,
                    reading: Reading | None, tol: Tolerance, claims_bounds: bool,
-                   inequalities: Inequalities | None = None) -> dict[str, Any] | None:
+                   rows: kernel.Rows | None = None) -> dict[str, Any] | None:
     """Return the certified fields of a claim (``status``, ``message``, its ``x``), or None.
 
     The decisions of :func:`verdict`, on the claim's parts: for a solver that makes its
@@ -179,35 +181,49 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
         ``verified_with``, ``row_violation`` and ``active_rows`` of the
         :class:`~.base.StepSolution`.
     """
-    if reading is None:
+    if reading is None or not reading.finite:
         return None
-    (finite, eq, box, rows, limit, kkt, objective, active_lo, active_up, active) = reading
-    if not finite:
-        return None
+    eq, box, row, limit = reading.eq, reading.box, reading.row, reading.eq_limit
     if status.usable:
         if status is not Status.RELAXED and status is not Status.ESCAPING and eq > limit:
             status = Status.VIOLATION
             message = message or f"equality residual {eq:.3g} exceeds tolerance {limit:.3g}"
-        elif max(box, rows) > tol.bounds:
+        elif max(box, row) > tol.bounds:
             status = Status.VIOLATION
-            message = message or _worst_breach(problem, x, box >= rows, claims_bounds)
-        elif status is Status.OPTIMAL and kkt != 1:  # not confirmed (or not computed)
+            message = message or _worst_breach(problem, x, box >= row, claims_bounds)
+        elif status is Status.OPTIMAL and reading.kkt != 1:  # not confirmed (or not computed)
             status = Status.FEASIBLE
             message = ((message + "; ") if message else "") + (
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
-    return dict(x=x, status=status, objective=objective, eq_residual=eq,
-                bound_violation=box, active_lower=active_lo.view(np.bool_),
-                active_upper=active_up.view(np.bool_), build_time=problem.build_time,
-                message=message, verified_with=tol, row_violation=rows,
-                active_rows=(inequalities or problem.inequalities()).labels(active)
+    active = reading.active_rows
+    return dict(x=x, status=status, objective=reading.objective, eq_residual=eq,
+                bound_violation=box, active_lower=reading.active_lower.view(np.bool_),
+                active_upper=reading.active_upper.view(np.bool_),
+                build_time=problem.build_time, message=message, verified_with=tol,
+                row_violation=row, active_rows=named_rows(problem, rows).labels(active)
                 if active else ())
 
 
-#: The kernel's certificate of one ``x`` (``kernel.certificate``'s tuple): finite, the
-#: equality, box and row residuals, the equality's limit, the KKT test (-1 not asked, 0
-#: fails, 1 holds), the objective, the active lower and upper bounds, the active rows.
-Reading = tuple[bool, float, float, float, float, int, float, NDArray[np.uint8],
-                NDArray[np.uint8], list[int]]
+def named_rows(problem: StepProblem, rows: kernel.Rows | None) -> Inequalities:
+    """Return ``problem``'s inequalities with their names, made from the kernel's ``rows``.
+
+    A solver hands on the kernel's rows (``kernel.inequalities``'s or
+    ``kernel.solve_certified``'s) and they are named here only when a message or the
+    active rows need their names; None: the problem's own
+    (:meth:`~dualarm_qp.step.StepProblem.inequalities`).
+    """
+    if rows is None:
+        return problem.inequalities()
+    return Inequalities(rows.C, rows.e, rows.kind, rows.index,
+                        Names(problem.names, problem.row_names, problem.lower_by,
+                              problem.upper_by))
+
+
+#: The kernel's certificate of one ``x`` (``kernel.certificate``'s answer): whether it is
+#: finite, the equality, box and row residuals, the equality's limit, the KKT test (-1
+#: not asked, 0 fails, 1 holds), the objective, the active lower and upper bounds, the
+#: active rows.
+Reading = kernel.Certificate
 
 #: What the kernel's certificate takes for A's basis when no KKT test is asked.
 _NO_BASIS = (np.zeros((0, 0)), np.zeros((0, 0)), 0, 0.0)

@@ -33,18 +33,13 @@ from __future__ import annotations
 import time
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
 from .._compiled import kernel
-from ..step.problem import Inequalities, Names, StepProblem
+from ..step.problem import StepProblem
 from ._affine import cost_arrays, problem_basis
 from ._util import empty_box_answer, empty_box_failure
 from .base import DEFAULT_TOLERANCE, Status, StepSolution, Tolerance, failed
-from .certify import certify, verdict, verdict_fields
+from .certify import certify, named_rows, verdict, verdict_fields
 from .registry import check_number, check_tolerance, register
-
-FloatArray = NDArray[np.float64]
 
 
 class NullspaceSolver:
@@ -80,12 +75,12 @@ class NullspaceSolver:
         empty = empty_box_failure(problem, self.name)
         if empty is not None:
             return empty
-        ineq = problem.inequalities()
+        rows = kernel.inequalities(problem.lower, problem.upper, problem.G, problem.h)
         w_diag, w_full, root_full = cost_arrays(problem)
-        code, x, rows, nullity, iterations = kernel.solve_nullspace(
-            problem.A, problem.b, *problem_basis(problem).args(), ineq.C, ineq.e, w_diag,
+        answer = kernel.solve_nullspace(
+            problem.A, problem.b, *problem_basis(problem).args(), rows.C, rows.e, w_diag,
             w_full, root_full, problem.center, self.feasibility_tol, self._max_iter())
-        return self._claim(problem, code, x, rows, nullity, iterations, start, ineq)
+        return self._claim(problem, answer, start, rows)
 
     def solve_certified(self, problem: StepProblem, tol: Tolerance,
                         claims_bounds: bool = True) -> StepSolution:
@@ -100,62 +95,66 @@ class NullspaceSolver:
         """
         start = time.perf_counter()
         w_diag, w_full, root_full = cost_arrays(problem)
-        code, x, rows, nullity, iterations, _, ineq, reading = kernel.solve_certified(
+        step = kernel.solve_certified(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
             w_diag, w_full, root_full, problem.center, self.feasibility_tol,
             self._max_iter(), claims_bounds, tol.equality, tol.bounds)
+        code = step.code
         if code == _EMPTY_BOX:  # not solved: the one answer to an empty box
             return certify(problem, empty_box_answer(problem, self.name,
                                                      time.perf_counter() - start),
                            tol, claims_bounds=claims_bounds)
-        inequalities = Inequalities(*ineq, Names(problem.names, problem.row_names,
-                                                 problem.lower_by, problem.upper_by))
+        rows, reading = step.rows, step.certificate  # the rows named only when read
         if code == _OPTIMAL:  # an optimum: certified in one piece, without a claim first
-            fields = verdict_fields(problem, Status.OPTIMAL, "", x, reading, tol,
-                                    claims_bounds, inequalities)
+            fields = verdict_fields(problem, Status.OPTIMAL, "", step.x, reading, tol,
+                                    claims_bounds, rows)
             if fields is not None:
-                extras: dict[str, Any] = {"nullity": nullity}
-                if iterations >= 0:
-                    extras["iterations"] = iterations
                 return StepSolution(**fields, scale=1.0,
                                     solve_time=time.perf_counter() - start,
-                                    solver=self.name, extras=extras)
-        claim = self._claim(problem, code, x, rows, nullity, iterations, start, inequalities)
+                                    solver=self.name, extras=_extras(step))
+        claim = self._claim(problem, step, start, rows)
         if reading is None:  # not an optimum: the claim is certified as it is
             return certify(problem, claim, tol, claims_bounds=claims_bounds)
-        return verdict(problem, claim, x, reading, tol, claims_bounds, time.perf_counter())
+        return verdict(problem, claim, claim.x, reading, tol, claims_bounds,
+                       time.perf_counter(), rows)
 
     def _max_iter(self) -> int:
         return -1 if self.max_iter is None else self.max_iter
 
-    def _claim(self, problem: StepProblem, code: int, x: FloatArray, rows: list[int],
-               nullity: int, iterations: int, start: float,
-               inequalities: Inequalities | None = None) -> StepSolution:
+    def _claim(self, problem: StepProblem, answer: kernel.StepAnswer | kernel.CertifiedStep,
+               start: float, rows: kernel.Rows | None = None) -> StepSolution:
         """Return the solver's claim from the kernel's answer (OPTIMAL, or a failure)."""
+        code = answer.code
         if code == _INCONSISTENT:
             return failed(problem, Status.INFEASIBLE, self.name,
                           "A x = b has no solution (A is rank-deficient)",
                           time.perf_counter() - start, conflicts=())
-        extras: dict[str, Any] = {"nullity": nullity}
-        if iterations >= 0:
-            extras["iterations"] = iterations
+        extras = _extras(answer)
         if code == _INFEASIBLE:
-            return self._infeasible(problem, rows, start, extras, inequalities)
+            return self._infeasible(problem, answer.conflicts, start, extras, rows)
         if code == _MAX_ITER:
             return failed(problem, Status.ERROR, self.name,
-                          f"active set did not converge in {iterations - 1} "
+                          f"active set did not converge in {answer.iterations - 1} "
                           "additions and drops", time.perf_counter() - start, **extras)
-        return StepSolution(x=x, status=Status.OPTIMAL, solver=self.name,
+        return StepSolution(x=answer.x, status=Status.OPTIMAL, solver=self.name,
                             solve_time=time.perf_counter() - start, extras=extras)
 
-    def _infeasible(self, problem: StepProblem, rows: list[int], start: float,
-                    extras: dict[str, Any], inequalities: Inequalities | None = None
+    def _infeasible(self, problem: StepProblem, conflicting: list[int], start: float,
+                    extras: dict[str, Any], rows: kernel.Rows | None = None
                     ) -> StepSolution:
-        conflicts = (inequalities or problem.inequalities()).labels(rows)
+        conflicts = named_rows(problem, rows).labels(conflicting)
         return failed(problem, Status.INFEASIBLE, self.name,
                       "no x meets A x = b within the limits; conflicting: "
                       + ", ".join(conflicts), time.perf_counter() - start,
                       conflicts=conflicts, **extras)
+
+
+def _extras(answer: kernel.StepAnswer | kernel.CertifiedStep) -> dict[str, Any]:
+    """Return the answer's null-space dimension, and its active-set iterations if counted."""
+    extras: dict[str, Any] = {"nullity": answer.nullity}
+    if answer.iterations >= 0:
+        extras["iterations"] = answer.iterations
+    return extras
 
 
 #: The kernel's answer codes (src/kernel/nullspace.hpp); 0 is OPTIMAL. An empty box is

@@ -45,9 +45,10 @@ def grasp_rate_range(
     InvalidInputError
         An argument is not a 3-vector of numbers, or ``dt`` is not a positive number.
     """
-    return kernel.grasp_rate_range(_vector(surface_r, "r"), _vector(s_star, "s_star"),
-                                   _vector(r_min, "r_min"), _vector(r_max, "r_max"),
-                                   _step(dt))
+    rates = kernel.grasp_rate_range(_vector(surface_r, "r"), _vector(s_star, "s_star"),
+                                    _vector(r_min, "r_min"), _vector(r_max, "r_max"),
+                                    _step(dt))
+    return rates.lower, rates.upper
 
 
 def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, float]:
@@ -66,8 +67,9 @@ def grasp_rates(surface: GraspSurface, sigma: float, dt: float) -> tuple[float, 
     """
     point = _vector(surface.point(sigma), "the surface's point")
     tangent = _vector(surface.tangent(sigma), "the surface's tangent")
-    return kernel.grasp_rates(point, tangent, float(sigma), surface.r_min, surface.r_max,
-                              surface.sigma_min, surface.sigma_max, _step(dt))
+    rates = kernel.grasp_rates(point, tangent, float(sigma), surface.r_min, surface.r_max,
+                               surface.sigma_min, surface.sigma_max, _step(dt))
+    return rates.lower, rates.upper
 
 
 def _vector(v: Sequence[float] | FloatArray, name: str) -> FloatArray:

@@ -20,10 +20,10 @@ Each step the builder hands the state to the compiled kernel's loop (``kernel.St
 
 A part is a kernel object (the library's own are compiled) or any object of the
 protocols of :mod:`.parts`, which the loop asks through the same door
-(:mod:`.python_parts`). A Case 2 support first places its line from the object's pose,
-then the step's kinematics follow. The parts, the surfaces' lines, boxes and ranges are
-read when the builder is made, as the options are: a part, a surface or a setting
-changed afterwards needs a new builder (the tasks' gains may change:
+(:mod:`.python_parts`). A Case 2 support first places its line from the object's pose
+(:mod:`.support`), then the step's kinematics follow. The parts, the surfaces' lines,
+boxes and ranges are read when the builder is made, as the options are: a part, a surface
+or a setting changed afterwards needs a new builder (the tasks' gains may change:
 :attr:`StepBuilder.leader_gain`).
 
 The decision vector's slices are the :class:`~dualarm_qp.step.layout.Layout`'s. ``s``
@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -44,17 +44,14 @@ from numpy.typing import NDArray
 from .._compiled import kernel
 from .._remade import KernelHolder
 from .._validate import as_number
-from ..errors import InvalidInputError, NonFiniteError, ShapeError, SupportLostError
-from ..task.carry import CarryKinematics, CarryModel
-from ..task.contact import SupportContact
+from ..errors import InvalidInputError, NonFiniteError, ShapeError
+from ..task.carry import CarryModel
 from ..task.scene import DualArmTask
-from ..task.support import SupportLine
 from ..task.surfaces import GraspSurface
 from .bounds import grasp_rates
 from .built import StepBuild, smallest_singular_value
 from .context import ArmKinematics, StepContext
 from .cost import CentringCost
-from .kinematics import both_arms
 from .layout import Layout
 from .limits import LimitSetup, standard_limits
 from .options import StepOptions
@@ -63,9 +60,11 @@ from .problem import StepProblem
 from .python_parts import cost_part, limit_part, task_part
 from .stacking import PIN_RTOL, checked_rates
 from .state import DualArmState
+from .support import SupportPlacement
 from .tasks import GraspClosureTask, ObjectPathTask
 
 FloatArray = NDArray[np.float64]
+Surfaces = tuple[GraspSurface, ...]
 
 #: What a failed standard task names (its rows are not finite).
 _EQUALITY = "the step's equality (D(t), its twist or the arms' poses)"
@@ -98,7 +97,7 @@ class StepBuilder(KernelHolder):
         Tasks of the user's, asked after the standard ones: equality rows, or with a
         ``weight`` a term of the cost (``examples/custom_task.py``). A grasp closure of
         the user's (a subclass of the kernel's ``GraspClosureTask``, e.g. the compliant
-        follower of :mod:`dualarm_qp.control.compliance`) takes the standard closure's
+        follower of :mod:`dualarm_qp.physics.compliance`) takes the standard closure's
         place.
     costs : sequence of CostTerm
         Cost terms of the user's, summed with the paper's centring.
@@ -167,7 +166,8 @@ class StepBuilder(KernelHolder):
         self._v_max = v
         self._surfaces: list[GraspSurface] = [task.surface] + (
             [] if task.leader_surface is None else [task.leader_surface])
-        self._contact = task.contact
+        self._support = (None if task.contact is None else
+                         SupportPlacement(task.contact, self.carry, task.surface))
         self._zeros = np.zeros(lay.n)
         self._remake()
         self._labels = tuple(limit.name for limit in self.limits)
@@ -194,10 +194,10 @@ class StepBuilder(KernelHolder):
         for limit in parts[2]:
             step.add_limit(limit)
         step.set_labels([limit.name for limit in self.limits])
-        # Straight grasps (and no Case 2 support, whose line moves): the kernel computes
-        # their rates to the range ends from the grasp coordinates.
+        # Straight grasps: the kernel computes their rates to the range ends from the grasp
+        # coordinates (a Case 2 support's line is given again each step, build).
         lines = [line for line in (surf.line for surf in self._surfaces) if line is not None]
-        if self._contact is None and len(lines) == len(self._surfaces):
+        if len(lines) == len(self._surfaces):
             for surf, line in zip(self._surfaces, lines, strict=True):
                 step.add_grasp_line(*line, surf.r_min, surf.r_max, surf.sigma_min,
                                     surf.sigma_max)
@@ -301,19 +301,18 @@ class StepBuilder(KernelHolder):
             x_prev = checked_rates(x_prev, "x_prev", self.layout.n, finite=False)
         carry, follower, trajectory = self.carry, self.task.follower, self.task.trajectory
         T_D = trajectory.pose(state.t)
-        support_force = math.nan
-        if self._contact is not None:
-            # The support line follows the object's orientation at this state: placed
-            # first, from the kinematics at the current placement.
-            kin = both_arms(carry, follower, q_l, q_f, state.sigma, state.sigma_leader,
-                            T_D).carry
-            support_force = self._support(self._contact, kin, state)
         step = self._step
+        support_force = math.nan
+        surfaces: Surfaces | Callable[[], Surfaces] = tuple(self._surfaces)
+        if self._support is not None:
+            # The support line follows the object's orientation at this state: placed
+            # first, then the step's kinematics follow.
+            support_force, surfaces = self._supported(self._support, state)
         grasp_lo, grasp_hi = (self._zeros[:0], self._zeros[:0]) if step.grasp_lines else \
             self._grasp_rates(sigmas)
         out = kernel.StepOut()
-        ctx = StepContext(out, state, self.task, self.layout, tuple(self._surfaces),
-                          self._leader_arm, self._follower_arm)
+        ctx = StepContext(out, state, self.task, self.layout, surfaces, self._leader_arm,
+                          self._follower_arm)
         q_carry = carry.configuration(q_l, state.sigma, state.sigma_leader)
         twist = trajectory.twist(state.t)
         called = time.perf_counter()
@@ -385,39 +384,42 @@ class StepBuilder(KernelHolder):
             lo[i], hi[i] = grasp_rates(surf, s, dt)
         return lo, hi
 
-    def _support(self, contact: SupportContact, kin: CarryKinematics, state: DualArmState
-                 ) -> float:
+    def _supported(self, support: SupportPlacement, state: DualArmState
+                   ) -> tuple[float, Callable[[], Surfaces]]:
         """Case 2: put the follower's path on the support line of this step; its push.
 
         The line is computed for the object's orientation at ``state`` and frozen for
-        the step (as the paper freezes the grasp frame, Sec. 3.3). When it moved, the
+        the step (as the paper freezes the grasp frame, Sec. 3.3;
+        :class:`~dualarm_qp.step.support.SupportPlacement`). When it moved, the
         follower's grasp joint is re-placed (the step's kinematics come after); the
         target then jumps by the line's motion at ``sigma``, which the closure feedback
         removes. The grasp bounds of the step are the line's (``h > 0``).
 
         Returns
         -------
-        float
-            The follower's push ``h`` [N] at ``sigma``.
+        h : float
+            The follower's push [N] at ``sigma``.
+        surfaces : callable
+            The step's grasp paths (the support line of this orientation first), made
+            when the step's context reads them.
 
         Raises
         ------
-        InvalidInputError
+        SupportLostError
             No pushing support for this orientation, the line reversed (gravity's
             component along the push changed sign), or ``h <= 0`` at ``sigma``.
         """
-        line = contact.line(kin.T_object[:3, :3])
-        current = self._surfaces[0]
-        if (isinstance(current, SupportLine)
-                and float(line.tangent(0.0) @ current.tangent(0.0)) < 0.0):
-            raise SupportLostError(
-                "support lost: the support line reversed (gravity's component along the "
-                "surface normal changed sign), so the follower would have to pull")
-        if not np.allclose(line.pose(0.0), current.pose(0.0), rtol=0.0, atol=1e-12):
-            self.carry.place_follower(line)
-        self._surfaces[0] = line
-        return contact.force(line, state.sigma)
-
+        carry, contact = self.carry, support.contact
+        line, h, R = support.place(
+            carry.configuration(state.q_l, state.sigma, state.sigma_leader), state.sigma)
+        rest = tuple(self._surfaces[1:])
+        if self._step.grasp_lines:
+            plane = contact.plane
+            self._step.set_grasp_line(0, line.origin, line.direction, plane.r_min,
+                                      plane.r_max, line.sigma_min, line.sigma_max)
+        else:  # a path of the leader's that is not straight: the rates from the surfaces
+            self._surfaces[0] = contact.line(R)
+        return h, lambda: (contact.line(R), *rest)
 
 
 __all__ = ["StepBuild", "StepBuilder", "smallest_singular_value"]

@@ -7,7 +7,7 @@ cost term and limit; none of them computes kinematics of its own.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -116,9 +116,6 @@ class StepContext:
         Arms, object and path.
     layout : Layout
         The slices of the decision vector.
-    surfaces : tuple of GraspSurface
-        The grasps' paths at this step, the follower's first (a Case 2 support line
-        follows gravity from step to step).
     leader_arm, follower_arm : ArmKinematics
         The arms' models and kinematics at this step (their links, for limits that need
         them).
@@ -126,20 +123,32 @@ class StepContext:
         The kernel's context of the step (what the compiled parts read).
     """
 
-    __slots__ = ("_out", "follower_arm", "kernel_context", "layout", "leader_arm", "state",
-                 "surfaces", "task")
+    __slots__ = ("_out", "_surfaces", "follower_arm", "kernel_context", "layout", "leader_arm",
+                 "state", "task")
 
     def __init__(self, out: Any, state: DualArmState, task: DualArmTask, layout: Layout,
-                 surfaces: tuple[GraspSurface, ...], leader_arm: ArmKinematics,
-                 follower_arm: ArmKinematics) -> None:
+                 surfaces: tuple[GraspSurface, ...] | Callable[[], tuple[GraspSurface, ...]],
+                 leader_arm: ArmKinematics, follower_arm: ArmKinematics) -> None:
         self._out = out
         self.kernel_context = out.context
         self.state = state
         self.task = task
         self.layout = layout
-        self.surfaces = surfaces
+        self._surfaces = surfaces
         self.leader_arm = leader_arm
         self.follower_arm = follower_arm
+
+    @property
+    def surfaces(self) -> tuple[GraspSurface, ...]:
+        """The grasps' paths at this step, the follower's first.
+
+        A Case 2 support line follows gravity from step to step: the step's line is made
+        when first read (``surfaces`` given as a function).
+        """
+        surfaces = self._surfaces
+        if callable(surfaces):
+            surfaces = self._surfaces = surfaces()
+        return surfaces
 
     @property
     def dt(self) -> float:
@@ -232,8 +241,8 @@ def smallest_singular_values(J_leader: FloatArray, J_follower: FloatArray
     One kernel call for both (a one-sided Jacobi on each Jacobian's rows); 0 for a
     Jacobian with fewer columns than rows, NaN for one that holds NaN or infinity.
     """
-    sv: tuple[float, float] = kernel.smallest_singular_values(J_leader, J_follower)
-    return sv
+    sv = kernel.smallest_singular_values(J_leader, J_follower)
+    return sv.leader, sv.follower
 
 
 __all__ = ["ArmKinematics", "StepContext", "smallest_singular_values"]

@@ -349,8 +349,8 @@ class StepProblem:
         Built by the compiled kernel (``src/kernel/rows.cpp``), which the exact solver
         uses.
         """
-        C, e, kind, index = kernel.inequalities(self.lower, self.upper, self.G, self.h)
-        return Inequalities(C, e, kind, index,
+        r = kernel.inequalities(self.lower, self.upper, self.G, self.h)
+        return Inequalities(r.C, r.e, r.kind, r.index,
                             Names(self.names, self.row_names, self.lower_by, self.upper_by))
 
     def row_violation(self, x: FloatArray) -> float:

@@ -36,11 +36,11 @@ def pin_rounding(lower: FloatArray, upper: FloatArray) -> FloatArray:
     See :data:`PIN_RTOL`; a box empty by more stays empty (an infeasible step). The
     kernel's box intersection, on one box.
     """
-    out = kernel.intersect_boxes(lower[None], [0], upper[None], [0], lower.shape[0],
+    box = kernel.intersect_boxes(lower[None], [0], upper[None], [0], lower.shape[0],
                                  PIN_RTOL)
-    if out[4] >= 0:
+    if box.nan_limit >= 0:
         raise NonFiniteError("the bounds")
-    return np.asarray(out[1])
+    return box.upper
 
 
 def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> FloatArray:
@@ -78,8 +78,9 @@ def checked_rates(x: object, name: str, n: int, *, finite: bool = True) -> Float
 
 
 #: ``kernel.intersect_boxes``'s answer: lower, upper, lower_by, upper_by (the index of
-#: the limit that set each bound, -1: none) and the first limit whose bounds hold NaN.
-CompiledBox = tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64], int]
+#: the limit that set each bound, -1: none) and nan_limit, the first limit whose bounds
+#: hold NaN.
+CompiledBox = kernel.Box
 
 
 class LimitStack:
@@ -115,8 +116,8 @@ class LimitStack:
         ----------
         compiled_lowers, compiled_uppers : ndarray, shape (len(compiled_ids), n)
             The kernel's boxes of the compiled limits.
-        compiled_box : tuple
-            Those boxes intersected by the kernel (``kernel.intersect_boxes``'s tuple):
+        compiled_box : kernel.Box
+            Those boxes intersected by the kernel (``kernel.intersect_boxes``'s answer):
             the step's box when no other limit gives bounds.
         lowers, uppers : list of array_like
             The other limits' bounds (checked here), of the limits ``lower_ids`` and
@@ -135,17 +136,15 @@ class LimitStack:
         NonFiniteError
             A limit's bounds hold NaN (named).
         """
+        box = compiled_box
         if lowers or uppers:
             L, L_ids = self._with_compiled(compiled_lowers, lowers, lower_ids, "lower")
             U, U_ids = self._with_compiled(compiled_uppers, uppers, upper_ids, "upper")
-            lower, upper, lo_by, up_by, nan_limit = kernel.intersect_boxes(
-                L, L_ids, U, U_ids, self.n, PIN_RTOL)
-        else:
-            lower, upper, lo_by, up_by, nan_limit = compiled_box
-        if nan_limit >= 0:
-            raise NonFiniteError(f"the bounds of the limit '{self.labels[nan_limit]}'")
-        lower_by, upper_by = self._sources_of(lo_by, up_by)
-        return lower, upper, lower_by, upper_by
+            box = kernel.intersect_boxes(L, L_ids, U, U_ids, self.n, PIN_RTOL)
+        if box.nan_limit >= 0:
+            raise NonFiniteError(f"the bounds of the limit '{self.labels[box.nan_limit]}'")
+        lower_by, upper_by = self._sources_of(box.lower_by, box.upper_by)
+        return box.lower, box.upper, lower_by, upper_by
 
     def checked_rows(self, k: int, G: object, h: object, names: tuple[str, ...]
                      ) -> tuple[FloatArray, FloatArray]:

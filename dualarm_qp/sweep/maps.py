@@ -6,8 +6,12 @@ canvas (no pyplot, no global state).
 A swept key whose values are all numbers is a numeric axis; any other key is an axis of
 categories in the order they first come in the table (a grid key's: the sweep file's).
 Points that share the two mapped values (other keys swept too) are summed up per cell:
-the mean completion, the worst ratio, the smallest margin. Markers (a start that cannot
-be reached) are explained in one legend below the axes, off the cells.
+the mean completion, the worst ratio, the smallest margin. Every sampled place is marked
+by the outcome of its points (completed, failed, start unreachable, interrupted; the
+worst where several points share it), the axes span the sampled values (and a small
+margin), and a grid of few values along a key is drawn as squares at the places rather
+than as cells, which would fill the axes as one block. The markers are explained in one
+legend below the axes, off the cells.
 """
 
 from __future__ import annotations
@@ -32,6 +36,25 @@ UNREACHABLE_LABEL = "start unreachable"
 
 #: Legend of the points that ran but never got inside every range (circled).
 NEVER_INSIDE_LABEL = "never inside every range"
+
+#: The marker of each outcome of a point: (matplotlib marker, fill, size [pt]), the
+#: worst first. A place where several points lie (other keys swept too) shows the worst.
+OUTCOMES = {
+    UNREACHABLE_LABEL: ("X", "black", 8.0),
+    "failed": ("v", "black", 7.0),
+    "interrupted": ("P", "0.6", 7.0),
+    "completed": ("o", "white", 5.5),
+}
+
+#: A full grid is drawn as cells from this many values along each of its two keys; a
+#: smaller one as squares at the sampled places.
+MIN_CELL_LEVELS = 4
+
+#: The maps' axes go this share of the sampled span beyond the outer samples (numbers).
+MARGIN = 0.08
+
+#: ... and at least this far, in steps between categories, for an axis of categories.
+CATEGORY_MARGIN = 0.4
 
 #: The swept key of the solver's name.
 SOLVER_KEY = "solver.name"
@@ -96,18 +119,59 @@ def _cells(rows: Rows, kx: str, ky: str, metric: Callable[[dict[str, Any]], floa
     return {k: agg(v) for k, v in groups.items()}
 
 
+def _outcome(row: dict[str, Any]) -> str:
+    """Return the outcome of one point: a key of :data:`OUTCOMES`."""
+    if row.get("criterion") == START_UNREACHABLE:
+        return UNREACHABLE_LABEL
+    if row["status"] in ("completed", "interrupted"):
+        return str(row["status"])
+    return "failed"
+
+
+def _mark_points(ax: Any, rows: Rows, xa: _Axis, ya: _Axis) -> None:
+    """Mark every sampled place with the marker of its worst outcome (:data:`OUTCOMES`)."""
+    worst: dict[tuple[Any, Any], str] = {}
+    order = list(OUTCOMES)
+    for r in rows:
+        place, outcome = (r[xa.key], r[ya.key]), _outcome(r)
+        if place not in worst or order.index(outcome) < order.index(worst[place]):
+            worst[place] = outcome
+    for outcome, (marker, face, size) in OUTCOMES.items():
+        places = sorted((p for p, o in worst.items() if o == outcome), key=str)
+        if places:
+            ax.plot([xa.pos(x) for x, _ in places], [ya.pos(y) for _, y in places], marker,
+                    ls="none", mfc=face, mec="black", color="black", ms=size, mew=1.0,
+                    label=outcome, gid=f"points:{outcome}", zorder=4)
+
+
+def _span(ax: Any, xa: _Axis, ya: _Axis) -> None:
+    """Limit the axes to the sampled values, with a margin of :data:`MARGIN` of their span."""
+    for axis, which in ((xa, "x"), (ya, "y")):
+        p = [axis.pos(v) for v in axis.levels]
+        lo, hi = min(p), max(p)
+        pad = (MARGIN * (hi - lo) if hi > lo
+               else 0.5 if not axis.numeric or lo == 0 else MARGIN * abs(lo))
+        if not axis.numeric:
+            pad = max(pad, CATEGORY_MARGIN)
+        getattr(ax, f"set_{which}lim")(lo - pad, hi + pad)
+
+
 def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
               values: dict[tuple[Any, Any], float], label: str, labels: Labels, *,
               never_inside: bool = False, **style: Any) -> None:
-    """Draw ``values`` over (kx, ky): cells when they fill a grid, else dots.
+    """Draw ``values`` over (kx, ky), and mark every sampled place by its outcome.
 
-    Points whose start cannot be reached are crossed out; with ``never_inside``, points
-    that ran but never got inside every range are circled.
+    A full grid of at least :data:`MIN_CELL_LEVELS` values along each key is drawn as
+    cells, one per place; a smaller grid, or places that fill no grid, as coloured
+    squares at the places, so that a few samples never paint one solid block. The axes
+    span the sampled values (:func:`_span`), and each place has the marker of its worst
+    outcome (:func:`_mark_points`). With ``never_inside``, the places of points that ran
+    but never got inside every range are circled.
     """
     xa = _Axis(kx, [r[kx] for r in rows], labels.get(kx))
     ya = _Axis(ky, [r[ky] for r in rows], labels.get(ky))
     full = len({(r[kx], r[ky]) for r in rows}) == len(xa.levels) * len(ya.levels)
-    if full and len(xa.levels) * len(ya.levels) > 1:
+    if full and min(len(xa.levels), len(ya.levels)) >= MIN_CELL_LEVELS:
         grid = np.full((len(ya.levels), len(xa.levels)), np.nan)
         for (x, y), v in values.items():
             grid[ya.levels.index(y), xa.levels.index(x)] = v
@@ -115,16 +179,12 @@ def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
     else:
         pts = list(values.items())
         art = ax.scatter([xa.pos(x) for (x, _), _ in pts], [ya.pos(y) for (_, y), _ in pts],
-                         c=[v for _, v in pts], s=36, **style)
+                         c=[v for _, v in pts], s=400 if len(pts) <= 36 else 60, marker="s",
+                         **style)
     fig.colorbar(art, ax=ax, label=label)
     xa.label(ax, "x")
     ya.label(ax, "y")
-    dead = {(r[kx], r[ky]) for r in rows if r.get("criterion") == START_UNREACHABLE}
-    alive = {(r[kx], r[ky]) for r in rows if r.get("criterion") != START_UNREACHABLE}
-    crossed = sorted(dead - alive, key=str)
-    if crossed:
-        ax.plot([xa.pos(x) for x, _ in crossed], [ya.pos(y) for _, y in crossed], "x",
-                color="black", ms=5, label=UNREACHABLE_LABEL)
+    _mark_points(ax, rows, xa, ya)
     if never_inside:
         ran = [r for r in rows if r["status"] != "interrupted"
                and r.get("criterion") != START_UNREACHABLE]
@@ -132,7 +192,9 @@ def _draw_map(fig: Figure, ax: Any, rows: Rows, kx: str, ky: str,
         never = sorted({(r[kx], r[ky]) for r in ran} - inside, key=str)
         if never:
             ax.plot([xa.pos(x) for x, _ in never], [ya.pos(y) for _, y in never], "o",
-                    mfc="none", color="black", ms=5, label=NEVER_INSIDE_LABEL)
+                    mfc="none", color="black", ms=13, mew=1.2, label=NEVER_INSIDE_LABEL,
+                    zorder=4)
+    _span(ax, xa, ya)
 
 
 def _legend_below(fig: Figure) -> None:

@@ -5,16 +5,14 @@ trajectories need no arm model; :mod:`.scene` ties them to the two arms.
 """
 
 from .support import (
-    ImplicitSurface,
     SupportLine,
     SupportSolution,
     equilibrium_residual,
     gravity_tilde,
-    solve_support,
     support_line,
     support_point,
-    support_sliding_vector,
 )
+from .support_general import ImplicitSurface, solve_support, support_sliding_vector
 from .surfaces import CenterLine, CurvedBar, CylinderSurface, GraspSurface, PlaneBar, case1_pose
 from .trajectory import (
     PAPER_P0,

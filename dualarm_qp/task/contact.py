@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compiled import kernel
 from .._validate import as_array, as_pose
 from ..errors import InvalidInputError, SupportLostError
 from .support import SupportLine, support_line
@@ -127,6 +128,18 @@ class SupportContact:
             raise SupportLostError(
                 "support lost for gravity in object coordinates "
                 f"[{g_o[0]:.4g}, {g_o[1]:.4g}, {g_o[2]:.4g}] m/s^2: {err}") from None
+
+    def compiled(self) -> Any:
+        """Return the kernel's form of this support (``kernel.SupportPlane``).
+
+        Its ``line(R_world_object)`` is :meth:`line`'s line, computed by the kernel
+        (``src/kernel/support_line.cpp``): what the step builder asks each step. Where it
+        finds none (``held`` False), :meth:`line` says why.
+        """
+        plane = self.plane
+        return kernel.SupportPlane(self.mass, self.mass_centre, self.gravity, self.r1,
+                                   self._a, self._offset, plane.r_min, plane.r_max,
+                                   GRAVITY_ALONG_PUSH_MIN)
 
     def force(self, line: SupportLine, sigma: float) -> float:
         """Push ``h`` [N] on ``line`` at the grasp coordinate ``sigma`` [m], checked.

@@ -47,16 +47,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._validate import as_array
 from ..errors import InvalidInputError
-
-if TYPE_CHECKING:
-    from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
 
@@ -66,8 +63,6 @@ __all__ = [
     "LoadSplit",
     "ObjectLoad",
     "UnbalancedLoadError",
-    "hand_statics",
-    "hand_wrenches",
     "rigid_grasp",
     "sliding_grasp",
     "split_load",
@@ -162,7 +157,7 @@ def rigid_grasp(point: Any) -> GraspStatics:
 def rigid_statics(point: FloatArray) -> GraspStatics:
     """:func:`rigid_grasp` of a float64 (3,) ``point`` computed from checked values.
 
-    What the per-step statics call (:func:`hand_statics`): the point comes from the
+    What the per-step statics call (:func:`.hands.hand_statics`): the point comes from the
     leader's checked kinematics, so it is not checked again.
     """
     return GraspStatics(point.copy(), np.zeros((6, 0)))
@@ -193,7 +188,7 @@ def sliding_grasp(point: Any, sliding: Any, turn: Any = (0.0, 0.0, 0.0)) -> Gras
 def sliding_statics(point: FloatArray, sliding: FloatArray, turn: FloatArray) -> GraspStatics:
     """:func:`sliding_grasp` of float64 (3,) arrays computed from checked values.
 
-    What the per-step statics call (:func:`hand_statics`, the torque rows): the hands'
+    What the per-step statics call (:func:`.hands.hand_statics`, the torque rows): the hands'
     points and directions come from the arms' kinematics and the surfaces at a checked
     state, so they are not checked again (a step's rows are checked where the builder
     stacks them).
@@ -348,63 +343,3 @@ def split_load(hands: Sequence[GraspStatics], load: ObjectLoad, T_world_object: 
         if hand.wrench is not None:
             out[i] = hand.wrench
     return LoadSplit(out, L, G.shape[1] - rank, residual)
-
-
-def hand_statics(task: DualArmTask, q_l: Any, sigma: float, sigma_l: float = 0.0
-                 ) -> tuple[list[GraspStatics], FloatArray]:
-    """Return what each hand can transmit at a state, and the object's pose (world frame).
-
-    The object is placed by the leader, ``T_world_object = leader.fk(q_l) H1(sigma_l)``;
-    the grasp points are the leader's tool point and the follower's contact point on
-    the object, ``T_world_object H2(sigma)``. A support's push is the support line's
-    at this orientation (docs/support.md).
-
-    Returns
-    -------
-    hands : list of GraspStatics
-        The leader's, then the follower's.
-    T_world_object : ndarray, shape (4, 4)
-
-    Raises
-    ------
-    SupportLostError
-        A support that would have to pull here.
-    """
-    T_tool = task.leader.fk(np.asarray(q_l, dtype=float))
-    T_obj = T_tool @ task.H1_at(sigma_l)
-    R, p = T_obj[:3, :3], T_obj[:3, 3]
-    ls = task.leader_surface
-    # The points and directions come from the leader's checked kinematics and the
-    # surfaces (which check sigma): the grasps are made without a second check.
-    leader = (rigid_statics(T_tool[:3, 3]) if ls is None else
-              sliding_statics(T_tool[:3, 3], R @ ls.tangent(sigma_l),
-                              R @ ls.angular_rate(sigma_l)))
-    contact = task.contact
-    if contact is not None:
-        line = contact.line(R)
-        h = contact.force(line, sigma)
-        follower = support_push(R @ line.point(sigma) + p, R @ line.normal(sigma), h)
-    else:
-        s = task.surface
-        follower = sliding_statics(R @ s.point(sigma) + p, R @ s.tangent(sigma),
-                                   R @ s.angular_rate(sigma))
-    return [leader, follower], T_obj
-
-
-def hand_wrenches(task: DualArmTask, q_l: Any, sigma: float, sigma_l: float = 0.0
-                  ) -> LoadSplit:
-    """Return the wrench each hand applies to the object at a state (minimum-norm split).
-
-    Raises
-    ------
-    InvalidInputError
-        The task has no load.
-    UnbalancedLoadError
-        The grasps cannot hold the load here.
-    SupportLostError
-        A support that would have to pull here.
-    """
-    if task.load is None:
-        raise InvalidInputError("the task has no load (object mass)")
-    hands, T_obj = hand_statics(task, q_l, sigma, sigma_l)
-    return split_load(hands, task.load, T_obj)

@@ -2,14 +2,18 @@
 
 Each arm holds itself and its hand's share of the load still (the plan's accelerations
 are not counted). With ``w = [f; m]`` the wrench the hand applies to the object (world
-frame, moment about the hand's grasp point, :mod:`dualarm_qp.task.loads`), the object
-pushes back on the hand with ``-w``, and the joint torques that hold the arm are
+frame, moment about the hand's grasp point ``c``, :mod:`dualarm_qp.task.loads`), the
+object pushes back on the hand with ``-w``, and the joint torques that hold the arm are
 
-    tau(q, w) = g(q) + J(q)^T w,
+    tau(q, w) = g(q) + J(q)^T [f; m + (c - p) x f],
 
 ``g`` the generalised gravity of the arm's links (their inertias are the arm's Pinocchio
 model's: a URDF's ``inertial`` tags, the PUMA 560's published parameters) and ``J`` the
-Jacobian of the tool point, world axes ``[v; omega]``.
+Jacobian of the tool point ``p``, world axes ``[v; omega]``: the moment is moved from the
+grasp point, where the force acts, to the point whose Jacobian is used. The leader's
+grasp point is its tool point; the follower's is its contact point on the object, which
+is its tool point only up to the closure error (0.4 mm of it moves a heavy bar's torque
+by 0.045 N m).
 
 The wrench depends on where the object is and where the grasps are: the leader's joints
 ``q_l`` place the object, the grasp coordinates ``sigma`` (and ``sigma_l``) place the
@@ -41,14 +45,8 @@ from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
-from .loads import (
-    FALLBACK_LENGTH,
-    GraspStatics,
-    ObjectLoad,
-    hand_statics,
-    hand_wrenches,
-    sliding_statics,
-)
+from .hands import hand_statics
+from .loads import FALLBACK_LENGTH, GraspStatics, ObjectLoad, sliding_statics, split_load
 from .scene import DualArmTask
 
 FloatArray = NDArray[np.float64]
@@ -163,7 +161,8 @@ class ArmStatics(KernelHolder):
     def _remake(self) -> None:
         self._chain = self._compiled()
 
-    def torque(self, q: FloatArray, wrench: FloatArray) -> FloatArray:
+    def torque(self, q: FloatArray, wrench: FloatArray, point: FloatArray | None = None
+               ) -> FloatArray:
         """Joint torques [N m] that hold the arm at ``q`` with the hand applying ``wrench``.
 
         Parameters
@@ -172,20 +171,25 @@ class ArmStatics(KernelHolder):
             Joints [rad].
         wrench : ndarray, shape (6,)
             ``[f; m]`` the hand applies to the object [N, N m], world frame, moment about
-            the tool point.
+            ``point``.
+        point : ndarray, shape (3,), optional
+            Where the force acts [m], world frame (the grasp point); default the tool
+            point. The moment is moved from it to the tool point, whose Jacobian is used.
         """
-        tau, _, _ = self._chain.static_torques(q, self.frame, wrench, False)
+        tau = self._chain.static_torques(q, self.frame, wrench, point, False).tau
         return tau
 
-    def linearised(self, q: FloatArray, wrench: FloatArray
+    def linearised(self, q: FloatArray, wrench: FloatArray, point: FloatArray | None = None
                    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Torques, their derivative over ``q`` at a fixed world wrench, and the Jacobian.
 
         Pinocchio's ``computeStaticTorqueDerivatives`` holds the external force fixed in
         the body; here it is fixed in the world (the load's wrench does not turn with
         the hand). With ``F = -w`` on the body, ``J^T F`` differs by the turn of ``F``
-        with the body: column ``j`` gains ``-J^T [omega_j x f; omega_j x m]``
-        (``omega_j`` the world axis of joint ``j``).
+        with the body: column ``j`` gains ``-J^T [omega_j x f; omega_j x m_p]``
+        (``omega_j`` the world axis of joint ``j``, ``m_p`` the moment about the tool
+        point ``p``). A ``point`` stays in the world while ``p`` moves by ``v_j``: the
+        moment about ``p``, ``m + (point - p) x f``, gains ``f x v_j``.
 
         Returns
         -------
@@ -196,7 +200,8 @@ class ArmStatics(KernelHolder):
         J : ndarray, shape (6, n)
             Tool-point Jacobian, world axes ``[v; omega]``.
         """
-        tau, dtau, J = self._chain.static_torques(q, self.frame, wrench, True)
+        st = self._chain.static_torques(q, self.frame, wrench, point, True)
+        tau, dtau, J = st.tau, st.dtau, st.J
         return tau, dtau, J
 
 
@@ -252,15 +257,23 @@ class LoadTorques:
         UnbalancedLoadError, SupportLostError
             The grasps cannot hold the load here.
         """
+        return self._split(q_l, sigma, sigma_l)[0]
+
+    def _split(self, q_l: FloatArray, sigma: float, sigma_l: float
+               ) -> tuple[FloatArray, FloatArray | None]:
+        """Both hands' wrenches (2, 6) and their grasp points (2, 3) [m] (None: no load)."""
         if self.task.load is None:
-            return np.zeros((2, 6))
-        return hand_wrenches(self.task, q_l, sigma, sigma_l).wrenches
+            return np.zeros((2, 6)), None
+        hands, T_obj = hand_statics(self.task, q_l, sigma, sigma_l)
+        split = split_load(hands, self.task.load, T_obj)
+        return split.wrenches, np.array([hand.point for hand in hands])
 
     def torques(self, q_l: FloatArray, q_f: FloatArray, sigma: float, sigma_l: float = 0.0
                 ) -> FloatArray:
         """Both arms' joint torques, the leader's first (n_l + n_f,) [N m]."""
-        w = self.wrenches(q_l, sigma, sigma_l)
-        return np.r_[self.leader.torque(q_l, w[0]), self.follower.torque(q_f, w[1])]
+        w, c = self._split(q_l, sigma, sigma_l)
+        return np.r_[self.leader.torque(q_l, w[0], None if c is None else c[0]),
+                     self.follower.torque(q_f, w[1], None if c is None else c[1])]
 
     def linearised(self, q_l: FloatArray, q_f: FloatArray, sigma: float,
                    sigma_l: float = 0.0) -> TorqueState:
@@ -282,17 +295,18 @@ class LoadTorques:
         """
         load = self.task.load
         if load is not None and self.task.contact is None:
-            tau, D, w = self._with_split(load, q_l, q_f, sigma, sigma_l)
-            return TorqueState(tau, D, w)
+            lt = self._with_split(load, q_l, q_f, sigma, sigma_l)
+            return TorqueState(lt.tau, lt.D, lt.w)
         n_l, n_f, n_g = self.n_l, self.n_f, self.n_grasp
-        w = self.wrenches(q_l, sigma, sigma_l)
-        tau_l, dl, J_l = self.leader.linearised(q_l, w[0])
-        tau_f, df, J_f = self.follower.linearised(q_f, w[1])
+        w, c = self._split(q_l, sigma, sigma_l)
+        tau_l, dl, J_l = self.leader.linearised(q_l, w[0], None if c is None else c[0])
+        tau_f, df, J_f = self.follower.linearised(q_f, w[1], None if c is None else c[1])
         D = np.zeros((n_l + n_f, n_l + n_f + n_g))
         D[:n_l, :n_l] = dl
         D[n_l:, n_l:n_l + n_f] = df
         if load is not None:
-            dw = self._support_derivative(q_l, sigma, sigma_l)
+            tools = np.array([self.task.leader.fk(q_l)[:3, 3], self.task.follower.fk(q_f)[:3, 3]])
+            dw = self._support_derivative(q_l, sigma, sigma_l, tools)
             D[:n_l, :n_l] += J_l.T @ dw[0, :, :n_l]
             D[n_l:, :n_l] += J_f.T @ dw[1, :, :n_l]
             D[:n_l, n_l + n_f:] += J_l.T @ dw[0, :, n_l:]
@@ -300,8 +314,8 @@ class LoadTorques:
         return TorqueState(np.r_[tau_l, tau_f], D, w)
 
     def _with_split(self, load: ObjectLoad, q_l: FloatArray, q_f: FloatArray, sigma: float,
-                    sigma_l: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``(tau, D, w)`` of grasps: the hands at the state and at each moved grasp.
+                    sigma_l: float) -> kernel.LoadTorques:
+        """``tau``, ``D`` and ``w`` of grasps: the hands at the state and at each moved grasp.
 
         The follower's grasp moved by :data:`GRASP_STEP` moves only the follower's hand
         (the rest of the set-up is kept); a sliding leader's moves the object.
@@ -325,12 +339,14 @@ class LoadTorques:
             [[h.free for h in hs] for hs, _ in sets], [c for _, c in sets], GRASP_STEP,
             FALLBACK_LENGTH, RCOND_MIN)
 
-    def _support_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float
-                            ) -> FloatArray:
+    def _support_derivative(self, q_l: FloatArray, sigma: float, sigma_l: float,
+                            tools: FloatArray) -> FloatArray:
         """``d w / d (q_l, grasps)`` of both hands with a support (2, 6, n_l + n_grasp).
 
         Central differences of the whole split over :data:`SPLIT_STEP`: a support's push
-        depends on the object's orientation, so the split is not linear in gravity.
+        depends on the object's orientation, so the split is not linear in gravity. Each
+        wrench is moved from its grasp point (which moves with the state) to its arm's
+        tool point at this state, ``tools`` (2, 3) [m], whose Jacobian carries it.
         """
         n_l, n_g = self.n_l, self.n_grasp
         h = SPLIT_STEP
@@ -340,13 +356,18 @@ class LoadTorques:
             up, down = y.copy(), y.copy()
             up[k] += h
             down[k] -= h
-            cols.append((self._split(up) - self._split(down)) / (2.0 * h))
+            cols.append((self._about_tools(up, tools) - self._about_tools(down, tools))
+                        / (2.0 * h))
         return np.stack(cols, axis=-1)
 
-    def _split(self, y: FloatArray) -> FloatArray:
+    def _about_tools(self, y: FloatArray, tools: FloatArray) -> FloatArray:
+        """Both hands' wrenches at ``y = (q_l, sigma[, sigma_l])``, moments about ``tools``."""
         n_l = self.n_l
         sigma_l = float(y[n_l + 1]) if self.n_grasp == 2 else 0.0
-        return self.wrenches(y[:n_l], float(y[n_l]), sigma_l)
+        w, c = self._split(y[:n_l], float(y[n_l]), sigma_l)
+        if c is None:
+            return w
+        return w + np.c_[np.zeros((2, 3)), np.cross(c - tools, w[:, :3])]
 
 
 def split_operator(hands: list[GraspStatics], centre: FloatArray, mass: float

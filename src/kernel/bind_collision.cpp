@@ -10,7 +10,79 @@ namespace dqk_binding {
 
 using namespace nb::literals;
 
+namespace {
+
+// segment_closest_points's answer: row k is segment pair k's.
+struct ClosestPoints {
+  Vec s, t;
+  dqk::Points x, y;
+};
+
+// capsule_proximities's answer: row k is capsule pair k's.
+struct CapsuleProximities {
+  Vec distance;
+  dqk::Points point_a, point_b, normal;
+};
+
+// A list of pair indices as an int64 array (a copy: the kernel keeps them as ints).
+nb::object index_array(const std::vector<int>& pairs) {
+  dqk::IndexVec out_pairs(static_cast<Index>(pairs.size()));
+  for (size_t k = 0; k < pairs.size(); ++k) out_pairs[static_cast<Index>(k)] = pairs[k];
+  return out(std::move(out_pairs));
+}
+
+// The classes of the answers below, each field a named read-only property (an array a
+// view of the answer's memory).
+void bind_results(nb::module_& m) {
+  auto closest = nb::class_<ClosestPoints>(
+      m, "ClosestPoints", "Closest points of k segment pairs (segment_closest_points).");
+  array_property(closest, "s", &ClosestPoints::s, "(k): x's parameter in [0, 1] on [p0, p1].");
+  array_property(closest, "t", &ClosestPoints::t, "(k): y's parameter in [0, 1] on [q0, q1].");
+  array_property(closest, "x", &ClosestPoints::x, "(k, 3): the closest points on [p0, p1].");
+  array_property(closest, "y", &ClosestPoints::y, "(k, 3): the closest points on [q0, q1].");
+
+  using P = CapsuleProximities;
+  auto many = nb::class_<P>(m, "CapsuleProximities",
+                            "Proximities of k capsule pairs (capsule_proximities).");
+  array_property(many, "distance", &P::distance, "(k): signed distances [m].");
+  array_property(many, "point_a", &P::point_a, "(k, 3): witness points on the capsules a.");
+  array_property(many, "point_b", &P::point_b, "(k, 3): witness points on the capsules b.");
+  array_property(many, "normal", &P::normal, "(k, 3): unit normals from a to b.");
+
+  using O = dqk::CapsuleProximity;
+  auto one = nb::class_<O>(m, "CapsuleProximity",
+                           "The proximity of one pair of bodies (CoalPairs.measure).");
+  one.def_ro("distance", &O::distance, "The signed distance [m].");
+  array_property(one, "point_a", &O::point_a, "(3): the witness point on body a.");
+  array_property(one, "point_b", &O::point_b, "(3): the witness point on body b.");
+  array_property(one, "normal", &O::normal, "(3): the unit normal from a to b.");
+
+  using S = dqk::Proximities;
+  auto scene = nb::class_<S>(m, "SceneProximities",
+                             "The collision scene's measured pairs (scene_proximities).");
+  scene.def_ro("finite", &S::finite,
+               "Every capsule distance was finite (else nothing else is filled in).")
+      .def_prop_ro("pairs", [](const S& p) { return index_array(p.pairs); },
+                   "(k) int64: the measured pairs, in the scene's order.");
+  array_property(scene, "distance", &S::distance, "(k): signed distances [m].");
+  array_property(scene, "point_a", &S::point_a, "(k, 3): witness points on the bodies a.");
+  array_property(scene, "point_b", &S::point_b, "(k, 3): witness points on the bodies b.");
+  array_property(scene, "normal", &S::normal, "(k, 3): unit normals from a to b.");
+
+  using D = dqk::DamperRows;
+  auto damper = nb::class_<D>(m, "DamperRows", "A step's collision rows (DamperScene.rows).");
+  damper.def_ro("finite", &D::finite,
+                "The scene and the rows were finite (else nothing else is filled in).")
+      .def_prop_ro("pairs", [](const D& d) { return index_array(d.pairs); },
+                   "(p) int64: the scene's pair of each row.");
+  array_property(damper, "G", &D::G, "(p, n): the rows.");
+  array_property(damper, "h", &D::h, "(p): their bounds.");
+}
+
+}  // namespace
+
 void bind_collision(nb::module_& m) {
+  bind_results(m);
   m.def(
       "segment_closest_points",
       [](const CArray& p0_, const CArray& p1_, const CArray& q0_, const CArray& q1_) {
@@ -19,22 +91,20 @@ void bind_collision(nb::module_& m) {
         const Index k = p0.rows();
         require(p1.rows() == k && q0.rows() == k && q1.rows() == k,
                 "segment_closest_points: p0, p1, q0, q1 must be (k, 3) each");
-        Vec s(k), t(k);
-        dqk::Points x(k, 3), y(k, 3);
+        ClosestPoints r{Vec(k), Vec(k), dqk::Points(k, 3), dqk::Points(k, 3)};
         for (Index i = 0; i < k; ++i) {
           const dqk::SegmentPoints c = dqk::closest_points(
               p0.row(i).transpose(), p1.row(i).transpose(), q0.row(i).transpose(),
               q1.row(i).transpose());
-          s[i] = c.s;
-          t[i] = c.t;
-          x.row(i) = c.x.transpose();
-          y.row(i) = c.y.transpose();
+          r.s[i] = c.s;
+          r.t[i] = c.t;
+          r.x.row(i) = c.x.transpose();
+          r.y.row(i) = c.y.transpose();
         }
-        return nb::make_tuple(out(std::move(s)), out(std::move(t)), out(std::move(x)),
-                              out(std::move(y)));
+        return r;
       },
       "p0"_a, "p1"_a, "q0"_a, "q1"_a,
-      "Closest points of k segment pairs: (s, t, x, y).");
+      "Closest points of k segment pairs (a ClosestPoints).");
 
   m.def(
       "capsule_proximities",
@@ -46,15 +116,14 @@ void bind_collision(nb::module_& m) {
         require(a0.rows() == k && a1.rows() == k && b0.rows() == k && b1.rows() == k &&
                     rb.size() == k,
                 "capsule_proximities: a0, a1, b0, b1 must be (k, 3), ra and rb (k,)");
-        Vec d(k);
-        dqk::Points pa(k, 3), pb(k, 3), n(k, 3);
-        dqk::capsule_proximities(a0, a1, ra, b0, b1, rb, d, pa, pb, n);
-        return nb::make_tuple(out(std::move(d)), out(std::move(pa)), out(std::move(pb)),
-                              out(std::move(n)));
+        CapsuleProximities r{Vec(k), dqk::Points(k, 3), dqk::Points(k, 3), dqk::Points(k, 3)};
+        dqk::capsule_proximities(a0, a1, ra, b0, b1, rb, r.distance, r.point_a, r.point_b,
+                                 r.normal);
+        return r;
       },
       "a0"_a, "a1"_a, "ra"_a, "b0"_a, "b1"_a, "rb"_a,
-      "Signed distances, witness points and unit normals of k capsule pairs: "
-      "(distance, point_a, point_b, normal).");
+      "Signed distances, witness points and unit normals of k capsule pairs (a "
+      "CapsuleProximities).");
 
   nb::class_<dqk::CoalPairs>(
       m, "CoalPairs",
@@ -82,34 +151,27 @@ void bind_collision(nb::module_& m) {
              const CArray& frame_b) {
             const Eigen::Matrix4d T_a = c_matrix(frame_a, 4, "frame_a");
             const Eigen::Matrix4d T_b = c_matrix(frame_b, 4, "frame_b");
-            const dqk::CapsuleProximity p = self.measure(pair, T_a, T_b);
-            return nb::make_tuple(p.distance, out(Vec(p.point_a)), out(Vec(p.point_b)),
-                                  out(Vec(p.normal)));
+            return self.measure(pair, T_a, T_b);
           },
           "pair"_a, "frame_a"_a, "frame_b"_a,
           "Coal's proximity of pair k, its bodies in the frames (4, 4) frame_a and "
-          "frame_b: (distance, point_a, point_b, normal).");
+          "frame_b (a CapsuleProximity).");
 
   m.def(
       "scene_proximities",
       [](const CArray& frames, const std::vector<int>& body_frame, const CArray& a_local,
          const CArray& b_local, const Vec& r, const Vec& sphere, const std::vector<int>& ia,
          const std::vector<int>& ib, double within, const dqk::CoalPairs* exact) {
-        dqk::Proximities p = dqk::scene_proximities(
-            c_matrix(frames, 4, "frames"), body_frame, points(a_local, "a_local"),
-            points(b_local, "b_local"), r, sphere, ia, ib, within, exact);
-        dqk::IndexVec pairs(static_cast<Index>(p.pairs.size()));
-        for (size_t k = 0; k < p.pairs.size(); ++k) pairs[static_cast<Index>(k)] = p.pairs[k];
-        return nb::make_tuple(p.finite, out(std::move(pairs)), out(std::move(p.distance)),
-                              out(std::move(p.point_a)), out(std::move(p.point_b)),
-                              out(std::move(p.normal)));
+        return dqk::scene_proximities(c_matrix(frames, 4, "frames"), body_frame,
+                                      points(a_local, "a_local"), points(b_local, "b_local"),
+                                      r, sphere, ia, ib, within, exact);
       },
       "frames"_a, "body_frame"_a, "a_local"_a, "b_local"_a, "r"_a, "sphere"_a, "ia"_a, "ib"_a,
       "within"_a, "exact"_a = nb::none(),
       "The collision scene's proximities of the pairs whose bounding spheres are closer "
       "than within, by their capsules, and by coal for a pair with a box when exact (a "
-      "CoalPairs) is given: (finite, pairs, distance, point_a, point_b, normal); finite "
-      "is False when a capsule distance is not finite (nothing measured by coal then).");
+      "CoalPairs) is given (a SceneProximities); its finite is False when a capsule "
+      "distance is not finite (nothing measured by coal then).");
 
   nb::class_<dqk::DamperScene>(
       m, "DamperScene",
@@ -140,12 +202,12 @@ void bind_collision(nb::module_& m) {
           "rows",
           [](const dqk::DamperScene& self, const dqk::Chain& leader, const dqk::Chain& follower,
              const CArray& J_object, const CArray& T_object) {
-            return damper_tuple(self.rows(leader, follower, c_matrix(J_object, -1, "J_object"),
-                                          c_matrix(T_object, 4, "T_object")));
+            return self.rows(leader, follower, c_matrix(J_object, -1, "J_object"),
+                             c_matrix(T_object, 4, "T_object"));
           },
           "leader"_a, "follower"_a, "J_object"_a, "T_object"_a,
-          "This step's rows: (finite, pairs, G, h); finite is False when the scene's "
-          "frames gave a non-finite distance (nothing else is computed then).");
+          "This step's rows (a DamperRows); its finite is False when the scene's frames "
+          "gave a non-finite distance (nothing else is computed then).");
 
   m.def(
       "damper_rows",

@@ -15,51 +15,14 @@
 
 #include "standard_parts.hpp"
 #include "step.hpp"
+#include "support_line.hpp"
+#include "torque_limit.hpp"
 
 namespace dqk_binding {
 
 using namespace nb::literals;
 
 namespace {
-
-// A numpy array viewing value, a member of the object owner (kept alive by the array).
-// Writeable, as numpy's own arrays are (some QP backends refuse read-only buffers): the
-// step's objects are made anew each step, so a write changes that step's only.
-template <typename M>
-nb::object view(const M& value, nb::handle owner) {
-  using S = typename M::Scalar;
-  constexpr int nd = M::ColsAtCompileTime == 1 ? 1 : 2;
-  npy_intp shape[2] = {static_cast<npy_intp>(nd == 1 ? value.size() : value.rows()),
-                       static_cast<npy_intp>(nd == 1 ? 1 : value.cols())};
-  npy_intp strides[2] = {static_cast<npy_intp>(sizeof(S)), 0};
-  if constexpr (nd == 2) {
-    strides[0] = static_cast<npy_intp>(value.rowStride() * sizeof(S));
-    strides[1] = static_cast<npy_intp>(value.colStride() * sizeof(S));
-  }
-  if (value.size() == 0) {  // no memory to view: a fresh empty array of the shape
-    PyObject* empty = PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0);
-    if (empty == nullptr) throw nb::python_error();
-    return nb::steal(empty);
-  }
-  PyObject* array = PyArray_New(&PyArray_Type, nd, shape, numpy_type<S>(), strides,
-                                const_cast<S*>(value.data()), 0,
-                                NPY_ARRAY_ALIGNED | NPY_ARRAY_WRITEABLE, nullptr);
-  if (array == nullptr) throw nb::python_error();
-  owner.inc_ref();
-  if (PyArray_SetBaseObject(reinterpret_cast<PyArrayObject*>(array), owner.ptr()) < 0) {
-    owner.dec_ref();
-    Py_DECREF(array);
-    throw nb::python_error();
-  }
-  return nb::steal(array);
-}
-
-// Binds the read-only array property name of T, the member the getter returns.
-template <typename T, typename Get>
-void array_property(nb::class_<T>& cls, const char* name, Get get, const char* doc) {
-  cls.def_prop_ro(
-      name, [get](nb::handle self) { return view(get(nb::cast<const T&>(self)), self); }, doc);
-}
 
 nb::tuple names_tuple(const std::vector<std::string>& names) {
   nb::list out;
@@ -437,6 +400,38 @@ void bind_parts(nb::module_& m) {
       },
       "damper"_a, "names"_a, "nonfinite"_a, nb::keep_alive<1, 2>());
   bind_limit_method<dqk::CollisionLimit>(collision);
+
+  nb::class_<dqk::SlidePath>(
+      m, "SlidePath",
+      "A sliding path as one joint: the hand's pose on the object H(sigma) = P M(rate sigma) C.")
+      .def(
+          "__init__",
+          [](dqk::SlidePath* self, bool revolute, int axis, const dqk::Pose& placement,
+             const dqk::Pose& child, double rate) {
+            require((axis == 0 || axis == 1) && std::isfinite(rate) && placement.allFinite() &&
+                        child.allFinite(),
+                    "SlidePath: axis 0 (x) or 1 (y), finite placements and rate");
+            new (self) dqk::SlidePath{revolute, axis, placement, child, rate};
+          },
+          "revolute"_a, "axis"_a, "placement"_a, "child"_a, "rate"_a,
+          "revolute: a rotation (else a translation) about or along axis 0 (x) or 1 (y) of "
+          "the joint frame; placement P and child C (4, 4) [m]; rate d theta / d sigma.")
+      .def("at", &dqk::SlidePath::at, "sigma"_a, "H(sigma) (4, 4) [m], object coordinates.");
+
+  auto torque = nb::class_<dqk::TorqueLimit, dqk::Limit, PyLimit<dqk::TorqueLimit>>(
+      m, "TorqueLimit",
+      "|tau + dt D x| <= tau_max: both arms' quasi-static torques from the step's context.");
+  torque.def(nb::init<dqk::Chain*, int, dqk::Chain*, int, Vec, std::vector<std::string>,
+                      std::optional<double>, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                      dqk::SlidePath, std::optional<dqk::SlidePath>, double, double, double>(),
+             "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "tau_max"_a,
+             "row_names"_a, "mass"_a.none(), "mass_centre"_a, "gravity"_a, "follower_path"_a,
+             "leader_path"_a.none(), "grasp_step"_a, "fallback_length"_a, "rcond_min"_a,
+             nb::keep_alive<1, 2>(), nb::keep_alive<1, 4>());
+  torque.def_prop_rw("approach", &dqk::TorqueLimit::approach, &dqk::TorqueLimit::set_approach,
+                     "time constant [s] with which a torque may approach its limit (each "
+                     "sample closes at most dt / approach of a joint's margin; 0: all of it)");
+  bind_limit_method<dqk::TorqueLimit>(torque);
 }
 
 void bind_loop(nb::module_& m) {
@@ -459,6 +454,16 @@ void bind_loop(nb::module_& m) {
                                                sigma_max});
           },
           "origin"_a, "direction"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a)
+      .def(
+          "set_grasp_line",
+          [](dqk::Step& self, Index g, const Eigen::Vector3d& origin,
+             const Eigen::Vector3d& direction, const Eigen::Vector3d& r_min,
+             const Eigen::Vector3d& r_max, double sigma_min, double sigma_max) {
+            self.set_grasp_line(g, dqk::GraspLine{origin, direction, r_min, r_max, sigma_min,
+                                                  sigma_max});
+          },
+          "grasp"_a, "origin"_a, "direction"_a, "r_min"_a, "r_max"_a, "sigma_min"_a,
+          "sigma_max"_a, "Replace the line of grasp (an index in the grasps' order).")
       .def_prop_ro("n", &dqk::Step::n)
       .def_prop_ro("grasp_lines", &dqk::Step::grasp_lines)
       .def(
@@ -535,6 +540,36 @@ int problem_check(const Strict& A, const Strict& b, const Strict& w, const Stric
   return 0;
 }
 
+void bind_support(nb::module_& m) {
+  auto line = nb::class_<dqk::SupportLine>(
+      m, "SupportLine", "A Case 2 support line at one orientation (object coordinates).");
+  using L = dqk::SupportLine;
+  line.def_ro("held", &L::held, "False: no line with h > 0 inside the box here.")
+      .def_ro("sigma_min", &L::sigma_min, "[m]")
+      .def_ro("sigma_max", &L::sigma_max, "[m]")
+      .def_ro("sigma_inf", &L::sigma_inf, "Where the push is infinite [m].")
+      .def_ro("lever", &L::lever, "|a* x c| [N m]: the push is lever / (sigma - sigma_inf).")
+      .def("push", &L::push, "sigma"_a, "The push h [N] at sigma [m] (inf at sigma_inf).");
+  array_property(line, "gravity", [](const L& l) -> const Eigen::Vector3d& { return l.gravity; },
+                 "Gravity in object coordinates [m/s^2].");
+  array_property(line, "origin", [](const L& l) -> const Eigen::Vector3d& { return l.origin; },
+                 "The line's point at sigma = 0 [m].");
+  array_property(line, "direction",
+                 [](const L& l) -> const Eigen::Vector3d& { return l.direction; },
+                 "The sliding direction s* (unit).");
+  array_property(line, "pose0", [](const L& l) -> const dqk::Pose& { return l.pose0; },
+                 "The hand's pose at sigma = 0 (4, 4) [m].");
+  nb::class_<dqk::SupportPlane>(
+      m, "SupportPlane", "A Case 2 support on a plane: its line for any orientation.")
+      .def(nb::init<double, const Eigen::Vector3d&, const Eigen::Vector3d&,
+                    const Eigen::Vector3d&, const Eigen::Vector3d&, double,
+                    const Eigen::Vector3d&, const Eigen::Vector3d&, double>(),
+           "mass"_a, "mass_centre"_a, "gravity"_a, "r1"_a, "normal"_a, "offset"_a, "r_min"_a,
+           "r_max"_a, "gravity_min"_a)
+      .def("line", &dqk::SupportPlane::line, "R_world_object"_a,
+           "The support line for the object's orientation (3, 3).");
+}
+
 }  // namespace
 
 void bind_step(nb::module_& m) {
@@ -548,6 +583,7 @@ void bind_step(nb::module_& m) {
   bind_out(m);
   bind_parts(m);
   bind_loop(m);
+  bind_support(m);
 }
 
 }  // namespace dqk_binding

@@ -1,6 +1,8 @@
 // What every binding file of dualarm_qp._kernel shares: nanobind, NumPy's C API for the
-// arrays the kernel returns (out()), and the conversions of its arguments. module.cpp
-// makes the module and calls each file's bind_*() function.
+// arrays the kernel returns (out() for a function that returns one array, view() and
+// array_property() for the arrays of a bound struct: a result of several values is a
+// struct with named properties, never a tuple), and the conversions of its arguments.
+// module.cpp makes the module and calls each file's bind_*() function.
 #pragma once
 
 #include <stdexcept>
@@ -115,46 +117,53 @@ nb::object out(M&& value) {
   return nb::steal(array);
 }
 
-inline nb::tuple factor_tuple(const dqk::Factor& f) {
-  return nb::make_tuple(out(Mat(f.U)), out(Vec(f.sigma)), out(Mat(f.V)), out(Mat(f.N)));
+// A numpy array viewing value, a member of the object owner (kept alive by the array):
+// how a bound struct hands out its arrays, each property read a new array over the same
+// memory. Writeable, as numpy's own arrays are (some QP backends refuse read-only
+// buffers): the kernel's results are made anew by each call, so a write changes that
+// result only.
+template <typename M>
+nb::object view(const M& value, nb::handle owner) {
+  using S = typename M::Scalar;
+  constexpr int nd = M::ColsAtCompileTime == 1 ? 1 : 2;
+  npy_intp shape[2] = {static_cast<npy_intp>(nd == 1 ? value.size() : value.rows()),
+                       static_cast<npy_intp>(nd == 1 ? 1 : value.cols())};
+  npy_intp strides[2] = {static_cast<npy_intp>(sizeof(S)), 0};
+  if constexpr (nd == 2) {
+    strides[0] = static_cast<npy_intp>(value.rowStride() * sizeof(S));
+    strides[1] = static_cast<npy_intp>(value.colStride() * sizeof(S));
+  }
+  if (value.size() == 0) {  // no memory to view: a fresh empty array of the shape
+    PyObject* empty = PyArray_Zeros(nd, shape, PyArray_DescrFromType(numpy_type<S>()), 0);
+    if (empty == nullptr) throw nb::python_error();
+    return nb::steal(empty);
+  }
+  PyObject* array = PyArray_New(&PyArray_Type, nd, shape, numpy_type<S>(), strides,
+                                const_cast<S*>(value.data()), 0,
+                                NPY_ARRAY_ALIGNED | NPY_ARRAY_WRITEABLE, nullptr);
+  if (array == nullptr) throw nb::python_error();
+  owner.inc_ref();
+  if (PyArray_SetBaseObject(reinterpret_cast<PyArrayObject*>(array), owner.ptr()) < 0) {
+    owner.dec_ref();
+    Py_DECREF(array);
+    throw nb::python_error();
+  }
+  return nb::steal(array);
 }
 
-// basis(A) as Python holds it: (P, N, rank, sigma_max, qr).
-inline nb::tuple basis_tuple(dqk::Basis&& f) {
-  return nb::make_tuple(out(std::move(f.P)), out(std::move(f.N)), f.rank, f.sigma_max, f.qr);
+// Binds the read-only array property name of T, the member the getter returns.
+template <typename T, typename Get>
+void array_property(nb::class_<T>& cls, const char* name, Get get, const char* doc) {
+  cls.def_prop_ro(
+      name, [get](nb::handle self) { return view(get(nb::cast<const T&>(self)), self); }, doc);
 }
 
-// inequalities(...) as Python holds them: (C, e, kind, index).
-inline nb::tuple rows_tuple(dqk::Rows&& r) {
-  return nb::make_tuple(out(std::move(r.C)), out(std::move(r.e)), out(std::move(r.kind)),
-                        out(std::move(r.index)));
-}
-
-// A certificate as dualarm_qp/solvers/certify.py reads it (its Reading).
-inline nb::tuple certificate_tuple(dqk::Certificate&& c) {
-  return nb::make_tuple(c.finite, c.res.eq, c.res.box, c.res.row, c.eq_limit, c.kkt,
-                        c.objective, out(std::move(c.active_lower)),
-                        out(std::move(c.active_upper)), c.active_rows);
-}
-
-// solve_certified's answer as dualarm_qp/solvers/nullspace.py reads it: (code, x,
-// conflicts, nullity, iterations, basis, rows, certificate or None).
-inline nb::tuple certified_tuple(dqk::CertifiedStep&& s) {
-  nb::object cert = nb::none();
-  if (s.certified) cert = certificate_tuple(std::move(s.cert));
-  return nb::make_tuple(s.empty_box ? dqk::EMPTY_BOX_CODE : static_cast<int>(s.answer.code),
-                        out(std::move(s.answer.x)), s.answer.conflicts, s.answer.nullity,
-                        s.answer.iterations, basis_tuple(std::move(s.basis)),
-                        rows_tuple(std::move(s.rows)), cert);
-}
-
-// A step's collision rows as dualarm_qp/step/limits/collision.py reads them: (finite,
-// pairs, G, h).
-inline nb::tuple damper_tuple(dqk::DamperRows&& d) {
-  dqk::IndexVec pairs(static_cast<Index>(d.pairs.size()));
-  for (size_t k = 0; k < d.pairs.size(); ++k) pairs[static_cast<Index>(k)] = d.pairs[k];
-  return nb::make_tuple(d.finite, out(std::move(pairs)), out(std::move(d.G)),
-                        out(std::move(d.h)));
+// The same for a member of T named by its pointer (array_property(cls, "x", &T::x, doc)).
+template <typename T, typename M>
+void array_property(nb::class_<T>& cls, const char* name, M T::*member, const char* doc) {
+  cls.def_prop_ro(
+      name, [member](nb::handle self) { return view(nb::cast<const T&>(self).*member, self); },
+      doc);
 }
 
 inline void require(bool ok, const char* what) {

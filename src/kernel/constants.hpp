@@ -19,8 +19,9 @@ constexpr double STEP_RTOL = 1e-8;
 constexpr double ROUNDING = 1e3 * std::numeric_limits<double>::epsilon();
 // Relative agreement of two violations counted as a tie in the active-set method.
 constexpr double TIE_RTOL = 1e-14;
-// Task-scale LP: reduced costs above -PRICE_TOL (1 + |g_j|) count as met.
-constexpr double PRICE_TOL = 1e-12;
+// Task-scale LP: a row violated by at most PRICE_TOL (1 + |g_j|) (units of x, unit-norm
+// rows), i.e. a reduced cost above minus that, counts as met.
+constexpr double PRICE_TOL = 1e-9;
 // Task-scale LP: pivots below this share of the column's largest entry are never taken.
 constexpr double PIVOT_TOL = 1e-11;
 

@@ -54,14 +54,19 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
   B.topRows<3>() = Eigen::Matrix3d::Identity();
   B.bottomRows<3>() = skew(centre - about);
   B = (-mass) * (u.cwiseInverse().asDiagonal() * B);
-  Eigen::SelfAdjointEigenSolver<Mat> eig(N);
+  // The eigenvalues alone decide; the eigenvectors (the same eigenvalues, to the bit) only
+  // where the balance spans fewer than 6 directions.
+  Eigen::SelfAdjointEigenSolver<Mat> eig(N, Eigen::EigenvaluesOnly);
   if (eig.info() != Eigen::Success)
     throw std::invalid_argument("split_operator: the balance matrix's eigenvalues failed");
-  const Vec& lam = eig.eigenvalues();  // ascending
   Mat scaled;
-  if (lam[0] > rcond_min * lam[5]) {
+  if (eig.eigenvalues()[0] > rcond_min * eig.eigenvalues()[5]) {  // ascending
     scaled = MP.transpose() * N.partialPivLu().solve(B);
   } else {  // fewer than 6 balance directions: least squares on the kept eigenvectors
+    eig.compute(N, Eigen::ComputeEigenvectors);
+    if (eig.info() != Eigen::Success)
+      throw std::invalid_argument("split_operator: the balance matrix's eigenvectors failed");
+    const Vec& lam = eig.eigenvalues();
     Mat VtB = eig.eigenvectors().transpose() * B;
     for (Index k = 0; k < 6; ++k) {
       if (lam[k] > rcond_min * lam[5])

@@ -19,6 +19,18 @@ RowMat split_of(const HandSet& set, const Eigen::Vector3d& g, double mass, doubl
   return w;
 }
 
+// The wrench [f; m] about `from` as the same wrench about `to`.
+Vec6 about(const Vec6& w, const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  Vec6 out = w;
+  out.tail<3>() += (from - to).cross(Eigen::Vector3d(w.head<3>()));
+  return out;
+}
+
+// The origin of frame `frame` at the chain's last kinematics (static_torques' q).
+Eigen::Vector3d tool_point(Chain& chain, int frame) {
+  return chain.impl().data.oMf[static_cast<std::size_t>(frame)].translation();
+}
+
 }  // namespace
 
 LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int follower_tool,
@@ -45,16 +57,25 @@ LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int fo
   LoadTorques out;
   out.w.resize(2, 6);
   for (Index i = 0; i < 2; ++i) out.w.row(i) = flat.segment(6 * i, 6).transpose();
+  // Each hand's force acts at its grasp point c_i (the leader's tool point, the
+  // follower's contact point on the object); the arm's Jacobian is its tool point p_i's.
+  const Eigen::Vector3d c[2] = {sets[0].points.row(0).transpose(),
+                                sets[0].points.row(1).transpose()};
   Vec tau_l(n_l), tau_f(n_f);
   RowMat dl(n_l, n_l), df(n_f, n_f), J_l(6, n_l), J_f(6, n_f);
-  static_torques(leader, q_l, leader_tool, out.w.row(0).transpose(), tau_l, true, dl, J_l);
-  static_torques(follower, q_f, follower_tool, out.w.row(1).transpose(), tau_f, true, df, J_f);
+  static_torques(leader, q_l, leader_tool, out.w.row(0).transpose(), c[0], tau_l, true, dl, J_l);
+  static_torques(follower, q_f, follower_tool, out.w.row(1).transpose(), c[1], tau_f, true, df,
+                 J_f);
+  const Eigen::Vector3d p[2] = {tool_point(leader, leader_tool),
+                                tool_point(follower, follower_tool)};
   out.tau.resize(n_l + n_f);
   out.tau << tau_l, tau_f;
   out.D = RowMat::Zero(n_l + n_f, n_l + n_f + n_g);
   out.D.topLeftCorner(n_l, n_l) = dl;
   out.D.block(n_l, n_l, n_f, n_f) = df;
-  // The leader's joints turn the whole set-up (not gravity) with the tool's omega_j.
+  // The leader's joints turn the whole set-up (not gravity) with the tool's omega_j: the
+  // wrench about its moving grasp point by the rotation identity, the grasp point itself
+  // with the object (velocity v_j + omega_j x (c - p_l)); the moment is about p_i.
   Mat turned_g(3, n_l);
   for (Index j = 0; j < n_l; ++j)
     turned_g.col(j) = Eigen::Vector3d(J_l.block<3, 1>(3, j)).cross(gravity);
@@ -65,19 +86,25 @@ LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int fo
     const Eigen::Vector3d m = out.w.row(i).tail<3>().transpose();
     for (Index j = 0; j < n_l; ++j) {
       const Eigen::Vector3d omega = J_l.block<3, 1>(3, j);
-      dq.block<3, 1>(0, j) = omega.cross(f);
-      dq.block<3, 1>(3, j) = omega.cross(m);
+      const Eigen::Vector3d v = J_l.block<3, 1>(0, j);
+      Vec6 dw;
+      dw << omega.cross(f), omega.cross(m);
+      dw -= Kg.block(6 * i, j, 6, 1);
+      dq.col(j) = about(dw, c[i], p[i]);
+      dq.block<3, 1>(3, j) += (v + omega.cross(c[i] - p[0])).cross(f);  // d c x f
     }
-    dq -= Kg.middleRows(6 * i, 6);
     const RowMat& J = i == 0 ? J_l : J_f;
     out.D.block(i == 0 ? 0 : n_l, 0, i == 0 ? n_l : n_f, n_l) += J.transpose() * dq;
   }
-  // The grasps: forward differences of the split.
+  // The grasps: forward differences of the split, each wrench moved from its grasp point
+  // (which the grasp moves) to the fixed tool point.
   for (Index g = 0; g < n_g; ++g) {
-    const RowMat moved = split_of(sets[static_cast<size_t>(1 + g)], gravity, mass,
-                                  fallback_length, rcond_min);
+    const HandSet& set = sets[static_cast<size_t>(1 + g)];
+    const RowMat moved = split_of(set, gravity, mass, fallback_length, rcond_min);
     for (Index i = 0; i < 2; ++i) {
-      const Vec ds = (moved.row(i) - out.w.row(i)).transpose() / grasp_step;
+      const Vec6 w_now = about(out.w.row(i).transpose(), c[i], p[i]);
+      const Vec6 w_moved = about(moved.row(i).transpose(), set.points.row(i).transpose(), p[i]);
+      const Vec ds = (w_moved - w_now) / grasp_step;
       const RowMat& J = i == 0 ? J_l : J_f;
       out.D.block(i == 0 ? 0 : n_l, n_l + n_f + g, i == 0 ? n_l : n_f, 1) += J.transpose() * ds;
     }

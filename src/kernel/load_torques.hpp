@@ -20,13 +20,15 @@ struct HandSet {
 struct LoadTorques {
   Vec tau;     // n_l + n_f: the leader's joint torques, then the follower's [N m]
   RowMat D;    // (n_l + n_f) x (n_l + n_f + n_grasp): d tau / d (q_l, q_f, grasps)
-  RowMat w;    // 2 x 6: each hand's wrench on the object [N, N m]
+  RowMat w;    // 2 x 6: each hand's wrench on the object [N, N m], about its grasp point
 };
 
 // sets[0] is the state; sets[1 + i] the state with grasp i (decision order: the
 // follower's, then a sliding leader's) moved by grasp_step [m]. The split is K g
-// (split_operator); the leader's columns by the rotation identity
-// d w / d q_j = omega_j x w - K (omega_j x g), the grasps' by forward differences.
+// (split_operator), each hand's force acting at its grasp point (sets[0].points) and its
+// moment moved to the tool point, whose Jacobian carries it; the leader's columns by the
+// rotation identity d w / d q_j = omega_j x w - K (omega_j x g) with the grasp points
+// carried by the object, the grasps' by forward differences of the moved wrenches.
 LoadTorques load_torques(Chain& leader, int leader_tool, Chain& follower, int follower_tool,
                          const Vec& q_l, const Vec& q_f, const Eigen::Vector3d& gravity,
                          double mass, const std::vector<HandSet>& sets, double grasp_step,

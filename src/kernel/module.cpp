@@ -8,6 +8,8 @@
 #define DQK_BINDING_MAIN  // imports NumPy's C API table (binding.hpp)
 #include "binding.hpp"
 
+#include <nanobind/stl/optional.h>
+
 #include <coal/config.hh>
 
 #include "boxes.hpp"
@@ -33,6 +35,51 @@
 using namespace dqk_binding;
 using namespace nb::literals;
 
+namespace {
+
+// grasp_rate_range's and grasp_rates's answer: a grasp's sliding rates [m/s].
+struct RateRange {
+  double lower;
+  double upper;
+};
+
+// Chain.static_torques's answer: the torques and, when asked, their derivatives.
+struct StaticTorques {
+  Vec tau;           // n [N m]
+  dqk::RowMat dtau;  // n x n: d tau / d q at a fixed wrench (0 x 0 when not asked)
+  dqk::RowMat J;     // 6 x n: the frame's world Jacobian (0 x 0 when not asked)
+};
+
+void bind_results(nb::module_& m) {
+  nb::class_<RateRange>(m, "RateRange", "A grasp's sliding rates over one sample [m/s].")
+      .def_ro("lower", &RateRange::lower, "rho_min [m/s].")
+      .def_ro("upper", &RateRange::upper, "rho_max [m/s].");
+  using I = dqk::IKAnswer;
+  nb::class_<I>(m, "IKAnswer", "Where ik_dls stopped.")
+      .def_ro("iterations", &I::iterations, "Linear solves performed.")
+      .def_ro("position_error", &I::position_error, "|p* - p(q)| [m].")
+      .def_ro("rotation_error", &I::rotation_error, "The angle of R* R(q)^T [rad].")
+      .def_prop_ro("stop", [](const I& a) { return static_cast<int>(a.stop); },
+                   "0 converged, 1 iteration limit, 2 local minimum, 3 no descent.");
+  nb::class_<StaticTorques> st(m, "StaticTorques",
+                               "Joint torques holding a chain still under a hand wrench.");
+  array_property(st, "tau", &StaticTorques::tau, "(n,) joint torques [N m].");
+  array_property(st, "dtau", &StaticTorques::dtau,
+                 "(n, n) d tau / d q at a fixed wrench [N m/rad]; (0, 0) when not asked.");
+  array_property(st, "J", &StaticTorques::J,
+                 "(6, n) the frame's world Jacobian; (0, 0) when not asked.");
+  nb::class_<dqk::LoadTorques> lt(m, "LoadTorques",
+                                  "Both arms' torques under the carried load, linearised.");
+  array_property(lt, "tau", &dqk::LoadTorques::tau,
+                 "(n_l + n_f,) the leader's joint torques, then the follower's [N m].");
+  array_property(lt, "D", &dqk::LoadTorques::D,
+                 "(n_l + n_f, n_l + n_f + n_grasp) d tau / d (q_l, q_f, grasps).");
+  array_property(lt, "w", &dqk::LoadTorques::w,
+                 "(2, 6) each hand's wrench on the object [N, N m], about its grasp point.");
+}
+
+}  // namespace
+
 
 NB_MODULE(_kernel, m) {
   m.doc() = "The compiled exact step solver, the certificate's numeric core and the arms' kinematics.";
@@ -51,6 +98,7 @@ NB_MODULE(_kernel, m) {
   m.attr("PIVOT_TOL") = dqk::PIVOT_TOL;
   m.attr("PINOCCHIO_VERSION") = dqk::pinocchio_version();
   m.attr("COAL_VERSION") = COAL_VERSION;
+  bind_results(m);
 
   nb::class_<dqk::Chain>(m, "Chain",
                          "A chain of one-dof joints with frames, rebuilt as a pinocchio::Model.")
@@ -71,18 +119,19 @@ NB_MODULE(_kernel, m) {
       .def(
           "static_torques",
           [](dqk::Chain& chain, const Eigen::VectorXd& q, int frame, const dqk::Vec6& wrench,
-             bool derivatives) {
+             const std::optional<Eigen::Vector3d>& point, bool derivatives) {
             const Index n = chain.nq();
-            Vec tau(n);
-            dqk::RowMat dtau(derivatives ? n : 0, derivatives ? n : 0);
-            dqk::RowMat J(derivatives ? 6 : 0, derivatives ? n : 0);
-            dqk::static_torques(chain, q, frame, wrench, tau, derivatives, dtau, J);
-            return nb::make_tuple(out(std::move(tau)), out(std::move(dtau)), out(std::move(J)));
+            StaticTorques r{Vec(n), dqk::RowMat(derivatives ? n : 0, derivatives ? n : 0),
+                            dqk::RowMat(derivatives ? 6 : 0, derivatives ? n : 0)};
+            dqk::static_torques(chain, q, frame, wrench, point, r.tau, derivatives, r.dtau,
+                                r.J);
+            return r;
           },
-          "q"_a, "frame"_a, "wrench"_a, "derivatives"_a,
+          "q"_a, "frame"_a, "wrench"_a, "point"_a.none(), "derivatives"_a,
           "Joint torques holding the chain at q with the hand at frame applying wrench to "
-          "the object: (tau, dtau_dq at a fixed world wrench, J of the frame); the last two "
-          "empty without derivatives.")
+          "the object at point (world; the moment about it; None: the frame's origin): "
+          "(tau, dtau_dq with the wrench and point fixed in the world, J of the frame); the "
+          "last two empty without derivatives.")
       .def("set_frame_placement", &dqk::Chain::set_frame_placement, "frame"_a, "T"_a)
       .def("update", &dqk::Chain::update, "q"_a,
            "Forward kinematics, every joint's Jacobian and every frame's pose at q.")
@@ -122,10 +171,11 @@ NB_MODULE(_kernel, m) {
       [](const Eigen::Vector3d& r, const Eigen::Vector3d& s_star, const Eigen::Vector3d& r_min,
          const Eigen::Vector3d& r_max, double dt) {
         const auto [lo, hi] = dqk::grasp_rate_range(r, s_star, r_min, r_max, dt);
-        return nb::make_tuple(lo, hi);
+        return RateRange{lo, hi};
       },
       "r"_a, "s_star"_a, "r_min"_a, "r_max"_a, "dt"_a,
-      "Eqs. 30-31: (rho_min, rho_max) [m/s] keeping r in [r_min, r_max] sliding along s*.");
+      "Eqs. 30-31: the rates (a RateRange) [m/s] keeping r in [r_min, r_max] sliding "
+      "along s*.");
 
   m.def(
       "grasp_rates",
@@ -134,11 +184,12 @@ NB_MODULE(_kernel, m) {
          double sigma_max, double dt) {
         const auto [lo, hi] = dqk::grasp_rates(point, tangent, sigma, r_min, r_max, sigma_min,
                                                sigma_max, dt);
-        return nb::make_tuple(lo, hi);
+        return RateRange{lo, hi};
       },
       "point"_a, "tangent"_a, "sigma"_a, "r_min"_a, "r_max"_a, "sigma_min"_a, "sigma_max"_a,
       "dt"_a,
-      "One grasp's rates to the ends of its range [m/s]: Eqs. 30-31 cut by sigma's range.");
+      "One grasp's rates to the ends of its range (a RateRange) [m/s]: Eqs. 30-31 cut by "
+      "sigma's range.");
 
   m.def("step_errors", &dqk::step_errors, "carry"_a, "q_carry"_a, "carry_frames"_a,
         "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
@@ -155,17 +206,14 @@ NB_MODULE(_kernel, m) {
       [](dqk::Chain& chain, int tool, const dqk::Pose& T_target, Eigen::Ref<Eigen::VectorXd> q,
          const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, double tol_pos, double tol_rot,
          std::int64_t max_iter, double damping, double mu_min, double mu_max) {
-        const dqk::IKAnswer a = dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot,
-                                            max_iter, damping, mu_min, mu_max);
-        return nb::make_tuple(a.iterations, a.position_error, a.rotation_error,
-                              static_cast<int>(a.stop));
+        return dqk::ik_dls(chain, tool, T_target, q, lo, hi, tol_pos, tol_rot, max_iter,
+                           damping, mu_min, mu_max);
       },
       "chain"_a, "tool"_a, "T_target"_a, "q"_a.noconvert(), "lo"_a, "hi"_a, "tol_pos"_a,
       "tol_rot"_a, "max_iter"_a, "damping"_a, "mu_min"_a, "mu_max"_a,
       "Damped least squares of the pose of frame tool toward T_target, from q (clipped "
-      "into [lo, hi]); the best iterate is written into q. Returns (iterations, position "
-      "error [m], rotation error [rad], stop: 0 converged, 1 iteration limit, 2 local "
-      "minimum, 3 no descent).");
+      "into [lo, hi]); the best iterate is written into q. Returns where it stopped (an "
+      "IKAnswer).");
 
   nb::class_<dqk::WaypointPath>(m, "WaypointPath",
                                 "A waypoint path with minimum-jerk timing (WaypointTrajectory).")
@@ -219,10 +267,8 @@ NB_MODULE(_kernel, m) {
                   "load_torques: each set's points are (2, 3)");
           sets[k] = {dqk::Points(points[k]), free[k], centres[k]};
         }
-        dqk::LoadTorques r = dqk::load_torques(leader, leader_tool, follower, follower_tool,
-                                               q_l, q_f, gravity, mass, sets, grasp_step,
-                                               fallback_length, rcond_min);
-        return nb::make_tuple(out(std::move(r.tau)), out(std::move(r.D)), out(std::move(r.w)));
+        return dqk::load_torques(leader, leader_tool, follower, follower_tool, q_l, q_f,
+                                 gravity, mass, sets, grasp_step, fallback_length, rcond_min);
       },
       "leader"_a, "leader_tool"_a, "follower"_a, "follower_tool"_a, "q_l"_a, "q_f"_a,
       "gravity"_a, "mass"_a, "points"_a, "free"_a, "centres"_a, "grasp_step"_a,

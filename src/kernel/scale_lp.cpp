@@ -7,23 +7,49 @@
 
 namespace dqk {
 
+namespace {
+
+// The dual in standard form: columns 0..k-1 the rows, k the cap (s <= s_hi), k+1 the
+// floor (-s <= -s_lo), then d artificial columns (held at zero); d + 1 equality rows.
+struct Dual {
+  Mat E;
+  Vec cost;
+};
+
+Dual dual_of(const Mat& M, const Vec& a, const Vec& g, double s_lo, double s_hi) {
+  const Index k = M.rows();
+  const Index d = M.cols();
+  Dual out{Mat::Zero(d + 1, k + 2 + d), Vec::Zero(k + 2 + d)};
+  out.E.topLeftCorner(d, k) = M.transpose();
+  out.E.block(d, 0, 1, k) = a.transpose();
+  out.E(d, k) = 1.0;
+  out.E(d, k + 1) = -1.0;
+  out.E.block(0, k + 2, d, d).setIdentity();
+  out.cost.head(k) = g;
+  out.cost(k) = s_hi;
+  out.cost(k + 1) = -s_lo;
+  return out;
+}
+
+// The rounding of the multipliers pi = B^-T c_B: |d pi|_1 <= eps cond_1(B) |pi|_1, so the
+// reduced cost of column j is known to this times |E_j|_1 at best. A basis of nearly
+// parallel or opposite rows (a degenerate vertex) has a large condition: a violation at
+// this level is rounding, and entering it cycles or ends in a ray made of rounding.
+double multiplier_noise(const Mat& B, const Eigen::PartialPivLU<Mat>& lu, const Vec& pi) {
+  const Mat B_inv = lu.inverse();
+  return std::numeric_limits<double>::epsilon() * B.cwiseAbs().colwise().sum().maxCoeff() *
+         B_inv.cwiseAbs().colwise().sum().maxCoeff() * pi.lpNorm<1>();
+}
+
+}  // namespace
+
 ScaleLPResult scale_lp(const Mat& M, const Vec& a, const Vec& g, double s_lo, double s_hi) {
   const Index k = M.rows();
   const Index d = M.cols();
   const Index real = k + 2;
-  const Index cols = k + 2 + d;
-  // Columns: 0..k-1 the rows, k the cap (s <= s_hi), k+1 the floor (-s <= -s_lo),
-  // then d artificial columns (held at zero).
-  Mat E = Mat::Zero(d + 1, cols);
-  E.topLeftCorner(d, k) = M.transpose();
-  E.block(d, 0, 1, k) = a.transpose();
-  E(d, k) = 1.0;
-  E(d, k + 1) = -1.0;
-  E.block(0, k + 2, d, d).setIdentity();
-  Vec cost = Vec::Zero(cols);
-  cost.head(k) = g;
-  cost(k) = s_hi;
-  cost(k + 1) = -s_lo;
+  const Dual lp = dual_of(M, a, g, s_lo, s_hi);
+  const Mat& E = lp.E;
+  const Vec& cost = lp.cost;
   std::vector<Index> basis;
   for (Index j = 0; j < d; ++j) basis.push_back(k + 2 + j);
   basis.push_back(k);
@@ -45,9 +71,10 @@ ScaleLPResult scale_lp(const Mat& M, const Vec& a, const Vec& g, double s_lo, do
     Vec reduced = cost.head(real) - E.leftCols(real).transpose() * pi;
     for (Index j : basis)
       if (j < real) reduced(j) = 0.0;
+    const double noise = multiplier_noise(B, lu, pi);
     Index q = -1;
     for (Index j = 0; j < real; ++j)
-      if (reduced(j) < -slack_tol(j)) {
+      if (reduced(j) < -(slack_tol(j) + noise * E.col(j).lpNorm<1>())) {
         q = j;  // Bland: the smallest index enters
         break;
       }

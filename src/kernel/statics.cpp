@@ -33,6 +33,7 @@ void set_gravity(Chain& chain, const Eigen::Vector3d& g) {
 }
 
 void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec6& wrench,
+                    const std::optional<Eigen::Vector3d>& point,
                     Eigen::Ref<Eigen::VectorXd> tau, bool derivatives, Eigen::Ref<RowMat> dtau,
                     Eigen::Ref<RowMat> J) {
   pin::Model& model = chain.impl().model;
@@ -43,11 +44,17 @@ void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec
     throw std::invalid_argument("static_torques: q and tau must have nq entries");
   if (derivatives && (dtau.rows() != n || dtau.cols() != n || J.rows() != 6 || J.cols() != n))
     throw std::invalid_argument("static_torques: dtau must be (nq, nq) and J (6, nq)");
+  if (point && !point->allFinite())
+    throw std::invalid_argument("static_torques: point must be finite");
   const auto f_id = static_cast<pin::FrameIndex>(frame);
   pin::forwardKinematics(model, data, q);
   const Eigen::Vector3d p = pin::updateFramePlacement(model, data, f_id).translation();
+  // The hand's wrench about the tool point p: its force acts at `point` (default p).
+  const Eigen::Vector3d force = wrench.head<3>();
+  const Eigen::Vector3d arm = point ? Eigen::Vector3d(*point - p) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d moment = wrench.tail<3>() + arm.cross(force);
   // -wrench on the hand, about the world origin, then in the hand's joint frame.
-  const Eigen::Vector3d f = -wrench.head<3>(), m = -wrench.tail<3>();
+  const Eigen::Vector3d f = -force, m = -moment;
   const pin::Force at_origin(f, m + p.cross(f));
   const pin::JointIndex joint = model.frames[f_id].parentJoint;
   std::vector<pin::Force> fext(static_cast<std::size_t>(model.njoints), pin::Force::Zero());
@@ -60,12 +67,15 @@ void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec
   pin::computeJointJacobians(model, data, q);
   pin::getFrameJacobian(model, data, f_id, pin::LOCAL_WORLD_ALIGNED, Jf);
   // A world-fixed force does not turn with the body: column j gains
-  // -J^T [omega_j x f_w; omega_j x m_w] = J^T [f_w x omega_j; m_w x omega_j].
+  // -J^T [omega_j x f_w; omega_j x m_w] = J^T [f_w x omega_j; m_w x omega_j]. Its point
+  // stays in the world while p moves by v_j: m_p gains -v_j x f_w = f_w x v_j (zero for a
+  // wrench about p itself, which moves with the hand).
   Eigen::MatrixXd turned(6, n);
   for (Eigen::Index j = 0; j < n; ++j) {
     const Eigen::Vector3d omega = Jf.block<3, 1>(3, j);
-    turned.block<3, 1>(0, j) = -wrench.head<3>().cross(omega);
-    turned.block<3, 1>(3, j) = -wrench.tail<3>().cross(omega);
+    turned.block<3, 1>(0, j) = -force.cross(omega);
+    turned.block<3, 1>(3, j) = -moment.cross(omega);
+    if (point) turned.block<3, 1>(3, j) -= force.cross(Eigen::Vector3d(Jf.block<3, 1>(0, j)));
   }
   dtau = dq - Jf.transpose() * turned;
   J = Jf;

@@ -3,6 +3,8 @@
 // the correction of Pinocchio's body-fixed force), on a Chain given inertias and gravity.
 #pragma once
 
+#include <optional>
+
 #include "kinematics.hpp"
 
 namespace dqk {
@@ -17,10 +19,13 @@ void set_inertia(Chain& chain, int j, double mass, const Eigen::Vector3d& lever,
 void set_gravity(Chain& chain, const Eigen::Vector3d& g);
 
 // The joint torques [N m] that hold the chain at q while the hand at frame `frame` applies
-// `wrench` = [f; m] to the object (world axes, moment about the frame's origin), into tau
-// (nq). With derivatives: d tau / d q at that world wrench into dtau (nq x nq) and the
-// frame's Jacobian (LOCAL_WORLD_ALIGNED, [v; w]) into J (6 x nq).
+// `wrench` = [f; m] to the object at the world point `point` (world axes, the moment about
+// `point`; none: the frame's origin p), into tau (nq): tau = g(q) + J(q)^T [f; m_p] with
+// J the frame's Jacobian and m_p = m + (point - p) x f the moment moved to p. With
+// derivatives: d tau / d q with the wrench and `point` fixed in the world into dtau
+// (nq x nq) and J (LOCAL_WORLD_ALIGNED, [v; w]) into J (6 x nq).
 void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec6& wrench,
+                    const std::optional<Eigen::Vector3d>& point,
                     Eigen::Ref<Eigen::VectorXd> tau, bool derivatives, Eigen::Ref<RowMat> dtau,
                     Eigen::Ref<RowMat> J);
 

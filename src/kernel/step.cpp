@@ -67,6 +67,12 @@ void Step::add_grasp_line(const GraspLine& line) {
   lines_.push_back(line);
 }
 
+void Step::set_grasp_line(Index g, const GraspLine& line) {
+  if (g < 0 || g >= static_cast<Index>(lines_.size()))
+    throw std::invalid_argument("Step.set_grasp_line: no line of that grasp to replace");
+  lines_[static_cast<size_t>(g)] = line;
+}
+
 void Step::context(Context& ctx, Chain& carry, const Eigen::VectorXd& q_carry,
                    const Vec& col_rate, Chain& follower, const Eigen::VectorXd& q_f,
                    const Pose& T_D, const Vec& sigmas, const Vec& grasp_lo,

@@ -81,6 +81,8 @@ class Step {
   void set_labels(std::vector<std::string> labels) {
     labels_ = std::make_shared<const std::vector<std::string>>(std::move(labels));
   }
+  // Replace grasp g's line (a Case 2 support's moves with the object's orientation).
+  void set_grasp_line(Index g, const GraspLine& line);
 
   Index n() const { return n_; }
   bool grasp_lines() const { return static_cast<Index>(lines_.size()) == k_; }

@@ -12,7 +12,8 @@ from typing import Any
 import pytest
 
 from dualarm_qp._signals import InterruptHandlers, SignalHold, interrupt_requested
-from dualarm_qp.bench import BenchSettings, run_bench, run_job, runner, write_report
+from dualarm_qp.bench import BenchSettings, keys, run_bench, run_job, runner, write_report
+from dualarm_qp.bench.bare import BareProbe
 from dualarm_qp.bench.report import COLUMNS
 from dualarm_qp.bench.runner import BackendInterrupted, BenchInterrupted
 from dualarm_qp.bench.store import append_result, load_results
@@ -132,10 +133,10 @@ def test_swallowed_signal_keeps_the_job_out_of_the_store(tmp_path: Path) -> None
 
 def _interrupted_osqp(monkeypatch: pytest.MonkeyPatch) -> None:
     """osqp answering as it does when its own handler caught a SIGINT that Python ignores."""
-    from dualarm_qp.solvers import _native
+    from dualarm_qp.solvers.backends import BackendAnswer, osqp_
 
-    monkeypatch.setattr(_native.OSQPNative, "solve", lambda self, problem:
-                        _native.BackendAnswer(None, False, False, "interrupted"))
+    monkeypatch.setattr(osqp_.OSQPNative, "solve", lambda self, problem:
+                        BackendAnswer(problem, None, False, False, "interrupted"))
 
 
 @pytest.mark.skipif("qp:osqp" not in available_solvers(), reason="osqp not installed")
@@ -209,7 +210,7 @@ def test_changed_code_invalidates_stored_rows(tmp_path: Path,
     assert len(digest) == 64 and digest == runner.code_digest()
     first = run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT)
     assert first.records[0]["code"] == digest
-    monkeypatch.setattr(runner, "code_digest", lambda: "0" * 64)
+    monkeypatch.setattr(keys, "code_digest", lambda: "0" * 64)  # what the job keys hold
     again = Counting()
     res = run_bench([LIMITS], ["nullspace"], tmp_path, settings=SHORT, job=again)
     assert again.calls == 1 and res.computed == 1
@@ -244,7 +245,7 @@ def test_bare_probe_passes_on_a_sigint_that_osqp_swallowed(
     monkeypatch.setattr(qpsolvers, "solve_problem", lambda *a, **k: answer)
     cfg = runner.read_config(LIMITS)
     problem = runner.canonical_steps(cfg, SHORT)[0]
-    probe = runner._BareProbe.make(get_solver("qp:osqp"))
+    probe = BareProbe.make(get_solver("qp:osqp"))
     assert probe is not None
     with pytest.raises(KeyboardInterrupt):  # Python's own SIGINT handler
         probe.solve_time(problem)

@@ -85,14 +85,14 @@ def test_kernel_pair_is_coal_bit_for_bit(kind: int, box: tuple[float, float, flo
                              GJK_TOLERANCE, EPA_TOLERANCE)
     for _ in range(5):
         T_a, T_b = _random_pose(rng, spread), _random_pose(rng, spread)
-        distance, point_a, point_b, normal = pairs.measure(0, T_a, T_b)
+        got = pairs.measure(0, T_a, T_b)
         expected = coal_proximity(geom_a, T_a, geom_b, T_b)
-        assert distance == expected.distance
-        np.testing.assert_array_equal(point_a, expected.point_a)
-        np.testing.assert_array_equal(point_b, expected.point_b)
+        assert got.distance == expected.distance
+        np.testing.assert_array_equal(got.point_a, expected.point_a)
+        np.testing.assert_array_equal(got.point_b, expected.point_b)
         # Both divide coal's normal by its length; numpy's dot product (BLAS) may fuse
         # its multiply-adds, so the length may differ in its last bit.
-        np.testing.assert_allclose(normal, expected.normal, rtol=0.0, atol=4e-16)
+        np.testing.assert_allclose(got.normal, expected.normal, rtol=0.0, atol=4e-16)
 
 
 @pytest.mark.parametrize("kind", [0, 1, 2], ids=["box", "capsule", "sphere"])
@@ -106,11 +106,12 @@ def test_kernel_pair_with_local_poses_is_coal(kind: int) -> None:
     seen_overlap = seen_apart = False
     for _ in range(200):
         F_a, F_b = _random_pose(rng, 0.15), _random_pose(rng, 0.15)
-        distance, point_a, point_b, normal = pairs.measure(0, F_a, F_b)
+        got = pairs.measure(0, F_a, F_b)
+        distance, normal = got.distance, got.normal
         expected = coal_proximity(geom_a, F_a @ local_a, geom_b, F_b @ local_b)
         assert distance == pytest.approx(expected.distance, abs=1e-9)
-        np.testing.assert_allclose(point_a, expected.point_a, rtol=0.0, atol=1e-8)
-        np.testing.assert_allclose(point_b, expected.point_b, rtol=0.0, atol=1e-8)
+        np.testing.assert_allclose(got.point_a, expected.point_a, rtol=0.0, atol=1e-8)
+        np.testing.assert_allclose(got.point_b, expected.point_b, rtol=0.0, atol=1e-8)
         if abs(distance) > 1e-6:
             np.testing.assert_allclose(normal, expected.normal, rtol=0.0, atol=1e-6)
         assert np.linalg.norm(normal) == pytest.approx(1.0, abs=1e-12)
@@ -129,13 +130,13 @@ def scene_setup():
 
 def _written_out(scene, frames: np.ndarray, within: float) -> tuple[np.ndarray, Proximities]:
     """The rule of :meth:`CollisionScene.measure`, with coal's Python API for the boxes."""
-    finite, keep, *near = kernel.scene_proximities(
+    near = kernel.scene_proximities(
         frames.reshape(-1, 4), scene._frame_list, scene._a, scene._b, scene._r,
         scene._sphere, scene._ia_list, scene._ib_list, within)
-    assert finite
-    prox = [list(x) for x in zip(*near, strict=True)]
+    assert near.finite
+    prox = zip(near.distance, near.point_a, near.point_b, near.normal, strict=True)
     out_pairs, out = [], []
-    for k, (d, pa, pb, n) in zip(keep.tolist(), prox, strict=True):
+    for k, (d, pa, pb, n) in zip(near.pairs.tolist(), prox, strict=True):
         pair = scene.pairs[k]
         bodies = (scene.bodies[pair.a], scene.bodies[pair.b])
         if any(isinstance(b.shape, Box) for b in bodies):

@@ -59,10 +59,11 @@ def test_a_torque_beyond_the_limit_at_measured_states_is_a_warning_with_a_plant(
     exp = _experiment()
     free = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits)
     assert free.completed, free.failure
-    # A limit just above what the plan needs: the drifting plant's states go beyond it.
+    # A limit just above what the plan needs: the drifting plant's states go beyond it
+    # (a shoulder drift of 1 mrad per sample, 0.8 mm off closure: 0.14% beyond).
     limit = float(_shoulder_torques(free).max()) * 1.002
     exp = _experiment(shoulder=limit)
-    drift = DriftingPlant(5e-4)
+    drift = DriftingPlant(1e-3)
     result = rollout(exp.controller(), exp.initial, duration=exp.duration, limits=exp.limits,
                      plant=drift)
     assert _shoulder_torques(result).max() > limit * (1 + result.torque.allowance_rtol)

@@ -105,16 +105,17 @@ def _crate(tmp_path: Path) -> Path:
 
 @pytest.mark.slow
 def test_only_a_failed_claim_fails_the_comparison(tmp_path, capsys):
-    """The crate is within d_s of the path: the avoiding run cannot start (exit 1, NO);
-    the runs without avoidance complete and go into it (measured: penetration)."""
+    """The crate is 5 mm from the object at the start, within d_s: the avoiding run is
+    refused before its first sample (exit 1, NO); the runs without avoidance complete
+    and go into it (measured: penetration)."""
     out = tmp_path / "out"
     assert main(["collisions", str(_crate(tmp_path)), "--out", str(out), "--quiet",
                  "--no-plots"]) == 1
     captured = capsys.readouterr()
     lines = captured.out.splitlines()
     avoiding = next(x for x in lines if x.startswith("  avoiding "))
-    assert "0 samples, FAILED on path_collision at t = 0 s" in avoiding
-    assert any("obstacle 'crate'" in x for x in lines)  # the failure's message, below it
+    assert "0 samples, FAILED on collision at t = 0 s" in avoiding
+    assert any("object - crate is 5.30 mm apart at the start" in x for x in lines)  # below it
     for folder in ("not_avoiding", "fixed_grasp"):
         line = next(x for x in lines if x.startswith(f"  {folder} "))
         assert "completed; nearest -" in line and "(object - crate); penetration;" in line
@@ -123,7 +124,7 @@ def test_only_a_failed_claim_fails_the_comparison(tmp_path, capsys):
     record = json.loads((out / "collisions.json").read_text())
     assert record["status"] == "failed"
     assert record["claims"] == {"avoiding_completes_and_keeps_clearance": False}
-    assert record["runs"]["avoiding"]["failure"]["criterion"] == "path_collision"
+    assert record["runs"]["avoiding"]["failure"]["criterion"] == "collision"
     assert record["runs"]["not_avoiding"]["penetration"] is True
 
 

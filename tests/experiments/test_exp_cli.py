@@ -190,6 +190,14 @@ def test_reproduce_shows_the_papers_claims(tmp_path, capsys):
     for case in ("a", "b", "c"):
         assert rep["cases"][case]["closure_pos_err_max_m"] < 1e-6
         assert rep["cases"][case]["closure_rot_err_max_rad"] < 1e-6
+    # one page leads to each case: its report and its animation, both there
+    page = (tmp_path / "report.html").read_text()
+    assert "report.html" in rep["outputs"] and "open " in capsys.readouterr().out
+    for case in "abcd":
+        for name in ("report.html", "animation.html"):
+            assert f'href="case_{case}/{name}"' in page
+            assert (tmp_path / f"case_{case}" / name).is_file()
+    assert page.count('src="data:image/png;base64,') == 2  # Figs. 5 and 6
 
 
 def test_unwritable_output_folder_is_bad_input(tmp_path, capsys):

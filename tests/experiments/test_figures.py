@@ -342,6 +342,46 @@ def test_joint_counts_come_from_the_header_and_a_sliding_leader_grasp_is_drawn()
     assert spans(grasp.axes[0], "outside:grasp_leader") == pytest.approx(flat([(0.55, 0.9)]))
 
 
+def test_a_runs_figures_avoid_the_costly_ways_to_draw(monkeypatch):
+    """What made the plots cost several times the run: tight_layout (it measures every
+    tick label before placing the axes), mathematical typesetting of the log axes'
+    labels (parsed anew for each), minor ticks on axes spanning many decades, and the
+    alpha channel of an opaque image."""
+    import io
+
+    import matplotlib.mathtext
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    from dualarm_qp.experiments.figures.canvas import png_bytes
+
+    calls = {"tight_layout": 0, "mathtext": 0}
+
+    def counted(name, original):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return original(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(Figure, "tight_layout", counted("tight_layout", Figure.tight_layout))
+    monkeypatch.setattr(matplotlib.mathtext.MathTextParser, "parse",
+                        counted("mathtext", matplotlib.mathtext.MathTextParser.parse))
+    data, limits = synthetic(), synthetic_limits()
+    log_axes = 0
+    for draw in (grasp_figure, tracking_figure, closure_figure):  # they had tight_layout
+        fig = draw(data, limits, "title")
+        if draw is not grasp_figure:  # drawn: the log axes' labels are typeset
+            assert Image.open(io.BytesIO(png_bytes(fig))).mode == "RGB"
+        for ax in fig.axes:
+            if ax.get_yscale() == "log":
+                log_axes += 1
+                assert not len(ax.yaxis.get_minorticklocs())
+                labels = [t.get_text() for t in ax.get_yticklabels()]
+                assert "10\N{SUPERSCRIPT MINUS}\N{SUPERSCRIPT THREE}" in labels, labels
+    assert log_axes == 3  # tracking: error, singular values; closure
+    assert calls == {"tight_layout": 0, "mathtext": 0}
+
+
 def test_reading_a_file_that_is_not_a_trajectory_fails(tmp_path):
     bad = tmp_path / "x.csv"
     bad.write_text("a,b\n1,2\n")

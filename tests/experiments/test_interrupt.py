@@ -41,7 +41,7 @@ CASES = ("puma_beam_fixed.yaml", "puma_beam_sliding_s7_100.yaml",
 TRIALS = 20  # per command, half SIGINT and half SIGTERM
 RUN_FILES = {"summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
              "tracking.png", "closure.png", "report.html", "config.yaml", "animation.html"}
-REPRODUCE_FILES = {"reproduce.json", "fig5_joint3.png", "fig6_grasp.png"}
+REPRODUCE_FILES = {"reproduce.json", "report.html", "fig5_joint3.png", "fig6_grasp.png"}
 
 
 def _shorter(src: Path, dst: Path, *, duration: float, dt: float) -> Path:

@@ -211,9 +211,12 @@ def test_reproduce_twice_into_the_same_folder(tmp_path, cases, case_plots, capsy
     rep = json.loads((out / "reproduce.json").read_text())
     assert rep["status"] == first["status"] and rep["status"] in ("completed", "failed")
     assert sorted(rep["outputs"]) == ["case_a/", "case_b/", "case_c/", "case_d/",
-                                      "fig5_joint3.png", "fig6_grasp.png"]
+                                      "fig5_joint3.png", "fig6_grasp.png", "report.html"]
     assert names(out) == ["case_a", "case_b", "case_c", "case_d", "fig5_joint3.png",
-                          "fig6_grasp.png", "notes.txt", "reproduce.json"]
+                          "fig6_grasp.png", "notes.txt", "report.html", "reproduce.json"]
+    page = (out / "report.html").read_text()  # the page that leads to each case
+    linked = "report.html" if case_plots else "summary.json"  # no plots: no case report
+    assert all(f'href="case_{k}/{linked}"' in page for k in "abcd")
     assert (out / "case_a" / "notes.txt").read_text() == "mine too"
     assert "error" not in capsys.readouterr().err
 
@@ -329,7 +332,8 @@ def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, case_plots,
     assert rep["status"] == "interrupted" and rep["interrupted_case"] == "b"
     assert list(rep["cases"]) == ["a", "b"] and rep["figures"] == []
     assert rep["cases"]["b"]["status"] == "interrupted"
-    assert names(out) == ["case_a", "case_b", "reproduce.json"]
+    assert names(out) == ["case_a", "case_b", "report.html", "reproduce.json"]
+    assert "Interrupted in case (b)" in (out / "report.html").read_text()
     assert summary(out / "case_b")["samples"] == 3
     assert "interrupted in case (b)" in capsys.readouterr().err
     # and the next reproduction into it just works

@@ -24,7 +24,7 @@ LAYERS = {
     "experiments": 6, "bench": 6,
     "physics": 6,  # the task in MuJoCo: checks a run's folder, adds to its report
     "sweep": 7,  # runs experiments (6) and reuses the bench store (6)
-    "cli": 7, "__main__": 7, "__init__": 7,
+    "cli": 7, "cli_commands": 7, "__main__": 7, "__init__": 7,
 }
 
 
@@ -77,7 +77,7 @@ def test_no_module_imports_from_a_higher_layer(parts, path):
 
 
 #: The one module that builds a DualArmController (Experiment.controller).
-CONTROLLER_BUILDER = ("experiments", "setup.py")
+CONTROLLER_BUILDER = ("experiments", "experiment.py")
 
 
 def _sources():
@@ -110,3 +110,81 @@ def test_only_experiment_controller_builds_a_controller(rel, path):
     else:
         assert not calls, f"{rel} builds a DualArmController (lines {calls}); use " \
                           "Experiment.controller"
+
+
+def _module_name(path: Path) -> str:
+    """Dotted name of a package file (a package's ``__init__.py`` is the package)."""
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """Each package module and the package modules it imports (every import statement,
+    ``TYPE_CHECKING`` blocks and function bodies included).
+
+    ``from .a import b`` is an edge to the module ``a.b`` when there is one, else to
+    ``a``; a stub's name (the compiled kernel's ``.pyi``) is no module here.
+    """
+    files = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+    stubs = {_module_name(p) for p in PACKAGE.rglob("*.pyi")}
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+        edges: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                base = (package[: len(package) - node.level + 1] if node.level else [])
+                mod = ".".join(base + ([node.module] if node.module else []))
+                for alias in node.names:
+                    full = f"{mod}.{alias.name}"
+                    if full in files:
+                        edges.add(full)
+                    elif full not in stubs and mod in files:
+                        edges.add(mod)
+            elif isinstance(node, ast.Import):
+                edges.update(a.name for a in node.names if a.name in files)
+        graph[name] = edges - {name}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import circles: each strongly connected group of two or more modules."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:  # Tarjan's algorithm
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                found.append(sorted(group))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycle():
+    """No module imports a module that (through the package) imports it back, not even
+    for type annotations only: each module's place in the layers is then well defined."""
+    assert _cycles(_import_graph()) == []
+
+
+def test_the_cycle_check_finds_a_circle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

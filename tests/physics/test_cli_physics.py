@@ -116,12 +116,12 @@ def test_a_servo_oscillation_is_named_and_fails_the_check(tmp_path, capsys):
                                                (None, "no torque limits"),
                                                (0.5, "torque/limit 0.5 ")])
 def test_the_console_line_says_when_no_joint_has_a_torque_limit(ratio, words):
-    from dualarm_qp.cli import _physics_line
+    from dualarm_qp.cli_commands import physics_line
 
     peaks = {"deviation_pos_max_m": 1e-4, "internal_force_max_N": 10.0,
              "follower_support_min_N": 15.0, "follower_support_max_N": 30.0,
              "slip_max_m": 1e-4, "torque_ratio_max": ratio, "wall_time_s": 2.0}
-    line = _physics_line("closed_loop", peaks)
+    line = physics_line("closed_loop", peaks)
     assert words in line and "nan" not in line
 
 

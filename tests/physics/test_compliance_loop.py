@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 import yaml
 
-from dualarm_qp.control.compliance import ComplianceGains
 from dualarm_qp.errors import ConfigError
 from dualarm_qp.experiments import build_experiment, load_config, parse_config
 from dualarm_qp.kinematics.robots import example_robots_dir
 from dualarm_qp.physics.check import closed_loop, diagnose
 from dualarm_qp.physics.command import settings_of
+from dualarm_qp.physics.compliance import ComplianceGains
 from dualarm_qp.physics.settings import PhysicsSettings
 
 pytest.importorskip("mujoco", reason="the physics check needs MuJoCo "

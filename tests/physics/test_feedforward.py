@@ -11,7 +11,7 @@ import pytest
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.physics.plant import MujocoPlant
 from dualarm_qp.physics.settings import PhysicsSettings
-from dualarm_qp.task.loads import hand_statics, hand_wrenches
+from dualarm_qp.task.hands import hand_statics, hand_wrenches
 
 pytest.importorskip("mujoco", reason="the physics check needs MuJoCo "
                                      "(pip install -e '.[physics]'; '.[dev]' has it)")

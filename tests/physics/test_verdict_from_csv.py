@@ -22,7 +22,8 @@ import pytest
 from dualarm_qp.cli import main
 from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.kinematics.robots import example_robots_dir
-from dualarm_qp.task.loads import ObjectLoad, hand_wrenches
+from dualarm_qp.task.hands import hand_wrenches
+from dualarm_qp.task.loads import ObjectLoad
 
 pytest.importorskip("mujoco", reason="the physics check needs MuJoCo "
                                      "(pip install -e '.[physics]'; '.[dev]' has it)")

@@ -61,12 +61,12 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
     w_diag, w_full, root_full = cost_arrays(problem)
     W = problem.weight_matrix()
     for x in points:
-        (finite, eq, box, rows, limit, kkt, objective, act_lo, act_up,
-         act_rows) = kernel.certificate(
+        c = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
             *f.args(), ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
             problem.center, x, bounds, 1e-7, 1e-7, True)
-        assert finite
+        assert c.finite
+        eq, box, rows, limit = c.eq, c.box, c.row, c.eq_limit
         want_eq = np.abs(problem.A @ x - problem.b).max(initial=0.0)
         want_box = max(0.0, float(np.max(np.r_[problem.lower - x, x - problem.upper])))
         norms = np.linalg.norm(problem.G, axis=1)
@@ -77,13 +77,15 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
         assert rows == pytest.approx(want_rows, rel=1e-12, abs=1e-14)
         assert limit == 1e-7 * max(1.0, float(np.abs(problem.b).max(initial=0.0)))
         d = x - problem.center
-        assert objective == pytest.approx(float(d @ W @ d), rel=1e-12)
-        np.testing.assert_array_equal(act_lo.view(bool), problem.lower - x >= -ACTIVE_TOL)
-        np.testing.assert_array_equal(act_up.view(bool), x - problem.upper >= -ACTIVE_TOL)
+        assert c.objective == pytest.approx(float(d @ W @ d), rel=1e-12)
+        np.testing.assert_array_equal(c.active_lower.view(bool),
+                                      problem.lower - x >= -ACTIVE_TOL)
+        np.testing.assert_array_equal(c.active_upper.view(bool),
+                                      x - problem.upper >= -ACTIVE_TOL)
         on = (ineq.kind == 0) & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
-        assert act_rows == np.flatnonzero(on).tolist()
+        assert c.active_rows == np.flatnonzero(on).tolist()
         meets = eq <= limit and max(box, rows) <= 1e-7
-        assert kkt == (int(kkt_holds(problem, x, bounds=bounds)) if meets else -1)
+        assert c.kkt == (int(kkt_holds(problem, x, bounds=bounds)) if meets else -1)
 
 
 def test_the_kkt_test_is_not_run_unless_asked():
@@ -93,7 +95,7 @@ def test_the_kkt_test_is_not_run_unless_asked():
         problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
         *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, *cost_arrays(problem),
         problem.center, points[0], True, 1e-7, 1e-7, False)
-    assert out[5] == -1
+    assert out.kkt == -1
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])

@@ -117,7 +117,8 @@ def test_nnls_agrees_with_scipy(seed: int, m: int, n: int) -> None:
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(m, n))
     b = rng.normal(size=m) * 3.0
-    x, rnorm, converged = kernel.nnls(A, b, 50 * (n + 1))
+    out = kernel.nnls(A, b, 50 * (n + 1))
+    x, rnorm, converged = out.x, out.rnorm, out.converged
     ref, ref_norm = nnls(A, b, maxiter=50 * (n + 1))
     assert converged
     assert (x >= 0.0).all()
@@ -133,17 +134,18 @@ def test_nnls_converges_when_the_answer_is_large() -> None:
     rng = np.random.default_rng(189822818)
     A = rng.normal(size=(2, 7))
     b = rng.normal(size=2) * 3.0
-    x, rnorm, converged = kernel.nnls(A, b, 50 * 8)
-    assert converged and (x >= 0.0).all() and x.max() > 100.0
+    out = kernel.nnls(A, b, 50 * 8)
+    x, rnorm = out.x, out.rnorm
+    assert out.converged and (x >= 0.0).all() and x.max() > 100.0
     assert rnorm <= 1e-10 and abs(rnorm - nnls(A, b)[1]) <= 1e-10
 
 
 def test_nnls_zero_and_nonpositive_answers() -> None:
     A = np.eye(3)
-    x, rnorm, converged = kernel.nnls(A, np.array([-1.0, 2.0, 0.0]), 20)
-    assert converged
-    assert x.tolist() == [0.0, 2.0, 0.0]
-    assert rnorm == pytest.approx(1.0)
+    out = kernel.nnls(A, np.array([-1.0, 2.0, 0.0]), 20)
+    assert out.converged
+    assert out.x.tolist() == [0.0, 2.0, 0.0]
+    assert out.rnorm == pytest.approx(1.0)
 
 
 def test_a_stale_kernel_is_refused(tmp_path: Path) -> None:

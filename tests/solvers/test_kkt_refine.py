@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from dualarm_qp.bench.suite import load_suite
-from dualarm_qp.solvers import _native, get_solver
+from dualarm_qp.solvers import get_solver
 from dualarm_qp.solvers._kkt import refine
+from dualarm_qp.solvers.backends import NATIVE
 from dualarm_qp.step.problem import StepProblem
 
 SUITE = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "step_suite.npz"
@@ -34,11 +35,11 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 def _backend_points(backend: str) -> list[tuple[int, StepProblem, np.ndarray]]:
     """Each instance of the subset with the native backend's last iterate, plus two
     perturbations of it (which exercise the rejections)."""
-    if backend not in _native.NATIVE:
+    if backend not in NATIVE:
         pytest.skip(f"{backend} is not installed")
     suite = load_suite(SUITE)
     name = {"osqp": "qp:osqp", "proxqp": "qp:proxsuite"}[backend]
-    native = _native.NATIVE[backend](get_solver(name).options)
+    native = NATIVE[backend](get_solver(name).options)
     rng = np.random.default_rng(3)
     out = []
     for i in range(0, len(suite), STRIDE):
@@ -48,7 +49,7 @@ def _backend_points(backend: str) -> list[tuple[int, StepProblem, np.ndarray]]:
         ans = native.solve(p)
         if ans.x is None:
             continue
-        x = ans.x + p.center
+        x = ans.x
         out += [(i, p, x), (i, p, x + 1e-5 * rng.standard_normal(p.n)),
                 (i, p, np.clip(x + 1e-3 * rng.standard_normal(p.n), p.lower, p.upper))]
     return out

@@ -15,13 +15,14 @@ import numpy as np
 import pytest
 
 from dualarm_qp.bench.suite import load_suite
-from dualarm_qp.solvers import Status, _native, available_solvers, get_solver
+from dualarm_qp.solvers import Status, available_solvers, get_solver
+from dualarm_qp.solvers.backends import NATIVE, osqp_, shifted
 from dualarm_qp.step.problem import StepProblem
 
 SUITE = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "step_suite.npz"
 
 
-@pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
+@pytest.mark.skipif("osqp" not in NATIVE, reason="osqp is not installed")
 def test_osqp_extension_path_matches_the_public_api(monkeypatch: pytest.MonkeyPatch) -> None:
     """Same steps in the same order (warm starts, failures and new setups included):
     the same iterates, statuses and iteration counts with and without the shortcut."""
@@ -29,11 +30,11 @@ def test_osqp_extension_path_matches_the_public_api(monkeypatch: pytest.MonkeyPa
     # QPSolver never hands an empty box (lower > upper) to the backend.
     steps = [p for p in suite.problems[::11] if not (p.lower > p.upper).any()]
     options = get_solver("qp:osqp").options
-    fast = _native.NATIVE["osqp"](options)
+    fast = NATIVE["osqp"](options)
     fast_out = [fast.solve(p) for p in steps]
     assert fast._ext is not None or fast._solver is None
-    monkeypatch.setattr(_native, "_osqp_extension", lambda solver: None)
-    slow = _native.NATIVE["osqp"](options)
+    monkeypatch.setattr(osqp_, "_osqp_extension", lambda solver: None)
+    slow = NATIVE["osqp"](options)
     slow_out = [slow.solve(p) for p in steps]
     assert slow._ext is None
     for a, b in zip(fast_out, slow_out, strict=True):
@@ -59,7 +60,7 @@ def _pathological_step() -> StepProblem:
                            lower=d["lower"], upper=d["upper"], n_grasp=int(d["n_grasp"]))
 
 
-@pytest.mark.skipif("proxqp" not in _native.NATIVE, reason="proxsuite is not installed")
+@pytest.mark.skipif("proxqp" not in NATIVE, reason="proxsuite is not installed")
 def test_proxsuite_profile_caps_inner_and_outer_iterations() -> None:
     solver = get_solver("qp:proxsuite")
     assert solver.options["max_iter"] * (solver.options["max_iter_in"] + 1) <= 50_000
@@ -71,16 +72,16 @@ def test_proxsuite_profile_caps_inner_and_outer_iterations() -> None:
     assert settings.max_iter_in == solver.options["max_iter_in"]
 
 
-@pytest.mark.skipif("proxqp" not in _native.NATIVE, reason="proxsuite is not installed")
+@pytest.mark.skipif("proxqp" not in NATIVE, reason="proxsuite is not installed")
 def test_proxsuite_pathological_call_returns_within_a_second(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The raw cost and no preconditioner (the old set-up) stall proxqp on this step;
     the profile's iteration caps end the call well within a second."""
     problem = _pathological_step()
-    monkeypatch.setattr(_native, "cost_weights", lambda w: np.array(w, dtype=float))
+    monkeypatch.setattr(shifted, "cost_weights", lambda w: np.array(w, dtype=float))
     options = {**get_solver("qp:proxsuite").options, "compute_preconditioner": False,
                "eps_primal_inf": 1e-4}
-    native = _native.NATIVE["proxqp"](options)
+    native = NATIVE["proxqp"](options)
     start = time.perf_counter()
     out = native.solve(problem)
     elapsed = time.perf_counter() - start
@@ -90,9 +91,9 @@ def test_proxsuite_pathological_call_returns_within_a_second(
     assert elapsed < 1.0  # ... but bounded
 
 
-def _endless_osqp() -> _native.OSQPNative:
+def _endless_osqp() -> osqp_.OSQPNative:
     """An osqp object that never converges (no termination check) for 5 s."""
-    return _native.OSQPNative({"eps_abs": 1e-300, "eps_rel": 0.0, "check_termination": 0,
+    return osqp_.OSQPNative({"eps_abs": 1e-300, "eps_rel": 0.0, "check_termination": 0,
                                "polishing": False, "scaling": 0, "max_iter": 10**9,
                                "time_limit": 5.0})
 
@@ -104,7 +105,7 @@ def _interrupt_in(seconds: float) -> threading.Timer:
 
 
 @pytest.mark.sigint  # Python's SIGINT handler
-@pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
+@pytest.mark.skipif("osqp" not in NATIVE, reason="osqp is not installed")
 def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
     """osqp's own SIGINT handler catches a Ctrl-C during a solve and returns
     "interrupted"; the step is not taken and the KeyboardInterrupt reaches the caller."""
@@ -122,7 +123,7 @@ def test_osqp_passes_a_ctrl_c_on_as_keyboard_interrupt() -> None:
 
 
 @pytest.mark.sigint  # the handler installed below is replaced after the test
-@pytest.mark.skipif("osqp" not in _native.NATIVE, reason="osqp is not installed")
+@pytest.mark.skipif("osqp" not in NATIVE, reason="osqp is not installed")
 def test_osqp_interrupted_is_never_a_result() -> None:
     """With a handler that does not raise, the interrupted call is an ERROR with no x,
     and the program's handler still sees the signal."""

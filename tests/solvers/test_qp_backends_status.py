@@ -15,7 +15,7 @@ from dualarm_qp.step.problem import StepProblem
 QP = [n for n in available_solvers() if n.startswith("qp:")]
 #: Backends that may miss a feasible instance (of 40, 10 with s7 = 1e9); a miss is ERROR,
 #: never OPTIMAL or INFEASIBLE. Measured on these seeds with the raw cost: osqp 7,
-#: proxsuite 8, quadprog 5, clarabel 3; with the cost normalised (_native.cost_weights)
+#: proxsuite 8, quadprog 5, clarabel 3; with the cost normalised (backends.shifted.cost_weights)
 #: and the present profiles: none. The first-order backends keep a little headroom.
 MAY_MISS = {"qp:osqp": 2, "qp:proxsuite": 1}
 

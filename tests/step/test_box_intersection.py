@@ -60,9 +60,9 @@ def test_the_intersection_equals_the_per_limit_loop(seed):
     upper_ids = sorted(rng.choice(8, size=k_up, replace=False).tolist())
     got = kernel.intersect_boxes(lowers, lower_ids, uppers, upper_ids, n, PIN_RTOL)
     want = reference(lowers, lower_ids, uppers, upper_ids, n)
-    for g, w in zip(got[:4], want, strict=True):
+    for g, w in zip((got.lower, got.upper, got.lower_by, got.upper_by), want, strict=True):
         np.testing.assert_array_equal(g, w)
-    assert got[4] == -1
+    assert got.nan_limit == -1
 
 
 def test_a_box_empty_by_rounding_is_pinned_and_one_empty_by_more_is_kept():
@@ -78,7 +78,7 @@ def test_the_first_limit_with_a_nan_bound_is_named():
     fine = np.array([0.0, 1.0])
     out = kernel.intersect_boxes(np.array([fine, nan_row]), [0, 3], np.array([nan_row]),
                                  [2], 2, PIN_RTOL)
-    assert out[4] == 2
+    assert out.nan_limit == 2
 
 
 class _Bad:
@@ -131,8 +131,8 @@ def test_an_infinitely_empty_box_stays_empty():
     lower = np.array([np.inf, 0.0])
     upper = np.array([1.0, -np.inf])
     out = kernel.intersect_boxes(lower[None], [0], upper[None], [1], 2, PIN_RTOL)
-    assert out[0][0] == np.inf and out[1][0] == 1.0  # not pinned to [inf, inf]
-    assert out[1][1] == -np.inf
+    assert out.lower[0] == np.inf and out.upper[0] == 1.0  # not pinned to [inf, inf]
+    assert out.upper[1] == -np.inf
 
 
 def test_pin_rounding_refuses_a_nan_bound():

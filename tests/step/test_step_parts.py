@@ -101,15 +101,15 @@ def test_the_loop_equals_the_parts_asked_one_by_one(case, seed: int, scale: floa
             uppers.append(np.asarray(c.upper, dtype=float))
             upper_ids.append(k)
     n = builder.n
-    lower, upper, lo_by, up_by, bad = kernel.intersect_boxes(
+    box = kernel.intersect_boxes(
         np.array(lowers).reshape(-1, n), lower_ids, np.array(uppers).reshape(-1, n),
         upper_ids, n, PIN_RTOL)
-    assert bad < 0
-    _equal(problem.lower, lower, "lower")
-    _equal(problem.upper, upper, "upper")
+    assert box.nan_limit < 0
+    _equal(problem.lower, box.lower, "lower")
+    _equal(problem.upper, box.upper, "upper")
     labels = [limit.name for limit in builder.limits]
-    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
-    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in up_by)
+    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in box.lower_by)
+    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in box.upper_by)
     # The grasps' rates to their range ends (the kernel's own for a straight grasp), and
     # the variables that recover.
     _equal_grasp_rates(builder, ctx)
@@ -271,13 +271,12 @@ def test_python_and_compiled_boxes_are_intersected_in_the_limits_order() -> None
         lowers.append(np.asarray(c.lower, dtype=float))
         uppers.append(np.asarray(c.upper, dtype=float))
     ids = list(range(len(builder.limits)))
-    lower, upper, lo_by, up_by, _ = kernel.intersect_boxes(np.array(lowers), ids,
-                                                           np.array(uppers), ids, n, PIN_RTOL)
-    _equal(problem.lower, lower, "lower")
-    _equal(problem.upper, upper, "upper")
+    box = kernel.intersect_boxes(np.array(lowers), ids, np.array(uppers), ids, n, PIN_RTOL)
+    _equal(problem.lower, box.lower, "lower")
+    _equal(problem.upper, box.upper, "upper")
     labels = [limit.name for limit in builder.limits]
-    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in lo_by)
-    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in up_by)
+    assert problem.lower_by == tuple(labels[i] if i >= 0 else "" for i in box.lower_by)
+    assert problem.upper_by == tuple(labels[i] if i >= 0 else "" for i in box.upper_by)
     assert "python box 2" in problem.lower_by
 
 

@@ -141,3 +141,39 @@ def test_maps_are_drawn_over_the_free_keys_not_the_paired_ones():
     meta = {"swept_keys": swept, "map_keys": ["v", "solver.name"]}
     assert _swept(rows, meta, axes=True) == ["v", "solver.name"]
     assert _swept(rows, meta) == ["v", "solver.name", "duration"]  # the table's columns
+
+
+@pytest.mark.parametrize("n", [2, 3, 5])
+def test_a_grid_shows_every_sampled_point_on_axes_that_span_them(n):
+    """A small grid is squares at its points, not one block of colour reaching beyond
+    them; every point is marked by its outcome; the axes stop just past the samples."""
+    from matplotlib.collections import QuadMesh
+
+    from dualarm_qp.sweep.maps import MARGIN, MIN_CELL_LEVELS
+
+    xs, ys = [0.1 * i for i in range(n)], [100.0 + 50.0 * j for j in range(n)]
+    statuses = ["completed"] * (n * n)
+    statuses[1] = "failed"  # at (xs[0], ys[1])
+    rows, swept = _rows([{"x": x, "y": y} for x in xs for y in ys], statuses)
+    rows[-1].update(criterion=START_UNREACHABLE, status="failed", path_completed_pct=0.0)
+    for r in rows:
+        r.update(recovered_at_s=0.2, worst_limit_ratio_after_recovery=0.9,
+                 joint_margin_min_after_recovery_rad=0.1)
+    for fig in (completion_figure(rows, swept), limits_figure(rows, swept)):
+        maps = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+        assert len(maps) in (1, 3)
+        for ax in maps:
+            cells = [c for c in ax.collections if isinstance(c, QuadMesh)]
+            assert bool(cells) == (n >= MIN_CELL_LEVELS)
+            for (lo, hi), sampled in ((ax.get_xlim(), xs), (ax.get_ylim(), ys)):
+                span = max(sampled) - min(sampled)
+                assert lo < min(sampled) and hi > max(sampled)
+                assert hi - lo == pytest.approx((1 + 2 * MARGIN) * span)
+            marked = {gid: set(zip(ln.get_xdata(), ln.get_ydata(), strict=True))
+                      for ln in ax.lines if (gid := ln.get_gid() or "").startswith("points:")}
+            assert set().union(*marked.values()) == {(x, y) for x in xs for y in ys}
+            assert marked["points:failed"] == {(xs[0], ys[1])}
+            assert marked["points:start unreachable"] == {(xs[-1], ys[-1])}
+            assert len(marked["points:completed"]) == n * n - 2
+        legend = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert {"completed", "failed", "start unreachable"} <= set(legend)

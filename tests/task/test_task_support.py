@@ -370,3 +370,63 @@ def test_builder_puts_the_follower_on_the_support_line_and_records_h() -> None:
     q_l[5] += math.pi  # spins the hand about its approach (world x): object x goes down
     with pytest.raises(InvalidInputError, match="support lost"):
         builder.build(DualArmState(s0.t, q_l, s0.q_f, s0.sigma))
+
+
+def test_the_compiled_line_is_the_contacts_line() -> None:
+    """The kernel's line (what each step computes) is SupportContact.line's, to rounding,
+    at random orientations; where the contact has no line, the kernel holds none. The
+    bar of the beam (its pushing side lost upside down) and a wide face with the mass
+    centre off the bar's axis (a sloped line)."""
+    held = lost = 0
+    rng = np.random.default_rng(11)
+    for contact in (_contact(), _contact(rc=(0.0, 0.05, 0.25), box={
+            "r_min": (0.0, -0.3, -0.4), "r_max": (0.0, 0.3, 0.4)})):
+        plane = contact.compiled()
+        for _ in range(100):
+            R = _R_x_up() @ pin.exp3(rng.normal(0.0, 1.2, 3))
+            line = plane.line(R)
+            try:
+                ref = contact.line(R)
+            except InvalidInputError:
+                assert not line.held
+                lost += 1
+                continue
+            assert line.held
+            held += 1
+            np.testing.assert_allclose(line.gravity, contact.gravity_in_object(R), atol=1e-14)
+            np.testing.assert_allclose(line.origin, ref.origin, atol=1e-15)
+            np.testing.assert_allclose(line.direction, ref.tangent(0.0), atol=1e-15)
+            np.testing.assert_allclose(line.pose0, ref.pose(0.0), atol=1e-15)
+            for mine, theirs in ((line.sigma_min, ref.sigma_min),
+                                 (line.sigma_max, ref.sigma_max),
+                                 (line.sigma_inf, ref.sigma_inf)):
+                assert mine == pytest.approx(theirs, rel=1e-14, abs=1e-15)
+            for sigma in np.linspace(ref.sigma_min, ref.sigma_max, 5):
+                assert line.push(sigma) == pytest.approx(ref.force(sigma), rel=1e-12)
+    assert held > 100 and lost > 20
+
+
+def test_a_support_step_makes_its_python_line_only_when_read(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each step's line comes from the kernel: the contact's Python line is made for a
+    step only when its context's surfaces are read (and then it is that step's line)."""
+    exp = _beam_support_task()
+    builder = exp.controller().builder
+    made: list[np.ndarray] = []
+    python_line = SupportContact.line
+
+    def counted(self: SupportContact, R: Any) -> Any:
+        made.append(np.array(R))
+        return python_line(self, R)
+
+    monkeypatch.setattr(SupportContact, "line", counted)
+    s0 = exp.initial
+    builds = [builder.build(DualArmState(s0.t, s0.q_l + 0.01 * k, s0.q_f, s0.sigma))
+              for k in range(3)]
+    assert made == []
+    surfaces = builds[1].context.surfaces
+    assert len(made) == 1 and builds[1].context.surfaces is surfaces
+    R = builds[1].carry.T_object[:3, :3]
+    np.testing.assert_array_equal(made[0], R)
+    np.testing.assert_allclose(surfaces[0].pose(0.0), python_line(exp.task.contact, R).pose(0.0),
+                               atol=0.0)

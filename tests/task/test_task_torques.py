@@ -24,7 +24,8 @@ from dualarm_qp.errors import InvalidInputError
 from dualarm_qp.experiments import build_experiment, parse_config
 from dualarm_qp.kinematics.puma560 import puma560
 from dualarm_qp.kinematics.robots import example_robot_arm, example_robots_dir
-from dualarm_qp.task.loads import hand_statics, split_load
+from dualarm_qp.task.hands import hand_statics
+from dualarm_qp.task.loads import split_load
 from dualarm_qp.task.torques import ArmStatics, LoadTorques, split_operator, torque_limits_of
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -77,6 +78,15 @@ def test_arm_derivative_at_a_fixed_world_wrench(which: str) -> None:
         g = statics.torque(q, np.zeros(6))
         np.testing.assert_allclose(tau - g, J.T @ w, atol=1e-10)
         np.testing.assert_allclose(J, arm.jacobian(q), atol=1e-12)
+        # The force at a point fixed in the world (a grasp point 5 cm off the tool point):
+        # the moment moved to the tool point, and its derivative with the point held.
+        point = arm.fk(q)[:3, 3] + rng.normal(0.0, 0.05, 3)
+        tau, dtau, J = statics.linearised(q, w, point)
+        np.testing.assert_allclose(tau, statics.torque(q, w, point), atol=1e-12)
+        moved = np.r_[w[:3], w[3:] + np.cross(point - arm.fk(q)[:3, 3], w[:3])]
+        np.testing.assert_allclose(tau - g, J.T @ moved, atol=1e-10)
+        fd = _central(lambda x, w=w, c=point: statics.torque(x, w, c), q)
+        assert np.abs(dtau - fd).max() < 1e-6 * max(1.0, np.abs(fd).max())
 
 
 @pytest.mark.parametrize("which", ["puma", "ur5"])
@@ -113,6 +123,12 @@ def test_compiled_gravity_is_pinocchios(which: str) -> None:
         fext[joint] = data.oMi[joint].actInv(pin.Force(-w[:3], -w[3:] + np.cross(p, -w[:3])))
         loaded = pin.computeStaticTorque(model, data, q, fext)
         np.testing.assert_allclose(statics.torque(q, w), loaded, rtol=0.0,
+                                   atol=1e-12 * max(1.0, np.abs(loaded).max()))
+        # The force at a world point c, its moment about c.
+        c = p + rng.normal(0.0, 0.05, 3)
+        fext[joint] = data.oMi[joint].actInv(pin.Force(-w[:3], -w[3:] + np.cross(c, -w[:3])))
+        loaded = pin.computeStaticTorque(model, data, q, fext)
+        np.testing.assert_allclose(statics.torque(q, w, c), loaded, rtol=0.0,
                                    atol=1e-12 * max(1.0, np.abs(loaded).max()))
 
 
@@ -166,7 +182,8 @@ def test_whole_derivative_matches_finite_differences(name: str) -> None:
             load = exp.task.load
             K = split_operator(hands, T[:3, :3] @ load.mass_centre + T[:3, 3], load.mass)
             w = (K @ load.gravity).reshape(2, 6)
-            return np.r_[torques.leader.torque(q_l, w[0]), torques.follower.torque(q_f, w[1])]
+            return np.r_[torques.leader.torque(q_l, w[0], hands[0].point),
+                         torques.follower.torque(q_f, w[1], hands[1].point)]
 
         st = torques.linearised(q_l, q_f, s.sigma, s.sigma_leader)
         np.testing.assert_allclose(st.tau, tau(y), atol=1e-9)
@@ -234,7 +251,8 @@ def test_load_torques_kernel_refuses_malformed_sets() -> None:
     args = (torques.leader.chain, torques.leader.frame, torques.follower.chain,
             torques.follower.frame, s.q_l, s.q_f, load.gravity, load.mass)
     tail = (GRASP_STEP, FALLBACK_LENGTH, RCOND_MIN)
-    tau, _, w = kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, *tail)
+    loads = kernel.load_torques(*args, [points] * 2, [free] * 2, [centre] * 2, *tail)
+    tau, w = loads.tau, loads.w
     np.testing.assert_allclose(tau, torques.torques(s.q_l, s.q_f, s.sigma), atol=1e-9)
     np.testing.assert_allclose(w, torques.wrenches(s.q_l, s.sigma), atol=1e-9)
     with pytest.raises(ValueError, match="one set per sliding grasp"):

@@ -14,7 +14,8 @@ from dualarm_qp.kinematics import urdf_arm
 from dualarm_qp.kinematics.robots import example_robot_arm, example_robots_dir
 from dualarm_qp.viz.animation import animation_html
 from dualarm_qp.viz.frames import read_timeline
-from dualarm_qp.viz.meshes import MeshLibrary, place_visuals, read_mesh, read_stl, urdf_of
+from dualarm_qp.viz.mesh_files import MeshLibrary, read_mesh, read_stl
+from dualarm_qp.viz.meshes import place_visuals, urdf_of
 from dualarm_qp.viz.page import _inline, viewer_bundle
 from dualarm_qp.viz.scene import arm_node_poses, arm_parts, describe_scene
 

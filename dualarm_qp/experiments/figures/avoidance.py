@@ -17,8 +17,12 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .canvas import limit_lines, new_figure, tick_text
+from .canvas import fixed_margins, limit_lines, new_figure, panel_title, tick_text
 from .compare import Curve
+
+#: The figure's height, the room for its title and the height of one line of a legend
+#: or of the note at 7 points [in].
+HEIGHT, TITLE_IN, LINE_IN = 7.4, 0.4, 0.16
 
 #: Colour of the penetration band (below a clearance of 0).
 PENETRATION_COLOUR = "C3"
@@ -116,7 +120,7 @@ def avoidance_figure(clearances: Sequence[Curve], grasps: Sequence[Curve], *,
         ``"penetration"``.
     """
     window = near_window(clearances, influence_distance)
-    fig = new_figure(figsize=(11, 7.4) if window is not None else (8, 7.4))
+    fig = new_figure(figsize=(11, HEIGHT) if window is not None else (8, HEIGHT))
     grid = fig.add_gridspec(2, 2 if window is not None else 1, height_ratios=(1.5, 1),
                             width_ratios=(1.7, 1) if window is not None else None)
     columns = [None] if window is None else [None, window]
@@ -134,15 +138,16 @@ def avoidance_figure(clearances: Sequence[Curve], grasps: Sequence[Curve], *,
                           f"{tick_text(grasp_range[1] * scale)} {unit}")
         ax2.set_xlabel("t [s]")
         if win is not None:
-            ax1.set_title(f"from t = {win[0]:.3g} s, as the runs come within d_i",
-                          fontsize=9)
+            panel_title(ax1, f"from t = {win[0]:.3g} s, as the runs come within d_i",
+                        fontsize=9)
         axes += [ax1, ax2]
     axes[0].set_ylabel(f"nearest clearance [{unit}]", fontsize=9)
     axes[1].set_ylabel(f"grasp [{unit}]", fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
     more, more_labels = axes[1].get_legend_handles_labels()
     fig.legend([*handles, *more], [*labels, *more_labels], loc="upper center",
-               bbox_to_anchor=(0.5, 0.96), ncol=2, fontsize=7, frameon=False)
+               bbox_to_anchor=(0.5, 1.0 - TITLE_IN / HEIGHT), ncol=2, fontsize=7,
+               frameon=False)
     rows = -(-(len(labels) + len(more_labels)) // 2)
     if cut:
         top = safety_distance + TOP_BANDS * (influence_distance - safety_distance)
@@ -150,8 +155,9 @@ def avoidance_figure(clearances: Sequence[Curve], grasps: Sequence[Curve], *,
             f"The clearance axes stop at {tick_text(top * scale)} {unit}: farther pairs give "
             "no row.")
     fig.suptitle(title, fontsize=10)
-    bottom = 0.022 * (note.count("\n") + 2) if note else 0.0
-    fig.tight_layout(rect=(0, bottom, 1, 0.95 - 0.018 * rows))
+    fixed_margins(fig, left=0.85, right=0.2, top=TITLE_IN + LINE_IN * rows + 0.35,
+                  bottom=0.6 + (LINE_IN * (note.count("\n") + 1) if note else 0.0),
+                  hspace=0.12, wspace=0.15)
     if note:
         fig.text(0.01, 0.012, note, fontsize=7, color="0.3")
     return fig

@@ -18,7 +18,16 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ...collision.settings import CLEARANCE_ALLOWANCE
-from .canvas import LIMIT_COLOUR, limit_lines, new_figure, outside_mask, outside_spans, shade_spans
+from .canvas import (
+    LIMIT_COLOUR,
+    fixed_margins,
+    limit_lines,
+    new_figure,
+    outside_mask,
+    outside_spans,
+    panel_title,
+    shade_spans,
+)
 from .rundata import PlotLimits, RunData
 
 #: The file name of the figure.
@@ -29,6 +38,9 @@ CLEARANCE_COLUMNS = (("clearance_arm_arm", "arm - arm", "C0"),
                      ("clearance_arm_object", "arm - object", "C2"),
                      ("clearance_obstacles", "arms and object - obstacles", "C1"),
                      ("clearance_self", "arm - itself", "C4"))
+
+#: The figure's height and its margin above the axis [in].
+HEIGHT, TOP = 5.0, 0.35
 
 #: The axis stops this many influence distances up.
 TOP_PER_INFLUENCE = 3.0
@@ -56,7 +68,7 @@ def clearance_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figu
     ``clearance:<column>`` for each group drawn; samples below ``d_s - allowance`` are
     shaded (``outside:clearance``).
     """
-    fig = new_figure(figsize=(8, 5))
+    fig = new_figure(figsize=(8, HEIGHT))
     ax = fig.subplots()
     t = data.t
     per_m, unit = limits.units.per_m, limits.units.length
@@ -95,13 +107,18 @@ def clearance_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figu
                 label=f"above {top * per_m:.4g} {unit}: on the top edge")
     ax.set_xlabel("t [s]")
     ax.set_ylabel(f"smallest distance [{unit}]")
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
-              frameon=False)
+    # The legend under the axis, below the time axis's label: two columns, each row
+    # about 0.16 in high at this font size.
+    rows = -(-len(ax.get_legend_handles_labels()[1]) // 2)
+    bottom = 0.62 + 0.16 * rows
+    axis_height = HEIGHT - TOP - bottom
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.5 / axis_height),
+              ncol=2, frameon=False)
     state = ("" if limits.clearance_enforced
              else " (collision avoidance off: measured only)")
-    ax.set_title((title + ": " if title else "") + "clearance of each group of pairs" + state,
-                 fontsize=10)
-    fig.tight_layout()
+    panel_title(ax, (title + ": " if title else "") + "clearance of each group of pairs" + state,
+                fontsize=10)
+    fixed_margins(fig, top=TOP, bottom=bottom)
     return fig
 
 

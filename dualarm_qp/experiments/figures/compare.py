@@ -19,10 +19,12 @@ from numpy.typing import NDArray
 
 from .canvas import (
     finite_max_abs,
+    fixed_margins,
     limit_lines,
     new_figure,
     outside_mask,
     outside_spans,
+    panel_title,
     shade_spans,
     speed_axis,
     tick_text,
@@ -33,6 +35,10 @@ FloatArray = NDArray[np.float64]
 
 #: Length of the zoomed window at the start [s].
 ZOOM_S = 0.5
+
+#: The figure's height, the room for its title and the height of one line of a legend
+#: or of the note at 7 points [in].
+HEIGHT, TITLE_IN, LINE_IN = 7.2, 0.4, 0.16
 
 
 @dataclass(frozen=True)
@@ -190,7 +196,7 @@ def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, floa
         gid ``"limit:range"`` / ``"limit:speed"`` and shaded spans
         ``"outside:range:<label>"`` / ``"outside:speed:<label>"``.
     """
-    fig = new_figure(figsize=(11, 7.2))
+    fig = new_figure(figsize=(11, HEIGHT))
     axes = fig.subplots(2, 2, gridspec_kw={"width_ratios": (2.2, 1)})
     t0 = min((float(c.t[0]) for c in curves if c.t.size), default=0.0)
     dts = [float(np.median(np.diff(c.t))) for c in curves if c.t.size > 1]
@@ -202,8 +208,8 @@ def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, floa
     _speed_panel(axes[1][1], curves, speed_limit, scale, unit, "speed", window)
     axes[0][0].set_ylabel(value_label)
     axes[1][0].set_ylabel(speed_label)
-    axes[0][1].set_title(f"first {zoom:g} s", fontsize=9)
-    axes[1][1].set_title(f"first {zoom:g} s", fontsize=9)
+    panel_title(axes[0][1], f"first {zoom:g} s", fontsize=9)
+    panel_title(axes[1][1], f"first {zoom:g} s", fontsize=9)
     for ax in axes[1]:
         ax.set_xlabel("t [s]")
     # One legend for the figure, under the title: the runs, the range, the speed limit
@@ -211,12 +217,14 @@ def comparison_figure(curves: Sequence[Curve], *, value_range: tuple[float, floa
     handles, labels = axes[0][0].get_legend_handles_labels()
     more, more_labels = axes[1][0].get_legend_handles_labels()
     ncol = 2
-    fig.legend([*handles, *more], [*labels, *more_labels], loc="upper center",
-               bbox_to_anchor=(0.5, 0.96), ncol=ncol, fontsize=7, frameon=False)
     rows = -(-(len(labels) + len(more_labels)) // ncol)
+    fig.legend([*handles, *more], [*labels, *more_labels], loc="upper center",
+               bbox_to_anchor=(0.5, 1.0 - TITLE_IN / HEIGHT), ncol=ncol, fontsize=7,
+               frameon=False)
     fig.suptitle(title, fontsize=10)
-    top = 1.0 - 0.022 * rows
-    fig.tight_layout(rect=(0, 0.025 * (note.count("\n") + 2) if note else 0, 1, top))
+    top = TITLE_IN + LINE_IN * rows + 0.35
+    bottom = 0.6 + (LINE_IN * (note.count("\n") + 1) if note else 0.0)
+    fixed_margins(fig, left=1.0, right=0.25, top=top, bottom=bottom, hspace=0.3, wspace=0.15)
     if note:
         fig.text(0.01, 0.012, note, fontsize=7, color="0.3")
     return fig

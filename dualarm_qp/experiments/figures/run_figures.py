@@ -32,12 +32,15 @@ from matplotlib.figure import Figure
 
 from .canvas import (
     finite_max_abs,
+    fixed_margins,
     limit_lines,
     log_axis,
+    log_y,
     new_figure,
     note_bottom,
     outside_mask,
     outside_spans,
+    panel_title,
     save_png,
     shade_spans,
     speed_axis,
@@ -55,6 +58,9 @@ RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.
 
 _ARMS = (("l", "leader"), ("f", "follower"))
 
+#: At most this many intervals between the ticks of each axis of a grid's panel.
+GRID_TICKS = 4
+
 #: How far the error axes go below the smallest tolerance [powers of ten]: an error a
 #: million times smaller than its tolerance is drawn on the bottom edge.
 LOG_DECADES = 6
@@ -70,14 +76,17 @@ def _arm_grid(data: RunData, height: float, bottom: float, rows: int = 2
     """Return a rows x n grid (leader, follower, ...) with fixed margins [in].
 
     Fixed margins rather than ``tight_layout``, which costs more than the drawing on
-    grids this size.
+    grids this size. Each small panel has at most :data:`GRID_TICKS` intervals between
+    ticks on each axis: a panel's ticks are much of the cost of drawing it.
     """
     n = max(data.n_joints("l"), data.n_joints("f"), 1)
     width = 2.4 * n + 0.8
     fig = new_figure(figsize=(width, height))
     axes = fig.subplots(rows, n, sharex=True, squeeze=False)
-    fig.subplots_adjust(left=0.75 / width, right=1 - 0.15 / width, top=1 - 0.75 / height,
-                        bottom=bottom / height, wspace=0.38, hspace=0.32)
+    fixed_margins(fig, left=0.75, right=0.15, top=0.75, bottom=bottom, wspace=0.38,
+                  hspace=0.32)
+    for ax in axes.flat:
+        ax.locator_params(nbins=GRID_TICKS)
     return fig, axes, n
 
 
@@ -102,7 +111,7 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
             limit_lines(ax, (lim.q_min[j], lim.q_max[j]), name, scale=per_rad)
             shade_spans(ax, outside_spans(t, outside_mask(q[:, j], lim.q_min[j],
                                                           lim.q_max[j])), name)
-            ax.set_title(f"{label} q{j + 1}", fontsize=9)
+            panel_title(ax, f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
             if row == 1:
                 ax.set_xlabel("t [s]", fontsize=8)
@@ -145,7 +154,7 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
             shade_spans(ax, outside_spans(t, outside_mask(real[:, j], -vmax, vmax)), name,
                         label="realised over the limit")
             speed_axis(ax, vmax * per_rad, finite_max_abs(cmd[:, j], real[:, j]) * per_rad)
-            ax.set_title(f"{label} q{j + 1}", fontsize=9)
+            panel_title(ax, f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
         axes[row][0].set_ylabel(f"[{unit}/s]", fontsize=8)
     if accel:
@@ -168,7 +177,7 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
                 shade_spans(ax, outside_spans(t, outside_mask(acc[:, j], -amax, amax)),
                             name, label="realised over the limit")
                 speed_axis(ax, amax * per_rad, finite_max_abs(acc[:, j]) * per_rad)
-                ax.set_title(f"{label} q{j + 1} acceleration", fontsize=9)
+                panel_title(ax, f"{label} q{j + 1} acceleration", fontsize=9)
                 ax.tick_params(labelsize=7)
             axes[row][0].set_ylabel(f"[{unit}/s^2]", fontsize=8)
     for ax in axes[-1]:
@@ -246,7 +255,7 @@ def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     ax2.legend(fontsize=7, title=f"largest |speed| {peak:.4g} {unit}/s", title_fontsize=7)
     fig.suptitle((title + ": " if title else "") + "grasp position along the bar",
                  fontsize=10)
-    fig.tight_layout()
+    fixed_margins(fig, hspace=0.1)
     return fig
 
 
@@ -256,7 +265,7 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
     t = data.t
     errors = (data.col("leader_pos_err"), data.col("leader_rot_err"))
-    ax1.set_yscale("log")
+    log_y(ax1)
     floor = log_axis(ax1, limits.tracking, errors, decades=LOG_DECADES)
     ax1.plot(t, np.maximum(errors[0], floor), color="C0", label="position [m]")
     ax1.plot(t, np.maximum(errors[1], floor), color="C1", label="rotation [rad]")
@@ -269,7 +278,7 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     ax1.legend(fontsize=7, ncol=2)
 
     s_min = limits.singular_value_min
-    ax2.set_yscale("log")
+    log_y(ax2)
     floor = log_axis(ax2, (s_min,), (data.col("sigma_min_l"), data.col("sigma_min_f")),
                      decades=2)
     for name, colour, label in (("sigma_min_l", "C2", "leader"),
@@ -300,7 +309,7 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     ax3.legend(fontsize=7, ncol=3)
     fig.suptitle((title + ": " if title else "")
                  + "leader tracking, conditioning, task scale", fontsize=10)
-    fig.tight_layout()
+    fixed_margins(fig, hspace=0.1)
     return fig
 
 
@@ -317,7 +326,7 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     corrected = np.nanmax(data.col("correction_f"), initial=0.0) > 0.0
     errors = [data.col("closure_pos_err"), data.col("closure_rot_err")]
     drawn = [*errors, data.col("closure_pos_err_pre") if corrected else np.zeros(0)]
-    ax.set_yscale("log")
+    log_y(ax)
     floor = log_axis(ax, limits.closure, drawn, decades=LOG_DECADES)
     ax.plot(t, np.maximum(errors[0], floor), marker=marker, color="C0", label="position [m]")
     ax.plot(t, np.maximum(errors[1], floor), marker=marker, color="C1",
@@ -333,8 +342,8 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     ax.set_xlabel("t [s]")
     ax.set_ylabel("closure error")
     ax.legend(fontsize=7)
-    ax.set_title((title + ": " if title else "") + "grasp closure error", fontsize=10)
-    fig.tight_layout()
+    panel_title(ax, (title + ": " if title else "") + "grasp closure error", fontsize=10)
+    fixed_margins(fig, top=0.35)
     return fig
 
 

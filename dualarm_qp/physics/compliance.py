@@ -45,11 +45,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
+from ..control.measured import HandReading
 from ..errors import InvalidInputError
-from ..physics.measure import internal_force
 from ..step.tasks import GraspClosureTask
-from ..task.loads import ObjectLoad, hand_statics, wrench_space
-from .measured import HandReading
+from ..task.hands import hand_statics
+from ..task.loads import ObjectLoad, wrench_space
+from .measure import internal_force
 
 if TYPE_CHECKING:
     from ..step.context import StepContext

@@ -8,19 +8,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dualarm_qp.control.compliance import (
+from dualarm_qp.control.measured import HandReading
+from dualarm_qp.control.rollout import rollout
+from dualarm_qp.errors import InvalidInputError
+from dualarm_qp.experiments import build_experiment, load_config
+from dualarm_qp.physics.compliance import (
     ComplianceGains,
     ComplianceTask,
     NoWrenchReadingError,
     WrenchMeasurement,
 )
-from dualarm_qp.control.measured import HandReading
-from dualarm_qp.control.rollout import rollout
-from dualarm_qp.errors import InvalidInputError
-from dualarm_qp.experiments import build_experiment, load_config
 from dualarm_qp.step.build import StepBuilder
 from dualarm_qp.step.state import DualArmState
-from dualarm_qp.task.loads import ObjectLoad, hand_statics, split_load
+from dualarm_qp.task.hands import hand_statics
+from dualarm_qp.task.loads import ObjectLoad, split_load
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 BEAM = CONFIGS / "puma_beam_limits.yaml"

@@ -1,0 +1,11 @@
+"""ecos: an interior-point conic method, through qpsolvers (its options are not checked here)."""
+
+from __future__ import annotations
+
+from .base import Backend
+
+BACKEND = Backend("ecos", "ecos", profile={
+    "abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10, "max_iters": 100})
+
+
+__all__ = ["BACKEND"]
