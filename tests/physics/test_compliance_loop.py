@@ -93,3 +93,25 @@ def test_the_heavy_bar_keeps_its_split_and_torque_only_with_the_compliant_follow
     stiff = closed_loop(exp, dataclasses.replace(settings, compliance=None))
     assert stiff.summary()["torque_ratio_max"] > 1.05
     assert np.nanmax(stiff.log["split_error"][10:]) > 2 * np.nanmax(settled)
+
+
+def _support_error(run) -> np.ndarray:
+    """|measured - planned| support force [N] per sample: the plan's share of what the
+    two hands measured along the support's normal, against the support's own."""
+    g = run.log
+    support, share = np.asarray(g["support"]), np.asarray(g["share"])
+    planned = np.asarray(g["share_plan"]) * support / share
+    return np.abs(support - planned)
+
+
+@pytest.mark.slow
+def test_a_compliant_support_pushes_with_the_plans_force():
+    """Case 2: the compliant follower regulates its normal force to the support line's;
+    the standard closure leaves it where the servos' stiffness puts it."""
+    exp, settings = _experiment(CONFIGS / "puma_beam_support.yaml")
+    stiff = closed_loop(exp, dataclasses.replace(settings, compliance=None))
+    compliant = closed_loop(exp, dataclasses.replace(settings, compliance=ComplianceGains()))
+    for run in (stiff, compliant):
+        assert run.result is not None and run.result.completed, run.result.message
+    assert np.nanmedian(_support_error(stiff)) > 8.0
+    assert np.nanmax(_support_error(compliant)) < 4.0
