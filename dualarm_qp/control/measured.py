@@ -43,6 +43,10 @@ class HandReading:
     object_pose : ndarray, shape (7,)
         The object frame's position [m] and orientation (quaternion ``w, x, y, z``),
         world.
+    torque_ratio : float
+        The largest share of a joint's torque limit the arms' joints reached over the
+        sample (the plant's own torques; NaN: no limits, or a plant that does not
+        measure them).
     """
 
     leader: FloatArray
@@ -51,6 +55,7 @@ class HandReading:
     internal_follower: FloatArray
     share: float
     object_pose: FloatArray
+    torque_ratio: float = float("nan")
 
 
 def load_share(leader: FloatArray, follower: FloatArray, up: FloatArray) -> float:
@@ -76,6 +81,7 @@ def record_readings(trace: Trace, plant: Any) -> None:
         trace.internal_follower[k] = r.internal_follower
         trace.load_share[k] = r.share
         trace.object_pose[k] = r.object_pose
+        trace.torque_ratio_measured[k] = r.torque_ratio
 
 
 __all__ = ["HandReading", "load_share", "record_readings"]

@@ -52,7 +52,8 @@ class Trace:
     wrenches measured with each sample's state (:mod:`dualarm_qp.control.measured`; NaN
     without such a plant): each hand's wrench on the object, the size of the internal
     force [N] and the follower's internal wrench, the follower's share of the load, the
-    object's pose (position [m], quaternion ``w, x, y, z``).
+    object's pose (position [m], quaternion ``w, x, y, z``); ``torque_ratio_measured``
+    the largest share of a joint's torque limit its joints reached over the sample.
 
     ``clearance_*`` are the smallest signed distances [m] of each group of pairs of the
     task's collision scene at the row's state (``inf`` for a group without pairs; NaN
@@ -120,6 +121,7 @@ class Trace:
     internal_follower: FloatArray
     load_share: FloatArray
     object_pose: FloatArray
+    torque_ratio_measured: FloatArray
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:

@@ -214,8 +214,10 @@ def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
     wrench_follower_mz`` the measured wrenches (the convention of the ``f_*`` columns),
     ``internal_force`` [N] the size of their internal part and ``internal_follower_fx ..
     internal_follower_mz`` the follower's internal wrench, ``load_share_follower`` the
-    follower's share of the load, and ``object_x, object_y, object_z`` [m],
-    ``object_qw .. object_qz`` the object's measured pose.
+    follower's share of the load, ``object_x, object_y, object_z`` [m],
+    ``object_qw .. object_qz`` the object's measured pose, and ``torque_ratio_measured``
+    the largest share of a joint's torque limit the plant's joints reached over the
+    sample (NaN without limits).
     """
     for role, wrench in (("leader", trace.wrench_leader), ("follower", trace.wrench_follower)):
         for j, part in enumerate(_WRENCH):
@@ -226,6 +228,7 @@ def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
     cols["load_share_follower"] = trace.load_share
     for j, part in enumerate(("x", "y", "z", "qw", "qx", "qy", "qz")):
         cols[f"object_{part}"] = trace.object_pose[:, j]
+    cols["torque_ratio_measured"] = trace.torque_ratio_measured
 
 
 def write_trace_csv(path: Path, trace: Trace) -> None:

@@ -432,14 +432,14 @@ class MujocoPlant:
         log["gap"].append(0.0 if self._gap_q is None else float(-d.qpos[self._gap_q]))
         tau_j = d.qfrc_actuator[self._arm_dofs] + d.qfrc_applied[self._arm_dofs]
         ratio = np.abs(tau_j) / self._tau_max
-        log["torque_ratio_peak"].append(max(peak_tau, float(np.max(ratio)))
-                                        if np.isfinite(self._tau_max).any() else np.nan)
+        peak = max(peak_tau, float(np.max(ratio))) if np.isfinite(self._tau_max).any() else np.nan
+        log["torque_ratio_peak"].append(peak)
         log["w_leader"].append(reading.leader)
         log["w_follower"].append(reading.follower)
         log["torque"].append(tau_j.copy())
         log["torque_peak"].append(np.maximum(self.peak_torque, np.abs(tau_j)))
         log["sigma"].append(state.sigma)
-        return reading
+        return dataclasses.replace(reading, torque_ratio=peak)
 
     def arrays(self) -> dict[str, FloatArray]:
         """Return the log as arrays (one row per controller sample)."""

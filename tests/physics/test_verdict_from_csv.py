@@ -5,7 +5,8 @@ trajectory.csv; ``dualarm-qp physics`` on its folder runs the same closed loop (
 same controller, settings and start: MuJoCo is deterministic) and judges it. Here the
 peaks the verdict reads are recomputed from the CSV alone (the object's pose against
 ``D(t)`` of the file's path, the measured wrenches against the plan's split of the
-load) and judged against the thresholds in ``summary.json``.
+load, the joints' measured share of their torque limits) and judged against the
+thresholds in ``summary.json``.
 """
 
 from __future__ import annotations
@@ -89,5 +90,8 @@ def test_the_verdict_of_the_compliant_heavy_bar_from_trajectory_csv(tmp_path):
     assert pos.max() <= s["deviation_max_m"] and rot.max() <= s["rotation_max_rad"]
     squeeze = c["internal_force"].max() - p["replay"]["internal_force_max_N"]
     assert squeeze <= s["squeeze_max_N"]
+    torque = c["torque_ratio_measured"]
+    assert torque.max() == pytest.approx(loop["torque_ratio_max"], rel=1e-9)
+    assert torque.max() <= s["torque_ratio_max"]  # the file's allowance, 1.02
     assert split.max() < 0.10  # the compliant follower keeps the plan's split
     assert p["status"] == "ok" and loop["cause"] is None
