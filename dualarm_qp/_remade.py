@@ -1,11 +1,12 @@
-"""Objects that hold the kernel's objects: pickled without them, made again (private).
+"""Objects that hold what a pickle cannot: pickled without it, made again (private).
 
-A kernel object (a ``dualarm_qp._kernel`` class: a chain, a waypoint path, the collision
-scene's coal solvers) is no Python object that a pickle can hold; nor is a native QP
-solver's module or set-up solver. A class that holds some names them in
-``_kernel_attributes`` and makes them in ``_remake``: its pickles (of an arm, a task, a
-collision scene, a controller; ``copy.deepcopy`` pickles too) leave them out, and
-unpickling makes them again from the rest of the state.
+The kernel's chains, waypoint paths and support planes pickle themselves. Three things
+do not: the kernel's loop over the step's parts (``kernel.Step``, whose parts may be
+Python objects the kernel only refers to: it is made again from them), the collision
+scene's coal solvers, and a native QP solver's module or set-up solver (OSQP,
+ProxQP). A class that holds one names it in ``_kernel_attributes`` and makes it in
+``_remake``: its pickles (``copy.deepcopy`` pickles too) leave it out, and unpickling
+makes it again from the rest of the state.
 """
 
 from __future__ import annotations

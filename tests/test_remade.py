@@ -1,19 +1,18 @@
-"""The holders of kernel objects: pickled without them, made again when unpickled."""
+"""The holders of objects a pickle cannot hold: pickled without them, made again."""
 
 from __future__ import annotations
 
 import copy
 import pickle
+import threading
 
-import numpy as np
 import pytest
 
-from dualarm_qp._compiled import kernel
 from dualarm_qp._remade import KernelHolder
 
 
 class _Path(KernelHolder):
-    """A waypoint path of the kernel's, made from two poses."""
+    """An object that holds one a pickle cannot hold (a lock stands for a native solver)."""
 
     _kernel_attributes = ("_path",)
 
@@ -23,9 +22,7 @@ class _Path(KernelHolder):
         self._remake()
 
     def _remake(self) -> None:
-        T = np.eye(4)
-        T[0, 3] = self.offset
-        self._path = kernel.WaypointPath([0.0, 1.0], np.concatenate([np.eye(4), T]))
+        self._path = threading.Lock()
         self.made += 1
 
 

@@ -31,7 +31,6 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._remade import KernelHolder
 from .._validate import as_array, as_pose, check_limits
 from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
 from .chain import (
@@ -50,7 +49,7 @@ FloatArray = NDArray[np.float64]
 
 
 
-class SerialArm(KernelHolder):
+class SerialArm:
     """A revolute serial arm: a Pinocchio model, joint limits, base and tool poses.
 
     Parameters
@@ -96,9 +95,6 @@ class SerialArm(KernelHolder):
     ShapeError, NonFiniteError, LimitsError, InvalidInputError
         Malformed parameters, or a model that is not one chain of revolute joints.
     """
-
-    # Made again when unpickled (_remake): the kernel's chain and its empty output.
-    _kernel_attributes = ("_chain", "_no_jacobian")
 
     def __init__(
         self,
@@ -174,17 +170,10 @@ class SerialArm(KernelHolder):
         self._model = model
         self._data = model.createData()
         self._tool_frames = (int(self._tool_id),)
-        self._remake()
+        # The kernel's copy of the Pinocchio model (it pickles itself).
+        self._chain = compiled_chain(model)
         self.base = base  # validated by the property setters
         self.tool = tool
-
-    def _remake(self) -> None:
-        # The kernel's copy of the Pinocchio model (a pickle holds the model).
-        self._chain = compiled_chain(self._model)
-        # No Jacobian asked for: an empty (0, n) output. Sliced from a row, so that its
-        # strides are a C array's (numpy gives np.empty((0, n)) zero strides, which the
-        # kernel's in-place outputs refuse; so does a deep copy of this one).
-        self._no_jacobian = np.empty((1, self._model.nq))[:0]
 
     # ------------------------------------------------------------------ basics
     @property
@@ -349,7 +338,7 @@ class SerialArm(KernelHolder):
         """
         links = self._links
         T = np.empty((len(links), 4, 4))
-        self._chain.compute(self.check_q(q), links, (), T.reshape(-1, 4), self._no_jacobian)
+        self._chain.poses(self.check_q(q), links, T.reshape(-1, 4))
         return T
 
     def fk(self, q: Any) -> FloatArray:
@@ -358,7 +347,7 @@ class SerialArm(KernelHolder):
         With the default identity tool this is the flange.
         """
         T = np.empty((4, 4))
-        self._chain.compute(self.check_q(q), self._tool_frames, (), T, self._no_jacobian)
+        self._chain.poses(self.check_q(q), self._tool_frames, T)
         return T
 
     def jacobian(self, q: Any) -> FloatArray:

@@ -334,7 +334,7 @@ class StepBuilder(KernelHolder):
             upper=out.upper, G=out.G, h=out.h, n_grasp=self.layout.n_grasp, x_prev=x_prev,
             names=self.layout.names, row_names=out.row_names,
             eq_names=self._eq_names or out.eq_names, lower_by=out.lower_names,
-            upper_by=out.upper_names, build_time=seconds, source=out)
+            upper_by=out.upper_names, build_time=seconds)
 
     def _failure(self, out: Any) -> InvalidInputError:
         """Return the error of a part that gave no piece (``out.failed_part``)."""

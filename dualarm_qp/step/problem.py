@@ -169,11 +169,6 @@ class StepProblem:
         The limit that set each variable's lower and upper bound (for messages).
     build_time : float
         Seconds the builder spent assembling this problem.
-    source : kernel.StepOut, optional
-        The kernel's step whose arrays these are (:class:`~dualarm_qp.step.build.StepBuilder`
-        gives it): the kernel made them, of the right shapes and checked (a part's
-        non-finite piece stops the build), so they are not checked again. None (the
-        default): the arrays are the caller's, checked here.
     """
 
     A: FloatArray
@@ -193,23 +188,18 @@ class StepProblem:
     lower_by: tuple[str, ...] = ()
     upper_by: tuple[str, ...] = ()
     build_time: float = 0.0
-    source: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.source is not None:
-            # The kernel's own arrays, checked as it made them: checking them again here
-            # cost 11% of the PUMA beam's step (benchmarks/step_profile.py, docs/benchmarks.md).
-            return
-        arrays = (self.A, self.b, self.weights, self.center, self.lower, self.upper, self.G,
-                  self.h)
         try:  # float64 C-ordered arrays (the builder's): checked in one kernel pass
-            code = kernel.problem_check(*arrays)
+            code = kernel.problem_check(self.A, self.b, self.weights, self.center, self.lower,
+                                        self.upper, self.G, self.h)
         except TypeError:  # anything else: converted once, then checked
             code = kernel.problem_check(*self._converted())
         if code:
             raise self._defect(code)
-        n = self.n
-        if self.G.size == 0 and self.G.shape != (0, n):  # no rows (the default)
+        m, n = self.A.shape
+        p = self.G.shape[0]
+        if p == 0 and self.G.shape != (0, n):  # no rows (the default)
             object.__setattr__(self, "G", np.zeros((0, n)))
             object.__setattr__(self, "h", np.zeros(0))
         if self.x_prev is not None:
@@ -219,19 +209,20 @@ class StepProblem:
             object.__setattr__(self, "x_prev", xp)
         if not 0 <= self.n_grasp <= n:
             raise InvalidInputError(f"n_grasp must be in [0, {n}], got {self.n_grasp}")
-        for name, count, prefix in (("names", n, "x"), ("row_names", self.p, "row"),
-                                    ("eq_names", self.m, "eq")):
-            given = getattr(self, name)
-            if not given:
-                object.__setattr__(self, name, tuple(f"{prefix}{i + 1}" for i in range(count)))
-            elif len(given) != count:
-                raise ShapeError(name, (count,), (len(given),))
-        for name in ("lower_by", "upper_by"):
-            given = getattr(self, name)
-            if not given:
-                object.__setattr__(self, name, ("",) * n)
-            elif len(given) != n:
-                raise ShapeError(name, (n,), (len(given),))
+        self._name("names", n, "x")
+        self._name("row_names", p, "row")
+        self._name("eq_names", m, "eq")
+        self._name("lower_by", n, "")
+        self._name("upper_by", n, "")
+
+    def _name(self, field_name: str, count: int, prefix: str) -> None:
+        """Check a tuple of ``count`` names, or give the default (``prefix1..``, or "")."""
+        given = getattr(self, field_name)
+        if not given:
+            object.__setattr__(self, field_name, tuple(
+                f"{prefix}{i + 1}" if prefix else "" for i in range(count)))
+        elif len(given) != count:
+            raise ShapeError(field_name, (count,), (len(given),))
 
     def _converted(self) -> tuple[FloatArray, ...]:
         """Set every array as a C-ordered float64 one (no rows: ``G`` of shape (0, n))."""
@@ -293,9 +284,7 @@ class StepProblem:
                 b = scale * self.b
             if kernel.first_defect([b], []) >= 0:
                 raise NonFiniteError("b (scaled)")
-        # A new right-hand side: no longer the kernel's step, checked by the constructor.
-        return dataclasses.replace(self, b=b, x_prev=self.x_prev if x_prev is None else x_prev,
-                                   source=None)
+        return dataclasses.replace(self, b=b, x_prev=self.x_prev if x_prev is None else x_prev)
 
     def weight_matrix(self) -> FloatArray:
         """``W`` as an ``n x n`` matrix."""

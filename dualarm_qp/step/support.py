@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._remade import KernelHolder
 from ..errors import SupportLostError
 from ..task.carry import CarryModel
 from ..task.contact import SupportContact
@@ -44,7 +43,7 @@ FloatArray = NDArray[np.float64]
 MOVED_ATOL = 1e-12
 
 
-class SupportPlacement(KernelHolder):
+class SupportPlacement:
     """Places the follower of a Case 2 support on each step's support line.
 
     Parameters
@@ -57,22 +56,16 @@ class SupportPlacement(KernelHolder):
         The follower's path the model starts on (the support line at the start).
     """
 
-    _kernel_attributes = ("_plane",)
-
     def __init__(self, contact: SupportContact, carry: CarryModel,
                  surface: GraspSurface) -> None:
         self.contact = contact
         self.carry = carry
         self._frame = (carry.frames[1],)
-        self._no_jacobian = np.empty((1, carry.model.nq))[:0]  # no Jacobian asked
         # The previous step's line: its pose at sigma = 0 and, for a support line, its
         # direction (a line that reverses is refused).
         self._pose = surface.pose(0.0)
         self._direction = surface.tangent(0.0) if isinstance(surface, SupportLine) else None
-        self._remake()
-
-    def _remake(self) -> None:
-        self._plane = self.contact.compiled()
+        self._plane = self.contact.compiled()  # a kernel.SupportPlane (it pickles itself)
 
     def place(self, q_carry: FloatArray, sigma: float) -> tuple[Any, float, FloatArray]:
         """Put the follower on the support line at the model's joints ``q_carry``.
@@ -93,7 +86,7 @@ class SupportPlacement(KernelHolder):
             (or infinite) at ``sigma``.
         """
         T = np.empty((4, 4))
-        self.carry.chain.compute(q_carry, self._frame, (), T, self._no_jacobian)
+        self.carry.chain.poses(q_carry, self._frame, T)
         R = T[:3, :3]
         contact = self.contact
         line = self._plane.line(R)

@@ -28,7 +28,6 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain, set_frame_placement, set_joint_placement
@@ -73,7 +72,7 @@ class CarryKinematics:
     J_target: FloatArray
 
 
-class CarryModel(KernelHolder):
+class CarryModel:
     """Leader arm, object and sliding grasps as one Pinocchio model.
 
     Parameters
@@ -96,8 +95,6 @@ class CarryModel(KernelHolder):
     n_grasp : int
         Sliding grasps: 1 (follower) or 2 (follower, then leader).
     """
-
-    _kernel_attributes = ("chain",)  # made again when unpickled (_remake)
 
     def __init__(self, leader: SerialArm, surface: GraspSurface, H1: FloatArray,
                  leader_surface: GraspSurface | None = None) -> None:
@@ -139,13 +136,9 @@ class CarryModel(KernelHolder):
             self._col_rate = np.r_[np.ones(n_l), joint_f.rate, self._leader_rate]
         self.model = model
         self.data = model.createData()  # for the callers' own Pinocchio calls
-        self.chain = compiled_chain(model)
+        self.chain = compiled_chain(model)  # the kernel's copy (it pickles itself)
         self._frames = (int(self._tool), int(self._object), int(self._target))
         self._q = np.zeros(model.nq)
-
-    def _remake(self) -> None:
-        # The kernel's copy of the Pinocchio model.
-        self.chain = compiled_chain(self.model)
 
     def place_follower(self, surface: GraspSurface) -> None:
         """Put the follower's grasp joint on a new path of the same kind.

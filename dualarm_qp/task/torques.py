@@ -35,13 +35,13 @@ one call into the compiled kernel.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._remade import KernelHolder
 from ..errors import InvalidInputError
 from ..kinematics.arm import SerialArm
 from ..kinematics.compiled import compiled_chain
@@ -113,7 +113,7 @@ def torque_limits_of(arm: SerialArm, given: FloatArray | None, role: str) -> Flo
     return tau
 
 
-class ArmStatics(KernelHolder):
+class ArmStatics:
     """One arm's quasi-static joint torques ``g(q) + J(q)^T w``, compiled.
 
     The kernel's copy of the arm's model (:func:`~dualarm_qp.kinematics.compiled.compiled_chain`)
@@ -129,18 +129,18 @@ class ArmStatics(KernelHolder):
         Gravity [m/s^2], world frame.
     """
 
-    _kernel_attributes = ("_chain",)  # made again when unpickled (_remake)
-
     def __init__(self, arm: SerialArm, gravity: FloatArray) -> None:
         self.n = arm.n
         self.frame = arm.tool_frame_id
         self.gravity = np.array(gravity, dtype=np.float64)
-        self._model = pin.Model(arm.model)  # a copy: later edits of the arm do not reach it
-        self._chain = self._compiled()
+        model = pin.Model(arm.model)  # a copy: later edits of the arm do not reach it
+        self._chain = self._compiled(model)
 
-    def _compiled(self) -> kernel.Chain:
-        """Return the kernel's chain of the arm's model, with its inertias and this gravity."""
-        model = self._model
+    def _compiled(self, model: Any) -> kernel.Chain:
+        """Return the kernel's chain of ``model``, with its inertias and this gravity.
+
+        The chain pickles itself, bodies and gravity included.
+        """
         chain = compiled_chain(model)
         for j in range(1, model.njoints):
             body = model.inertias[j]
@@ -158,8 +158,6 @@ class ArmStatics(KernelHolder):
         """
         return self._chain
 
-    def _remake(self) -> None:
-        self._chain = self._compiled()
 
     def torque(self, q: FloatArray, wrench: FloatArray, point: FloatArray | None = None
                ) -> FloatArray:

@@ -22,7 +22,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._compiled import kernel
-from .._remade import KernelHolder
 from .._validate import as_array, as_number, as_pose
 from ..errors import InvalidInputError, NonFiniteError, ShapeError
 
@@ -214,7 +213,7 @@ def _pose_from(R: FloatArray, p: FloatArray) -> FloatArray:
     return T
 
 
-class WaypointTrajectory(KernelHolder, Trajectory):
+class WaypointTrajectory(Trajectory):
     """Rest-to-rest motion through SE(3) waypoints with minimum-jerk timing.
 
     On segment ``k`` (``t_k <= t <= t_{k+1}``), with ``tau = (t - t_k) / (t_{k+1} - t_k)``
@@ -247,8 +246,6 @@ class WaypointTrajectory(KernelHolder, Trajectory):
         Fewer than two waypoints, times not strictly increasing, or an improper rotation.
     """
 
-    _kernel_attributes = ("_path",)  # made again when unpickled (_remake)
-
     def __init__(self, times: Any, poses: Any) -> None:
         ts = as_array(times, "times", (-1,))
         if ts.size < 2:
@@ -276,11 +273,9 @@ class WaypointTrajectory(KernelHolder, Trajectory):
         self.t0 = self._times[0]
         self.tf = self._times[-1]
         self._poses = Ts
-        self._remake()
-
-    def _remake(self) -> None:
-        # Every evaluation runs in the kernel, with one fixed order of every sum.
-        self._path = kernel.WaypointPath(self._times, np.concatenate(self._poses))
+        # Every evaluation runs in the kernel, with one fixed order of every sum (the
+        # kernel's path pickles itself).
+        self._path = kernel.WaypointPath(self._times, np.concatenate(Ts))
 
     @property
     def times(self) -> FloatArray:

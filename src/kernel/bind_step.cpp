@@ -567,7 +567,30 @@ void bind_support(nb::module_& m) {
            "mass"_a, "mass_centre"_a, "gravity"_a, "r1"_a, "normal"_a, "offset"_a, "r_min"_a,
            "r_max"_a, "gravity_min"_a)
       .def("line", &dqk::SupportPlane::line, "R_world_object"_a,
-           "The support line for the object's orientation (3, 3).");
+           "The support line for the object's orientation (3, 3).")
+      .def("__getstate__",
+           [](const dqk::SupportPlane& plane) {
+             const dqk::SupportPlaneArgs& a = plane.args();
+             nb::dict d;
+             d["mass"] = a.mass;
+             d["mass_centre"] = nb::cast(Eigen::Vector3d(a.mass_centre));
+             d["gravity"] = nb::cast(Eigen::Vector3d(a.gravity));
+             d["r1"] = nb::cast(Eigen::Vector3d(a.r1));
+             d["normal"] = nb::cast(Eigen::Vector3d(a.normal));
+             d["offset"] = a.offset;
+             d["r_min"] = nb::cast(Eigen::Vector3d(a.r_min));
+             d["r_max"] = nb::cast(Eigen::Vector3d(a.r_max));
+             d["gravity_min"] = a.gravity_min;
+             return d;
+           })
+      .def("__setstate__", [](dqk::SupportPlane& plane, const nb::dict& d) {
+        using V = Eigen::Vector3d;
+        new (&plane) dqk::SupportPlane(
+            nb::cast<double>(d["mass"]), nb::cast<V>(d["mass_centre"]),
+            nb::cast<V>(d["gravity"]), nb::cast<V>(d["r1"]), nb::cast<V>(d["normal"]),
+            nb::cast<double>(d["offset"]), nb::cast<V>(d["r_min"]), nb::cast<V>(d["r_max"]),
+            nb::cast<double>(d["gravity_min"]));
+      });
 }
 
 }  // namespace

@@ -49,7 +49,7 @@ pin::JointModel joint_of(int kind, const Eigen::Vector3d& axis) {
 Chain::Chain(const std::vector<int>& parents, const std::vector<int>& kinds, const RowMat& axes,
              const RowMat& placements, const std::vector<int>& frame_parents,
              const RowMat& frame_placements)
-    : impl_(std::make_unique<Impl>()) {
+    : impl_(std::make_unique<Impl>()), kinds_(kinds), axes_(axes) {
   const auto n = static_cast<Eigen::Index>(parents.size());
   if (static_cast<Eigen::Index>(kinds.size()) != n || axes.rows() != n || axes.cols() != 3 ||
       placements.rows() != 4 * n || placements.cols() != 4)
@@ -80,6 +80,54 @@ Chain::Chain(const std::vector<int>& parents, const std::vector<int>& kinds, con
   }
   impl_->data = pin::Data(model);
   q_ = Eigen::VectorXd::Zero(model.nq);
+}
+
+Chain::Chain(const ChainState& s)
+    : Chain(s.parents, s.kinds, s.axes, s.placements, s.frame_parents, s.frame_placements) {
+  pin::Model& model = impl_->model;
+  const auto n = static_cast<Eigen::Index>(s.parents.size());
+  if (static_cast<Eigen::Index>(s.masses.size()) != n || s.levers.rows() != n ||
+      s.levers.cols() != 3 || s.inertias.rows() != 3 * n || s.inertias.cols() != 3)
+    throw std::invalid_argument("chain state: masses (n), levers (n, 3), inertias (3n, 3)");
+  set_frame_placement(0, s.universe);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Matrix3d I = s.inertias.block<3, 3>(3 * i, 0);
+    model.inertias[static_cast<std::size_t>(i + 1)] =
+        pin::Inertia(s.masses[static_cast<std::size_t>(i)], s.levers.row(i).transpose(),
+                     pin::Symmetric3(I));
+  }
+  model.gravity = pin::Motion(s.gravity, Eigen::Vector3d::Zero());
+}
+
+ChainState Chain::state() const {
+  const pin::Model& model = impl_->model;
+  const auto n = static_cast<Eigen::Index>(model.njoints - 1);
+  const auto m = static_cast<Eigen::Index>(model.nframes - 1);
+  ChainState s;
+  s.kinds = kinds_;
+  s.axes = axes_;
+  s.placements.resize(4 * n, 4);
+  s.masses.resize(static_cast<std::size_t>(n));
+  s.levers.resize(n, 3);
+  s.inertias.resize(3 * n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto j = static_cast<std::size_t>(i + 1);
+    s.parents.push_back(static_cast<int>(model.parents[j]));
+    s.placements.block<4, 4>(4 * i, 0) = model.jointPlacements[j].toHomogeneousMatrix();
+    const pin::Inertia& body = model.inertias[j];
+    s.masses[j - 1] = body.mass();
+    s.levers.row(i) = body.lever().transpose();
+    s.inertias.block<3, 3>(3 * i, 0) = body.inertia().matrix();
+  }
+  s.frame_placements.resize(4 * m, 4);
+  for (Eigen::Index f = 0; f < m; ++f) {
+    const pin::Frame& frame = model.frames[static_cast<std::size_t>(f + 1)];
+    s.frame_parents.push_back(static_cast<int>(frame.parentJoint));
+    s.frame_placements.block<4, 4>(4 * f, 0) = frame.placement.toHomogeneousMatrix();
+  }
+  s.universe = model.frames[0].placement.toHomogeneousMatrix();
+  s.gravity = model.gravity.linear();
+  return s;
 }
 
 Chain::~Chain() = default;

@@ -19,6 +19,21 @@ using Pose = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
 // along x, y, z or an axis.
 enum JointKind : int { RX = 0, RY, RZ, RAXIS, PX, PY, PZ, PAXIS };
 
+// What a Chain is made of, as it is now (what its pickle holds): the constructor's
+// arguments with the placements as set since, frame 0's placement, each joint's body
+// and gravity.
+struct ChainState {
+  std::vector<int> parents, kinds;
+  RowMat axes, placements;         // n x 3; 4n x 4
+  std::vector<int> frame_parents;  // frames 1..m
+  RowMat frame_placements;         // 4m x 4
+  Pose universe;                   // frame 0's placement
+  std::vector<double> masses;      // joints 1..n [kg]
+  RowMat levers;                   // n x 3: mass centres in the joint frames [m]
+  RowMat inertias;                 // 3n x 3: rotational inertias about them [kg m^2]
+  Eigen::Vector3d gravity;         // [m/s^2], world frame
+};
+
 class Chain {
  public:
   // Joints 1..n (the universe, joint 0, is implied): parents[i] is the parent of joint
@@ -29,6 +44,8 @@ class Chain {
   Chain(const std::vector<int>& parents, const std::vector<int>& kinds, const RowMat& axes,
         const RowMat& placements, const std::vector<int>& frame_parents,
         const RowMat& frame_placements);
+  // The chain of a state() (an unpickled chain).
+  explicit Chain(const ChainState& state);
   ~Chain();
   Chain(const Chain&) = delete;
   Chain& operator=(const Chain&) = delete;
@@ -37,6 +54,7 @@ class Chain {
   int njoints() const;  // with the universe
   int nframes() const;  // with the universe
   std::uint64_t updates() const { return updates_; }
+  ChainState state() const;
   const Eigen::VectorXd& q() const { return q_; }
 
   // Replace the placement of joint j (1..n) or frame f (0..m: the universe's too) in its
@@ -65,6 +83,8 @@ class Chain {
 
  private:
   std::unique_ptr<Impl> impl_;
+  std::vector<int> kinds_;  // the constructor's, for state()
+  RowMat axes_;
   Eigen::VectorXd q_;
   std::uint64_t updates_ = 0;
 };

@@ -50,6 +50,40 @@ struct StaticTorques {
   dqk::RowMat J;     // 6 x n: the frame's world Jacobian (0 x 0 when not asked)
 };
 
+// A Chain's pickle: its state() as a dict of named arrays, and back.
+nb::dict chain_state(const dqk::Chain& chain) {
+  dqk::ChainState s = chain.state();
+  nb::dict d;
+  d["parents"] = s.parents;
+  d["kinds"] = s.kinds;
+  d["axes"] = nb::cast(std::move(s.axes));
+  d["placements"] = nb::cast(std::move(s.placements));
+  d["frame_parents"] = s.frame_parents;
+  d["frame_placements"] = nb::cast(std::move(s.frame_placements));
+  d["universe"] = nb::cast(dqk::RowMat(s.universe));
+  d["masses"] = s.masses;
+  d["levers"] = nb::cast(std::move(s.levers));
+  d["inertias"] = nb::cast(std::move(s.inertias));
+  d["gravity"] = nb::cast(Eigen::Vector3d(s.gravity));
+  return d;
+}
+
+void set_chain_state(dqk::Chain& chain, const nb::dict& d) {
+  dqk::ChainState s;
+  s.parents = nb::cast<std::vector<int>>(d["parents"]);
+  s.kinds = nb::cast<std::vector<int>>(d["kinds"]);
+  s.axes = nb::cast<dqk::RowMat>(d["axes"]);
+  s.placements = nb::cast<dqk::RowMat>(d["placements"]);
+  s.frame_parents = nb::cast<std::vector<int>>(d["frame_parents"]);
+  s.frame_placements = nb::cast<dqk::RowMat>(d["frame_placements"]);
+  s.universe = nb::cast<dqk::RowMat>(d["universe"]);
+  s.masses = nb::cast<std::vector<double>>(d["masses"]);
+  s.levers = nb::cast<dqk::RowMat>(d["levers"]);
+  s.inertias = nb::cast<dqk::RowMat>(d["inertias"]);
+  s.gravity = nb::cast<Eigen::Vector3d>(d["gravity"]);
+  new (&chain) dqk::Chain(s);
+}
+
 void bind_results(nb::module_& m) {
   nb::class_<RateRange>(m, "RateRange", "A grasp's sliding rates over one sample [m/s].")
       .def_ro("lower", &RateRange::lower, "rho_min [m/s].")
@@ -106,6 +140,9 @@ NB_MODULE(_kernel, m) {
                     const dqk::RowMat&, const std::vector<int>&, const dqk::RowMat&>(),
            "parents"_a, "kinds"_a, "axes"_a, "placements"_a, "frame_parents"_a,
            "frame_placements"_a)
+      .def("__getstate__", &chain_state,
+           "The chain as it is now (joints, frames, bodies, gravity): its pickle.")
+      .def("__setstate__", &set_chain_state)
       .def_prop_ro("nq", &dqk::Chain::nq)
       .def_prop_ro("njoints", &dqk::Chain::njoints)
       .def_prop_ro("nframes", &dqk::Chain::nframes)
@@ -139,6 +176,17 @@ NB_MODULE(_kernel, m) {
            "T"_a.noconvert(), "J"_a.noconvert(),
            "update(q); then the poses of pose_frames into T (4k, 4) and the Jacobians of "
            "jac_frames into J (6m, nq), C-contiguous float64 arrays.")
+      .def(
+          "poses",
+          [](dqk::Chain& chain, const Eigen::VectorXd& q, const std::vector<int>& frames,
+             Eigen::Ref<dqk::RowMat> T) {
+            for (int f : frames) chain.check_frame(f);
+            chain.update(q);
+            chain.frame_poses(frames, T);
+          },
+          "q"_a, "frames"_a, "T"_a.noconvert(),
+          "update(q); then the poses of frames into T (4k, 4), a C-contiguous float64 "
+          "array (compute without Jacobians).")
       .def("frame_poses", &dqk::Chain::frame_poses, "frames"_a, "T"_a.noconvert(),
            "The poses of frames at the last update into T (4k, 4).")
       .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a, "J"_a.noconvert(),
@@ -218,6 +266,18 @@ NB_MODULE(_kernel, m) {
   nb::class_<dqk::WaypointPath>(m, "WaypointPath",
                                 "A waypoint path with minimum-jerk timing (WaypointTrajectory).")
       .def(nb::init<const std::vector<double>&, const dqk::RowMat&>(), "times"_a, "poses"_a)
+      .def("__getstate__",
+           [](const dqk::WaypointPath& path) {
+             nb::dict d;
+             d["times"] = path.times();
+             d["poses"] = nb::cast(path.poses());
+             return d;
+           })
+      .def("__setstate__",
+           [](dqk::WaypointPath& path, const nb::dict& d) {
+             new (&path) dqk::WaypointPath(nb::cast<std::vector<double>>(d["times"]),
+                                           nb::cast<dqk::RowMat>(d["poses"]));
+           })
       .def("pose", &dqk::WaypointPath::pose, "t"_a, "T"_a.noconvert(),
            "T_world_object(t) into T (4, 4); the first or last waypoint outside [t0, tf].")
       .def("derivative", &dqk::WaypointPath::derivative, "t"_a, "order"_a,

@@ -27,6 +27,15 @@ struct SupportLine {
   double push(double sigma) const;
 };
 
+// A SupportPlane's constructor arguments, as given (what its pickle holds).
+struct SupportPlaneArgs {
+  double mass;
+  Eigen::Vector3d mass_centre, gravity, r1, normal;
+  double offset;
+  Eigen::Vector3d r_min, r_max;
+  double gravity_min;
+};
+
 class SupportPlane {
  public:
   // mass [kg], mass_centre and r1 (the leader's hand) [m] in object coordinates, gravity
@@ -38,8 +47,10 @@ class SupportPlane {
                const Eigen::Vector3d& r_min, const Eigen::Vector3d& r_max, double gravity_min);
   // The line for the object's orientation R_world_object.
   SupportLine line(const Eigen::Matrix3d& R_world_object) const;
+  const SupportPlaneArgs& args() const { return args_; }
 
  private:
+  SupportPlaneArgs args_;
   double mass_;
   Eigen::Vector3d centre_, gravity_, r1_, normal_;
   double offset_;

@@ -40,6 +40,13 @@ Eigen::Vector3d min_jerk(double tau) {
           tau * (60.0 + tau * (-180.0 + 120.0 * tau))};
 }
 
+RowMat WaypointPath::poses() const {
+  RowMat out(4 * static_cast<Eigen::Index>(poses_.size()), 4);
+  for (std::size_t k = 0; k < poses_.size(); ++k)
+    out.middleRows(4 * static_cast<Eigen::Index>(k), 4) = poses_[k];
+  return out;
+}
+
 WaypointPath::WaypointPath(const std::vector<double>& times, const RowMat& poses)
     : times_(times) {
   const auto n = static_cast<Eigen::Index>(times.size());

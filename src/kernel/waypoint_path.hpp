@@ -24,6 +24,9 @@ class WaypointPath {
   WaypointPath(const std::vector<double>& times, const RowMat& poses);
 
   double t0() const { return times_.front(); }
+  const std::vector<double>& times() const { return times_; }
+  // The waypoints' poses stacked (4N x 4), as given.
+  RowMat poses() const;
   double tf() const { return times_.back(); }
 
   // T_world_object(t) into T (4 x 4), the first or last waypoint outside [t0, tf].
