@@ -174,7 +174,8 @@ class SignalHold:
     :class:`InterruptHandlers`: :class:`Interrupted`, recorded; with Python's default
     handler: KeyboardInterrupt; with the default action of SIGTERM: the process ends,
     its files complete). Holds nest. Outside the main thread, or for a signal the
-    process ignores, nothing changes.
+    process ignores, nothing changes. A held signal does not interrupt a system call
+    either: a library's blocking read (a robot's state) goes on (``SA_RESTART``).
 
     Parameters
     ----------
@@ -199,11 +200,15 @@ class SignalHold:
 
     def __enter__(self) -> SignalHold:
         _take_over(self._previous, self._hold)
+        for sig in self._previous:  # a held signal lets a library's system call go on
+            signal.siginterrupt(sig, False)
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, *exc: object) -> None:
         for sig, previous in self._previous.items():
             signal.signal(sig, previous)
+            if isinstance(getattr(previous, "__self__", None), SignalHold):  # an outer hold
+                signal.siginterrupt(sig, False)
         self._previous.clear()
         if self._deliver_on_exit or exc_type is not None:
             self.deliver()

@@ -96,3 +96,18 @@ def check_limits(lower: FloatArray, upper: FloatArray, name: str) -> None:
         raise LimitsError(
             f"{name}: lower limit {lower[i]:g} exceeds upper limit {upper[i]:g} at index {i}"
         )
+
+
+def limit_array(value: Any, name: str, n: int) -> FloatArray:
+    """Return ``n`` per-joint limits: infinite allowed, not NaN; a scalar is broadcast."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as err:
+        raise InvalidInputError(f"{name} must be numbers: {err}") from err
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ShapeError(name, (n,), arr.shape)
+    if np.isnan(arr).any():
+        raise NonFiniteError(name)
+    return arr

@@ -157,6 +157,7 @@ class DualArmController:
             self.leader_gain = leader_gain
         self._x_prev: FloatArray | None = None
         self._x_applied = np.zeros(self._builder.n)
+        self._x_applied_prev = self._x_applied  # the one before it (jerk limits)
         self._lookahead: Lookahead | None = None
         if error_budget is not None and self._hard_bounds:
             if not (len(error_budget) == 2 and all(
@@ -242,14 +243,14 @@ class DualArmController:
         self._x_prev = None
         n = self._builder.n
         if rates is None:
-            self._x_applied = np.zeros(n)
+            self._x_applied = self._x_applied_prev = np.zeros(n)
         else:
             x = np.asarray(rates, dtype=np.float64)
             if x.shape != (n,):
                 raise ShapeError("rates", (n,), x.shape)
             if not np.isfinite(x).all():
                 raise NonFiniteError("rates")
-            self._x_applied = x.copy()
+            self._x_applied = self._x_applied_prev = x.copy()  # moving at constant rates
 
     def step(self, state: DualArmState, *, scale_max: float = 1.0) -> ControlOutput:
         """Compute one step's command from the measured ``state``.
@@ -282,7 +283,8 @@ class DualArmController:
         if not 0.0 <= scale_max <= 1.0:
             raise InvalidInputError(f"scale_max must be in [0, 1], got {scale_max}")
         build = self._builder.build(state, scale_max=scale_max, x_prev=self._x_prev,
-                                    x_applied=self._x_applied)
+                                    x_applied=self._x_applied,
+                                    x_applied_prev=self._x_applied_prev)
         solved = time.perf_counter()
         solution = self._solved(build)
         guarded = time.perf_counter()
@@ -340,7 +342,7 @@ class DualArmController:
             x = solution.x
         self._x_prev = x if usable_x else None
         if usable_x:
-            self._x_applied = x
+            self._x_applied_prev, self._x_applied = self._x_applied, x
         scale = scale_max * min(max(solution.scale, 0.0), 1.0) if usable_x else 0.0
         ql_dot, qf_dot, m, m_leader = self._builder.layout.split(x)
         return ControlOutput(ql_dot=ql_dot, qf_dot=qf_dot, m=m, m_leader=m_leader,

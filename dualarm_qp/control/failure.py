@@ -8,7 +8,8 @@ from typing import Any
 #: Criteria a run can fail on (``Failure.criterion``).
 CRITERIA = ("unreachable", "path_collision", "solver", "support", "closure", "tracking",
             "singularity", "stalled", "path_incomplete",
-            "range", "speed", "acceleration", "collision", "torque", "interrupted")
+            "range", "speed", "acceleration", "jerk", "collision", "torque", "interrupted",
+            "watchdog", "start", "cell")  # the last three: a drive's (docs/robots.md)
 
 #: Criteria whose failure message names its cause (:mod:`.diagnosis`).
 EXPLAINED = ("closure", "tracking", "stalled", "path_incomplete")

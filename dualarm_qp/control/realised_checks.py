@@ -44,14 +44,16 @@ def realised_reports(controller: DualArmController, trace: Trace, dt: float,
         reports[role] = measure(q, arm.q_min, arm.q_max, arm.qd_max, dt,
                                 [f"{prefix}{j + 1}" for j in range(arm.n)],
                                 speed_rule=speed_rule, a_max=arm.qdd_max, v_start=v0,
-                                acceleration_rule=accel_rule)
+                                acceleration_rule=accel_rule, j_max=arm.qddd_max,
+                                jerk_rule=opts.jerk_limits)
     surface = task.surface
     a_grasp = np.array([opts.grasp_acc_max])
     reports["grasp"] = measure(trace.grasp[:, None], np.array([surface.sigma_min]),
                                np.array([surface.sigma_max]),
                                np.array([opts.grasp_speed_max]), dt, ["grasp"],
                                speed_rule=speed_rule, a_max=a_grasp,
-                               v_start=np.array([start[2]]), acceleration_rule=accel_rule)
+                               v_start=np.array([start[2]]), acceleration_rule=accel_rule,
+                               j_max=np.array([opts.grasp_jerk_max]), jerk_rule=opts.jerk_limits)
     lead = task.leader_surface
     if lead is not None:
         reports["grasp_leader"] = measure(

@@ -36,6 +36,7 @@ from .config_arms import (
     InitialSpec,
     UrdfSpec,
 )
+from .config_cell import CellSpec
 from .config_controller import MAX_SAMPLES, ControllerSpec, SolverSpec, WeightsSpec
 from .config_physics import PhysicsSpec
 from .config_scene import CollisionSpec, SceneSpec, ShapeSpec
@@ -229,6 +230,7 @@ class ExperimentConfig(Model):
     scene: SceneSpec = Field(default_factory=SceneSpec)
     collision: CollisionSpec = Field(default_factory=CollisionSpec)
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)  # docs/physics.md
+    cell: CellSpec = Field(default_factory=CellSpec)  # docs/robots.md
 
     @field_validator("name")
     @classmethod

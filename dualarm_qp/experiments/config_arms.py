@@ -101,6 +101,7 @@ class ArmSpec(Model):
     q_max: list[LimitNum] | None = None
     qd_max: list[LimitNum] | None = None
     qdd_max: list[LimitNum] | None = None
+    qddd_max: list[LimitNum] | None = None
     tau_max: list[LimitNum] | None = None
     link_radius: Annotated[list[Num], Field(min_length=1, max_length=64)] | None = None
     initial: InitialSpec

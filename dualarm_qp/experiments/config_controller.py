@@ -61,7 +61,9 @@ class ControllerSpec(Model):
     ``acceleration_limits`` keeps every joint within its arm's ``qdd_max`` and every
     grasp within ``grasp_acc_max`` (length unit / time unit^2); ``initial_rates`` says
     how the run starts: ``rest`` (the default) or ``path`` (already moving as the first
-    step of the path asks, its answer without acceleration limits).
+    step of the path asks, its answer without acceleration limits). ``jerk_limits``
+    keeps every joint within its arm's ``qddd_max`` and every grasp within
+    ``grasp_jerk_max`` (length unit / time unit^3); it needs ``acceleration_limits``.
     """
 
     dt: Num
@@ -73,6 +75,8 @@ class ControllerSpec(Model):
     torque_limits: Flag = False
     torque_approach: Num | None = None
     grasp_acc_max: Num | None = None
+    jerk_limits: Flag = False
+    grasp_jerk_max: Num | None = None
     initial_rates: Literal["rest", "path"] = "rest"
     correction_gain: Num | None = None
     leader_gain: Num | None = None
@@ -111,7 +115,7 @@ class ControllerSpec(Model):
         return self
 
     @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap",
-                     "grasp_acc_max", "torque_approach")
+                     "grasp_acc_max", "torque_approach", "grasp_jerk_max")
     @classmethod
     def _positive_time(cls, v: float | None) -> float | None:
         if v is not None and not (math.isfinite(v) and v > 0):

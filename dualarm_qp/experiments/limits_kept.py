@@ -8,6 +8,10 @@ acceleration limits; a continuous joint has no range) is seen, not assumed:
     qf1, qf4, qf6), speed 6/6, acceleration off
       grasp range, speed, acceleration; torque off; collision off
 
+With jerk limits (``controller.jerk_limits``), each arm and grasp also names ``jerk``
+(``jerk 7/7``); without them, and without torque limits, those are left out of the
+arms' lists.
+
 For each arm, ``k/n``: ``k`` of its ``n`` joints have that limit (the joints without
 one are named); ``off``: the file's ``controller`` setting is off. For each grasp, a
 limit is named when it is kept; ``none`` marks one that is on without a value
@@ -42,9 +46,10 @@ def limits_kept(exp: Experiment, hard: bool) -> dict[str, Any]:
     -------
     dict
         ``enforced`` (``hard``); ``leader`` and ``follower``: ``{"joints": n, "range",
-        "speed", "acceleration", "torque"}``, each the list of the joints without that
-        limit (``[]``: every joint has one) or None when the setting is off; ``grasp``
-        (and ``grasp_leader`` when it slides): ``{"range", "speed", "acceleration"}``,
+        "speed", "acceleration", "jerk", "torque"}``, each the list of the joints without
+        that limit (``[]``: every joint has one) or None when the setting is off;
+        ``grasp`` (and ``grasp_leader`` when it slides): ``{"range", "speed",
+        "acceleration", "jerk"}``,
         each True (kept), False (on, no value) or None (off); ``collision``: None when
         off, else ``{"pairs", "safety_distance_m"}``.
     """
@@ -61,6 +66,7 @@ def limits_kept(exp: Experiment, hard: bool) -> dict[str, Any]:
             else None,
             "acceleration": _without(names, np.isfinite(arm.qdd_max))
             if opts.acceleration_limits else None,
+            "jerk": _without(names, np.isfinite(arm.qddd_max)) if opts.jerk_limits else None,
             # The torque limits were checked when the experiment was built.
             "torque": _without(names, np.isfinite(torque_limits_of(arm, tau, role)))
             if opts.torque_limits else None,
@@ -74,6 +80,7 @@ def limits_kept(exp: Experiment, hard: bool) -> dict[str, Any]:
             else None,
             "acceleration": bool(np.isfinite(opts.grasp_acc_max))
             if opts.acceleration_limits else None,
+            "jerk": bool(np.isfinite(opts.grasp_jerk_max)) if opts.jerk_limits else None,
         }
     scene = task.scene
     out["collision"] = (None if scene is None or not scene.settings.enabled else
@@ -91,20 +98,27 @@ def limits_lines(kept: dict[str, Any]) -> list[str]:
     if not kept.get("enforced"):
         return ["  limits kept: none (this solver does not enforce limits; the realised "
                 "motion is measured against them only)"]
-    arms = "; ".join(f"{role} " + ", ".join(_arm_item(kind, kept[role][kind],
+    arms = "; ".join(f"{role} " + ", ".join(_arm_item(kind, kept[role].get(kind),
                                                        kept[role]["joints"])
                                             for kind in ("range", "speed", "acceleration",
-                                                         "torque")
-                                            if kind != "torque" or kept[role][kind] is not None)
+                                                         "jerk", "torque")
+                                            if kind not in _SHOWN_WHEN_ON
+                                            or kept[role].get(kind) is not None)
                      for role in ("leader", "follower"))
     grasps = "; ".join(f"{key.replace('_', ' ')} " + ", ".join(
-        _grasp_item(kind, kept[key][kind]) for kind in ("range", "speed", "acceleration"))
+        _grasp_item(kind, kept[key].get(kind))
+        for kind in ("range", "speed", "acceleration", "jerk")
+        if kind not in _SHOWN_WHEN_ON or kept[key].get(kind) is not None)
         for key in ("grasp", "grasp_leader") if key in kept)
     torque = "" if kept["leader"]["torque"] is not None else "; torque off"
     c = kept["collision"]
     collision = ("collision off" if c is None else
                  f"collision {c['pairs']} pairs at {c['safety_distance_m'] * 1e3:.3g} mm")
     return [f"  limits kept: {arms}", f"    {grasps}{torque}; {collision}"]
+
+
+#: Limits the console names only when their setting is on (most runs keep neither).
+_SHOWN_WHEN_ON = ("jerk", "torque")
 
 
 def _arm_item(kind: str, without: list[str] | None, n: int) -> str:

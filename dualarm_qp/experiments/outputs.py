@@ -231,9 +231,20 @@ def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
     cols["torque_ratio_measured"] = trace.torque_ratio_measured
 
 
-def write_trace_csv(path: Path, trace: Trace) -> None:
-    """Write the trace, one row per sample (angles in rad, lengths in m, times in s)."""
+def write_trace_csv(path: Path, trace: Trace, extra: dict[str, Any] | None = None) -> None:
+    """Write the trace, one row per sample (angles in rad, lengths in m, times in s).
+
+    ``extra`` holds further columns (one value per row), written after the trace's own
+    (a cell's record: :mod:`dualarm_qp.cell.record`); a name the trace already has is
+    refused.
+    """
     cols = trace_columns(trace)
+    for name, values in (extra or {}).items():
+        if name in cols or len(values) != len(trace):
+            raise InvalidInputError(f"extra column {name!r}: a trace column already has "
+                                    f"that name, or it has {len(values)} rows, not "
+                                    f"{len(trace)}")
+        cols[name] = values
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols.keys())

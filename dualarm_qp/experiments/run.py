@@ -297,7 +297,8 @@ def write_resolved_config(path: Path, config_file: str) -> bool:
 
 
 def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
-                  *, plots: bool = True, animate: bool = False) -> list[str]:
+                  *, plots: bool = True, animate: bool = False,
+                  columns: dict[str, Any] | None = None) -> list[str]:
     """Write the output set of a run into ``out``, replacing an earlier run's.
 
     The earlier run's files go first (:func:`remove_run_outputs`), then
@@ -306,6 +307,8 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     comes last, its ``outputs`` listing exactly the other files written. An error on the
     way removes what this call wrote (no set without its summary is left). Call it
     inside a :class:`~dualarm_qp._signals.SignalHold` for an all-or-nothing set.
+    ``columns`` are further columns of ``trajectory.csv`` (a cell's,
+    :mod:`dualarm_qp.cell.record`), after the run's own.
 
     Returns
     -------
@@ -315,16 +318,18 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     out.mkdir(parents=True, exist_ok=True)
     remove_run_outputs(out)
     try:
-        return _write_outputs(out, exp, result, summary, plots=plots, animate=animate)
+        return _write_outputs(out, exp, result, summary, plots=plots, animate=animate,
+                              columns=columns)
     except BaseException:
         remove_run_outputs(out)  # a set without its summary is no run: leave none
         raise
 
 
 def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
-                   *, plots: bool, animate: bool) -> list[str]:
+                   *, plots: bool, animate: bool, columns: dict[str, Any] | None = None
+                   ) -> list[str]:
     """Write the files of :func:`write_outputs`, ``summary.json`` last."""
-    write_trace_csv(out / "trajectory.csv", result.trace)
+    write_trace_csv(out / "trajectory.csv", result.trace, columns)
     written = ["trajectory.csv"]
     if write_resolved_config(out / "config.yaml", exp.path):
         written.append("config.yaml")  # what rebuilds the scene (dualarm-qp animate)

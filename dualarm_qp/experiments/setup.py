@@ -33,6 +33,7 @@ from .setup_arms import arms_of
 from .setup_checks import check_within_reach
 from .setup_controller import run_limits_of, step_options_of
 from .setup_initial import follower_base, follower_initial, leader_initial
+from .setup_jerk import with_jerk_limits
 from .setup_object import Grasps, check_load, grasps_of, load_of, surface_of
 from .setup_path import path_targets, trajectory_of
 from .setup_scene import scene_of
@@ -151,6 +152,7 @@ def _build(cfg: ExperimentConfig, path: str, solver: str | None,
     fallback = fallback_of(cfg, path)
     solver_name = solver or cfg.solver.name
     check_projection(cfg, solver_name, path)
+    task, options = with_jerk_limits(cfg, task, options, sc.angle, sc.length, sc.time, path)
     return Experiment(
         name=cfg.name,
         path=path,

@@ -31,8 +31,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validate import as_array, as_pose, check_limits
-from ..errors import InvalidInputError, LimitsError, NonFiniteError, ShapeError
+from .._validate import as_array, as_pose, check_limits, limit_array
+from ..errors import InvalidInputError, LimitsError
 from .chain import (
     REVOLUTE_JOINTS,
     TOOL_FRAME,
@@ -73,6 +73,8 @@ class SerialArm:
     qdd_max : array_like, shape (n,)
         Joint acceleration limits [rad/s^2], symmetric. Default inf (none: a URDF
         states no acceleration limits).
+    qddd_max : array_like, shape (n,)
+        Joint jerk limits [rad/s^3], symmetric. Default inf (none).
     base : array_like, shape (4, 4)
         ``T_world_base``, the pose of the arm's base frame (frame 0) in the world.
     tool : array_like, shape (4, 4)
@@ -105,6 +107,7 @@ class SerialArm:
         q_max: Any = None,
         qd_max: Any = None,
         qdd_max: Any = None,
+        qddd_max: Any = None,
         base: Any = None,
         tool: Any = None,
         name: str = "arm",
@@ -133,7 +136,8 @@ class SerialArm:
             lo, hi, vel = np.full(n, -np.inf), np.full(n, np.inf), np.full(n, np.inf)
         self._set_limits(lo if q_min is None else q_min, hi if q_max is None else q_max,
                          vel if qd_max is None else qd_max,
-                         np.full(n, np.inf) if qdd_max is None else qdd_max, n)
+                         np.full(n, np.inf) if qdd_max is None else qdd_max, n,
+                         qddd_max=qddd_max)
         frame = template.frames[flange]
         self._flange = pin.SE3(frame.placement)
         self._tool_id = template.addFrame(pin.Frame(TOOL_FRAME, frame.parentJoint, flange,
@@ -145,16 +149,21 @@ class SerialArm:
         self._root_frames = [i for i, f in enumerate(template.frames) if f.parentJoint == 0]
         self._place(base, tool)
 
-    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int) -> None:
-        self.q_min = _limit(q_min, "q_min", n)
-        self.q_max = _limit(q_max, "q_max", n)
+    def _set_limits(self, q_min: Any, q_max: Any, qd_max: Any, qdd_max: Any, n: int, *,
+                    qddd_max: Any = None) -> None:
+        self.q_min = limit_array(q_min, "q_min", n)
+        self.q_max = limit_array(q_max, "q_max", n)
         check_limits(self.q_min, self.q_max, f"{self.name} joint limits")
-        self.qd_max = _limit(qd_max, "qd_max", n)
-        if (self.qd_max <= 0).any():
-            raise LimitsError(f"{self.name}: qd_max must be positive, got {self.qd_max}")
-        self.qdd_max = _limit(qdd_max, "qdd_max", n)
-        if (self.qdd_max <= 0).any():
-            raise LimitsError(f"{self.name}: qdd_max must be positive, got {self.qdd_max}")
+        self.qd_max, self.qdd_max, self.qddd_max = (
+            self._rate_limit(v, key, n) for key, v in (
+                ("qd_max", qd_max), ("qdd_max", qdd_max),
+                ("qddd_max", np.inf if qddd_max is None else qddd_max)))
+
+    def _rate_limit(self, value: Any, key: str, n: int) -> FloatArray:
+        limit = limit_array(value, key, n)
+        if (limit <= 0).any():
+            raise LimitsError(f"{self.name}: {key} must be positive, got {limit}")
+        return limit
 
     def _place(self, base: Any, tool: Any) -> None:
         """Copy the template model, allocate its data, set the limits, base and tool."""
@@ -267,7 +276,8 @@ class SerialArm:
         return new
 
     def with_limits(self, q_min: Any = None, q_max: Any = None,
-                    qd_max: Any = None, qdd_max: Any = None) -> SerialArm:
+                    qd_max: Any = None, qdd_max: Any = None, *,
+                    qddd_max: Any = None) -> SerialArm:
         """Return a copy of this arm with other limits (None keeps a limit as it is).
 
         Raises
@@ -280,7 +290,8 @@ class SerialArm:
         new._set_limits(self.q_min if q_min is None else q_min,
                         self.q_max if q_max is None else q_max,
                         self.qd_max if qd_max is None else qd_max,
-                        self.qdd_max if qdd_max is None else qdd_max, self.n)
+                        self.qdd_max if qdd_max is None else qdd_max, self.n,
+                        qddd_max=self.qddd_max if qddd_max is None else qddd_max)
         new._place(self._base, self._tool)
         return new
 
@@ -410,21 +421,6 @@ def _frozen_pose(value: Any, name: str) -> FloatArray:
     T = np.eye(4) if value is None else as_pose(value, name).copy()
     T.flags.writeable = False
     return T
-
-
-def _limit(value: Any, name: str, n: int) -> FloatArray:
-    """Limits may be infinite but not NaN; a scalar is broadcast to all joints."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError) as err:
-        raise InvalidInputError(f"{name} must be numbers: {err}") from err
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise ShapeError(name, (n,), arr.shape)
-    if np.isnan(arr).any():
-        raise NonFiniteError(name)
-    return arr
 
 
 # DHTable, frame_id, check_revolute and REVOLUTE_JOINTS are importable from here too.

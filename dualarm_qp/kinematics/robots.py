@@ -41,6 +41,13 @@ EXAMPLE_ROBOTS: dict[str, str] = {
     "z1": "z1_description/urdf/z1.urdf",
 }
 
+#: Robots whose description another package ships, by name: (distribution, URDF path
+#: inside it). ``fr3``: the Franka Research 3 of ``franky-sim`` (Franka's own
+#: description; ``pip install "dualarm-qp[franka]"``), the arm the simulator serves.
+PACKAGED_ROBOTS: dict[str, tuple[str, str]] = {
+    "fr3": ("franky-sim", "franky_sim/assets/fr3_clean.urdf"),
+}
+
 #: How to install the robot descriptions.
 ROBOTS_HINT = "pip install 'dualarm-qp[robots]' (the example-robot-data package)"
 
@@ -215,13 +222,30 @@ def example_robots_dir() -> Path | None:
     return folder if folder.is_dir() else None
 
 
+def _packaged_urdf(robot: str) -> Path:
+    """Path of the URDF of a robot of :data:`PACKAGED_ROBOTS`, in its installed package."""
+    import importlib.metadata
+
+    dist_name, relative = PACKAGED_ROBOTS[robot]
+    try:
+        dist = importlib.metadata.distribution(dist_name)
+    except importlib.metadata.PackageNotFoundError:
+        raise RobotModelError(f"{robot}: its description comes with {dist_name}, which is not "
+                              f'installed: pip install "dualarm-qp[franka]"', "name") from None
+    path = Path(str(dist.locate_file(relative)))
+    if not path.is_file():
+        raise RobotModelError(f"{robot}: no file {relative} in {dist_name}", "name")
+    return path
+
+
 def example_robot_urdf(robot: str) -> Path:
     """Path of the URDF of an example-robot-data robot.
 
     Parameters
     ----------
     robot : str
-        A name of :data:`EXAMPLE_ROBOTS` (``"ur5"``, ``"panda"``, ``"baxter"``, ...) or
+        A name of :data:`EXAMPLE_ROBOTS` (``"ur5"``, ``"panda"``, ``"baxter"``, ...), of
+        :data:`PACKAGED_ROBOTS` (``"fr3"``) or
         a ``.urdf`` path relative to the package's ``robots`` folder
         (e.g. ``"panda_description/urdf/panda_collision.urdf"``).
 
@@ -230,6 +254,8 @@ def example_robot_urdf(robot: str) -> Path:
     RobotModelError
         example-robot-data is not installed, or the name is unknown (``field`` "name").
     """
+    if robot in PACKAGED_ROBOTS:
+        return _packaged_urdf(robot)
     folder = example_robots_dir()
     if folder is None:
         raise RobotModelError(f"example-robot-data is not installed: {ROBOTS_HINT}", "name")

@@ -269,7 +269,8 @@ class StepBuilder(KernelHolder):
     # -- the step -----------------------------------------------------------------------
     def build(self, state: DualArmState, *, scale_max: float = 1.0,
               x_prev: FloatArray | None = None,
-              x_applied: FloatArray | None = None) -> StepBuild:
+              x_applied: FloatArray | None = None,
+              x_applied_prev: FloatArray | None = None) -> StepBuild:
         """Build the step problem for ``state``: the kernel's loop over every part.
 
         Parameters
@@ -283,6 +284,9 @@ class StepBuilder(KernelHolder):
         x_applied : ndarray, optional
             The last command applied [rad/s, m/s] (acceleration limits); default zero
             (at rest).
+        x_applied_prev : ndarray, optional
+            The command applied before it [rad/s, m/s] (jerk limits); default
+            ``x_applied`` (constant rates).
 
         Raises
         ------
@@ -313,6 +317,8 @@ class StepBuilder(KernelHolder):
         out = kernel.StepOut()
         ctx = StepContext(out, state, self.task, self.layout, surfaces, self._leader_arm,
                           self._follower_arm)
+        if x_applied_prev is not None:  # jerk limits read it (step/limits/jerk.py)
+            ctx.x_applied_prev = checked_rates(x_applied_prev, "x_applied_prev", self.layout.n)
         q_carry = carry.configuration(q_l, state.sigma, state.sigma_leader)
         twist = trajectory.twist(state.t)
         called = time.perf_counter()

@@ -121,10 +121,13 @@ class StepContext:
         them).
     kernel_context : kernel.Context
         The kernel's context of the step (what the compiled parts read).
+    x_applied_prev : ndarray or None
+        The command applied before the last one [rad/s, m/s] (what jerk limits measure
+        the step from, with :attr:`x_applied`); None: the same as :attr:`x_applied`.
     """
 
     __slots__ = ("_out", "_surfaces", "follower_arm", "kernel_context", "layout", "leader_arm",
-                 "state", "task")
+                 "state", "task", "x_applied_prev")
 
     def __init__(self, out: Any, state: DualArmState, task: DualArmTask, layout: Layout,
                  surfaces: tuple[GraspSurface, ...] | Callable[[], tuple[GraspSurface, ...]],
@@ -137,6 +140,7 @@ class StepContext:
         self._surfaces = surfaces
         self.leader_arm = leader_arm
         self.follower_arm = follower_arm
+        self.x_applied_prev: FloatArray | None = None
 
     @property
     def surfaces(self) -> tuple[GraspSurface, ...]:

@@ -67,6 +67,12 @@ class StepOptions:
         Time constant [s] with which a joint's torque may approach its limit: each
         sample closes at most ``dt / torque_approach`` of the margin (None: all of it,
         in one sample).
+    jerk_limits : bool
+        Keep every joint's jerk within its arm's ``qddd_max`` and every grasp's within
+        ``grasp_jerk_max``: each rate within ``j dt^2`` of the last two commands'
+        extrapolation (:mod:`dualarm_qp.step.limits.jerk`). Default False.
+    grasp_jerk_max : float
+        Limit on every grasp's sliding jerk [m/s^3]; ``inf`` for none.
     """
 
     dt: float
@@ -86,6 +92,8 @@ class StepOptions:
     leader_tau_max: FloatArray | None = None
     follower_tau_max: FloatArray | None = None
     torque_approach: float | None = None
+    jerk_limits: bool = False
+    grasp_jerk_max: float = float("inf")
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -107,6 +115,8 @@ class StepOptions:
                                                      and self.torque_approach > 0):
             raise InvalidInputError("torque_approach must be a positive number of seconds, "
                                     f"got {self.torque_approach}")
+        if not self.grasp_jerk_max > 0:
+            raise InvalidInputError("grasp_jerk_max must be positive")
         for name in ("correction_gain", "leader_gain"):
             gain = getattr(self, name)
             if gain is None:

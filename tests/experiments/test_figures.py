@@ -286,6 +286,26 @@ def test_realised_rates_are_finite_differences():
     assert spans(ax, "outside:qf_dot3") == pytest.approx(flat([(0.05, 0.15), (0.35, 0.45),
                                                           (0.75, 0.85)]))
     assert ax.get_yscale() == "symlog"
+    assert not [ax for ax in rates.axes if "jerk" in ax.get_title()]  # none kept
+
+
+def test_jerk_limits_add_rows_of_realised_jerks_from_third_differences():
+    data = synthetic()
+    jerk = data.realised_jerks("f")
+    # qf3: 0, 0, 2, 2, 2, 0 rad at 0.1 s: rates 0, 20, 0, 0, -20; accelerations 0, 200,
+    # -200, 0, -200; jerks their differences over 0.1 s
+    assert jerk[:5, 2] == pytest.approx([0.0, 2000.0, -4000.0, 2000.0, -2000.0])
+    assert np.isnan(jerk[-1]).all()
+    arm = ArmLimits(np.full(6, -1.0), np.full(6, 1.0), np.full(6, 3.0), np.full(6, 500.0),
+                    np.full(6, 3000.0))
+    limits = dataclasses.replace(synthetic_limits(), leader=arm, follower=arm,
+                                 jerk_limits_enforced=True)
+    rates = rates_figure(data, limits, title="t")
+    assert rates.texts[-1].get_text().endswith("(dashed); jerks against theirs")
+    ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3 jerk")
+    assert axis_levels(ax, "limit:qf_dddot3") == pytest.approx([-3000.0 * DEG, 3000.0 * DEG])
+    # over 3000 rad/s^3 at samples 2 (-4000) only among the first five
+    assert spans(ax, "outside:qf_dddot3")[:2] == pytest.approx([0.15, 0.25])
 
 
 def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():

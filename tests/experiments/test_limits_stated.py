@@ -72,8 +72,8 @@ def test_an_explicit_inf_leaves_a_joint_unlimited_and_says_so(
     kept = json.loads((out / "summary.json").read_text())["limits_kept"]
     assert kept["enforced"] is True
     assert kept["follower"] == {"joints": 7, "range": [], "speed": [], "acceleration": ["qf2"],
-                                "torque": None}
-    assert kept["grasp"] == {"range": True, "speed": True, "acceleration": True}
+                                "jerk": None, "torque": None}
+    assert kept["grasp"] == {"range": True, "speed": True, "acceleration": True, "jerk": None}
     assert kept["collision"] is None
 
 
@@ -153,3 +153,26 @@ def test_the_shipped_start_is_well_within_reach() -> None:
         for arm, q in ((exp.task.leader, exp.initial.q_l), (exp.task.follower, exp.initial.q_f)):
             d = float(np.linalg.norm(arm.fk(q)[:3, 3] - arm.base[:3, 3]))
             assert 0.1 < d / arm_reach(arm) < 1.0, (name, arm.name)
+
+
+def test_jerk_limits_are_named_when_kept(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The FR3 pair keeps jerk limits (every joint must state one): the console and
+    summary.json say so; without them the jerk is not named."""
+    pytest.importorskip("franky_sim")  # the FR3's description ('.[franka]'; '.[dev]' has it)
+    data = _load("fr3_pair")
+    data["controller"]["duration"] = 0.05
+    code, stdout, err, out = _run(tmp_path, data, capsys)
+    assert code == 0, err
+    assert ("limits kept: leader range 7/7, speed 7/7, acceleration 7/7, jerk 7/7; follower "
+            "range 7/7, speed 7/7, acceleration 7/7, jerk 7/7") in stdout
+    assert "    grasp range, speed, acceleration, jerk; torque off; collision off" in stdout
+    kept = json.loads((out / "summary.json").read_text())["limits_kept"]
+    assert kept["leader"]["jerk"] == [] and kept["follower"]["jerk"] == []
+    assert kept["grasp"]["jerk"] is True
+    data["controller"]["jerk_limits"] = False
+    code, stdout, err, out = _run(tmp_path / "off", data, capsys)
+    assert code == 0, err
+    assert ("limits kept: leader range 7/7, speed 7/7, acceleration 7/7; follower range "
+            "7/7, speed 7/7, acceleration 7/7\n    grasp range, speed, acceleration; torque "
+            "off") in stdout

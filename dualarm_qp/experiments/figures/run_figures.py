@@ -6,7 +6,8 @@ can read what was drawn); :func:`write_run_figures` writes them all as PNG files
 - ``joints.png``: every joint against its range, shaded where outside;
 - ``rates.png``: every joint rate, commanded and realised (finite differences
   of the recorded joints), against its speed limit, shaded where the realised rate is
-  over it;
+  over it; with acceleration (jerk) limits, the realised accelerations (jerks) against
+  theirs;
 - ``grasp.png``: the grasp coordinate against its range, and the sliding speed
   against its limit;
 - ``tracking.png``: the leader's tracking error, the smallest singular value of each
@@ -122,19 +123,22 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
 
 
 def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Joint rates against the speed limits (and accelerations against theirs).
+    """Joint rates against the speed limits (and accelerations and jerks against theirs).
 
-    Angles in the file's unit (deg or rad) per second (per second squared).
+    Angles in the file's unit (deg or rad) per second (per second squared, cubed).
 
     The realised rate is the finite difference of the recorded joints; it differs
     from the commanded one where a position-level correction moved the joints. The
     shading marks the samples whose realised rate is over the limit. The last row's
     command, computed but never applied, is left out. When the run kept acceleration
     limits, two more rows show the realised accelerations (finite differences of the
-    realised rates, the first from rest) against ``qdd_max``.
+    realised rates, the first from rest) against ``qdd_max``; when it kept jerk limits,
+    two more the realised jerks (the accelerations' differences) against ``qddd_max``.
     """
-    accel = limits.acceleration_limits_enforced
-    fig, axes, n = _arm_grid(data, 10.4 if accel else 5.6, 0.85, rows=4 if accel else 2)
+    blocks = [b for b, on in (("acceleration", limits.acceleration_limits_enforced),
+                              ("jerk", limits.jerk_limits_enforced)) if on]
+    rows = 2 + 2 * len(blocks)
+    fig, axes, n = _arm_grid(data, 0.8 + 2.4 * rows, 0.85, rows=rows)
     t = data.t
     per_rad, unit = limits.units.per_rad, limits.units.angle
     for row, (arm, label) in enumerate(_ARMS):
@@ -157,33 +161,12 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
             panel_title(ax, f"{label} q{j + 1}", fontsize=9)
             ax.tick_params(labelsize=7)
         axes[row][0].set_ylabel(f"[{unit}/s]", fontsize=8)
-    if accel:
-        for row, (arm, label) in enumerate(_ARMS, start=2):
-            acc = data.realised_accelerations(arm)
-            lim = limits.arm(arm)
-            a_max = (lim.qdd_max if lim.qdd_max is not None
-                     else np.full(acc.shape[1], np.inf))
-            for j in range(n):
-                ax = axes[row][j]
-                if j >= acc.shape[1]:
-                    ax.set_visible(False)
-                    continue
-                name = f"q{arm}_ddot{j + 1}"
-                amax = float(a_max[j])
-                ax.plot(t, acc[:, j] * per_rad, color="C3", lw=0.9,
-                        label="realised acceleration")
-                limit_lines(ax, (-amax, amax), name, scale=per_rad,
-                            label="acceleration limit")
-                shade_spans(ax, outside_spans(t, outside_mask(acc[:, j], -amax, amax)),
-                            name, label="realised over the limit")
-                speed_axis(ax, amax * per_rad, finite_max_abs(acc[:, j]) * per_rad)
-                panel_title(ax, f"{label} q{j + 1} acceleration", fontsize=9)
-                ax.tick_params(labelsize=7)
-            axes[row][0].set_ylabel(f"[{unit}/s^2]", fontsize=8)
+    for i, block in enumerate(blocks):
+        _derivative_rows(axes, data, limits, 2 + 2 * i, block)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]", fontsize=8)
     handles, labels = [], []
-    for ax in (axes[0][0], *(axes[2][:1] if accel else ())):
+    for ax in (axes[0][0], *(axes[2 + 2 * i][0] for i in range(len(blocks)))):
         h, lab = ax.get_legend_handles_labels()
         for hh, ll in zip(h, lab, strict=True):
             if ll not in labels:
@@ -192,8 +175,38 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
     fig.suptitle((title + ": " if title else "")
                  + "joint rates against their speed limits (dashed)"
-                 + ("; accelerations against theirs" if accel else ""), fontsize=10)
+                 + "".join(f"; {b}s against theirs" for b in blocks), fontsize=10)
     return fig
+
+
+def _derivative_rows(axes: Any, data: RunData, limits: PlotLimits, first: int,
+                     kind: str) -> None:
+    """Draw both arms' realised accelerations or jerks against their limits."""
+    per_rad, unit = limits.units.per_rad, limits.units.angle
+    power, color, letter = (("2", "C3", "ddot") if kind == "acceleration"
+                            else ("3", "C4", "dddot"))
+    t = data.t
+    for row, (arm, label) in enumerate(_ARMS, start=first):
+        value = (data.realised_accelerations(arm) if kind == "acceleration"
+                 else data.realised_jerks(arm))
+        lim = limits.arm(arm)
+        given = lim.qdd_max if kind == "acceleration" else lim.qddd_max
+        bound = given if given is not None else np.full(value.shape[1], np.inf)
+        for j in range(axes.shape[1]):
+            ax = axes[row][j]
+            if j >= value.shape[1]:
+                ax.set_visible(False)
+                continue
+            name = f"q{arm}_{letter}{j + 1}"
+            top = float(bound[j])
+            ax.plot(t, value[:, j] * per_rad, color=color, lw=0.9, label=f"realised {kind}")
+            limit_lines(ax, (-top, top), name, scale=per_rad, label=f"{kind} limit")
+            shade_spans(ax, outside_spans(t, outside_mask(value[:, j], -top, top)), name,
+                        label="realised over the limit")
+            speed_axis(ax, top * per_rad, finite_max_abs(value[:, j]) * per_rad)
+            panel_title(ax, f"{label} q{j + 1} {kind}", fontsize=9)
+            ax.tick_params(labelsize=7)
+        axes[row][0].set_ylabel(f"[{unit}/s^{power}]", fontsize=8)
 
 
 def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:

@@ -122,6 +122,17 @@ class RunData:
         before = np.vstack([np.zeros((1, v.shape[1])), v[:-1]])
         return (v - before) / dt[:, None]
 
+    def realised_jerks(self, arm: str) -> FloatArray:
+        """Realised joint jerks of ``arm`` [rad/s^3], from the realised accelerations.
+
+        Row k is ``(a[k] - a[k-1]) / dt`` with ``a[-1] = 0`` (the run started at rest);
+        the last row is NaN.
+        """
+        a = self.realised_accelerations(arm)
+        dt = np.diff(self.col("t"), append=np.nan)
+        before = np.vstack([np.zeros((1, a.shape[1])), a[:-1]])
+        return (a - before) / dt[:, None]
+
     @property
     def t(self) -> FloatArray:
         """Sample times [s]."""
@@ -159,12 +170,13 @@ def realised_rate(t: Any, values: Any) -> FloatArray:
 
 @dataclass(frozen=True)
 class ArmLimits:
-    """Range [rad], speed [rad/s] and acceleration limit [rad/s^2] of each joint of one arm."""
+    """Range [rad], speed [rad/s], acceleration [rad/s^2] and jerk [rad/s^3] limits of an arm."""
 
     q_min: FloatArray
     q_max: FloatArray
     qd_max: FloatArray
     qdd_max: FloatArray | None = None
+    qddd_max: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -239,6 +251,8 @@ class PlotLimits:
         What the figures show angles and lengths in (default degrees and millimetres).
     acceleration_limits_enforced : bool
         Whether the run's step kept the joints' acceleration limits.
+    jerk_limits_enforced : bool
+        Whether the run's step kept the joints' jerk limits.
     clearance : (float, float) or None
         ``(d_s, d_i)`` [m], the safety and the influence distance, of a task with a
         collision scene (None without one).
@@ -260,6 +274,7 @@ class PlotLimits:
     acceleration_limits_enforced: bool = False
     clearance: tuple[float, float] | None = None
     clearance_enforced: bool = False
+    jerk_limits_enforced: bool = False
 
     @classmethod
     def from_experiment(cls, exp: Experiment) -> PlotLimits:
@@ -270,6 +285,8 @@ class PlotLimits:
             return ArmLimits(np.asarray(a.q_min, dtype=float), np.asarray(a.q_max, dtype=float),
                              np.asarray(a.qd_max, dtype=float),
                              np.asarray(getattr(a, "qdd_max", np.full(a.n, np.inf)),
+                                        dtype=float),
+                             np.asarray(getattr(a, "qddd_max", np.full(a.n, np.inf)),
                                         dtype=float))
 
         opts = exp.options
@@ -290,7 +307,8 @@ class PlotLimits:
                                                              False)),
                    clearance=None if collision is None else (
                        float(collision.safety_distance), float(collision.influence_distance)),
-                   clearance_enforced=collision is not None and bool(collision.enabled))
+                   clearance_enforced=collision is not None and bool(collision.enabled),
+                   jerk_limits_enforced=bool(getattr(opts, "jerk_limits", False)))
 
     def arm(self, arm: str) -> ArmLimits:
         """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""

@@ -1,0 +1,190 @@
+"""``dualarm-qp drive``: run a cell from an experiment file and write the run's folder.
+
+The folder is the one ``dualarm-qp run`` writes (``trajectory.csv`` with the cell's
+columns after the run's, ``summary.json`` with a ``cell`` section, the plots,
+``report.html``, ``config.yaml``), so ``animate``, ``physics`` and ``bag`` read a
+hardware log as they read a simulated run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+from .._signals import SignalHold, raise_if_interrupted
+from ..experiments.config import ExperimentConfig, load_config, safe_name
+from ..experiments.experiment import Experiment
+from ..experiments.setup import build_experiment
+from .base import Cell, CellSetupError
+from .loop import DriveResult, DriveSettings, drive
+
+#: The cells ``drive --cell`` knows.
+CELLS = ("mujoco", "franka")
+
+#: The watchdog's default: this many samples of ``dt``.
+WATCHDOG_SAMPLES = 3
+
+
+def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> DriveSettings:
+    """Return the loop's guards from the file's ``cell:`` section, in SI."""
+    from ..experiments.config import ANGLE_SCALE, TIME_SCALE
+
+    c = cfg.cell
+    angle, t = ANGLE_SCALE[cfg.units.angle], TIME_SCALE[cfg.units.time]
+    dt = exp.options.dt
+    return DriveSettings(
+        watchdog=WATCHDOG_SAMPLES * dt if c.watchdog is None else c.watchdog * t,
+        dry_run=dry_run,
+        start_tolerance=0.01 if c.start_tolerance is None else c.start_tolerance * angle,
+        range_margin=c.range_margin * angle)
+
+
+def commanded(exp: Experiment, headroom: float) -> Experiment:
+    """Return the experiment a cell's controller runs: the arms' limits with headroom.
+
+    Every joint's speed, acceleration and jerk limit is multiplied by ``1 - headroom``
+    (the step and the clamp keep those); the recorded motion is still judged against the
+    file's. The servos' tracking error (a lag, friction, the arms' coupling) has the rest.
+    """
+    if headroom == 0.0:
+        return exp
+    keep = 1.0 - headroom
+    leader, follower = (arm.with_limits(qd_max=arm.qd_max * keep, qdd_max=arm.qdd_max * keep,
+                                        qddd_max=arm.qddd_max * keep)
+                        for arm in (exp.task.leader, exp.task.follower))
+    task = dataclasses.replace(exp.task, leader=leader, follower=follower)
+    return dataclasses.replace(exp, task=task)
+
+
+def check_drivable(exp: Experiment, path: str) -> None:
+    """Refuse a task whose grasp the cell cannot estimate from the joints.
+
+    Raises
+    ------
+    CellSetupError
+        A sliding leader grasp, or a supporting follower (Case 2).
+    """
+    if exp.task.leader_surface is not None:
+        raise CellSetupError(f"{path}: object.leader_surface: a cell needs the leader to "
+                             "grasp rigidly (the object's pose is read from the leader's "
+                             "hand; docs/robots.md)")
+    if exp.task.contact is not None:
+        raise CellSetupError(f"{path}: object.support: a cell drives a follower that grasps "
+                             "the object (Case 1), not one that supports it")
+
+
+def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> Cell:
+    """Build the cell ``kind`` of the experiment (not yet opened).
+
+    Raises
+    ------
+    CellSetupError
+        An unknown kind, or a ``cell:`` section the back-end cannot use.
+    """
+    if kind == "mujoco":
+        from ..physics.check import arm_tau_max
+        from ..physics.command import settings_for
+        from ..physics.plant import MujocoPlant
+        from .mujoco import MujocoCell
+
+        plant = MujocoPlant(exp.task, settings_for(cfg, exp, path), arm_tau_max=arm_tau_max(exp))
+        return MujocoCell(plant, exp.initial, exp.options.dt, realtime=cfg.cell.realtime)
+    if kind == "franka":
+        from .franka import franka_cell
+
+        return franka_cell(cfg, exp, path, drive_settings(cfg, exp, dry_run=False).watchdog)
+    raise CellSetupError(f"unknown cell {kind!r}; the cells are {', '.join(CELLS)}")
+
+
+def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Path | None, *,
+                    dry_run: bool = False, plots: bool = True
+                    ) -> tuple[DriveResult, dict[str, Any]]:
+    """Drive ``cell`` and write the run's folder (with SIGINT and SIGTERM held).
+
+    Returns
+    -------
+    result : DriveResult
+        What the loop did.
+    summary : dict
+        The content of ``summary.json``.
+    """
+    from ..experiments.run import make_summary, write_outputs
+
+    settings = drive_settings(cfg, exp, dry_run=dry_run)
+    controller = commanded(exp, cfg.cell.headroom).controller()
+
+    def progress(done: float, lost: float) -> None:
+        raise_if_interrupted()
+
+    t0 = time.perf_counter()
+    res = drive(cell, controller, exp.initial, duration=exp.duration, settings=settings,
+                limits=exp.limits, progress=progress, judged_by=exp.task)
+    wall = time.perf_counter() - t0
+    with SignalHold():
+        summary = make_summary(exp, res.result, wall)
+        summary["cell"] = res.cell
+        summary["plant"] = type(cell).__name__
+        if out is not None:
+            write_outputs(out, exp, res.result, summary, plots=plots, columns=res.columns)
+    return res, summary
+
+
+def cmd_drive(args: argparse.Namespace) -> int:
+    """``dualarm-qp drive``: exit 0 completed, 1 failed or stopped, 130 interrupted."""
+    from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
+    from ..experiments.outputs import check_unused_folder
+    from ..experiments.run import OUTPUT_FILES
+
+    path = str(args.config)
+    cfg = load_config(args.config)
+    exp = build_experiment(cfg, path)
+    check_drivable(exp, path)
+    exp.controller()  # fail early (exit 2) on an unknown or missing solver
+    cell = open_cell(args.cell, cfg, exp, path)
+    out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
+               / f"cell_{args.cell}")
+    check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
+    out = output_folder(out)
+    res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
+                                   plots=not args.no_plots)
+    stop = summary["cell"]["stop"]
+    print(f"{exp.name}: cell {args.cell}{' (dry run)' if args.dry_run else ''}: "
+          f"{summary['status']}, {summary['samples']} samples, "
+          f"{summary['path_completed_pct']:.1f}% of the path; closure error max "
+          f"{summary['closure_pos_err_max_m'] * 1e3:.3g} mm; stopped ({stop['reason']}) in "
+          f"{stop['samples']} samples, at rest: {stop['at_rest']}")
+    print(f"  outputs: {out}/")
+    if summary["status"] == "interrupted":
+        print_error(f"{summary['message']}; the arms were brought to rest and the samples "
+                    "are written")
+        return EXIT_INTERRUPTED
+    if not res.result.completed:
+        print_error(summary["message"])
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def add_parsers(sub: Any) -> None:
+    """Add ``drive`` and ``serve`` to the command line's subcommands."""
+    d = sub.add_parser("drive", help="drive two arms along the file's path through a cell; "
+                       "write the same folder as 'run'")
+    d.add_argument("config", type=Path, help="experiment YAML file (with a cell: section "
+                   "for ROS 2 and Franka)")
+    d.add_argument("--cell", choices=CELLS, default="mujoco", help="the cell (default mujoco)")
+    d.add_argument("--dry-run", action="store_true",
+                   help="read the robots and compute the commands, send nothing")
+    d.add_argument("--out", help="output folder (default runs/<name>/cell_<cell>)")
+    d.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    d.add_argument("--force", action="store_true",
+                   help="write into a folder that holds other files, keeping them")
+    d.set_defaults(func=cmd_drive)
+    from .serve import add_serve_parser
+
+    add_serve_parser(sub)
+
+
+__all__ = ["CELLS", "WATCHDOG_SAMPLES", "add_parsers", "check_drivable", "cmd_drive", "commanded",
+           "drive_and_write", "drive_settings", "open_cell"]
