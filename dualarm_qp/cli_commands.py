@@ -77,12 +77,16 @@ def _run(args: argparse.Namespace, figures: FigureProcess | None) -> int:
     if args.plant == "mujoco":  # docs/physics.md
         from .physics.check import arm_tau_max
         from .physics.command import settings_for
+        from .physics.compliant import compliant_experiment
         from .physics.plant import DivergedError, MujocoPlant
 
         blown_up = (DivergedError,)
         plant = MujocoPlant(exp.task, settings_for(load_config(args.config), exp,
                                                    str(args.config)),
                             arm_tau_max=arm_tau_max(exp))
+        if plant.settings.compliance is not None:  # the compliant follower's step
+            exp = compliant_experiment(exp, plant)
+            controller = exp.controller()
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
@@ -207,7 +211,9 @@ def physics_line(name: str, r: dict[str, Any] | None) -> str:
     return (f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
             f"internal force {r['internal_force_max_N']:.3g} N, follower support "
             f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
-            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
+            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)"
+            + ("" if not r.get("cause") else
+               f"; first past a threshold: {r['cause']['kind']} at {r['cause']['t_s']:.3g} s"))
 
 
 def cmd_physics(args: argparse.Namespace) -> int:
@@ -216,7 +222,7 @@ def cmd_physics(args: argparse.Namespace) -> int:
     from .physics.plant import DivergedError
 
     try:
-        p = check_run(args.run_dir, delay=True if args.delay else None)
+        p = check_run(args.run_dir, delay=args.delay)
     except DivergedError as err:  # the simulation blew up: a failed check, not bad input
         print_error(str(err))
         return EXIT_FAILED

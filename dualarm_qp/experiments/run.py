@@ -21,6 +21,7 @@ from typing import Any
 from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
 from ..control.controller import DualArmController
+from ..control.measured import record_readings
 from ..control.plant import Plant
 from ..control.rollout import RolloutResult, rollout
 from .limits_kept import limits_kept
@@ -204,6 +205,8 @@ def run_and_write(
             bar.close()
         raise
     wall = time.perf_counter() - t0
+    if plant is not None:  # what it measured at the hands, if it does
+        record_readings(result.trace, plant)
     with SignalHold(deliver=False) as hold:
         if bar is not None:
             bar.close()
