@@ -11,10 +11,13 @@ import argparse
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._signals import SignalHold
 from .errors import DualArmError, InvalidInputError
+
+if TYPE_CHECKING:
+    from .experiments.figures.process import FigureProcess
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141  # 128 + SIGINT, 128 + SIGPIPE
@@ -41,7 +44,23 @@ def output_folder(path: str | Path) -> Path:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """``dualarm-qp run``: one experiment from a YAML file."""
+    """``dualarm-qp run``: one experiment from a YAML file.
+
+    The figures' process starts first: it imports matplotlib while this one imports the
+    rest and runs (:mod:`~dualarm_qp.experiments.figures.process`).
+    """
+    from .experiments.figures.process import FigureProcess
+
+    figures = None if args.no_plots else FigureProcess.start()
+    try:
+        return _run(args, figures)
+    finally:
+        if figures is not None:
+            figures.close()
+
+
+def _run(args: argparse.Namespace, figures: FigureProcess | None) -> int:
+    """Run one experiment file (``dualarm-qp run``); its figures drawn by ``figures``."""
     from .experiments.config import load_config, safe_name
     from .experiments.options import check_solver_options, parse_solver_options
     from .experiments.outputs import check_unused_folder
@@ -76,7 +95,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                                  plots=not args.no_plots, animate=args.animate,
-                                 controller=controller, plant=plant)
+                                 controller=controller, plant=plant, figures=figures)
     except blown_up as err:  # the simulation blew up: a failed run, not bad input
         if new_folder and not any(out.iterdir()):
             out.rmdir()  # nothing was written: leave no empty folder
