@@ -2,9 +2,12 @@
 
 Each configuration is run from the command line, in a fresh process, once with
 ``--no-plots`` and once with the plots (``joints.png`` ... ``report.html``), alternately,
-``--repeat`` times; the table gives the shortest wall time of each and their ratio (the
-shortest, because other work on the machine only ever adds time). The processes' CPU time
-(user + system, the children's, from ``resource``) is given beside it.
+``--repeat`` times. The table gives the median wall time of each, the median of the
+rounds' ratios (each round's two runs side by side, so that a burst of other work on
+the machine falls on both alike) and the shortest wall time of each. The processes' CPU
+time (user + system, the command's and its children's, from ``resource``; median) is
+given beside it. Wall time is the whole command's, until it exits: every output file,
+the figures included, is written by then.
 
 ``--collisions FILE`` times ``dualarm-qp collisions FILE`` (three runs, their plots and
 the comparison figure) the same way.
@@ -23,10 +26,12 @@ from __future__ import annotations
 import argparse
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,19 +54,41 @@ def timed(args: list[str], env: dict[str, str]) -> tuple[float, float]:
     return wall, cpu
 
 
+@dataclass(frozen=True)
+class Timing:
+    """What :func:`measure` found for one command: ``repeat`` wall and CPU times [s]."""
+
+    wall: list[float]
+    cpu: list[float]
+
+    @property
+    def median(self) -> float:
+        """Median wall time [s]."""
+        return statistics.median(self.wall)
+
+
 def measure(variants: dict[str, list[str]], repeat: int, cache: Path,
-            cold: bool) -> dict[str, tuple[float, float]]:
-    """Time each variant ``repeat`` times, alternately; the shortest wall and CPU times."""
-    best: dict[str, tuple[float, float]] = {}
+            cold: bool) -> dict[str, Timing]:
+    """Time each variant ``repeat`` times, alternately; every round's wall and CPU times."""
+    found: dict[str, Timing] = {name: Timing([], []) for name in variants}
     env = dict(os.environ)
     for k in range(repeat + 1):  # the first round fills the cache and is not counted
         for name, args in variants.items():
             env["DUALARM_QP_CACHE"] = str(cache / f"{name}{k}" if cold else cache)
             wall, cpu = timed(args, env)
             if k:
-                old = best.get(name, (wall, cpu))
-                best[name] = (min(old[0], wall), min(old[1], cpu))
-    return best
+                found[name].wall.append(wall)
+                found[name].cpu.append(cpu)
+    return found
+
+
+def row(label: str, found: dict[str, Timing]) -> str:
+    """One line of the table: median wall (CPU) of each, median ratio, shortest walls."""
+    bare, plots = found["bare"], found["plots"]
+    ratio = statistics.median(p / b for p, b in zip(plots.wall, bare.wall, strict=True))
+    return (f"{label:28s} {bare.median:6.2f} ({statistics.median(bare.cpu):5.2f}) "
+            f"{plots.median:6.2f} ({statistics.median(plots.cpu):5.2f}) {ratio:6.2f}"
+            f"   {min(bare.wall):5.2f} {min(plots.wall):5.2f}")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -79,26 +106,22 @@ def main(argv: list[str] | None = None) -> None:
         tmp = Path(tmp_name)
         cache = tmp / "cache"
         print(f"{'config':28s} {'no plots [s]':>14s} {'plots [s]':>14s} {'ratio':>6s}"
-              "   (wall, shortest of {}; CPU in brackets)".format(args.repeat))
+              f"   {'shortest':>11s}   (wall, median of {args.repeat}; CPU in brackets)")
         for name in names:
             path = Path(name) if name.endswith(".yaml") else ROOT / "configs" / f"{name}.yaml"
             out = str(tmp / path.stem)
-            best = measure({"bare": ["run", str(path), "--out", out, "--force", "--quiet",
-                                     "--no-plots"],
-                            "plots": ["run", str(path), "--out", out, "--force", "--quiet"]},
-                           args.repeat, cache, args.cold)
-            (w0, c0), (w1, c1) = best["bare"], best["plots"]
-            print(f"{path.stem:28s} {w0:6.2f} ({c0:5.2f}) {w1:6.2f} ({c1:5.2f}) {w1 / w0:6.2f}")
+            found = measure({"bare": ["run", str(path), "--out", out, "--force", "--quiet",
+                                      "--no-plots"],
+                             "plots": ["run", str(path), "--out", out, "--force", "--quiet"]},
+                            args.repeat, cache, args.cold)
+            print(row(path.stem, found), flush=True)
         for name in args.collisions:
             out = str(tmp / ("collisions_" + Path(name).stem))
-            best = measure({"bare": ["collisions", name, "--out", out, "--quiet",
-                                     "--no-plots"],
-                            "plots": ["collisions", name, "--out", out, "--quiet"]},
-                           args.repeat, cache, args.cold)
-            (w0, c0), (w1, c1) = best["bare"], best["plots"]
-            print(f"{'collisions ' + Path(name).stem:28s} {w0:6.2f} ({c0:5.2f}) "
-                  f"{w1:6.2f} ({c1:5.2f}) {w1 / w0:6.2f}")
-
+            found = measure({"bare": ["collisions", name, "--out", out, "--quiet",
+                                      "--no-plots"],
+                             "plots": ["collisions", name, "--out", out, "--quiet"]},
+                            args.repeat, cache, args.cold)
+            print(row("collisions " + Path(name).stem, found), flush=True)
 
 if __name__ == "__main__":
     main()

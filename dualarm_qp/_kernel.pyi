@@ -418,6 +418,7 @@ class TorqueLimit(Limit):
                  mass_centre: ArrayLike, gravity: ArrayLike, follower_path: SlidePath,
                  leader_path: SlidePath | None, grasp_step: float, fallback_length: float,
                  rcond_min: float) -> None: ...
+    approach: float
     def constraint(self, ctx: object) -> Constraint: ...
 
 class SupportLine:

@@ -120,9 +120,21 @@ def _add_physics(sub: Any) -> None:
                                         "closed loop, with a verdict (docs/physics.md)")
     ph.add_argument("run_dir", type=Path, metavar="RUN_DIR",
                     help="output folder of 'dualarm-qp run'")
-    ph.add_argument("--delay", action="store_true",
-                    help="closed loop one sample late (overrides the file's physics.delay)")
+    ph.add_argument("--delay", nargs="?", const=1, default=None, type=_samples,
+                    metavar="N", help="closed loop N samples late (1 when N is left out; "
+                    "overrides the file's physics.delay)")
     ph.set_defaults(func=cmd_physics)
+
+
+def _samples(text: str) -> int:
+    """Return ``--delay``'s number of samples (>= 0)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a whole number of samples >= 0, not {text!r}")
+    return value
 
 
 def _add_reproduce(sub: Any) -> None:

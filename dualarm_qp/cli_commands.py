@@ -11,10 +11,13 @@ import argparse
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._signals import SignalHold
 from .errors import DualArmError, InvalidInputError
+
+if TYPE_CHECKING:
+    from .experiments.figures.process import FigureProcess
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141  # 128 + SIGINT, 128 + SIGPIPE
@@ -41,7 +44,23 @@ def output_folder(path: str | Path) -> Path:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """``dualarm-qp run``: one experiment from a YAML file."""
+    """``dualarm-qp run``: one experiment from a YAML file.
+
+    The figures' process starts first: it imports matplotlib while this one imports the
+    rest and runs (:mod:`~dualarm_qp.experiments.figures.process`).
+    """
+    from .experiments.figures.process import FigureProcess
+
+    figures = None if args.no_plots else FigureProcess.start()
+    try:
+        return _run(args, figures)
+    finally:
+        if figures is not None:
+            figures.close()
+
+
+def _run(args: argparse.Namespace, figures: FigureProcess | None) -> int:
+    """Run one experiment file (``dualarm-qp run``); its figures drawn by ``figures``."""
     from .experiments.config import load_config, safe_name
     from .experiments.options import check_solver_options, parse_solver_options
     from .experiments.outputs import check_unused_folder
@@ -58,12 +77,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.plant == "mujoco":  # docs/physics.md
         from .physics.check import arm_tau_max
         from .physics.command import settings_for
+        from .physics.compliant import compliant_experiment
         from .physics.plant import DivergedError, MujocoPlant
 
         blown_up = (DivergedError,)
         plant = MujocoPlant(exp.task, settings_for(load_config(args.config), exp,
                                                    str(args.config)),
                             arm_tau_max=arm_tau_max(exp))
+        if plant.settings.compliance is not None:  # the compliant follower's step
+            exp = compliant_experiment(exp, plant)
+            controller = exp.controller()
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / exp.solver_name.replace(":", "_"))
     check_unused_folder(out, force=args.force, what="a run", names=OUTPUT_FILES)
@@ -72,7 +95,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         outcome = run_experiment(exp, out, progress=None if not args.quiet else False,
                                  plots=not args.no_plots, animate=args.animate,
-                                 controller=controller, plant=plant)
+                                 controller=controller, plant=plant, figures=figures)
     except blown_up as err:  # the simulation blew up: a failed run, not bad input
         if new_folder and not any(out.iterdir()):
             out.rmdir()  # nothing was written: leave no empty folder
@@ -188,7 +211,9 @@ def physics_line(name: str, r: dict[str, Any] | None) -> str:
     return (f"  {name:<12} object off D(t) {r['deviation_pos_max_m'] * 1e3:.3g} mm, "
             f"internal force {r['internal_force_max_N']:.3g} N, follower support "
             f"{r['follower_support_min_N']:.3g}..{r['follower_support_max_N']:.3g} N, "
-            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)")
+            f"slip {r['slip_max_m'] * 1e3:.3g} mm, {torque} ({r['wall_time_s']:.1f} s)"
+            + ("" if not r.get("cause") else
+               f"; first past a threshold: {r['cause']['kind']} at {r['cause']['t_s']:.3g} s"))
 
 
 def cmd_physics(args: argparse.Namespace) -> int:
@@ -197,7 +222,7 @@ def cmd_physics(args: argparse.Namespace) -> int:
     from .physics.plant import DivergedError
 
     try:
-        p = check_run(args.run_dir, delay=True if args.delay else None)
+        p = check_run(args.run_dir, delay=args.delay)
     except DivergedError as err:  # the simulation blew up: a failed check, not bad input
         print_error(str(err))
         return EXIT_FAILED

@@ -47,6 +47,14 @@ class Trace:
     its hand's share of the load), likewise computed after the run for a task with a
     load or torque limits (:mod:`dualarm_qp.control.torques`; NaN otherwise).
 
+    ``wrench_leader``, ``wrench_follower``, ``internal_force``, ``internal_follower``,
+    ``load_share`` and ``object_pose`` are what a plant that measures the hands'
+    wrenches measured with each sample's state (:mod:`dualarm_qp.control.measured`; NaN
+    without such a plant): each hand's wrench on the object, the size of the internal
+    force [N] and the follower's internal wrench, the follower's share of the load, the
+    object's pose (position [m], quaternion ``w, x, y, z``); ``torque_ratio_measured``
+    the largest share of a joint's torque limit its joints reached over the sample.
+
     ``clearance_*`` are the smallest signed distances [m] of each group of pairs of the
     task's collision scene at the row's state (``inf`` for a group without pairs; NaN
     without a scene) and ``clearance_pair`` the nearest pair: measured from the recorded
@@ -107,13 +115,22 @@ class Trace:
     f_follower: FloatArray
     tau_leader: FloatArray
     tau_follower: FloatArray
+    wrench_leader: FloatArray
+    wrench_follower: FloatArray
+    internal_force: FloatArray
+    internal_follower: FloatArray
+    load_share: FloatArray
+    object_pose: FloatArray
+    torque_ratio_measured: FloatArray
 
     @classmethod
     def allocate(cls, rows: int, n_l: int, n_f: int) -> Trace:
         """Arrays for ``rows`` samples, filled with NaN until written."""
         widths = {"q_l": n_l, "ql_dot": n_l, "margin_ql": n_l,
                   "q_f": n_f, "qf_dot": n_f, "margin_qf": n_f, "f_leader": 6,
-                  "f_follower": 6, "tau_leader": n_l, "tau_follower": n_f}
+                  "f_follower": 6, "tau_leader": n_l, "tau_follower": n_f,
+                  "wrench_leader": 6, "wrench_follower": 6, "internal_follower": 6,
+                  "object_pose": 7}
         values: dict[str, Any] = {}
         for f in fields(cls):
             if f.name in ("status", "clearance_pair"):

@@ -54,7 +54,10 @@ class ControllerSpec(Model):
     unit, default twice ``duration``) is how long a slowed task may run.
     ``torque_limits`` keeps every joint's quasi-static torque (its arm's weight and its
     hand's share of ``object.mass``) within its arm's ``tau_max`` (N m, whatever the
-    units; default a URDF's ``effort``; a DH arm or preset must give it).
+    units; default a URDF's ``effort``; a DH arm or preset must give it), and
+    ``torque_approach`` (time unit, default none) is the time constant with which a
+    torque may approach its limit (each sample closes at most ``dt / torque_approach``
+    of the margin).
     ``acceleration_limits`` keeps every joint within its arm's ``qdd_max`` and every
     grasp within ``grasp_acc_max`` (length unit / time unit^2); ``initial_rates`` says
     how the run starts: ``rest`` (the default) or ``path`` (already moving as the first
@@ -70,6 +73,7 @@ class ControllerSpec(Model):
     grasp_speed_max: Num | None = None
     acceleration_limits: Flag = False
     torque_limits: Flag = False
+    torque_approach: Num | None = None
     grasp_acc_max: Num | None = None
     jerk_limits: Flag = False
     grasp_jerk_max: Num | None = None
@@ -111,7 +115,7 @@ class ControllerSpec(Model):
         return self
 
     @field_validator("dt", "duration", "centre_horizon", "grasp_speed_max", "duration_cap",
-                     "grasp_acc_max", "grasp_jerk_max")
+                     "grasp_acc_max", "torque_approach", "grasp_jerk_max")
     @classmethod
     def _positive_time(cls, v: float | None) -> float | None:
         if v is not None and not (math.isfinite(v) and v > 0):

@@ -10,11 +10,28 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
-from .config_types import Flag, LimitNum, Model, Num, keyed, scalar_to_list
+from .config_types import Flag, LimitNum, Model, Num, Vec3, keyed, scalar_to_list
 
 LimitList = Annotated[list[LimitNum], Field(min_length=1)]
+
+#: Most samples of delay a file may ask for.
+DELAY_MAX = 100
+
+
+def _samples(value: Any) -> int:
+    """Return a delay's samples: ``true`` 1 (the former meaning), ``false`` 0, or a number."""
+    if isinstance(value, bool):
+        return int(value)
+    if isinstance(value, int) and 0 <= value <= DELAY_MAX:
+        return value
+    raise ValueError(f"must be true (1 sample), false or a whole number of samples from 0 "
+                     f"to {DELAY_MAX}, got {value!r}")
+
+
+#: The closed loop's delay in samples (``true`` is 1, as it was before it took a number).
+Samples = Annotated[int, BeforeValidator(_samples)]
 
 
 class TorqueLimitSpec(Model):
@@ -43,16 +60,58 @@ class TorqueLimitSpec(Model):
         return self
 
 
+class ComplianceSpec(Model):
+    """``physics.compliance``: the compliant follower's gains (SI; docs/physics.md)."""
+
+    force_gain: Num = 2e-4
+    moment_gain: Num = 2e-3
+    filter_time: Num = 0.02
+
+    @model_validator(mode="after")
+    def _signs(self) -> ComplianceSpec:
+        for key in ("force_gain", "moment_gain", "filter_time"):
+            if getattr(self, key) < 0:
+                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
+        return self
+
+
+def _switch(value: Any) -> Any:
+    """Return ``compliance: true`` as the default gains, ``false`` as none."""
+    if value is True:
+        return {}
+    if value is False:
+        return None
+    return value
+
+
+#: ``physics.compliance``: ``true`` (the default gains), ``false`` or the gains.
+Compliance = Annotated[ComplianceSpec | None, BeforeValidator(_switch)]
+
+
+class BaseErrorSpec(Model):
+    """``physics.base_error``: the simulated follower's base off the model's.
+
+    In the base's own frame: ``position`` in the file's length unit, ``rpy`` in its
+    angle unit.
+    """
+
+    position: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rpy: Vec3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
 class PhysicsSpec(Model):
     """The ``physics:`` section, as written (lengths in the file's length unit)."""
 
     servo: Literal["position", "velocity"] = "position"
     reference: Literal["measured", "integrated"] = "measured"
     reference_time: Num | None = None
-    kp: Num = 100000.0
-    kv: Num = 300.0
+    servo_frequency: Num = 40.0
+    damping_ratio: Num = 1.0
+    kp: Num | None = None
+    kv: Num | None = None
     armature: Num = 0.05
-    delay: Flag = False
+    delay: Samples = 0
+    predict: Flag = True
     contacts: Literal["obstacles", "all", "none"] = "obstacles"
     geometry: Literal["meshes", "capsules"] = "meshes"
     object_mass: Num = 3.0
@@ -63,17 +122,25 @@ class PhysicsSpec(Model):
     squeeze_max: Num = 20.0
     torque_ratio_max: Num = 1.0
     tau_max: TorqueLimitSpec = Field(default_factory=TorqueLimitSpec)
+    compliance: Compliance = None
+    base_error: BaseErrorSpec | None = None
 
     @model_validator(mode="after")
     def _ranges(self) -> PhysicsSpec:
-        for key in ("kv", "object_mass", "link_density", "squeeze_max", "torque_ratio_max"):
+        for key in ("servo_frequency", "damping_ratio", "object_mass", "link_density",
+                    "squeeze_max", "torque_ratio_max"):
             if not getattr(self, key) > 0:
                 raise keyed(key, f"must be > 0 (got {getattr(self, key):g})")
-        for key in ("kp", "armature"):
-            if getattr(self, key) < 0:
-                raise keyed(key, f"must be >= 0 (got {getattr(self, key):g})")
-        if self.servo == "position" and not self.kp > 0:
-            raise keyed("kp", "a position servo needs kp > 0 (or servo: velocity)")
+        if self.kv is not None and not self.kv > 0:
+            raise keyed("kv", f"must be > 0 (got {self.kv:g}; leave it out for each "
+                        "joint's from its inertia)")
+        if self.armature < 0:
+            raise keyed("armature", f"must be >= 0 (got {self.armature:g})")
+        if self.kp is not None and self.kp < 0:
+            raise keyed("kp", f"must be >= 0 (got {self.kp:g})")
+        if self.servo == "position" and self.kp is not None and not self.kp > 0:
+            raise keyed("kp", "a position servo needs kp > 0 (or leave it out for each "
+                        "joint's from its inertia, or servo: velocity)")
         for key in ("reference_time", "deviation_max", "rotation_max", "slip_max"):
             value = getattr(self, key)
             if value is not None and not value > 0:
@@ -82,4 +149,4 @@ class PhysicsSpec(Model):
 
 
 
-__all__ = ["PhysicsSpec", "TorqueLimitSpec"]
+__all__ = ["BaseErrorSpec", "ComplianceSpec", "PhysicsSpec", "TorqueLimitSpec"]

@@ -112,8 +112,12 @@ CRITERION_TEXT = {
 
 #: What each figure of a run shows (its caption in the report).
 FIGURE_CAPTIONS = {
-    "joints.png": "Joints against their ranges (dashed); shaded where outside.",
-    "rates.png": "Joint rates, commanded and realised, against the speed limits (dashed).",
+    "joints.png": "Joints against their ranges: one lane per joint (leader above, follower "
+                  "below), scaled so that each joint's range lies on its lane's dashed "
+                  "lines (the label beside it gives the range); shaded where outside.",
+    "rates.png": "Joint rates, commanded and realised, against the speed limits: one lane "
+                 "per joint, the limits on its dashed lines (the label gives them); shaded "
+                 "where the realised rate is over.",
     "grasp.png": "Grasp position along the object against its range; sliding speed "
                  "against its limit.",
     "tracking.png": "Leader's error to D(t) against its tolerance, the arms' smallest "

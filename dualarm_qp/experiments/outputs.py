@@ -126,9 +126,11 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
     wrench each hand applies to the object [N, N m] (world frame, moment about the
     hand's grasp point; NaN where the grasps cannot hold it). With a load or torque
     limits, ``tau_leader_1 ..`` and ``tau_follower_1 ..`` are each joint's quasi-static
-    torque [N m] (the arm's weight and its hand's share of the load). ``scale`` is the
-    task scale (:class:`~dualarm_qp.control.trace.Trace`): the share of the path rate
-    asked for that the limits allowed, 1 when not slowed, the last row included.
+    torque [N m] (the arm's weight and its hand's share of the load). Against a plant
+    that measures the hands' wrenches, what it measured (:func:`_measured_columns`).
+    ``scale`` is the task scale (:class:`~dualarm_qp.control.trace.Trace`): the share
+    of the path rate asked for that the limits allowed, 1 when not slowed, the last row
+    included.
     """
     cols: dict[str, Any] = {"t": trace.t, "path_t": trace.tau}
     for j in range(trace.q_l.shape[1]):
@@ -181,15 +183,52 @@ def trace_columns(trace: Trace) -> dict[str, Any]:
         if np.isfinite(trace.clearance_self).any():  # arms with self-collision pairs
             cols["clearance_self"] = trace.clearance_self
         cols["clearance_pair"] = trace.clearance_pair
-    if len(trace) and not np.isnan(trace.f_leader).all():  # a task with a load
+    if len(trace):
+        _load_columns(cols, trace)
+    return cols
+
+
+#: The parts of a wrench, in its columns' names.
+_WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def _load_columns(cols: dict[str, Any], trace: Trace) -> None:
+    """Add the load's columns: the planned wrenches, the torques, what was measured."""
+    if not np.isnan(trace.f_leader).all():  # a task with a load
         for role, wrench in (("leader", trace.f_leader), ("follower", trace.f_follower)):
-            for j, part in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
+            for j, part in enumerate(_WRENCH):
                 cols[f"f_{role}_{part}"] = wrench[:, j]
-    if len(trace) and not np.isnan(trace.tau_leader).all():  # joint torques recorded
+    if not np.isnan(trace.tau_leader).all():  # joint torques recorded
         for role, tau in (("leader", trace.tau_leader), ("follower", trace.tau_follower)):
             for j in range(tau.shape[1]):
                 cols[f"tau_{role}_{j + 1}"] = tau[:, j]
-    return cols
+    if not np.isnan(trace.internal_force).all():  # wrenches measured
+        _measured_columns(cols, trace)
+
+
+def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
+    """Add the columns of what a plant measured at the hands (:mod:`..control.measured`).
+
+    Against a plant that measures the hands' wrenches (``run --plant mujoco``):
+    ``wrench_leader_fx .. wrench_leader_mz`` and ``wrench_follower_fx ..
+    wrench_follower_mz`` the measured wrenches (the convention of the ``f_*`` columns),
+    ``internal_force`` [N] the size of their internal part and ``internal_follower_fx ..
+    internal_follower_mz`` the follower's internal wrench, ``load_share_follower`` the
+    follower's share of the load, ``object_x, object_y, object_z`` [m],
+    ``object_qw .. object_qz`` the object's measured pose, and ``torque_ratio_measured``
+    the largest share of a joint's torque limit the plant's joints reached over the
+    sample (NaN without limits).
+    """
+    for role, wrench in (("leader", trace.wrench_leader), ("follower", trace.wrench_follower)):
+        for j, part in enumerate(_WRENCH):
+            cols[f"wrench_{role}_{part}"] = wrench[:, j]
+    cols["internal_force"] = trace.internal_force
+    for j, part in enumerate(_WRENCH):
+        cols[f"internal_follower_{part}"] = trace.internal_follower[:, j]
+    cols["load_share_follower"] = trace.load_share
+    for j, part in enumerate(("x", "y", "z", "qw", "qx", "qy", "qz")):
+        cols[f"object_{part}"] = trace.object_pose[:, j]
+    cols["torque_ratio_measured"] = trace.torque_ratio_measured
 
 
 def write_trace_csv(path: Path, trace: Trace, extra: dict[str, Any] | None = None) -> None:

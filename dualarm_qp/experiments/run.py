@@ -21,6 +21,7 @@ from typing import Any
 from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
 from ..control.controller import DualArmController
+from ..control.measured import record_readings
 from ..control.plant import Plant
 from ..control.rollout import RolloutResult, rollout
 from .limits_kept import limits_kept
@@ -31,6 +32,9 @@ from .setup import Experiment
 OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
                 "tracking.png", "closure.png", "clearance.png", "report.html", "config.yaml",
                 "animation.html")
+
+#: What writes a run's PNG figures: ``figures(out, exp)`` returns the file names.
+FigureWriter = Callable[[Path, Experiment], list[str]]
 
 #: What ``summary.json``'s ``status`` says.
 STATUSES = ("completed", "failed", "interrupted")
@@ -114,6 +118,7 @@ def run_experiment(
     animate: bool = False,
     controller: DualArmController | None = None,
     plant: Plant | None = None,
+    figures: FigureWriter | None = None,
 ) -> RunOutcome:
     """Roll the experiment out and write its outputs.
 
@@ -136,6 +141,13 @@ def run_experiment(
     plant : Plant, optional
         What the commands drive (``--plant mujoco``:
         :class:`~dualarm_qp.physics.plant.MujocoPlant`); default: the model itself.
+    figures : callable, optional
+        What writes the PNG figures, called as ``figures(out, exp)`` once
+        ``trajectory.csv`` is written and returning the file names (default:
+        :func:`~dualarm_qp.experiments.figures.run_figures.write_run_figures`, in this
+        process). The command line passes a
+        :class:`~dualarm_qp.experiments.figures.process.FigureProcess`, started before the
+        run, which draws them in other processes.
 
     Returns
     -------
@@ -147,7 +159,8 @@ def run_experiment(
         are written is raised once they all are.
     """
     outcome, hold = run_and_write(exp, out_dir, progress=progress, plots=plots,
-                                  animate=animate, controller=controller, plant=plant)
+                                  animate=animate, controller=controller, plant=plant,
+                                  figures=figures)
     hold.deliver()
     return outcome
 
@@ -161,6 +174,7 @@ def run_and_write(
     animate: bool = False,
     controller: DualArmController | None = None,
     plant: Plant | None = None,
+    figures: FigureWriter | None = None,
 ) -> tuple[RunOutcome, SignalHold]:
     """Do what :func:`run_experiment` does, but hand back a signal held while writing.
 
@@ -191,6 +205,8 @@ def run_and_write(
             bar.close()
         raise
     wall = time.perf_counter() - t0
+    if plant is not None:  # what it measured at the hands, if it does
+        record_readings(result.trace, plant)
     with SignalHold(deliver=False) as hold:
         if bar is not None:
             bar.close()
@@ -200,7 +216,8 @@ def run_and_write(
         out = None
         if out_dir is not None:
             out = Path(out_dir)
-            write_outputs(out, exp, result, summary, plots=plots, animate=animate)
+            write_outputs(out, exp, result, summary, plots=plots, animate=animate,
+                          figures=figures)
     return RunOutcome(result, summary, out), hold
 
 
@@ -295,6 +312,7 @@ def write_resolved_config(path: Path, config_file: str) -> bool:
 
 def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
                   *, plots: bool = True, animate: bool = False,
+                  figures: FigureWriter | None = None,
                   columns: dict[str, Any] | None = None) -> list[str]:
     """Write the output set of a run into ``out``, replacing an earlier run's.
 
@@ -304,8 +322,9 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     comes last, its ``outputs`` listing exactly the other files written. An error on the
     way removes what this call wrote (no set without its summary is left). Call it
     inside a :class:`~dualarm_qp._signals.SignalHold` for an all-or-nothing set.
-    ``columns`` are further columns of ``trajectory.csv`` (a cell's,
-    :mod:`dualarm_qp.cell.record`), after the run's own.
+    ``figures`` writes the PNG figures (see :func:`run_experiment`). ``columns`` are
+    further columns of ``trajectory.csv`` (a cell's, :mod:`dualarm_qp.cell.record`),
+    after the run's own.
 
     Returns
     -------
@@ -316,15 +335,15 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
     remove_run_outputs(out)
     try:
         return _write_outputs(out, exp, result, summary, plots=plots, animate=animate,
-                              columns=columns)
+                              figures=figures, columns=columns)
     except BaseException:
         remove_run_outputs(out)  # a set without its summary is no run: leave none
         raise
 
 
 def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
-                   *, plots: bool, animate: bool, columns: dict[str, Any] | None = None
-                   ) -> list[str]:
+                   *, plots: bool, animate: bool, figures: FigureWriter | None = None,
+                   columns: dict[str, Any] | None = None) -> list[str]:
     """Write the files of :func:`write_outputs`, ``summary.json`` last."""
     write_trace_csv(out / "trajectory.csv", result.trace, columns)
     written = ["trajectory.csv"]
@@ -337,10 +356,13 @@ def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: d
                         title=f"{exp.name} ({exp.solver_name})")
         written.append(ANIMATION_FILE)
     if plots and len(result.trace):
-        from .figures import write_run_figures
         from .html_report import REPORT_FILE, write_run_report
 
-        pngs = write_run_figures(out, exp)
+        if figures is None:
+            from .figures import write_run_figures
+
+            figures = write_run_figures
+        pngs = figures(out, exp)
         summary["outputs"] = [*written, *pngs, REPORT_FILE]  # the report shows the list
         write_run_report(out, summary, figures=pngs)
         written += [*pngs, REPORT_FILE]

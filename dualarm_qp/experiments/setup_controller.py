@@ -60,6 +60,7 @@ def step_options_of(cfg: ExperimentConfig, sc: Scales, dt: float, leader: Serial
             else c.grasp_speed_max * sc.length / sc.time,
             acceleration_limits=c.acceleration_limits,
             torque_limits=c.torque_limits,
+            torque_approach=None if c.torque_approach is None else c.torque_approach * sc.time,
             leader_tau_max=tau_max["leader"],
             follower_tau_max=tau_max["follower"],
             grasp_acc_max=math.inf if c.grasp_acc_max is None

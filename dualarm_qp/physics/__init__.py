@@ -5,6 +5,7 @@
   :mod:`dualarm_qp.experiments.config_physics`.
 * :mod:`.mjcf`: an MJCF model built from the task: the arms from their Pinocchio
   models, the object as a free body, the grasps as a weld and frictionless slides.
+* :mod:`.gains`: each joint servo's gains from the arm's own inertia.
 * :mod:`.plant`: the model as a plant the rollout drives (``dualarm-qp run --plant
   mujoco``), with joint servos at 1 ms substeps, and what it measures.
 * :mod:`.measure`: each hand's wrench on the object and the internal (squeeze) part.

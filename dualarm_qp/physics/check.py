@@ -8,7 +8,7 @@
 * The **closed loop** runs the controller against the simulator at the controller's
   ``dt`` (:func:`~dualarm_qp.control.rollout.rollout` with a
   :class:`~dualarm_qp.physics.plant.MujocoPlant`): it measures the joints and the sliding
-  coordinate from MuJoCo (optionally one sample late) and sends its rates back.
+  coordinate from MuJoCo (optionally some samples late) and sends its rates back.
 
 The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 
@@ -33,6 +33,7 @@ The verdict (:data:`STATUSES`, the first that applies) reads the closed loop:
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -44,6 +45,7 @@ from ..control.rollout import RunLimits, rollout
 from ..experiments.setup import Experiment
 from ..step.state import DualArmState
 from .cause import Event, first_cause, oscillation_event, stop_message, threshold_events
+from .compliant import compliant_experiment
 from .plant import MujocoPlant
 from .settings import PhysicsSettings
 from .simulation import PhysicsRun
@@ -68,7 +70,7 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
         Replay the follower this many samples late (a deliberately lagged follower).
     """
     t0 = time.perf_counter()
-    plant = MujocoPlant(exp.task, settings, delay=False, arm_tau_max=arm_tau_max(exp))
+    plant = MujocoPlant(exp.task, settings, delay=0, arm_tau_max=arm_tau_max(exp))
     sl = np.zeros_like(grasp) if grasp_leader is None else np.nan_to_num(grasp_leader)
     dt = float(t[1] - t[0]) if t.size > 1 else exp.options.dt
     plant.reset(DualArmState(float(path_t[0]), q_l[0], q_f[0], float(grasp[0]), float(sl[0])),
@@ -81,9 +83,11 @@ def replay(exp: Experiment, settings: PhysicsSettings, t: FloatArray, q_l: Float
     return PhysicsRun.of("replay", plant, t0)
 
 
-def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | None = None
+def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: int | None = None
                 ) -> PhysicsRun:
     """Run the controller against MuJoCo (the run starts at rest).
+
+    ``delay`` [samples] overrides ``settings.delay``.
 
     The run's tracking and closure tolerances are widened to the check's thresholds
     (:func:`closed_loop_limits`): the controller goes on while the verdict's thresholds
@@ -91,6 +95,7 @@ def closed_loop(exp: Experiment, settings: PhysicsSettings, *, delay: bool | Non
     """
     t0 = time.perf_counter()
     plant = MujocoPlant(exp.task, settings, delay=delay, arm_tau_max=arm_tau_max(exp))
+    exp = compliant_experiment(exp, plant)
     result = rollout(exp.controller(), exp.initial, duration=exp.duration,
                      limits=closed_loop_limits(exp.limits, settings), plant=plant,
                      stop_on_interrupt=True)
@@ -238,6 +243,11 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
     cause = judged.cause
     if "message" in c and cause is not None and cause.kind != "controller":
         c["message"] = stop_message(c["message"], seen=True)  # the simulation saw why
+    # Each simulation with what it saw first (the replay is the squeeze's baseline).
+    c["cause"] = None if cause is None else cause.as_dict()
+    if b is not None and baseline is not None:
+        first = first_cause(threshold_events(baseline, math.inf, settings))
+        b["cause"] = None if first is None else first.as_dict()
     return {
         "status": judged.status, "reasons": judged.reasons,
         "cause": None if cause is None else cause.kind,
@@ -248,6 +258,7 @@ def physics_summary(closed: PhysicsRun, baseline: PhysicsRun | None,
         "internal_force_excess_N": c["internal_force_max_N"] - (
             0.0 if b is None else b["internal_force_max_N"]),
         "settings": settings.as_dict(),
+        "servo_gains": closed.gains,
         "torque_limits_N_m": {k: [float(x) if np.isfinite(x) else None for x in v]
                               for k, v in closed.limits.items()},
         "model_notes": closed.notes,

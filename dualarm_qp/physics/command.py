@@ -53,7 +53,7 @@ def settings_for(cfg: ExperimentConfig, exp: Experiment, path: str) -> PhysicsSe
     return settings_of(cfg)
 
 
-def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, Any]:
+def check_run(run_dir: str | Path, *, delay: int | None = None) -> dict[str, Any]:
     """Check the run in ``run_dir`` in MuJoCo; return the ``physics`` section written.
 
     Parameters
@@ -61,8 +61,8 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
     run_dir : path
         A folder written by ``dualarm-qp run`` (``summary.json``, ``trajectory.csv``,
         ``config.yaml``).
-    delay : bool, optional
-        Override the file's ``physics.delay`` (closed loop one sample late).
+    delay : int, optional
+        Override the file's ``physics.delay`` (the closed loop this many samples late).
 
     Raises
     ------
@@ -85,7 +85,7 @@ def check_run(run_dir: str | Path, *, delay: bool | None = None) -> dict[str, An
         raise InvalidInputError(f"cannot rebuild the task of {run}: {err}") from None
     settings = settings_for(cfg, exp, str(config))
     if delay is not None:
-        settings = dataclasses.replace(settings, delay=delay)
+        settings = dataclasses.replace(settings, delay=int(delay))
     data = RunData.read(run / "trajectory.csv")
     base = None  # a run that stopped before its second sample has nothing to replay
     if len(data) >= 2:

@@ -24,6 +24,10 @@
   every motion free but one: the hand's motion into the object along the normal, a
   one-sided joint limit (the hand pushes, never pulls).
 * **Obstacles** are the collision scene's, fixed in the world.
+* A **force/torque sensor** at each tool frame (site ``<role>_ft``, sensors
+  ``<role>_force`` and ``<role>_torque``), between the arm's last link and its tool
+  body (:data:`CHAIN_MASS`), as a wrist sensor between a robot's flange and its hand
+  (:mod:`dualarm_qp.physics.sensors` reads them).
 
 Nothing here imports MuJoCo: the model is text (:func:`build_mjcf`).
 """
@@ -48,8 +52,13 @@ FloatArray = NDArray[np.float64]
 
 #: Radius [m] of the default object.
 OBJECT_RADIUS = 0.02
-#: Mass [kg] and inertia [kg m^2] of the bodies of a grasp chain (nearly massless).
+#: Mass [kg] and inertia [kg m^2] of each arm's tool body and of the bodies of a grasp
+#: chain (nearly massless).
 CHAIN_MASS, CHAIN_INERTIA = 0.1, 1e-4
+#: Inertia [kg m^2] of a grasp chain's bodies: MuJoCo sets a weld's stiffness from the
+#: inertia of the bodies it joins, and a chain's spin joint with :data:`CHAIN_INERTIA`
+#: made the follower's weld turn 15 times as far as the leader's under one moment.
+CHAIN_BODY_INERTIA = 1e-2
 #: Weld and joint-limit stiffness: MuJoCo's ``solref`` time constant [s] and damping ratio.
 SOLREF = (2 * SUBSTEP, 1.0)
 #: How many bodies at the tip of each arm never touch the object (the grasping wrist).
@@ -210,7 +219,8 @@ def _arm_xml(task: DualArmTask, role: str, arm: SerialArm, settings: PhysicsSett
             tool = model.frames[arm.tool_frame_id].placement
             lines.append(f'<body name="{role}_tool" {_pose_attrs(tool)}>'
                          f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-                         f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/></body>')
+                         f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>'
+                         f'<site name="{role}_ft" pos="0 0 0"/></body>')
         xml += lines
         close.append("</body>")
     if fallback:
@@ -225,7 +235,7 @@ def _chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint]:
     axis = "1 0 0" if sj.axis == "x" else "0 1 0"
     kind = "slide" if sj.kind == "prismatic" else "hinge"
     light = (f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-             f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>')
+             f'diaginertia="{_f([CHAIN_BODY_INERTIA] * 3)}"/>')
     xml = (f'<body name="{name}_path" {_pose_attrs(sj.placement)}>{light}'
            f'<joint name="{name}_slide" type="{kind}" axis="{axis}" limited="false"/>'
            f'<body name="{name}_point" {_pose_attrs(sj.child)}>{light}'
@@ -237,7 +247,7 @@ def _chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint]:
 def _support_chain(name: str, surface: GraspSurface) -> tuple[str, GraspJoint, str]:
     """Return a support: free in every motion but into the object along the normal (one-sided)."""
     light = (f'<inertial pos="0 0 0" mass="{CHAIN_MASS!r}" '
-             f'diaginertia="{_f([CHAIN_INERTIA] * 3)}"/>')
+             f'diaginertia="{_f([CHAIN_BODY_INERTIA] * 3)}"/>')
     sr = f'solreflimit="{_f(SOLREF)}"'
     xml = (f'<body name="{name}_path" {_pose_attrs(surface.pose(0.0))}>{light}'
            f'<joint name="{name}_slide" type="slide" axis="1 0 0" limited="false"/>'
@@ -333,6 +343,9 @@ def build_mjcf(task: DualArmTask, settings: PhysicsSettings) -> PhysicsModel:
         "<equality>", *welds, "</equality>",
         "<contact>", *excludes, "</contact>",
         "<actuator>", *_actuators(joints, settings), "</actuator>",
+        "<sensor>", *(f'<force name="{role}_force" site="{role}_ft"/>'
+                      f'<torque name="{role}_torque" site="{role}_ft"/>'
+                      for role in ("leader", "follower")), "</sensor>",
         "</mujoco>", ""])
     return PhysicsModel(
         xml=xml, joints=joints, grasps=grasps, support_gap=support_gap,
@@ -409,12 +422,19 @@ def _contact_bits(settings: PhysicsSettings, *, obstacle: bool) -> str:
 
 
 def _actuators(joints: dict[str, tuple[str, ...]], settings: PhysicsSettings) -> list[str]:
-    """Each arm joint's servo: a position actuator (kp) and a velocity actuator (kv)."""
+    """Each arm joint's servo: a position actuator (kp) and a velocity actuator (kv).
+
+    The gains written are the file's ``kp`` and ``kv`` (1 where it states none): the
+    plant sets each joint's from the arm's inertia once the model is compiled
+    (:mod:`~dualarm_qp.physics.gains`).
+    """
+    kp = 1.0 if settings.kp is None else settings.kp
+    kv = 1.0 if settings.kv is None else settings.kv
     out = []
     for name in (*joints["leader"], *joints["follower"]):
         if settings.servo == "position":
-            out.append(f'<position name="{name}_p" joint="{name}" kp="{settings.kp!r}"/>')
-        out.append(f'<velocity name="{name}_v" joint="{name}" kv="{settings.kv!r}"/>')
+            out.append(f'<position name="{name}_p" joint="{name}" kp="{kp!r}"/>')
+        out.append(f'<velocity name="{name}_v" joint="{name}" kv="{kv!r}"/>')
     return out
 
 

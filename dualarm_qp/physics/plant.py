@@ -17,11 +17,15 @@ puts it at the run's start and then, for each controller sample of ``dt``:
 * measures, at the end of each sample, the joints, each sliding grasp's coordinate (its
   chain joint) and its slip (off the coordinate at the sample's start plus ``dt`` times
   the commanded sliding speed, with or without ``delay``), the object's pose, each
-  hand's wrench on the object and its internal part (:mod:`.measure`), the joint
-  torques (their peak share of the limits over the substeps), the welds' errors and a
-  support's gap, into :attr:`MujocoPlant.log`, and each arm joint's velocity error at
-  every substep into :attr:`MujocoPlant.velocity_error`;
-* hands the controller the measured state, or the previous sample's with ``delay``.
+  hand's wrench on the object from its force/torque sensor, their internal part and
+  the follower's share of the load against the plan's split (:mod:`.readout`), the
+  joint torques (their peak share of the limits over the substeps), the welds' errors
+  and a support's gap, into :attr:`MujocoPlant.log`, and each arm joint's velocity
+  error at every substep into :attr:`MujocoPlant.velocity_error`;
+* hands the controller the measured state, or with ``delay`` ``d`` the one measured
+  ``d`` samples earlier (brought forward by the commands applied since, with
+  ``predict``: :mod:`dualarm_qp.control.predict`), and keeps the sensors' reading of
+  that state in :attr:`MujocoPlant.readings`.
 
 Contacts (:attr:`PhysicsSettings.contacts
 <dualarm_qp.physics.settings.PhysicsSettings.contacts>`): by default the links and the
@@ -35,27 +39,26 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import deque
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from ..control.loads import hand_wrenches
-from ..errors import DualArmError, SupportLostError
+from ..control.measured import HandReading
+from ..control.predict import CommandHistory
+from ..errors import DualArmError, InvalidInputError
 from ..step.state import Command, DualArmState
-from ..task.loads import (
-    ObjectLoad,
-    UnbalancedLoadError,
-    rigid_grasp,
-    sliding_grasp,
-    support_push,
-)
+from ..task.loads import ObjectLoad
 from ..task.scene import DualArmTask
+from .compliance import WrenchMeasurement
+from .gains import ServoGains, servo_gains, set_gains, unstable_gains_advice
 from .limits import torque_limits
-from .measure import internal_force, space_of, weld_wrench
 from .mjcf import PhysicsModel, build_mjcf
+from .readout import Readout
 from .settings import SUBSTEP, PhysicsSettings
+from .statics import against_plan, load_feedforward, simulated_task
 
 FloatArray = NDArray[np.float64]
 
@@ -64,6 +67,7 @@ LOG_COLUMNS = {
     "t": "s", "tau": "s", "deviation_pos": "m", "deviation_rot": "rad",
     "internal": "N", "support": "N", "slip": "m",
     "weld_leader": "m", "weld_follower": "m", "gap": "m", "torque_ratio_peak": "1",
+    "share": "1", "share_plan": "1", "split_error": "1",
 }
 
 
@@ -110,24 +114,51 @@ class MujocoPlant:
         Override ``settings.delay``.
     arm_tau_max : dict of str to ndarray, optional
         Each arm's configured ``tau_max`` [N m] (:func:`torque_limits`).
+    measurement : WrenchMeasurement, optional
+        Updated with the reading of each state handed to the controller (a compliant
+        follower's, :mod:`dualarm_qp.physics.compliance`).
+
+    Attributes
+    ----------
+    delay : int
+        Samples the measurement handed to the controller is late (0: the latest).
+    readings : list of HandReading
+        What the sensors measured with each state handed to the controller (the
+        reset's first, then one per :meth:`advance`; as late as the state).
     """
 
     def __init__(self, task: DualArmTask, settings: PhysicsSettings, *,
-                 delay: bool | None = None,
-                 arm_tau_max: dict[str, FloatArray | None] | None = None) -> None:
+                 delay: int | None = None,
+                 arm_tau_max: dict[str, FloatArray | None] | None = None,
+                 measurement: WrenchMeasurement | None = None) -> None:
         self.task = task
         self.settings = settings
-        self.delay = settings.delay if delay is None else bool(delay)
-        self.physics: PhysicsModel = build_mjcf(task, settings)
+        self.delay = settings.delay if delay is None else int(delay)
+        if self.delay < 0:
+            raise InvalidInputError(f"delay must be a whole number of samples >= 0, got "
+                                    f"{self.delay}")
+        #: What MuJoCo simulates: the task, its follower's base moved by
+        #: ``settings.base_error`` (the controller keeps the model's).
+        self.world = simulated_task(task, settings.base_error)
+        self.physics: PhysicsModel = build_mjcf(self.world, settings)
         self.notes: list[str] = list(self.physics.notes)
         self.limits = torque_limits(task, settings, arm_tau_max)
         self._mj = _mujoco()
         pm = self.physics
-        self._load_task = task if task.load is not None else dataclasses.replace(
-            task, load=ObjectLoad(pm.mass, pm.mass_centre, pm.gravity))
+        #: The object's mass, mass centre and gravity as simulated (the file's, else
+        #: ``physics.object_mass`` at the middle of its shape).
+        self.load = task.load if task.load is not None else ObjectLoad(
+            pm.mass, pm.mass_centre, pm.gravity)
+        self._load_task = dataclasses.replace(task, load=self.load)
         self._ff = np.zeros(task.leader.n + task.follower.n)
         self.log: dict[str, list[Any]] = {}
         self.substeps = 1
+        #: Each arm joint's servo gains (set by :meth:`reset`, :mod:`.gains`).
+        self.gains: ServoGains | None = None
+        self.readings: list[HandReading] = []
+        self.measurement = measurement
+        self._history: deque[tuple[DualArmState, HandReading]] = deque()
+        self._commands = CommandHistory(self.delay)
 
     # -- building ---------------------------------------------------------------------
     def _compile(self, xml: str) -> None:
@@ -144,11 +175,8 @@ class MujocoPlant:
                       for role, names in self.physics.joints.items()}
         self._arm_dofs = np.r_[self._dadr["leader"], self._dadr["follower"]]
         self._arm_q = np.r_[self._qadr["leader"], self._qadr["follower"]]
-        self._obj = m.body("object").id
         self._obj_q = m.jnt_qposadr[m.joint("object_free").id]
-        self._obj_dof = m.jnt_dofadr[m.joint("object_free").id]
-        self._points = {r: m.body(b).id for r, b in self.physics.points.items()}
-        self._tools = {r: m.body(b).id for r, b in self.physics.tools.items()}
+        self.readout = Readout(m, self.data, self.physics, self.task)
         self._grasp_q = {r: (m.jnt_qposadr[m.joint(g.joint).id], g.rate)
                          for r, g in self.physics.grasps.items()}
         gap = self.physics.support_gap
@@ -195,6 +223,7 @@ class MujocoPlant:
             self._place(state)
         self.substeps = max(1, math.ceil(dt / SUBSTEP - 1e-9))
         self.model.opt.timestep = dt / self.substeps
+        self._set_gains()
         self.q_ref = np.r_[state.q_l, state.q_f].astype(float)
         self._rates = np.zeros(self.q_ref.size)
         #: The largest torque ratio, the joint (index over both arms) and the time [s].
@@ -208,7 +237,21 @@ class MujocoPlant:
         #: Each arm joint's largest |torque| over the last sample's substeps [N m].
         self.peak_torque = np.zeros(self._arm_dofs.size)
         self._measured = self._measure(state.t)
-        self._record(state.t, state.sigma, 0.0)
+        reading = self._record(state.t, state.sigma, 0.0)
+        self._history = deque([(self._measured, reading)], maxlen=self.delay + 1)
+        self._commands = CommandHistory(self.delay)
+        self.readings = [reading]
+        if self.measurement is not None:
+            self.measurement.reset()
+            self.measurement.update(reading, dt)
+
+    def _set_gains(self) -> None:
+        """Give each arm joint's servo its gains from the inertia at the start (:mod:`.gains`)."""
+        mj, m, d = self._mj, self.model, self.data
+        M = np.zeros((m.nv, m.nv))
+        mj.mj_fullM(m, d, M)
+        self.gains = servo_gains(M, self._dadr, self.settings, float(m.opt.timestep))
+        set_gains(m, self.gains, self.settings.servo)
 
     def _settle(self) -> None:
         """Hold the start for :data:`SETTLE` s, so that the run starts from rest under load.
@@ -242,20 +285,16 @@ class MujocoPlant:
         elif d.warning[self._mj.mjtWarning.mjWARN_BADQACC].number > 0:
             reason = "MuJoCo found an infinite or huge acceleration and reset the state"
         elif welds:
-            error = max(self._weld_error(self.physics.welds[r]) for r in ("leader", "follower"))
+            error = max(self.readout.weld_error(self.physics.welds[r])
+                        for r in ("leader", "follower"))
             if error > WELD_ERROR_DIVERGED:
                 reason = (f"a hand is {error * 1e3:.0f} mm off its grasp (a sound run keeps "
                           f"under {WELD_ERROR_DIVERGED * 1e3:g} mm)")
         if reason is None:
             return
-        st = self.settings
-        gains = (f"kp {st.kp:g} N m/rad, kv {st.kv:g} N m s/rad" if st.servo == "position"
-                 else f"kv {st.kv:g} N m s/rad")
-        raise DivergedError(
-            f"the simulation diverged {when}: {reason}. The servo gains ({gains}) are "
-            f"unstable with armature {st.armature:g} kg m^2 at substeps of "
-            f"{self.model.opt.timestep * 1e3:.3g} ms: lower physics.kp (or physics.kv), "
-            "or raise physics.armature")
+        raise DivergedError(f"the simulation diverged {when}: {reason}. "
+                            + unstable_gains_advice(self.settings, self.gains,
+                                                    float(self.model.opt.timestep)))
 
     # -- stepping ---------------------------------------------------------------------
     def drive(self, rates: FloatArray, dt: float, q_ref: FloatArray | None = None, *,
@@ -301,24 +340,8 @@ class MujocoPlant:
         return peak_tau
 
     def _feedforward(self, state: DualArmState) -> None:
-        """Set the load feed-forward: the torques that hold each hand's share of the load.
-
-        The share is the quasi-static split of :func:`dualarm_qp.control.loads.hand_wrenches`
-        at the measured state (zero where the grasps cannot hold the load), and the torque
-        ``J^T w`` with ``J`` the hand's Jacobian at its grasp point.
-        """
-        task = self._load_task
-        try:
-            split = hand_wrenches(task, state.q_l, state.sigma, state.sigma_leader).wrenches
-        except (UnbalancedLoadError, SupportLostError):
-            self._ff = np.zeros(self._arm_dofs.size)
-            return
-        parts = []
-        for arm, q, w in ((task.leader, state.q_l, split[0]), (task.follower, state.q_f,
-                                                              split[1])):
-            _, J = arm.fk_jacobian(q)
-            parts.append(J.T @ w)
-        self._ff = np.concatenate(parts)
+        """Set the load feed-forward at the measured ``state`` (:mod:`.statics`)."""
+        self._ff = load_feedforward(self._load_task, state)
 
     def _servo(self, rates: FloatArray) -> None:
         """Set the servos' references and the arms' bias feed-forward."""
@@ -330,7 +353,13 @@ class MujocoPlant:
         d.qfrc_applied[self._arm_dofs] = d.qfrc_bias[self._arm_dofs] + self._ff
 
     def advance(self, state: DualArmState, command: Command, dt: float) -> DualArmState:
-        """Apply the command's rates for ``dt``; return the measured state (see the module)."""
+        """Apply the command's rates for ``dt``; return the measured state (see the module).
+
+        With :attr:`delay` ``d`` the state (and the reading appended to
+        :attr:`readings`) is the one measured ``d`` samples ago (the start's, until
+        there are ``d``), brought forward by the commands applied since when
+        ``settings.predict`` (:mod:`dualarm_qp.control.predict`).
+        """
         rates = np.r_[command.ql_dot, command.qf_dot]
         self._feedforward(self._measured)
         peak_tau = self.drive(rates, dt, leak=self.settings.reference == "measured")
@@ -339,10 +368,18 @@ class MujocoPlant:
         self._measured = self._measure(tau)
         # The slip's reference: where the sample's command moved the grasp from where it
         # was at the sample's start, measured (previous), not from the state the controller
-        # was handed (with delay a sample older: one sample of sliding would count as slip).
-        self._record(tau, previous.sigma + dt * command.m, peak_tau)
-        out = previous if self.delay else self._measured
-        return DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
+        # was handed (with delay older: its sliding since would count as slip).
+        reading = self._record(tau, previous.sigma + dt * command.m, peak_tau)
+        self._history.append((self._measured, reading))
+        out, handed = self._history[0]
+        self.readings.append(handed)
+        if self.measurement is not None:
+            self.measurement.update(handed, dt)
+        self._commands.push(command, dt)
+        late = DualArmState(tau, out.q_l, out.q_f, out.sigma, out.sigma_leader)
+        if not self.settings.predict:
+            return late
+        return self._commands.predict(late, len(self._history) - 1)
 
     def replay_step(self, q_from: FloatArray, q_to: FloatArray, dt: float, tau: float,
                     sigma_ref: float) -> None:
@@ -365,65 +402,44 @@ class MujocoPlant:
                             sig.get("leader", 0.0))
 
     def wrenches(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Return the hands' wrenches on the object and their grasp points (world)."""
-        m, d = self.model, self.data
-        p_l, p_f = d.xpos[self._points["leader"]].copy(), d.xpos[self._points["follower"]].copy()
-        w_l = weld_wrench(m, d, self.physics.welds["leader"], self._obj, self._obj_dof, p_l)
-        w_f = weld_wrench(m, d, self.physics.welds["follower"], self._obj, self._obj_dof, p_f)
-        return w_l, w_f, p_l, p_f
+        """Return the hands' wrenches on the object from the welds, and the grasp points.
 
-    def _spaces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Each hand's wrench space (world) and the follower's push direction."""
-        task, d = self.task, self.data
-        R = d.xmat[self._obj].reshape(3, 3)
-        spaces = []
-        for role, surface in (("leader", task.leader_surface), ("follower", task.surface)):
-            p = d.xpos[self._points[role]]
-            if surface is None:
-                spaces.append(space_of(rigid_grasp(p).free))
-                continue
-            sigma = self._measured.sigma if role == "follower" else self._measured.sigma_leader
-            if role == "follower" and task.contact is not None:
-                spaces.append(space_of(support_push(p, R @ surface.normal(sigma), 1.0).free))
-                continue
-            g = sliding_grasp(p, R @ surface.tangent(sigma), R @ surface.angular_rate(sigma))
-            spaces.append(space_of(g.free))
-        normal = (R @ task.surface.normal(self._measured.sigma) if task.contact is not None
-                  else -self.physics.gravity / np.linalg.norm(self.physics.gravity))
-        return spaces[0], spaces[1], normal
+        The simulator's own account of the forces (the welds' constraint forces); what
+        the plant measures and hands on is the sensors' (:meth:`Readout.sensed
+        <dualarm_qp.physics.readout.Readout.sensed>`).
+        """
+        return self.readout.welds()
 
-    def _weld_error(self, eq: int) -> float:
-        d = self.data
-        nefc = int(d.nefc)
-        rows = np.flatnonzero((d.efc_type[:nefc] == 0) & (d.efc_id[:nefc] == eq))
-        return float(np.linalg.norm(d.efc_pos[rows[:3]])) if rows.size else 0.0
-
-    def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> None:
-        d, log = self.data, self.log
-        D = self.task.trajectory.pose(tau)
-        R = d.xmat[self._obj].reshape(3, 3)
+    def _record(self, tau: float, sigma_ref: float, peak_tau: float) -> HandReading:
+        """Log the sample just simulated; return its reading (:class:`HandReading`)."""
+        d, log, ro, state = self.data, self.log, self.readout, self._measured
         log["t"].append(self.t)
         log["tau"].append(tau)
-        log["deviation_pos"].append(float(np.linalg.norm(d.xpos[self._obj] - D[:3, 3])))
-        log["deviation_rot"].append(float(np.linalg.norm(pin.log3(D[:3, :3].T @ R))))
-        w_l, w_f, p_l, p_f = self.wrenches()
-        s_l, s_f, normal = self._spaces()
-        internal, _ = internal_force((p_l, p_f), (s_l, s_f), (w_l, w_f))
-        log["internal"].append(internal)
-        log["support"].append(float(w_f[:3] @ normal))
-        log["slip"].append(abs(self._measured.sigma - sigma_ref))
-        log["weld_leader"].append(self._weld_error(self.physics.welds["leader"]))
-        log["weld_follower"].append(self._weld_error(self.physics.welds["follower"]))
+        dev = ro.deviation(self.task.trajectory.pose(tau))
+        log["deviation_pos"].append(dev[0])
+        log["deviation_rot"].append(dev[1])
+        reading = ro.reading(state.sigma, state.sigma_leader)
+        push = ro.spaces(state.sigma, state.sigma_leader)[2]
+        log["internal"].append(reading.internal)
+        log["support"].append(float(reading.follower[:3] @ push))
+        log["share"].append(reading.share)
+        share_plan, split = against_plan(self._load_task, state, reading, push)
+        log["share_plan"].append(share_plan)
+        log["split_error"].append(split)
+        log["slip"].append(abs(state.sigma - sigma_ref))
+        log["weld_leader"].append(ro.weld_error(self.physics.welds["leader"]))
+        log["weld_follower"].append(ro.weld_error(self.physics.welds["follower"]))
         log["gap"].append(0.0 if self._gap_q is None else float(-d.qpos[self._gap_q]))
         tau_j = d.qfrc_actuator[self._arm_dofs] + d.qfrc_applied[self._arm_dofs]
         ratio = np.abs(tau_j) / self._tau_max
-        log["torque_ratio_peak"].append(max(peak_tau, float(np.max(ratio)))
-                                        if np.isfinite(self._tau_max).any() else np.nan)
-        log["w_leader"].append(w_l)
-        log["w_follower"].append(w_f)
+        peak = max(peak_tau, float(np.max(ratio))) if np.isfinite(self._tau_max).any() else np.nan
+        log["torque_ratio_peak"].append(peak)
+        log["w_leader"].append(reading.leader)
+        log["w_follower"].append(reading.follower)
         log["torque"].append(tau_j.copy())
         log["torque_peak"].append(np.maximum(self.peak_torque, np.abs(tau_j)))
-        log["sigma"].append(self._measured.sigma)
+        log["sigma"].append(state.sigma)
+        return dataclasses.replace(reading, torque_ratio=peak)
 
     def arrays(self) -> dict[str, FloatArray]:
         """Return the log as arrays (one row per controller sample)."""
@@ -431,4 +447,4 @@ class MujocoPlant:
 
 
 __all__ = ["LOG_COLUMNS", "SETTLE", "SPEED_DIVERGED", "WELD_ERROR_DIVERGED", "DivergedError",
-           "MujocoPlant", "PhysicsError", "torque_limits"]
+           "MujocoPlant", "PhysicsError", "simulated_task", "torque_limits"]

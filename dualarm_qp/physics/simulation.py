@@ -45,6 +45,9 @@ class PhysicsRun:
         The simulator's time step [s].
     substeps : int
         Substeps per controller sample.
+    gains : dict or None
+        The servos' gains (:meth:`ServoGains.as_dict
+        <dualarm_qp.physics.gains.ServoGains.as_dict>`).
     """
 
     name: str
@@ -58,6 +61,7 @@ class PhysicsRun:
     velocity_error: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
     substep: float = SUBSTEP
     substeps: int = 1
+    gains: dict[str, Any] | None = None
 
     @classmethod
     def of(cls, name: str, plant: MujocoPlant, started: float,
@@ -70,7 +74,8 @@ class PhysicsRun:
         error = np.asarray(plant.velocity_error, dtype=float).reshape(-1, len(names))
         return cls(name, plant.arrays(), time.perf_counter() - started, plant.notes,
                    plant.limits, result, (ratio, names[j] if j >= 0 else "", t), names,
-                   error, float(plant.model.opt.timestep), plant.substeps)
+                   error, float(plant.model.opt.timestep), plant.substeps,
+                   None if plant.gains is None else plant.gains.as_dict())
 
     def joint_name(self, j: int) -> str:
         """Return the name of arm joint ``j`` (over both arms, the leader's first)."""
@@ -80,9 +85,11 @@ class PhysicsRun:
         """Peaks of the run (JSON-ready, SI)."""
         g = self.log
 
+        none = np.zeros(0)
+
         def peak(key: str) -> float:
-            v = g[key]
-            return float(np.max(v)) if v.size and not np.isnan(v).all() else float("nan")
+            v = g.get(key, none)
+            return float(np.nanmax(v)) if v.size and not np.isnan(v).all() else float("nan")
 
         torque = g["torque_peak"]  # each joint's largest |torque| over a sample's substeps
         n_l = len(self.limits["leader"])
@@ -96,6 +103,9 @@ class PhysicsRun:
             "slip_max_m": peak("slip"),
             "weld_error_max_m": max(peak("weld_leader"), peak("weld_follower")),
             "support_gap_max_m": peak("gap"),
+            "load_share_follower": _span(g.get("share", none)),
+            "load_share_follower_planned": _span(g.get("share_plan", none)),
+            "split_error_max": peak("split_error"),
             "torque_ratio_max": peak("torque_ratio_peak"),
             "torque_ratio_worst": {"joint": self.worst[1], "t_s": self.worst[2]},
             "torque_max_N_m": {"leader": np.max(torque[:, :n_l], axis=0).tolist(),
@@ -106,6 +116,12 @@ class PhysicsRun:
             out["message"] = self.result.message
             out["path_completed_pct"] = 100.0 * self.result.path_completed
         return out
+
+
+def _span(values: FloatArray) -> list[float] | None:
+    """Return ``[min, max]`` of the finite values (None when there are none)."""
+    finite = values[np.isfinite(values)]
+    return [float(finite.min()), float(finite.max())] if finite.size else None
 
 
 __all__ = ["PhysicsRun"]

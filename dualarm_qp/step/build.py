@@ -95,7 +95,10 @@ class StepBuilder(KernelHolder):
         tool may not cross, ``examples/custom_limit.py``).
     tasks : sequence of Task
         Tasks of the user's, asked after the standard ones: equality rows, or with a
-        ``weight`` a term of the cost (``examples/custom_task.py``).
+        ``weight`` a term of the cost (``examples/custom_task.py``). A grasp closure of
+        the user's (a subclass of the kernel's ``GraspClosureTask``, e.g. the compliant
+        follower of :mod:`dualarm_qp.physics.compliance`) takes the standard closure's
+        place.
     costs : sequence of CostTerm
         Cost terms of the user's, summed with the paper's centring.
 
@@ -136,11 +139,15 @@ class StepBuilder(KernelHolder):
         self.carry = CarryModel(leader, task.surface, task.H1, task.leader_surface)
         self.layout = lay = Layout(n_l, n_f, self.carry.n_grasp)
         gain_l = float(options.leader_gain or 0.0) if leader_gain is None else leader_gain
+        closures = [t for t in tasks if isinstance(t, kernel.GraspClosureTask)]
+        if len(closures) > 1:
+            raise InvalidInputError("a step has one grasp closure: "
+                                    f"{', '.join(t.name for t in closures)} were given")
+        closure = closures[0] if closures else GraspClosureTask(
+            float(options.correction_gain or 0.0), exact_orientation=options.exact_orientation)
         self.tasks: tuple[Any, ...] = (
-            ObjectPathTask(gain_l),
-            GraspClosureTask(float(options.correction_gain or 0.0),
-                             exact_orientation=options.exact_orientation),
-            *tasks)
+            ObjectPathTask(gain_l), closure,
+            *(t for t in tasks if not isinstance(t, kernel.GraspClosureTask)))
         self.cost = CentringCost(lay, options, leader_ranges=leader_bounds)
         self.costs: tuple[Any, ...] = (self.cost, *costs)
         setup = LimitSetup(task, options, lay, leader_bounds)

@@ -63,6 +63,10 @@ class StepOptions:
     leader_tau_max, follower_tau_max : ndarray, shape (n,), optional
         Joint torque limits [N m] (``inf``: none); default the arm's model's ``effort``
         (a URDF's), which a DH arm does not have.
+    torque_approach : float, optional
+        Time constant [s] with which a joint's torque may approach its limit: each
+        sample closes at most ``dt / torque_approach`` of the margin (None: all of it,
+        in one sample).
     jerk_limits : bool
         Keep every joint's jerk within its arm's ``qddd_max`` and every grasp's within
         ``grasp_jerk_max``: each rate within ``j dt^2`` of the last two commands'
@@ -87,6 +91,7 @@ class StepOptions:
     torque_limits: bool = False
     leader_tau_max: FloatArray | None = None
     follower_tau_max: FloatArray | None = None
+    torque_approach: float | None = None
     jerk_limits: bool = False
     grasp_jerk_max: float = float("inf")
 
@@ -106,6 +111,10 @@ class StepOptions:
             raise InvalidInputError("grasp_speed_max must be positive")
         if not self.grasp_acc_max > 0:
             raise InvalidInputError("grasp_acc_max must be positive")
+        if self.torque_approach is not None and not (np.isfinite(self.torque_approach)
+                                                     and self.torque_approach > 0):
+            raise InvalidInputError("torque_approach must be a positive number of seconds, "
+                                    f"got {self.torque_approach}")
         if not self.grasp_jerk_max > 0:
             raise InvalidInputError("grasp_jerk_max must be positive")
         for name in ("correction_gain", "leader_gain"):

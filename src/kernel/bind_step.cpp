@@ -428,6 +428,9 @@ void bind_parts(nb::module_& m) {
              "row_names"_a, "mass"_a.none(), "mass_centre"_a, "gravity"_a, "follower_path"_a,
              "leader_path"_a.none(), "grasp_step"_a, "fallback_length"_a, "rcond_min"_a,
              nb::keep_alive<1, 2>(), nb::keep_alive<1, 4>());
+  torque.def_prop_rw("approach", &dqk::TorqueLimit::approach, &dqk::TorqueLimit::set_approach,
+                     "time constant [s] with which a torque may approach its limit (each "
+                     "sample closes at most dt / approach of a joint's margin; 0: all of it)");
   bind_limit_method<dqk::TorqueLimit>(torque);
 }
 

@@ -1,5 +1,6 @@
 #include "torque_limit.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -173,6 +174,12 @@ LoadTorques TorqueLimit::linearised(const Context& ctx) const {
                       mass_, sets, grasp_step_, fallback_length_, rcond_min_);
 }
 
+void TorqueLimit::set_approach(double seconds) {
+  if (!(std::isfinite(seconds) && seconds >= 0.0))
+    throw std::invalid_argument("TorqueLimit: approach must be a finite number of seconds >= 0");
+  approach_ = seconds;
+}
+
 Constraint TorqueLimit::constraint(const Context& ctx) const {
   Constraint c;
   const auto p = static_cast<Index>(rows_.size());
@@ -186,6 +193,10 @@ Constraint TorqueLimit::constraint(const Context& ctx) const {
     c.G.row(p + r) = -c.G.row(r);
     c.h(r) = tau_max_(j) - st.tau(j);
     c.h(p + r) = tau_max_(j) + st.tau(j);
+  }
+  if (approach_ > 0.0) {  // a joint inside its limit closes a share of its margin
+    const double share = std::min(1.0, ctx.dt / approach_);
+    c.h = (c.h.array() > 0.0).select(share * c.h.array(), c.h.array()).matrix();
   }
   if (!(c.G.allFinite() && c.h.allFinite())) {
     Constraint failed;

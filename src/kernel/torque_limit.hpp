@@ -54,6 +54,10 @@ class TorqueLimit : public Limit {
   // wrenches at the context's state (LoadTorques.linearised).
   LoadTorques linearised(const Context& ctx) const;
   const Vec& tau_max() const { return tau_max_; }
+  // The time constant [s] with which a torque may approach its limit: a joint inside
+  // it closes at most dt / approach of its margin per sample (0: all of it at once).
+  void set_approach(double seconds);
+  double approach() const { return approach_; }
 
  private:
   HandSet hands(const Pose& T_tool, const Pose& T_object, double sigma, double sigma_l) const;
@@ -73,6 +77,7 @@ class TorqueLimit : public Limit {
   SlidePath follower_path_;
   std::optional<SlidePath> leader_path_;
   double grasp_step_, fallback_length_, rcond_min_;
+  double approach_ = 0.0;
 };
 
 }  // namespace dqk

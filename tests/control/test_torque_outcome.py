@@ -29,6 +29,7 @@ CONFIG = Path(__file__).resolve().parents[2] / "configs" / "ur5_pair_heavy_bar.y
 def _experiment(duration: float = 0.3, shoulder: float | None = None):
     data = yaml.safe_load(CONFIG.read_text())
     data["controller"]["duration"] = duration
+    data["controller"].pop("torque_approach")  # the rows as they bind
     if shoulder is not None:
         data["follower"]["tau_max"][1] = shoulder
     return build_experiment(parse_config(data, CONFIG.name), CONFIG.name)

@@ -52,7 +52,9 @@ NO_ROWS = [n for n in available_solvers() if not solver_info(n).takes_rows]
 
 
 def _data(**controller: Any) -> dict[str, Any]:
+    """The shipped file, its torque rows as they bind (without the file's approach)."""
     data = yaml.safe_load((CONFIGS / f"{NAME}.yaml").read_text())
+    data["controller"].pop("torque_approach")
     data["controller"].update(controller)
     return data
 

@@ -216,16 +216,7 @@ def test_run_figures_draw_the_experiments_limits(limits_run):
     exp, out, _ = limits_run
     data = RunData.read(out / "trajectory.csv")
     limits = PlotLimits.from_experiment(exp)
-    leader, follower = exp.task.leader, exp.task.follower
-    rates = rates_figure(data, limits)
-    for j in range(follower.n):
-        v = follower.qd_max[j] * DEG
-        assert line_levels(rates, f"limit:qf_dot{j + 1}") == pytest.approx([-v, v])
-        v = leader.qd_max[j] * DEG
-        assert line_levels(rates, f"limit:ql_dot{j + 1}") == pytest.approx([-v, v])
-    joints = joints_figure(data, limits)
-    assert line_levels(joints, "limit:qf3") == pytest.approx(
-        [follower.q_min[2] * DEG, follower.q_max[2] * DEG])
+    # the joints' and rates' limits: tests/experiments/test_lanes.py
     grasp = grasp_figure(data, limits)
     surface = exp.task.surface
     assert line_levels(grasp, "limit:grasp") == pytest.approx(
@@ -240,14 +231,10 @@ def test_run_figures_draw_the_experiments_limits(limits_run):
 
 
 def test_the_follower_starts_outside_and_the_figures_say_so(limits_run):
-    """Table 2 starts q1 and the grasp outside their ranges: both are shaded from t = 0."""
+    """Table 2 starts the grasp (and q1: test_lanes.py) outside its range: shaded."""
     exp, out, _ = limits_run
     data = RunData.read(out / "trajectory.csv")
     limits = PlotLimits.from_experiment(exp)
-    joints = joints_figure(data, limits)
-    ax_q1 = next(ax for ax in joints.axes if ax.get_title() == "follower q1")
-    shaded = spans(ax_q1, "outside:qf1")
-    assert shaded and shaded[0] == pytest.approx(0.0)
     grasp = data.col("grasp")
     expected = outside_spans(data.t, (grasp > exp.task.surface.sigma_max + 1e-9))
     ax_g = grasp_figure(data, limits).axes[0]
@@ -262,11 +249,6 @@ def test_shading_spans_exactly_the_samples_outside():
     ax_g = grasp_figure(data, limits).axes[0]
     # grasp outside [0, 0.4] m at samples 0-1 and 6-7, sampled every 0.1 s
     assert spans(ax_g, "outside:grasp") == pytest.approx(flat([(0.0, 0.15), (0.55, 0.75)]))
-    joints = joints_figure(data, limits)
-    ax = next(ax for ax in joints.axes if ax.get_title() == "follower q3")
-    assert spans(ax, "outside:qf3") == pytest.approx(flat([(0.15, 0.45), (0.85, 0.9)]))
-    ax = next(ax for ax in joints.axes if ax.get_title() == "follower q2")
-    assert spans(ax, "outside:qf2") == []
     tracking = tracking_figure(data, limits)
     assert spans(tracking.axes[1], "outside:singular_value_min") == pytest.approx(
         [0.15, 0.25])
@@ -280,32 +262,13 @@ def test_realised_rates_are_finite_differences():
     assert real[1, 2] == pytest.approx((2.0 - 0.0) / 0.1)
     assert real[4, 2] == pytest.approx(-20.0)
     assert np.isnan(real[-1]).all()
-    rates = rates_figure(data, synthetic_limits())
-    ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3")
-    # the realised rate (20 rad/s) is over the 3 rad/s limit at samples 1 and 4 (and 8)
-    assert spans(ax, "outside:qf_dot3") == pytest.approx(flat([(0.05, 0.15), (0.35, 0.45),
-                                                          (0.75, 0.85)]))
-    assert ax.get_yscale() == "symlog"
-    assert not [ax for ax in rates.axes if "jerk" in ax.get_title()]  # none kept
-
-
-def test_jerk_limits_add_rows_of_realised_jerks_from_third_differences():
+def test_realised_jerks_are_third_differences():
     data = synthetic()
     jerk = data.realised_jerks("f")
     # qf3: 0, 0, 2, 2, 2, 0 rad at 0.1 s: rates 0, 20, 0, 0, -20; accelerations 0, 200,
-    # -200, 0, -200; jerks their differences over 0.1 s
+    # -200, 0, -200; jerks their differences over 0.1 s (their lanes: test_lanes.py)
     assert jerk[:5, 2] == pytest.approx([0.0, 2000.0, -4000.0, 2000.0, -2000.0])
     assert np.isnan(jerk[-1]).all()
-    arm = ArmLimits(np.full(6, -1.0), np.full(6, 1.0), np.full(6, 3.0), np.full(6, 500.0),
-                    np.full(6, 3000.0))
-    limits = dataclasses.replace(synthetic_limits(), leader=arm, follower=arm,
-                                 jerk_limits_enforced=True)
-    rates = rates_figure(data, limits, title="t")
-    assert rates.texts[-1].get_text().endswith("(dashed); jerks against theirs")
-    ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3 jerk")
-    assert axis_levels(ax, "limit:qf_dddot3") == pytest.approx([-3000.0 * DEG, 3000.0 * DEG])
-    # over 3000 rad/s^3 at samples 2 (-4000) only among the first five
-    assert spans(ax, "outside:qf_dddot3")[:2] == pytest.approx([0.15, 0.25])
 
 
 def test_a_speed_axis_is_logarithmic_only_beyond_its_limit():
@@ -349,12 +312,8 @@ def test_error_axes_stop_where_the_tolerances_stop_mattering():
 
 def test_joint_counts_come_from_the_header_and_a_sliding_leader_grasp_is_drawn():
     data = synthetic(7, leader_grasp=True)
-    assert data.n_joints("l") == data.n_joints("f") == 7
+    assert data.n_joints("l") == data.n_joints("f") == 7  # 14 lanes: test_lanes.py
     limits = synthetic_limits(7, leader_grasp_range=(0.0, 0.05))
-    joints = joints_figure(data, limits)
-    assert len([ax for ax in joints.axes if ax.get_visible()]) == 14
-    assert line_levels(rates_figure(data, limits), "limit:qf_dot7") == pytest.approx(
-        [-7 * DEG, 7 * DEG])
     grasp = grasp_figure(data, limits)
     labels = [ln.get_label() for ln in grasp.axes[0].get_lines()]
     assert "leader grasp" in labels
@@ -391,7 +350,7 @@ def test_a_runs_figures_avoid_the_costly_ways_to_draw(monkeypatch):
     for draw in (grasp_figure, tracking_figure, closure_figure):  # they had tight_layout
         fig = draw(data, limits, "title")
         if draw is not grasp_figure:  # drawn: the log axes' labels are typeset
-            assert Image.open(io.BytesIO(png_bytes(fig))).mode == "RGB"
+            assert Image.open(io.BytesIO(png_bytes(fig))).mode == "P"  # a palette
         for ax in fig.axes:
             if ax.get_yscale() == "log":
                 log_axes += 1
@@ -400,6 +359,32 @@ def test_a_runs_figures_avoid_the_costly_ways_to_draw(monkeypatch):
                 assert "10\N{SUPERSCRIPT MINUS}\N{SUPERSCRIPT THREE}" in labels, labels
     assert log_axes == 3  # tracking: error, singular values; closure
     assert calls == {"tight_layout": 0, "mathtext": 0}
+
+
+def test_a_runs_figures_make_few_ticks():
+    """What was left of the cost: the 14 (28) panels of joints.png and rates.png, each an
+    axis of its own, and the ticks (several artists each) of every axis: now one axis of
+    lanes (test_lanes.py), at most six ticks an axis (a speed axis beyond its limit has
+    its own round ticks), none beyond its ends, and a column of axes sharing its time
+    axis ticks the bottom one only."""
+    from dualarm_qp.experiments.figures.canvas import TICKS, png_bytes
+
+    data, limits = synthetic(7), synthetic_limits(7)
+    for draw in (joints_figure, rates_figure, grasp_figure, tracking_figure, closure_figure):
+        fig = draw(data, limits, "title")
+        png_bytes(fig)  # drawn: the ticks are made
+        axes = fig.axes
+        assert len(axes) <= 3
+        for k, ax in enumerate(axes):
+            for axis in (ax.xaxis, ax.yaxis):
+                lo, hi = sorted(axis.get_view_interval())
+                locs = axis.get_majorticklocs()
+                if axis.get_scale() != "symlog":  # a speed axis's round ticks: its own
+                    assert len(locs) <= TICKS + 1, (draw.__name__, k, locs)
+                assert all(lo - 1e-9 * (hi - lo) <= v <= hi + 1e-9 * (hi - lo)
+                           for v in locs), (draw.__name__, k, locs, lo, hi)
+            shares_below = k + 1 < len(axes) and ax.get_shared_x_axes().joined(ax, axes[-1])
+            assert ax.xaxis.get_visible() is not shares_below
 
 
 def test_reading_a_file_that_is_not_a_trajectory_fails(tmp_path):
@@ -514,19 +499,8 @@ def test_speed_ticks_are_round_numbers_in_the_display_unit():
 @pytest.mark.slow
 def test_run_figures_show_the_files_units():
     data = synthetic()
-    for units, per_rad, per_m in ((DisplayUnits("deg", "mm"), DEG, 1e3),
-                                  (DisplayUnits("rad", "m"), 1.0, 1.0)):
-        limits = dataclasses.replace(synthetic_limits(), units=units)
-        joints = joints_figure(data, limits)
-        assert joints.axes[0].get_ylabel() == f"[{units.angle}]"
-        assert line_levels(joints, "limit:qf3") == pytest.approx([-per_rad, per_rad])
-        rates = rates_figure(data, limits)
-        assert rates.axes[0].get_ylabel() == f"[{units.angle}/s]"
-        ax = next(ax for ax in rates.axes if ax.get_title() == "follower q3")
-        assert line_levels(rates, "limit:qf_dot3") == pytest.approx([-3 * per_rad,
-                                                                     3 * per_rad])
-        for value, label in shown_tick_labels(rates, ax):  # 20 rad/s against 3 rad/s
-            assert_readable(label, value)
+    for units, per_m in ((DisplayUnits("deg", "mm"), 1e3), (DisplayUnits("rad", "m"), 1.0)):
+        limits = dataclasses.replace(synthetic_limits(), units=units)  # joints: test_lanes
         grasp = grasp_figure(data, limits)
         assert grasp.axes[0].get_ylabel() == f"grasp [{units.length}]"
         assert grasp.axes[1].get_ylabel() == f"sliding speed [{units.length}/s]"

@@ -307,9 +307,10 @@ def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, c
     from dualarm_qp.experiments.figures import run_figures
 
     real = run_figures.grasp_figure
+    command = os.getpid()  # the figures may be drawn in a process of their own
 
     def grasp_figure(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGINT)  # a (second) Ctrl-C in the middle of writing
+        os.kill(command, signal.SIGINT)  # a (second) Ctrl-C in the middle of writing
         return real(*args, **kwargs)
 
     monkeypatch.setattr(run_figures, "grasp_figure", grasp_figure)

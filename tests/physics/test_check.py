@@ -10,7 +10,7 @@ import pytest
 
 from dualarm_qp.control.rollout import rollout
 from dualarm_qp.experiments import build_experiment, load_config
-from dualarm_qp.physics.check import PhysicsRun, closed_loop, replay, verdict
+from dualarm_qp.physics.check import PhysicsRun, closed_loop, closed_loop_limits, replay, verdict
 from dualarm_qp.physics.plant import MujocoPlant
 from dualarm_qp.physics.settings import PhysicsSettings
 
@@ -93,7 +93,7 @@ def test_hands_off_their_grasps_are_a_divergence(beam, monkeypatch):
 
     monkeypatch.setattr("dualarm_qp.physics.plant.WELD_ERROR_DIVERGED", 1e-9)
     plant = MujocoPlant(beam.task, PhysicsSettings())
-    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.kp"):
+    with pytest.raises(DivergedError, match=r"off its grasp.*lower physics\.servo_frequency"):
         plant.reset(beam.initial, beam.options.dt)
 
 
@@ -189,3 +189,25 @@ def test_integrated_references_wind_the_squeeze_up(beam):
     integrated = closed_loop(beam, PhysicsSettings(reference="integrated")).summary()
     assert measured["completed"] and integrated["completed"]
     assert integrated["internal_force_max_N"] > measured["internal_force_max_N"] + 5.0
+
+
+@pytest.mark.parametrize(("delay", "predict"), [(0, True), (2, False), (2, True)])
+def test_the_controller_is_handed_the_measurement_delay_samples_late(beam, delay, predict):
+    """State and reading k are those the plant measured at sample k - delay (the start's
+    before that); with ``predict`` the state is brought forward by the commands since."""
+    short = dataclasses.replace(beam, duration=0.31)
+    plant = MujocoPlant(beam.task, PhysicsSettings(delay=delay, predict=predict))
+    result = rollout(short.controller(), short.initial, duration=short.duration,
+                     limits=closed_loop_limits(short.limits, plant.settings), plant=plant)
+    assert result.completed
+    tr, log, dt = result.trace, plant.arrays(), short.options.dt
+    n = len(tr)
+    assert len(plant.readings) == n == log["t"].size
+    for k in range(1, n):
+        late = max(k - delay, 0)
+        np.testing.assert_array_equal(plant.readings[k].leader, log["w_leader"][late])
+        np.testing.assert_array_equal(plant.readings[k].follower, log["w_follower"][late])
+        since = range(max(late, k - delay), k) if predict and late else range(0)
+        if late:
+            expected = log["sigma"][late] + sum(dt * tr.m[j] for j in since)
+            assert tr.grasp[k] == pytest.approx(expected, abs=1e-15)

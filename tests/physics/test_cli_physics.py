@@ -47,6 +47,11 @@ def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
         assert physics[run]["samples"] == 11
         assert physics[run]["deviation_pos_max_m"] < 1e-3
     assert physics["closed_loop"]["completed"] is True
+    gains = physics["servo_gains"]  # each joint's from its inertia, at 40 Hz
+    omega = 2 * 3.141592653589793 * 40.0
+    assert gains["omega_rad_s"] == {"leader": omega, "follower": omega}
+    assert len(gains["kp_N_m_rad"]) == 12
+    assert gains["kp_N_m_rad"][0] == pytest.approx(gains["inertia_kg_m2"][0] * omega ** 2)
     assert (short_run / "physics.png").is_file()
     assert summary["outputs"].count("physics.png") == 1
     report = (short_run / "report.html").read_text()
@@ -77,10 +82,11 @@ def test_a_verdict_other_than_ok_exits_1_and_still_writes_everything(short_run, 
 
 @pytest.mark.slow
 def test_a_servo_oscillation_is_named_and_fails_the_check(tmp_path, capsys):
-    """Servo gains too stiff for the PUMA's wrists without armature: the closed loop
-    oscillates at about 73 Hz, growing, until the controller stops it on the closure.
+    """One servo gain for every joint, too stiff for the PUMA's wrists without armature:
+    the closed loop oscillates at about 73 Hz, growing, until the controller stops it on
+    the closure.
     The check exits 1 and names the oscillation, not a second-order error of the plan."""
-    path = _short_beam(tmp_path, kp=5e4, armature=0, rotation_max=170)  # deg: stopped
+    path = _short_beam(tmp_path, kp=5e4, kv=300, armature=0, rotation_max=170)  # deg: stopped
     data = yaml.safe_load(path.read_text())
     data["controller"]["duration"] = 0.62  # 20 samples; the loop stops at the 16th
     path.write_text(yaml.safe_dump(data))
@@ -223,6 +229,16 @@ def test_the_delay_option_reaches_the_closed_loop(short_run):
     assert main(["physics", str(short_run), "--delay"]) == 0
     physics = json.loads((short_run / "summary.json").read_text())["physics"]
     assert physics["settings"]["delay_samples"] == 1
+    assert main(["physics", str(short_run), "--delay", "3"]) == 0
+    physics = json.loads((short_run / "summary.json").read_text())["physics"]
+    assert physics["settings"]["delay_samples"] == 3
+
+
+def test_a_delay_option_that_is_no_number_of_samples_exits_2(short_run, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["physics", str(short_run), "--delay", "-2"])
+    assert stop.value.code == 2
+    assert "whole number of samples" in capsys.readouterr().err
 
 
 @pytest.mark.slow

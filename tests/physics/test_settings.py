@@ -28,7 +28,8 @@ def _with_physics(physics: object) -> dict:
 def test_defaults_are_documented_values():
     s = PhysicsSettings.from_spec(load_config(BEAM).physics, 1e-3)
     assert (s.servo, s.reference, s.reference_time, s.kp, s.kv, s.armature, s.delay) == (
-        "position", "measured", 0.03, 1e5, 300.0, 0.05, False)
+        "position", "measured", 0.03, None, None, 0.05, False)
+    assert (s.servo_frequency, s.damping_ratio) == (40.0, 1.0)
     assert (s.deviation_max, s.slip_max, s.squeeze_max, s.torque_ratio_max) == (
         0.01, 0.005, 20.0, 1.0)
 
@@ -183,3 +184,17 @@ def test_the_modules_example_is_the_defaults_in_the_units_it_states():
     assert dataclasses.replace(got, tau_max=None) == PhysicsSettings()
     degrees = float(re.search(r"``rotation_max`` is ([0-9.]+)", doc).group(1))
     assert np.radians(degrees) == pytest.approx(PhysicsSettings().rotation_max, rel=2e-3)
+
+
+@pytest.mark.parametrize(("given", "samples"), [(True, 1), (False, 0), (0, 0), (3, 3)])
+def test_the_delay_is_a_number_of_samples_and_true_is_one(given, samples):
+    cfg = parse_config(_with_physics({"delay": given}), "beam.yaml")
+    s = PhysicsSettings.from_spec(cfg.physics, 1e-3)
+    assert s.delay == samples and s.as_dict()["delay_samples"] == samples
+
+
+@pytest.mark.parametrize("given", [-1, 1.5, "2", 101])
+def test_a_delay_that_is_no_whole_number_of_samples_names_the_key(given):
+    with pytest.raises(ConfigError) as err:
+        parse_config(_with_physics({"delay": given}), "beam.yaml")
+    assert "physics.delay" in str(err.value) and "whole number of samples" in str(err.value)

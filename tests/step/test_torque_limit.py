@@ -147,6 +147,28 @@ def test_a_dh_arm_must_state_its_limits(tmp_path: Path,
                                                             torque_limits=True))
 
 
+def test_an_approach_time_closes_a_share_of_each_margin_per_sample() -> None:
+    """``torque_approach`` T: a joint inside its limit may close ``dt / T`` of its margin
+    in one sample; a joint beyond it is still asked back in one sample."""
+    every = [200.0, 80.0, 60.0, 40.0, 15.0, 10.0]
+    exp = _experiment(every, torque_limits=True)
+    ctx = StepBuilder(exp.task, exp.options).build(exp.initial).context
+    lay = StepBuilder(exp.task, exp.options).layout
+    torques = LoadTorques(exp.task)
+    st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)
+    dt = exp.options.dt
+    lim = np.r_[every, every]
+    lim[7] = 0.5 * abs(st.tau[7])  # the follower's joint 2 already beyond its limit
+    margin = np.r_[lim - st.tau, lim + st.tau]
+    assert (margin < 0).sum() == 1
+    for approach, share in ((0.2, dt / 0.2), (0.5 * dt, 1.0)):
+        c = TorqueLimit(torques, lim, lay, approach).constraint(ctx)
+        np.testing.assert_allclose(c.h, np.where(margin > 0, share * margin, margin),
+                                   rtol=1e-12)
+    with pytest.raises(InvalidInputError, match="torque_approach"):
+        dataclasses.replace(exp.options, torque_approach=0.0)
+
+
 #: Configs with a load (mass [kg], mass centre [mm]; None: as configured) for the compiled
 #: rows: a rigid leader grasp, both grasps sliding, a curved path (a revolute grasp joint).
 LOADS = {"puma_beam_limits": (6.0, [0.0, 0.0, 250.0]),

@@ -20,6 +20,7 @@ from matplotlib.figure import Figure
 from ...collision.settings import CLEARANCE_ALLOWANCE
 from .canvas import (
     LIMIT_COLOUR,
+    few_ticks,
     fixed_margins,
     limit_lines,
     new_figure,
@@ -70,6 +71,7 @@ def clearance_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figu
     """
     fig = new_figure(figsize=(8, HEIGHT))
     ax = fig.subplots()
+    few_ticks(ax)
     t = data.t
     per_m, unit = limits.units.per_m, limits.units.length
     d_s, d_i = limits.clearance if limits.clearance is not None else (np.nan, np.nan)

@@ -7,7 +7,7 @@ can read what was drawn); :func:`write_run_figures` writes them all as PNG files
 - ``rates.png``: every joint rate, commanded and realised (finite differences
   of the recorded joints), against its speed limit, shaded where the realised rate is
   over it; with acceleration (jerk) limits, the realised accelerations (jerks) against
-  theirs;
+  theirs (all in lanes, one lane per joint in one axis each: :mod:`.lanes`);
 - ``grasp.png``: the grasp coordinate against its range, and the sliding speed
   against its limit;
 - ``tracking.png``: the leader's tracking error, the smallest singular value of each
@@ -17,21 +17,27 @@ can read what was drawn); :func:`write_run_figures` writes them all as PNG files
   each group of pairs against the safety and influence distances (:mod:`.clearance`).
 
 Angles and lengths are shown in the experiment file's units (deg or rad, mm or m:
-:class:`~.rundata.DisplayUnits`). Speed axes are symmetric-logarithmic, linear inside
-the limit, with round ticks
-(:func:`~.canvas.speed_axis`): the paper's unbounded first step, thousands of times the
-limit, stays on the axis without flattening the rest.
+:class:`~.rundata.DisplayUnits`). The sliding speed's axis is symmetric-logarithmic,
+linear inside the limit, with round ticks (:func:`~.canvas.speed_axis`): the paper's
+unbounded first step, thousands of times the limit, stays on the axis without
+flattening the rest. Each axis has at most a few round ticks, and a column of axes
+that share the time ticks it on the bottom one only (:func:`~.canvas.few_ticks`): the
+ticks are much of the cost of drawing a figure.
+
+:func:`write_figures` draws and writes any of the figures, by file name, from the
+limits alone (no experiment): what a drawing process (:mod:`.process`) is sent.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from .canvas import (
+    few_ticks,
     finite_max_abs,
     fixed_margins,
     limit_lines,
@@ -44,11 +50,13 @@ from .canvas import (
     panel_title,
     save_png,
     shade_spans,
+    shared_time,
     speed_axis,
     tick_text,
 )
 from .clearance import CLEARANCE_FIGURE, clearance_figure, has_clearance
-from .rundata import PlotLimits, RunData, realised_rate
+from .lanes import joints_figure, rates_figure
+from .rundata import PlotLimits, RunData, realised_rate, run_title
 
 if TYPE_CHECKING:
     from ..setup import Experiment
@@ -57,156 +65,9 @@ if TYPE_CHECKING:
 #: scene adds :data:`~.clearance.CLEARANCE_FIGURE` after them).
 RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.png")
 
-_ARMS = (("l", "leader"), ("f", "follower"))
-
-#: At most this many intervals between the ticks of each axis of a grid's panel.
-GRID_TICKS = 4
-
 #: How far the error axes go below the smallest tolerance [powers of ten]: an error a
 #: million times smaller than its tolerance is drawn on the bottom edge.
 LOG_DECADES = 6
-
-
-def _speed_note(limits: PlotLimits) -> str:
-    return ("speed limit" if limits.speed_limits_enforced
-            else "speed limit (not enforced in this run)")
-
-
-def _arm_grid(data: RunData, height: float, bottom: float, rows: int = 2
-              ) -> tuple[Figure, Any, int]:
-    """Return a rows x n grid (leader, follower, ...) with fixed margins [in].
-
-    Fixed margins rather than ``tight_layout``, which costs more than the drawing on
-    grids this size. Each small panel has at most :data:`GRID_TICKS` intervals between
-    ticks on each axis: a panel's ticks are much of the cost of drawing it.
-    """
-    n = max(data.n_joints("l"), data.n_joints("f"), 1)
-    width = 2.4 * n + 0.8
-    fig = new_figure(figsize=(width, height))
-    axes = fig.subplots(rows, n, sharex=True, squeeze=False)
-    fixed_margins(fig, left=0.75, right=0.15, top=0.75, bottom=bottom, wspace=0.38,
-                  hspace=0.32)
-    for ax in axes.flat:
-        ax.locator_params(nbins=GRID_TICKS)
-    return fig, axes, n
-
-
-def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Both arms' joints against time, range limits dashed, outside shaded.
-
-    Angles in the file's unit (deg or rad).
-    """
-    fig, axes, n = _arm_grid(data, 5.2, 0.55)
-    t = data.t
-    per_rad, unit = limits.units.per_rad, limits.units.angle
-    for row, (arm, label) in enumerate(_ARMS):
-        q = data.joints(arm)
-        lim = limits.arm(arm)
-        for j in range(n):
-            ax = axes[row][j]
-            if j >= q.shape[1]:
-                ax.set_visible(False)
-                continue
-            name = f"q{arm}{j + 1}"
-            ax.plot(t, q[:, j] * per_rad, color="C2" if row == 0 else "C0", lw=1.2)
-            limit_lines(ax, (lim.q_min[j], lim.q_max[j]), name, scale=per_rad)
-            shade_spans(ax, outside_spans(t, outside_mask(q[:, j], lim.q_min[j],
-                                                          lim.q_max[j])), name)
-            panel_title(ax, f"{label} q{j + 1}", fontsize=9)
-            ax.tick_params(labelsize=7)
-            if row == 1:
-                ax.set_xlabel("t [s]", fontsize=8)
-        axes[row][0].set_ylabel(f"[{unit}]", fontsize=8)
-    fig.suptitle((title + ": " if title else "")
-                 + "joints against their ranges (dashed; shaded: outside)", fontsize=10)
-    return fig
-
-
-def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
-    """Joint rates against the speed limits (and accelerations and jerks against theirs).
-
-    Angles in the file's unit (deg or rad) per second (per second squared, cubed).
-
-    The realised rate is the finite difference of the recorded joints; it differs
-    from the commanded one where a position-level correction moved the joints. The
-    shading marks the samples whose realised rate is over the limit. The last row's
-    command, computed but never applied, is left out. When the run kept acceleration
-    limits, two more rows show the realised accelerations (finite differences of the
-    realised rates, the first from rest) against ``qdd_max``; when it kept jerk limits,
-    two more the realised jerks (the accelerations' differences) against ``qddd_max``.
-    """
-    blocks = [b for b, on in (("acceleration", limits.acceleration_limits_enforced),
-                              ("jerk", limits.jerk_limits_enforced)) if on]
-    rows = 2 + 2 * len(blocks)
-    fig, axes, n = _arm_grid(data, 0.8 + 2.4 * rows, 0.85, rows=rows)
-    t = data.t
-    per_rad, unit = limits.units.per_rad, limits.units.angle
-    for row, (arm, label) in enumerate(_ARMS):
-        cmd = data.commanded_rates(arm)
-        real = data.realised_rates(arm)
-        lim = limits.arm(arm)
-        for j in range(n):
-            ax = axes[row][j]
-            if j >= cmd.shape[1]:
-                ax.set_visible(False)
-                continue
-            name = f"q{arm}_dot{j + 1}"
-            vmax = float(lim.qd_max[j])
-            ax.plot(t[:-1], cmd[:-1, j] * per_rad, color="C0", lw=1.1, label="commanded")
-            ax.plot(t, real[:, j] * per_rad, color="C1", lw=0.9, ls=":", label="realised")
-            limit_lines(ax, (-vmax, vmax), name, scale=per_rad, label=_speed_note(limits))
-            shade_spans(ax, outside_spans(t, outside_mask(real[:, j], -vmax, vmax)), name,
-                        label="realised over the limit")
-            speed_axis(ax, vmax * per_rad, finite_max_abs(cmd[:, j], real[:, j]) * per_rad)
-            panel_title(ax, f"{label} q{j + 1}", fontsize=9)
-            ax.tick_params(labelsize=7)
-        axes[row][0].set_ylabel(f"[{unit}/s]", fontsize=8)
-    for i, block in enumerate(blocks):
-        _derivative_rows(axes, data, limits, 2 + 2 * i, block)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]", fontsize=8)
-    handles, labels = [], []
-    for ax in (axes[0][0], *(axes[2 + 2 * i][0] for i in range(len(blocks)))):
-        h, lab = ax.get_legend_handles_labels()
-        for hh, ll in zip(h, lab, strict=True):
-            if ll not in labels:
-                handles.append(hh)
-                labels.append(ll)
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
-    fig.suptitle((title + ": " if title else "")
-                 + "joint rates against their speed limits (dashed)"
-                 + "".join(f"; {b}s against theirs" for b in blocks), fontsize=10)
-    return fig
-
-
-def _derivative_rows(axes: Any, data: RunData, limits: PlotLimits, first: int,
-                     kind: str) -> None:
-    """Draw both arms' realised accelerations or jerks against their limits."""
-    per_rad, unit = limits.units.per_rad, limits.units.angle
-    power, color, letter = (("2", "C3", "ddot") if kind == "acceleration"
-                            else ("3", "C4", "dddot"))
-    t = data.t
-    for row, (arm, label) in enumerate(_ARMS, start=first):
-        value = (data.realised_accelerations(arm) if kind == "acceleration"
-                 else data.realised_jerks(arm))
-        lim = limits.arm(arm)
-        given = lim.qdd_max if kind == "acceleration" else lim.qddd_max
-        bound = given if given is not None else np.full(value.shape[1], np.inf)
-        for j in range(axes.shape[1]):
-            ax = axes[row][j]
-            if j >= value.shape[1]:
-                ax.set_visible(False)
-                continue
-            name = f"q{arm}_{letter}{j + 1}"
-            top = float(bound[j])
-            ax.plot(t, value[:, j] * per_rad, color=color, lw=0.9, label=f"realised {kind}")
-            limit_lines(ax, (-top, top), name, scale=per_rad, label=f"{kind} limit")
-            shade_spans(ax, outside_spans(t, outside_mask(value[:, j], -top, top)), name,
-                        label="realised over the limit")
-            speed_axis(ax, top * per_rad, finite_max_abs(value[:, j]) * per_rad)
-            panel_title(ax, f"{label} q{j + 1} {kind}", fontsize=9)
-            ax.tick_params(labelsize=7)
-        axes[row][0].set_ylabel(f"[{unit}/s^{power}]", fontsize=8)
 
 
 def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
@@ -221,6 +82,9 @@ def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     """
     fig = new_figure(figsize=(8, 6))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for ax in (ax1, ax2):
+        few_ticks(ax)
+    shared_time((ax1, ax2))
     t = data.t
     per_m, unit = limits.units.per_m, limits.units.length
     lo, hi = limits.grasp_range
@@ -276,6 +140,9 @@ def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figur
     """Leader tracking error, smallest singular values and task scale against time."""
     fig = new_figure(figsize=(8, 7.5))
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+    for ax in (ax1, ax2, ax3):
+        few_ticks(ax)
+    shared_time((ax1, ax2, ax3))
     t = data.t
     errors = (data.col("leader_pos_err"), data.col("leader_rot_err"))
     log_y(ax1)
@@ -334,6 +201,7 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     """
     fig = new_figure(figsize=(8, 3.8))
     ax = fig.subplots()
+    few_ticks(ax)
     t = data.t
     marker = "o" if len(data) < 20 else None
     corrected = np.nanmax(data.col("correction_f"), initial=0.0) > 0.0
@@ -360,6 +228,34 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     return fig
 
 
+def run_figure_names(data: RunData, limits: PlotLimits) -> list[str]:
+    """Return the PNG files of a run, in the order they are listed.
+
+    :data:`RUN_FIGURES`, then ``clearance.png`` when the run had a collision scene; none
+    for an empty run.
+    """
+    if not len(data):
+        return []
+    clearance = limits.clearance is not None and has_clearance(data)
+    return [*RUN_FIGURES, *([CLEARANCE_FIGURE] if clearance else [])]
+
+
+def write_figures(out: Path, limits: PlotLimits, title: str, names: list[str], *,
+                  data: RunData | None = None) -> None:
+    """Draw the figures ``names`` (of :func:`run_figure_names`) and write them into ``out``.
+
+    Each file is written atomically. ``data`` is the trajectory (default: read
+    ``out/trajectory.csv``).
+    """
+    if data is None:
+        data = RunData.read(out / "trajectory.csv")
+    draw = {"joints.png": joints_figure, "rates.png": rates_figure, "grasp.png": grasp_figure,
+            "tracking.png": tracking_figure, "closure.png": closure_figure,
+            CLEARANCE_FIGURE: clearance_figure}
+    for name in names:
+        save_png(draw[name](data, limits, title), out / name)
+
+
 def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None,
                       title: str | None = None) -> list[str]:
     """Write the PNG figures of a run (:data:`RUN_FIGURES`) into ``out``.
@@ -376,7 +272,7 @@ def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None
     data : RunData, optional
         The trajectory; default: read ``out/trajectory.csv``.
     title : str, optional
-        Title prefix; default ``"<experiment> (<solver>)"``.
+        Title prefix; default :func:`run_title`.
 
     Returns
     -------
@@ -386,22 +282,12 @@ def write_run_figures(out: Path, exp: Experiment, *, data: RunData | None = None
     """
     if data is None:
         data = RunData.read(out / "trajectory.csv")
-    if not len(data):
-        return []
     limits = PlotLimits.from_experiment(exp)
-    tag = f"{exp.name} ({exp.solver_name})" if title is None else title
-    draw = {"joints.png": joints_figure, "rates.png": rates_figure,
-            "grasp.png": grasp_figure, "tracking.png": tracking_figure,
-            "closure.png": closure_figure}
-    written = []
-    for name in RUN_FIGURES:
-        save_png(draw[name](data, limits, tag), out / name)
-        written.append(name)
-    if limits.clearance is not None and has_clearance(data):
-        save_png(clearance_figure(data, limits, tag), out / CLEARANCE_FIGURE)
-        written.append(CLEARANCE_FIGURE)
-    return written
+    names = run_figure_names(data, limits)
+    write_figures(out, limits, run_title(exp) if title is None else title, names, data=data)
+    return names
 
 
 __all__ = ["RUN_FIGURES", "closure_figure", "grasp_figure", "joints_figure",
-           "rates_figure", "tracking_figure", "write_run_figures"]
+           "rates_figure", "run_figure_names", "tracking_figure", "write_figures",
+           "write_run_figures"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import csv
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +19,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import DualArmError, InvalidInputError
-from ..config import ANGLE_SCALE, LENGTH_SCALE, load_config
 
 if TYPE_CHECKING:
     from ..setup import Experiment
@@ -189,26 +188,28 @@ class DisplayUnits:
         Unit of joint angles (and ``<angle>/s`` of joint rates).
     length : {"mm", "m"}
         Unit of the grasp coordinate (and ``<length>/s`` of the sliding speed).
+    per_rad : float
+        Display units of angle in one radian (set from ``angle``).
+    per_m : float
+        Display units of length in one metre (set from ``length``).
     """
 
     angle: str = "deg"
     length: str = "mm"
+    per_rad: float = field(init=False, repr=False, compare=False)
+    per_m: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        # The experiment file's units, read from its schema here only: a process that
+        # draws figures it was sent does not import the schema.
+        from ..config import ANGLE_SCALE, LENGTH_SCALE
+
         if self.angle not in ANGLE_SCALE or self.length not in LENGTH_SCALE:
             raise InvalidInputError(f"display units must be an angle in {list(ANGLE_SCALE)} "
                                     f"and a length in {list(LENGTH_SCALE)}, got "
                                     f"{self.angle!r}, {self.length!r}")
-
-    @property
-    def per_rad(self) -> float:
-        """Display units of angle in one radian."""
-        return 1.0 / ANGLE_SCALE[self.angle]
-
-    @property
-    def per_m(self) -> float:
-        """Display units of length in one metre."""
-        return 1.0 / LENGTH_SCALE[self.length]
+        object.__setattr__(self, "per_rad", 1.0 / ANGLE_SCALE[self.angle])
+        object.__setattr__(self, "per_m", 1.0 / LENGTH_SCALE[self.length])
 
     @classmethod
     def of_file(cls, path: str | Path) -> DisplayUnits:
@@ -217,6 +218,8 @@ class DisplayUnits:
         Degrees and millimetres when there is no readable experiment file (an
         experiment built in code).
         """
+        from ..config import load_config
+
         if not Path(path).is_file():
             return cls()
         try:
@@ -270,7 +273,7 @@ class PlotLimits:
     tracking: tuple[float, float]
     singular_value_min: float
     leader_grasp_range: tuple[float, float] | None = None
-    units: DisplayUnits = DisplayUnits()
+    units: DisplayUnits = field(default_factory=DisplayUnits)
     acceleration_limits_enforced: bool = False
     clearance: tuple[float, float] | None = None
     clearance_enforced: bool = False
@@ -313,3 +316,8 @@ class PlotLimits:
     def arm(self, arm: str) -> ArmLimits:
         """Limits of ``"l"`` (leader) or ``"f"`` (follower)."""
         return self.leader if arm == "l" else self.follower
+
+
+def run_title(exp: Experiment) -> str:
+    """Return the figures' title prefix of a run: ``"<experiment> (<solver>)"``."""
+    return f"{exp.name} ({exp.solver_name})"
