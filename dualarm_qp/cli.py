@@ -1,7 +1,7 @@
 """Command-line interface of ``dualarm-qp``.
 
 Commands: run, animate, physics, reproduce, collisions, bench, sweep, sweep-report,
-solvers, drive, serve.
+solvers, drive, serve, bag.
 
 Exit codes: 0 success, 1 the run failed (what it completed is still written), 2 bad
 input (configuration, arguments, missing solver, an output folder in use), 130
@@ -66,6 +66,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .cell.command import add_parsers  # drive and serve (docs/robots.md)
 
     add_parsers(sub)
+    from .bag.command import add_bag_parser  # bag (docs/ros2.md)
+
+    add_bag_parser(sub)
     for command in sub.choices.values():  # --debug after the command too
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                              help="show tracebacks of internal errors")

@@ -19,10 +19,10 @@ from ..experiments.config import ExperimentConfig, load_config, safe_name
 from ..experiments.experiment import Experiment
 from ..experiments.setup import build_experiment
 from .base import Cell, CellSetupError
-from .loop import DriveResult, DriveSettings, drive
+from .loop import DriveResult, DriveSettings, Observer, drive
 
 #: The cells ``drive --cell`` knows.
-CELLS = ("mujoco", "franka")
+CELLS = ("mujoco", "franka", "ros2")
 
 #: The watchdog's default: this many samples of ``dt``.
 WATCHDOG_SAMPLES = 3
@@ -76,8 +76,9 @@ def check_drivable(exp: Experiment, path: str) -> None:
                              "the object (Case 1), not one that supports it")
 
 
-def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> Cell:
-    """Build the cell ``kind`` of the experiment (not yet opened).
+def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str, *,
+              dry_run: bool = False) -> Cell:
+    """Build the cell ``kind`` of the experiment (not yet opened; ``dry_run``: it sends nothing).
 
     Raises
     ------
@@ -96,13 +97,19 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str) -> C
         from .franka import franka_cell
 
         return franka_cell(cfg, exp, path, drive_settings(cfg, exp, dry_run=False).watchdog)
+    if kind == "ros2":
+        from .ros2 import ros2_cell
+
+        return ros2_cell(cfg, exp, path, dry_run=dry_run)
     raise CellSetupError(f"unknown cell {kind!r}; the cells are {', '.join(CELLS)}")
 
 
 def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Path | None, *,
-                    dry_run: bool = False, plots: bool = True
-                    ) -> tuple[DriveResult, dict[str, Any]]:
+                    dry_run: bool = False, plots: bool = True,
+                    observer: Observer | None = None) -> tuple[DriveResult, dict[str, Any]]:
     """Drive ``cell`` and write the run's folder (with SIGINT and SIGTERM held).
+
+    ``observer`` is handed each recorded sample (a live view: :mod:`dualarm_qp.bag.live`).
 
     Returns
     -------
@@ -121,7 +128,7 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
 
     t0 = time.perf_counter()
     res = drive(cell, controller, exp.initial, duration=exp.duration, settings=settings,
-                limits=exp.limits, progress=progress, judged_by=exp.task)
+                limits=exp.limits, progress=progress, judged_by=exp.task, observer=observer)
     wall = time.perf_counter() - t0
     with SignalHold():
         summary = make_summary(exp, res.result, wall)
@@ -130,6 +137,20 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
         if out is not None:
             write_outputs(out, exp, res.result, summary, plots=plots, columns=res.columns)
     return res, summary
+
+
+def _together(observers: list[Observer]) -> Observer | None:
+    """One observer that calls each of ``observers`` in turn (None: there are none)."""
+    if not observers:
+        return None
+    if len(observers) == 1:
+        return observers[0]
+
+    def each(trace: Any, k: int) -> None:
+        for observer in observers:
+            observer(trace, k)
+
+    return each
 
 
 def cmd_drive(args: argparse.Namespace) -> int:
@@ -143,13 +164,32 @@ def cmd_drive(args: argparse.Namespace) -> int:
     exp = build_experiment(cfg, path)
     check_drivable(exp, path)
     exp.controller()  # fail early (exit 2) on an unknown or missing solver
-    cell = open_cell(args.cell, cfg, exp, path)
+    if args.send_run is not None:
+        if args.cell != "ros2":
+            raise CellSetupError("--send-run sends a run to ROS 2 trajectory controllers: "
+                                 "give --cell ros2")
+        from .ros2_trajectory import cmd_send_run
+
+        return cmd_send_run(args, cfg, exp, path, drive_settings(cfg, exp, dry_run=False))
+    cell = open_cell(args.cell, cfg, exp, path, dry_run=args.dry_run)
     out = Path(args.out if args.out else Path("runs") / safe_name(exp.name)
                / f"cell_{args.cell}")
     check_unused_folder(out, force=args.force, what="a drive", names=OUTPUT_FILES)
     out = output_folder(out)
-    res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
-                                   plots=not args.no_plots)
+    view = None
+    if args.foxglove:
+        from ..bag.live import open_drive_view
+
+        view = open_drive_view(cfg, exp, path, port=args.port)
+        print(f"live view at {view.view.url} (Foxglove WebSocket)", flush=True)
+    observers = [o for o in (view, getattr(cell, "observe", None)) if o is not None]
+    try:
+        res, summary = drive_and_write(exp, cfg, cell, out, dry_run=args.dry_run,
+                                       plots=not args.no_plots,
+                                       observer=_together(observers))
+    finally:
+        if view is not None:
+            view.view.close()
     stop = summary["cell"]["stop"]
     print(f"{exp.name}: cell {args.cell}{' (dry run)' if args.dry_run else ''}: "
           f"{summary['status']}, {summary['samples']} samples, "
@@ -180,6 +220,14 @@ def add_parsers(sub: Any) -> None:
     d.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     d.add_argument("--force", action="store_true",
                    help="write into a folder that holds other files, keeping them")
+    d.add_argument("--send-run", nargs="?", const="rollout", metavar="RUN_DIR",
+                   help="ROS 2: send a completed run (RUN_DIR, or without it a fresh rollout "
+                   "of the file) whole to each arm's joint_trajectory_controller, then watch")
+    d.add_argument("--foxglove", action="store_true",
+                   help="serve each sample live on 127.0.0.1 (Foxglove WebSocket), as "
+                   "'bag' writes it")
+    d.add_argument("--port", type=int, default=8765,
+                   help="the live view's port (default 8765; 0: any free one)")
     d.set_defaults(func=cmd_drive)
     from .serve import add_serve_parser
 

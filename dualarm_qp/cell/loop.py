@@ -45,6 +45,10 @@ from .settings import DriveResult, DriveSettings
 
 FloatArray = NDArray[np.float64]
 
+#: Called with the trace and the row just recorded (control and stop rows alike); it
+#: must not raise (an observer that can fail keeps its own errors).
+Observer = Callable[[Trace, int], None]
+
 
 @dataclass
 class _Log:
@@ -75,8 +79,10 @@ class _Loop:
 
     def __init__(self, cell: Cell, controller: DualArmController, initial: DualArmState,
                  duration: float, settings: DriveSettings, limits: RunLimits,
-                 judged_by: DualArmTask | None = None) -> None:
+                 judged_by: DualArmTask | None = None,
+                 observer: Observer | None = None) -> None:
         self.cell, self.controller, self.settings, self.limits = cell, controller, settings, limits
+        self.observer = observer
         self.task = controller.task
         self.judged_by = controller.task if judged_by is None else judged_by
         self.dt = controller.options.dt
@@ -210,6 +216,7 @@ class _Loop:
                          "infeasible" if isinstance(err, InfeasibleStepError) else "error")
             self._log_row(reading, self.sent1, np.zeros_like(self.sent1), state)
             self.rows = self.control_rows = k + 1
+            self._observe(k)
             self._fail("solver", str(err))
             return False
         computed = (np.r_[out.ql_dot, out.qf_dot] if out.applied and not at_end
@@ -220,6 +227,7 @@ class _Loop:
             self.trace.scale[k] = self.trace.scale[k - 1]
         self._log_row(reading, sent, computed, state)
         self.rows = self.control_rows = k + 1
+        self._observe(k)
         self._sample_failure(k, out)
         if self.failure is not None or at_end:
             return False
@@ -266,6 +274,12 @@ class _Loop:
         self.trace.ql_dot[k], self.trace.qf_dot[k] = v[:self.n_l], v[self.n_l:]
         self._log_row(reading, v, v, state)
         self.rows = k + 1
+        self._observe(k)
+
+    def _observe(self, k: int) -> None:
+        """Hand row ``k`` to the observer, once the row is counted (a whole record)."""
+        if self.observer is not None:
+            self.observer(self.trace, k)
 
     def stop(self) -> None:
         """Bring both arms to rest from the last command sent, recording each sample.
@@ -303,7 +317,8 @@ class _Loop:
 def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
           duration: float, settings: DriveSettings, limits: RunLimits | None = None,
           progress: Callable[[float, float], None] | None = None,
-          judged_by: DualArmTask | None = None) -> DriveResult:
+          judged_by: DualArmTask | None = None,
+          observer: Observer | None = None) -> DriveResult:
     """Drive ``cell`` along ``duration`` seconds of path (see the module).
 
     Parameters
@@ -326,6 +341,9 @@ def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
         The task whose joint limits the recorded motion is measured against (default
         the controller's; ``drive`` passes the file's while its controller commands
         within ``1 - cell.headroom`` of them).
+    observer : callable, optional
+        Called as ``observer(trace, k)`` with each row just recorded, control and stop
+        rows alike (:data:`Observer`: a live view, the ROS 2 node's topics).
 
     Returns
     -------
@@ -339,7 +357,7 @@ def drive(cell: Cell, controller: DualArmController, initial: DualArmState, *,
     limits = RunLimits() if limits is None else limits
     error: BaseException | None = None
     with SignalHold(deliver=False) as signals:
-        loop = _Loop(cell, controller, initial, duration, settings, limits, judged_by)
+        loop = _Loop(cell, controller, initial, duration, settings, limits, judged_by, observer)
         loop.signals = signals
         try:
             loop.run(progress)
@@ -411,4 +429,4 @@ def _result(loop: _Loop) -> DriveResult:
     return DriveResult(result, columns, cell)
 
 
-__all__ = ["DriveResult", "DriveSettings", "command_limits", "drive"]
+__all__ = ["DriveResult", "DriveSettings", "Observer", "command_limits", "drive"]

@@ -52,7 +52,13 @@ class CellArmSpec(Model):
 
 
 class CellSpec(Model):
-    """The ``cell:`` section (see the module)."""
+    """The ``cell:`` section (see the module).
+
+    ROS 2: ``interface``, what each arm's ``forward_command_controller`` claims
+    (``velocity``: the rates are sent; ``position``: the rates integrated from the
+    measured start); ``node``, the node's name; ``use_sim_time``, the node's clock is
+    ``/clock`` (a simulator's) rather than the system clock.
+    """
 
     watchdog: Num | None = None
     start_tolerance: Num | None = None
@@ -61,6 +67,7 @@ class CellSpec(Model):
     realtime: Flag = False
     interface: Literal["velocity", "position"] = "velocity"
     node: Text = "dualarm_qp"
+    use_sim_time: Flag = False
     leader: CellArmSpec = Field(default_factory=CellArmSpec)
     follower: CellArmSpec = Field(default_factory=CellArmSpec)
 

@@ -24,6 +24,7 @@ LAYERS = {
     "experiments": 6, "bench": 6,
     "physics": 6,  # the task in MuJoCo: checks a run's folder, adds to its report
     "sweep": 7,  # runs experiments (6) and reuses the bench store (6)
+    "bag": 6,  # a run folder as ROS 2 messages: a bag, a live view (experiments' files)
     "cell": 7,  # drives an experiment's controller (6) on two arms, MuJoCo's too (6)
     "cli": 7, "cli_commands": 7, "__main__": 7, "__init__": 7,
 }
