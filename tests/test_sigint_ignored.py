@@ -92,6 +92,7 @@ def _unmarked_sigint_tests(path: Path) -> list[str]:
     return found
 
 
+@pytest.mark.slow
 def test_every_test_that_mentions_sigint_is_marked() -> None:
     unmarked = [f"{p.relative_to(ROOT)}::{t}" for p in sorted(TESTS.rglob("test_*.py"))
                 if p != Path(__file__) for t in _unmarked_sigint_tests(p)]

@@ -42,6 +42,7 @@ class Counting:
         return run_job(*args)
 
 
+@pytest.mark.slow
 def test_bench_writes_every_field(tmp_path: Path) -> None:
     res = run_bench([LIMITS], ["nullspace", "qp:daqp"], tmp_path, settings=SHORT)
     assert res.ok and res.computed == 2

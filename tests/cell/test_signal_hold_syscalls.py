@@ -47,6 +47,7 @@ def _read_through_a_signal() -> tuple[int, int]:
 
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
                     reason="signal handlers are set in the main thread only")
+@pytest.mark.slow
 def test_a_held_signal_lets_a_blocking_read_finish() -> None:
     with SignalHold(deliver=False) as hold:
         first = _read_through_a_signal()

@@ -111,6 +111,7 @@ def test_two_obstacles_of_one_name_are_refused():
         _scene(obstacles=[("ball", ball), ("ball", ball)])
 
 
+@pytest.mark.slow
 def test_seven_joint_arms_get_self_pairs_three_joints_apart():
     from dualarm_qp.kinematics import example_robot_arm
     from dualarm_qp.kinematics.robots import example_robots_dir

@@ -65,6 +65,7 @@ def test_reachable_paths_pass(name: str) -> None:
     assert unreachable_waypoint(exp.task, exp.initial, t_end, within_ranges=True) is None
 
 
+@pytest.mark.slow
 def test_the_command_line_exits_1_with_the_criterion(tmp_path: Path) -> None:
     cfg = tmp_path / "far.yaml"
     cfg.write_text(yaml.safe_dump(waypoint_config(far_mm=2000.0)))

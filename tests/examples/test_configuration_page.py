@@ -101,6 +101,7 @@ def test_the_follower_tool_is_z_along_a_star_and_x_along_s_star():
     np.testing.assert_allclose(T_f[:3, 2], T_l[:3, 0], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_frames_picture_is_referenced_and_there(tmp_path):
     links = re.findall(r"\]\((figures/[^)]+\.png)\)", PAGE.read_text())
     assert "figures/grasp_frames.png" in links

@@ -112,6 +112,7 @@ SLOW = {"custom_limit.py", "custom_task.py"}
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW
                                   else n for n in sorted(CHECKS)])
+@pytest.mark.slow
 def test_example_runs_and_prints_its_result(name, tmp_path):
     if name in NEEDS_ROBOTS and example_robots_dir() is None:
         pytest.skip("needs the robots extra (example-robot-data)")

@@ -51,6 +51,7 @@ def test_every_exported_name_is_the_object_of_its_home_module(name):
     assert getattr(home, name) is value
 
 
+@pytest.mark.slow
 def test_dir_lists_the_public_names_and_every_one_resolves():
     """``dir()`` is ``__all__``, before and after the lazy names load; ``import *`` works."""
     proc = _python("""
@@ -84,6 +85,7 @@ def test_an_unknown_name_is_an_attribute_error():
         _ = dualarm_qp.no_such_name
 
 
+@pytest.mark.slow
 def test_import_is_light_and_lazy_names_load_on_first_use():
     proc = _python("""
         import sys
@@ -129,6 +131,7 @@ def test_docs_and_examples_show_a_status_by_its_value():
     assert not STATUS_AS_TEXT.search("view.update(state, status=out.status.value)")
 
 
+@pytest.mark.slow
 def test_the_limit_snippet_runs_and_keeps_its_wall():
     """The snippet of "Writing a limit": the follower's tool stops 150 mm (less the
     1 mm margin) from where it started, where the run without the wall slides 300 mm."""

@@ -149,6 +149,7 @@ def _example_main(*args: str, fake: str = "") -> subprocess.CompletedProcess[str
                           timeout=120, check=False, env=env)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="real-time scheduling is Linux's")
 def test_realtime_runs_the_loop_or_says_what_was_refused():
     done = _example_main("--realtime", "--seconds", "0.3")
@@ -171,6 +172,7 @@ def test_realtime_runs_the_loop_or_says_what_was_refused():
               "(it needs CAP_IPC_LOCK, or a locked-memory limit, ulimit -l, above the "
               "process's size)\n"),
 ])
+@pytest.mark.slow
 def test_a_refused_realtime_step_is_named_and_no_loop_runs(fake: str, message: str):
     refused = _example_main("--realtime", "--seconds", "0.3", fake=fake)
     assert refused.returncode == 1 and refused.stderr == message, refused.stderr

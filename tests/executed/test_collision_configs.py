@@ -92,6 +92,7 @@ def _safety(data: dict[str, Any]) -> float:
 
 
 # ------------------------------------------------------------------ fast: the scenes
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_config_builds_with_its_scene(name: str) -> None:
     case, data = CASES[name], _yaml(name)

@@ -89,6 +89,7 @@ def _cases() -> list[Any]:
     return cases
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("variant", "solver"), _cases())
 def test_recorded_run_keeps_limits(variant: str, solver: str, tmp_path: Path) -> None:
     exp, summary = run(variant, solver, tmp_path)

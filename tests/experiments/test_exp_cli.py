@@ -32,6 +32,7 @@ def short_config(tmp_path: Path, **controller) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_run_writes_outputs(tmp_path, capsys):
     out = tmp_path / "out"
     code = main(["run", str(short_config(tmp_path)), "--out", str(out), "--quiet"])
@@ -171,6 +172,7 @@ def test_atomic_write_keeps_old_file_on_failure(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["f.txt"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("module", ["dualarm_qp.cli", "dualarm_qp"])
 def test_console_script_entry_point(tmp_path, module):
     proc = subprocess.run([sys.executable, "-m", module, "--version"],

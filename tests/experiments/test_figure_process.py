@@ -171,6 +171,7 @@ def test_the_command_starts_the_drawing_first_and_ends_it(tmp_path, monkeypatch,
     assert figures.calls == [(out, "puma_beam_limits")] and figures.closed
 
 
+@pytest.mark.slow
 def test_the_drawing_process_can_start_before_the_experiment_is_imported():
     """The command starts it first thing, and it imports matplotlib while the command
     imports the rest: neither the starting nor the figure code it imports may pull in
@@ -196,6 +197,7 @@ def test_the_drawing_process_can_start_before_the_experiment_is_imported():
     assert proc.stdout.strip() == "ok"
 
 
+@pytest.mark.slow
 def test_a_run_without_plots_imports_no_matplotlib(tmp_path):
     code = textwrap.dedent(f"""
         import sys

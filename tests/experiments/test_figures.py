@@ -361,6 +361,7 @@ def test_a_runs_figures_avoid_the_costly_ways_to_draw(monkeypatch):
     assert calls == {"tight_layout": 0, "mathtext": 0}
 
 
+@pytest.mark.slow
 def test_a_runs_figures_make_few_ticks():
     """What was left of the cost: the 14 (28) panels of joints.png and rates.png, each an
     axis of its own, and the ticks (several artists each) of every axis: now one axis of
@@ -523,6 +524,7 @@ def test_the_display_units_are_the_experiment_files(tmp_path):
 
 # --- the bench figure -------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_bench_figure_has_a_log_time_axis_and_success_and_accuracy(tmp_path):
     from dualarm_qp.bench.figure import bench_figure
     from dualarm_qp.bench.report import plot

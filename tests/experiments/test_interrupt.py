@@ -65,6 +65,7 @@ def configs(tmp_path_factory) -> dict[str, Path]:
     return {"run": run, "cases": cases}
 
 
+@pytest.mark.slow
 def test_a_ctrl_c_during_the_rollout_stops_the_command(tmp_path):
     """The fast loop's trial: SIGINT 0.2 s into a rollout of 15,500 samples (several
     seconds) stops it there: exit 130, the partial set, no traceback."""

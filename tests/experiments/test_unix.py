@@ -21,6 +21,7 @@ def _python(code: str, cwd: Path | None = None) -> subprocess.CompletedProcess[s
                           capture_output=True, text=True, check=False, timeout=120)
 
 
+@pytest.mark.slow
 @posix_only
 def test_closed_stdout_ends_quietly():
     proc = subprocess.Popen([sys.executable, "-m", "dualarm_qp.cli", "solvers"],
@@ -32,6 +33,7 @@ def test_closed_stdout_ends_quietly():
     assert proc.returncode == EXIT_BROKEN_PIPE
 
 
+@pytest.mark.slow
 @posix_only
 def test_solvers_into_head_is_quiet():
     cmd = f"'{sys.executable}' -m dualarm_qp.cli solvers | head -1"
@@ -110,6 +112,7 @@ def test_import_selects_no_backend_and_no_pyplot(tmp_path):
     assert (tmp_path / "closure.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_the_library_and_the_help_import_no_optimiser():
     """`import dualarm_qp` and `dualarm-qp --help` stay light: no scipy.optimize either,
     and no 3D viewer (meshcat, its server's zmq, viser) until a view is drawn."""
@@ -131,6 +134,7 @@ def test_the_library_and_the_help_import_no_optimiser():
     assert proc.returncode == 0, proc.stderr
 
 
+@pytest.mark.slow
 def test_importing_the_library_or_the_help_imports_no_matplotlib():
     proc = _python("""
         import sys

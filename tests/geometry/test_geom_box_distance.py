@@ -52,6 +52,7 @@ def check_conventions(prox):
 # Centred between two faces: local x is 1e-17, not 0.
 @example(Box(np.array([0.25, 1.0, 1.0]), pose([0.0, 0.25, 0.25], [0.0, 0.075, 0.075])),
          np.array([0.0, 0.25, 0.25]), 0.5)
+@pytest.mark.slow
 def test_sphere_box_matches_clamping(box, centre, radius):
     centre = 1.5 * centre
     local = box_local(centre, box)
@@ -86,6 +87,7 @@ def test_sphere_box_matches_clamping(box, centre, radius):
 
 
 # ------------------------------------------------------------------ capsule vs box, apart
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(boxes, vec3, vec3, st.floats(0.01, 0.3))
 def test_capsule_box_apart_matches_a_minimisation_along_the_axis(box, a, b, radius):

@@ -261,6 +261,7 @@ def test_normal_near_the_touch_tolerance(z, normal):
 @settings(max_examples=100, deadline=None)
 @given(point, point, point, point, st.floats(0.01, 0.3), st.floats(0.01, 0.3),
        st.tuples(*[st.floats(-1.0, 1.0)] * 6), st.booleans())
+@pytest.mark.slow
 def test_distance_rate_is_normal_dot_witness_velocity(p0, p1, q0, q1, ra, rb, xi, move_a):
     d1, d2 = p1 - p0, q1 - q0
     assume(np.linalg.norm(np.cross(d1, d2)) > 1e-2 * max(np.linalg.norm(d1), 1e-9)

@@ -181,6 +181,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+@pytest.mark.slow
 def test_no_import_cycle():
     """No module imports a module that (through the package) imports it back, not even
     for type annotations only: each module's place in the layers is then well defined."""

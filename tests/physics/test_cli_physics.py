@@ -36,6 +36,7 @@ def short_run(tmp_path):
     return out
 
 
+@pytest.mark.slow
 def test_physics_adds_its_verdict_figure_and_report_section(short_run, capsys):
     assert main(["physics", str(short_run)]) == 0
     printed = capsys.readouterr().out
@@ -228,6 +229,7 @@ def test_a_physics_check_that_blows_up_fails_and_leaves_the_run(short_run, capsy
     assert {p.name: p.read_bytes() for p in short_run.iterdir()} == before
 
 
+@pytest.mark.slow
 def test_the_delay_option_reaches_the_closed_loop(short_run):
     assert main(["physics", str(short_run), "--delay"]) == 0
     physics = json.loads((short_run / "summary.json").read_text())["physics"]

@@ -164,6 +164,7 @@ def _case(seed: int, n: int) -> tuple[StepProblem, np.ndarray] | None:
     return _step(base, _pert(A, 1e-12, np.random.default_rng(seed)), x_f), ref
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", QP)
 def test_no_backend_claims_optimal_for_a_suboptimal_point(name: str) -> None:
     """On 80 rank-5 steps (6 x 7 and 6 x 8, perturbed at 1e-12), OPTIMAL means the optimum.

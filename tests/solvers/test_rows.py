@@ -17,6 +17,7 @@ ROW_SOLVERS = [i.name for i in list_solvers() if i.available and i.takes_rows
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(seed=seeds, n=st.sampled_from([7, 8, 9]), rows=st.integers(1, 4))
 def test_the_exact_solver_with_rows_matches_the_enumeration(seed: int, n: int,

@@ -51,6 +51,7 @@ def assert_verifies(problem: StepProblem, x: np.ndarray, scale: float) -> None:
 @settings(max_examples=150, deadline=None)
 @given(seed=seeds, factor=st.floats(0.5, 20.0), shift=st.sampled_from([0.0, 0.0, 0.3]),
        n=st.sampled_from([7, 7, 8]))
+@pytest.mark.slow
 def test_scale_policy_reaches_the_lp_scale(seed: int, factor: float, shift: float,
                                            n: int) -> None:
     """Through solve_step("scale"): the full task when feasible, else SCALED at the LP's

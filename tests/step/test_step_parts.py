@@ -161,6 +161,7 @@ def _equal_grasp_rates(builder: StepBuilder, ctx) -> None:
 @given(name=st.sampled_from(["puma_beam_limits", "both_sliding_bar", "curved_bar_waypoints",
                              "ur5_pair_sliding_bar"]),
        offsets=st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6)))
+@pytest.mark.slow
 def test_the_grasp_rates_equal_the_python_era_ones(name: str,
                                                    offsets: tuple[float, float]) -> None:
     """Straight grasps (computed in the kernel) and curved ones, inside and outside."""

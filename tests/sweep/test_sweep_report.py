@@ -38,6 +38,7 @@ def _rows(values: list[dict], statuses: list[str]) -> tuple[list[dict], list[str
     [{"solver.name": s, "v": x} for s in ("nullspace", "qp:daqp") for x in (1, 2, 3)],
     [{"v": x} for x in range(6)],                                          # one key
 ])
+@pytest.mark.slow
 def test_report_draws_every_kind_of_sweep_into_one_file(tmp_path, values):
     statuses = ["completed", "failed", "completed", "interrupted", "failed", "completed"]
     rows, swept = _rows(values, statuses)
@@ -60,6 +61,7 @@ def test_worst_points_put_failures_first():
     assert [r["point"] for r in worst] == [1, 4, 3, 5]
 
 
+@pytest.mark.slow
 def test_importing_the_sweep_package_imports_no_dask_pyarrow_or_matplotlib():
     code = ("import sys, dualarm_qp.sweep\n"
             "bad = [m for m in ('dask', 'distributed', 'pyarrow', 'matplotlib') "
@@ -81,6 +83,7 @@ def test_categories_keep_the_sweep_files_order_not_the_texts():
         "[5, 0, 0]", "[10, 0, 0]", "[3, 0, 0]"]
 
 
+@pytest.mark.slow
 def test_the_start_unreachable_legend_covers_no_map():
     values = [{"x": x, "y": y} for x in (0, 1, 2, 3) for y in (0, 1, 2, 3)]
     rows, swept = _rows(values, ["completed"] * 16)

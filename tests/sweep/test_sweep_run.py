@@ -226,6 +226,7 @@ def _sweep_argv(tmp_path, cluster) -> tuple:
                  cluster.scheduler_address, "--quiet", "--batch", "1"]
 
 
+@pytest.mark.slow
 @pytest.mark.sigint
 def test_a_ctrl_c_keeps_the_points_done_and_the_rerun_computes_the_rest(
         tmp_path, in_process_cluster, monkeypatch, capsys):
@@ -274,6 +275,7 @@ def test_a_ctrl_c_that_something_swallowed_still_stops_the_sweep(
     assert len(rows) == 6 and any(r["status"] == "interrupted" for r in rows)
 
 
+@pytest.mark.slow
 def test_the_embedded_cluster_has_the_workers_asked_for_and_closes():
     """``--workers``' cluster of worker processes (the sweeps above run on other ones)."""
     from dualarm_qp.sweep.cluster import open_client, worker_count

@@ -26,6 +26,7 @@ def test_capsule_arms_show_every_joint_axis(beam) -> None:
     assert scene["all_joint_axes"] is True
 
 
+@pytest.mark.slow
 def test_mesh_arms_show_only_the_axes_of_joints_near_a_limit(ur5_pair) -> None:
     scene = describe_scene(ur5_pair.task, t_start=0.0, t_end=1.0)
     assert scene["all_joint_axes"] is False  # rods out of every joint hid the meshes

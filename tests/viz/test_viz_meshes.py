@@ -93,6 +93,7 @@ def _pinocchio_oracle(arm, q):
     ("ur5", "base_link", "tool0", 7),
     ("panda", "panda_link0", "panda_link8", 11),  # the hand and fingers follow joint 7
 ])
+@pytest.mark.slow
 def test_mesh_vertices_are_where_pinocchio_places_the_visual_geometry(robot, root, tip, links):
     base = np.eye(4)
     base[:3, :3] = pin.rpy.rpyToMatrix(0.1, -0.2, 2.5)
