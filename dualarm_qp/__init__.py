@@ -20,10 +20,9 @@ if "numpy" not in _sys.modules:
     for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         _os.environ.setdefault(_var, "1")
 
-from importlib import import_module as _import_module
 from typing import TYPE_CHECKING as _TYPE_CHECKING
-from typing import Any as _Any
 
+from ._lazy import lazy_names as _lazy_names
 from .collision import CollisionScene, CollisionSettings
 from .errors import (
     ConfigError,
@@ -184,14 +183,8 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> _Any:
-    """Import a name of :data:`_LAZY` from its subpackage on first access."""
-    where = _LAZY.get(name)
-    if where is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(_import_module(f".{where}", __name__), name)
-    globals()[name] = value  # later accesses skip this function
-    return value
+#: Import a name of :data:`_LAZY` from its subpackage on first access.
+__getattr__ = _lazy_names(__name__, globals(), _LAZY)
 
 
 def __dir__() -> list[str]:

@@ -6,9 +6,9 @@ a process of their own) can be imported without the controller, the solvers and 
 configuration schema.
 """
 
-from importlib import import_module as _import_module
 from typing import TYPE_CHECKING as _TYPE_CHECKING
-from typing import Any as _Any
+
+from .._lazy import lazy_names as _lazy_names
 
 if _TYPE_CHECKING:
     from .config import ExperimentConfig, load_config, parse_config
@@ -37,14 +37,8 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> _Any:
-    """Import a name of :data:`_LAZY` from its module on first access."""
-    where = _LAZY.get(name)
-    if where is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(_import_module(f".{where}", __name__), name)
-    globals()[name] = value  # later accesses skip this function
-    return value
+#: Import a name of :data:`_LAZY` from its module on first access.
+__getattr__ = _lazy_names(__name__, globals(), _LAZY)
 
 
 def __dir__() -> list[str]:

@@ -302,7 +302,6 @@ def test_a_swallowed_interrupt_still_stops_the_run(tmp_path, monkeypatch):
     assert s["status"] == "interrupted" and s["samples"] == 5
 
 
-@pytest.mark.slow
 @pytest.mark.sigint
 def test_a_signal_while_writing_waits_for_the_whole_set(tmp_path, monkeypatch, capsys):
     from dualarm_qp.experiments.figures import run_figures

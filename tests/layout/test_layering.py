@@ -13,8 +13,8 @@ PACKAGE = Path(__file__).resolve().parents[2] / "dualarm_qp"
 LAYERS = {
     "errors": 0, "_validate": 0, "se3": 0, "poses": 0, "_io": 0, "_signals": 0,
     "_compiled": 0, "_kernel": 0,  # the compiled kernel and its loader (numbers only)
-    "_frozen": 0,  # frozen dataclasses made from checked values
-    "_remade": 0,  # holders of kernel objects, pickled without them
+    "_remade": 0,  # holders of what a pickle cannot hold, made again when unpickled
+    "_lazy": 0,  # a package's names imported on first access
     "kinematics": 1,
     "task": 2, "geometry": 2,  # shapes, distances, capsules fitted to arms (kinematics)
     "collision": 2,  # the bodies and pairs of a task, their clearance (geometry)

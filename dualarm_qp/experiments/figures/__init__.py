@@ -14,9 +14,9 @@ first access).
 - :mod:`.avoidance`: several runs' clearance and grasp travel (``dualarm-qp collisions``).
 """
 
-from importlib import import_module as _import_module
 from typing import TYPE_CHECKING as _TYPE_CHECKING
-from typing import Any as _Any
+
+from ..._lazy import lazy_names as _lazy_names
 
 if _TYPE_CHECKING:
     from .avoidance import avoidance_figure
@@ -58,14 +58,8 @@ __all__ = ["CLEARANCE_FIGURE", "RUN_FIGURES", "Curve", "DisplayUnits", "PlotLimi
            "write_run_figures"]
 
 
-def __getattr__(name: str) -> _Any:
-    """Import a name of :data:`_LAZY` from its module on first access."""
-    where = _LAZY.get(name)
-    if where is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(_import_module(f".{where}", __name__), name)
-    globals()[name] = value  # later accesses skip this function
-    return value
+#: Import a name of :data:`_LAZY` from its module on first access.
+__getattr__ = _lazy_names(__name__, globals(), _LAZY)
 
 
 def __dir__() -> list[str]:
