@@ -22,19 +22,8 @@ from dualarm_qp.experiments.run import run_experiment
 from dualarm_qp.experiments.setup import build_experiment
 
 ROOT = Path(__file__).resolve().parents[2]
-CONFIG = ROOT / "configs" / "puma_beam_limits.yaml"
 FR3 = ROOT / "configs" / "fr3_pair.yaml"
 STORE = get_typestore(Stores.ROS2_JAZZY)
-
-
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    """A short finished run of the beam with speed limits."""
-    exp = build_experiment(load_config(CONFIG), str(CONFIG))
-    exp = dataclasses.replace(exp, duration=1.0)
-    out = tmp_path_factory.mktemp("run")
-    run_experiment(exp, out, progress=False, plots=False)
-    return out
 
 
 def read_csv(path: Path) -> list[dict[str, str]]:

@@ -27,25 +27,14 @@ from dualarm_qp.bag.messages import TOPICS
 from dualarm_qp.bag.write import RunStream, write_bag
 from dualarm_qp.cell.loop import DriveSettings, drive
 from dualarm_qp.experiments.config import load_config
-from dualarm_qp.experiments.run import run_experiment
 from dualarm_qp.experiments.setup import build_experiment
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cell"))
 from fake import KinematicCell
 
 ROOT = Path(__file__).resolve().parents[2]
-CONFIG = ROOT / "configs" / "puma_beam_limits.yaml"
 ACCEL = ROOT / "configs" / "puma_beam_accel.yaml"
 STORE = get_typestore(Stores.ROS2_JAZZY)
-
-
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    exp = build_experiment(load_config(CONFIG), str(CONFIG))
-    exp = dataclasses.replace(exp, duration=1.0)
-    out = tmp_path_factory.mktemp("run")
-    run_experiment(exp, out, progress=False, plots=False)
-    return out
 
 
 def _subscribe_all(client: FoxgloveClient, view: LiveView | None = None):

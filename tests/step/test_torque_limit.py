@@ -75,14 +75,21 @@ def test_rows_are_the_linearised_torques() -> None:
     assert np.abs(t1 - (st.tau + dt * st.D @ x)).max() < 5e-4
 
 
+def _at_start(limits: list[float]):
+    """The experiment with these torque limits, its first step's context and layout, its
+    load torques and their linearisation at the start."""
+    exp = _experiment(limits, torque_limits=True)
+    builder = StepBuilder(exp.task, exp.options)
+    ctx = builder.build(exp.initial).context
+    torques = LoadTorques(exp.task)
+    st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)
+    return exp, ctx, builder.layout, torques, st
+
+
 def test_every_joint_limited_gives_the_same_rows_as_a_selection() -> None:
     """Every joint limited (the rows taken whole) and one joint less (a selection)."""
     every = [200.0, 80.0, 60.0, 40.0, 15.0, 10.0]
-    exp = _experiment(every, torque_limits=True)
-    ctx = StepBuilder(exp.task, exp.options).build(exp.initial).context
-    lay = StepBuilder(exp.task, exp.options).layout
-    torques = LoadTorques(exp.task)
-    st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)
+    exp, ctx, lay, torques, st = _at_start(every)
     dt = exp.options.dt
     for limits in (every, [200.0, 80.0, 60.0, np.inf, 15.0, 10.0]):
         lim = np.r_[limits, limits]
@@ -151,11 +158,7 @@ def test_an_approach_time_closes_a_share_of_each_margin_per_sample() -> None:
     """``torque_approach`` T: a joint inside its limit may close ``dt / T`` of its margin
     in one sample; a joint beyond it is still asked back in one sample."""
     every = [200.0, 80.0, 60.0, 40.0, 15.0, 10.0]
-    exp = _experiment(every, torque_limits=True)
-    ctx = StepBuilder(exp.task, exp.options).build(exp.initial).context
-    lay = StepBuilder(exp.task, exp.options).layout
-    torques = LoadTorques(exp.task)
-    st = torques.linearised(ctx.state.q_l, ctx.state.q_f, ctx.state.sigma)
+    exp, ctx, lay, torques, st = _at_start(every)
     dt = exp.options.dt
     lim = np.r_[every, every]
     lim[7] = 0.5 * abs(st.tau[7])  # the follower's joint 2 already beyond its limit
