@@ -54,12 +54,17 @@ FIGURE_TEXT = {
 }
 
 
-def _num(value: Any, unit: str = "", digits: int = 4) -> str:
-    """Return a number for a person (``n/a`` when missing)."""
+def _num(value: Any, unit: str = "", digits: int = 4, scale: float = 1.0) -> str:
+    """Return ``scale * value`` for a person (``n/a`` when missing).
+
+    A value is missing when absent, null or not finite: ``reproduce.json`` holds null
+    for a number a case never reached (a case stopped before its first sample has no
+    grasp position), and ``scale`` (e.g. 1e3 for m to mm) is applied only after the check.
+    """
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(
             value):
         return "n/a"
-    return f"{value:.{digits}g}{' ' + unit if unit else ''}"
+    return f"{scale * value:.{digits}g}{' ' + unit if unit else ''}"
 
 
 def _status(summary: dict[str, Any]) -> str:
@@ -83,8 +88,8 @@ def _numbers(summary: dict[str, Any], check: dict[str, Any]) -> list[str]:
         items.append(f"follower q3 from {_num(check.get('q3_min_deg'), 'deg')} to "
                      f"{_num(check.get('q3_max_deg'), 'deg')}; "
                      f"{check.get('q3_samples_outside', 'n/a')} samples outside its range")
-    items.append(f"grasp {_num(1e3 * summary.get('grasp_start_m', math.nan), 'mm')} -> "
-                 f"{_num(1e3 * summary.get('grasp_end_m', math.nan), 'mm')}")
+    items.append(f"grasp {_num(summary.get('grasp_start_m'), 'mm', scale=1e3)} -> "
+                 f"{_num(summary.get('grasp_end_m'), 'mm', scale=1e3)}")
     if check and "q3_first_step_deg" in check:
         items.append(f"first sample: q3 moves {_num(check['q3_first_step_deg'], 'deg', 3)}, "
                      f"the grasp {_num(check.get('grasp_first_step_mm'), 'mm', 3)}")

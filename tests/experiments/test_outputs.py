@@ -344,6 +344,48 @@ def test_interrupted_reproduction_stops_at_the_case(tmp_path, cases, case_plots,
     assert rep["status"] != "interrupted" and list(rep["cases"]) == ["a", "b", "c", "d"]
 
 
+def _signal_in_first_step(monkeypatch, sig: int) -> None:
+    """Make the first rollout's first controller step send ``sig`` to this process: the
+    rollout stops before its first sample is recorded (0 samples)."""
+    real = run_module.rollout
+    seen = {"n": 0}
+
+    def rollout(controller, *args, **kwargs):
+        seen["n"] += 1
+        if seen["n"] == 1:
+            step = controller.step
+
+            def first_step(*a, **k):
+                controller.step = step
+                os.kill(os.getpid(), sig)
+                return step(*a, **k)
+
+            controller.step = first_step
+        return real(controller, *args, **kwargs)
+
+    monkeypatch.setattr(run_module, "rollout", rollout)
+
+
+@pytest.mark.sigint
+def test_a_reproduction_stopped_before_its_first_sample_is_recorded(tmp_path, cases,
+                                                                     monkeypatch, capsys):
+    """A signal in case (a)'s first step: 0 samples, whose grasp is null in the record.
+    The page used to fail on it (TypeError), leaving case_a/ without reproduce.json."""
+    _signal_in_first_step(monkeypatch, signal.SIGTERM)
+    out = tmp_path / "r"
+    argv = ["reproduce", "--out", str(out), "--configs", str(cases), "--quiet"]
+    assert main(argv) == 130
+    assert names(out) == ["case_a", "report.html", "reproduce.json"]
+    rep = json.loads((out / "reproduce.json").read_text())
+    assert rep["status"] == "interrupted" and rep["interrupted_case"] == "a"
+    assert rep["outputs"] == ["case_a/", "report.html"]
+    assert rep["cases"]["a"]["samples"] == 0 and rep["cases"]["a"]["grasp_start_m"] is None
+    assert summary(out / "case_a")["samples"] == 0
+    page = (out / "report.html").read_text()
+    assert "Interrupted in case (a)" in page and "grasp n/a -&gt; n/a" in page
+    assert "interrupted in case (a)" in capsys.readouterr().err
+
+
 def test_signal_hold_delivers_after_the_block():
     with InterruptHandlers() as handlers:
         with pytest.raises(KeyboardInterrupt, match="SIGTERM"):

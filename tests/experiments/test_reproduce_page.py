@@ -127,3 +127,18 @@ def test_an_interrupted_reproduction_shows_the_cases_it_ran(tmp_path):
     assert re.findall(r'<section id="case_(\w)">', page) == ["a", "b"]
     assert "the run was interrupted" in section(page, "b")
     assert "<figure" not in page and "claims" not in page
+
+
+def test_a_case_stopped_before_its_first_sample_has_no_numbers(tmp_path):
+    """0 samples: no grasp (NaN in the summary, null in reproduce.json) and no speeds."""
+    out = folder(tmp_path, labels=("a",))
+    empty = summary("a", status="interrupted", samples=0, path_completed_pct=0.0,
+                    grasp_start_m=float("nan"), grasp_end_m=float("nan"),
+                    closure_pos_err_max_m=None, realised_limits={},
+                    failure={"criterion": "interrupted"})
+    page = render_reproduction_report(out, record(
+        status="interrupted", interrupted_case="a", cases={"a": empty}, checks={},
+        figures=[]))
+    part = section(page, "a")
+    assert "0 samples, 0% of the path" in part and "grasp n/a -&gt; n/a" in part
+    assert "worst closure error n/a" in part
