@@ -267,8 +267,11 @@ def _quiet_swallowed_interrupts() -> Iterator[None]:
 def _run_command(args: argparse.Namespace) -> int:
     """Run the command and map what happened to an exit code and one message.
 
-    An error that an interrupt caused (an import cut short) is reported as the interrupt.
+    An error that came after an interrupt (an import cut short, say) is reported as the
+    interrupt, with the error named on the same line: it may be the interrupt's doing, or
+    a fault of its own that would otherwise go unseen.
     """
+    after = ""
     try:
         code = int(args.func(args))
         sys.stdout.flush()  # a closed pipe shows here, not in the flush at exit
@@ -290,10 +293,12 @@ def _run_command(args: argparse.Namespace) -> int:
             print_error(f"internal error: {type(err).__name__}: {err} "
                         "(rerun with --debug for details)")
             return EXIT_FAILED
-        code = EXIT_FAILED  # caused by the interrupt (an import cut short): reported below
+        code = EXIT_FAILED  # after the interrupt: reported below, the error named
+        after = (f"; then {type(err).__name__}: {err}"
+                 + ("" if args.debug else " (rerun with --debug for details)"))
     stopped = interrupt_requested()
     if stopped is not None and code != EXIT_INTERRUPTED:
-        print_error(f"interrupted ({stopped})")
+        print_error(f"interrupted ({stopped}){after}")
         return EXIT_INTERRUPTED
     return code
 

@@ -85,6 +85,10 @@ def test_an_error_caused_by_an_interrupt_is_an_interrupt(monkeypatch, capsys):
     assert main(["solvers"]) == 130
     err = capsys.readouterr().err
     assert "internal error" not in err and "interrupted" in err
+    # The error is named on the same line: a fault of the command's own that came after
+    # an interrupt (a page that cannot be written for a run stopped at its first sample)
+    # would otherwise be hidden behind "interrupted".
+    assert "then ImportError: initialization failed (rerun with --debug" in err
 
 
 @pytest.mark.slow
