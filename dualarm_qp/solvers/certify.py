@@ -200,8 +200,21 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
                 bound_violation=box, active_lower=reading.active_lower.view(np.bool_),
                 active_upper=reading.active_upper.view(np.bool_),
                 build_time=problem.build_time, message=message, verified_with=tol,
-                row_violation=row, active_rows=named_rows(problem, rows).labels(active)
-                if active else ())
+                row_violation=row, active_rows=_row_names(problem, rows, active))
+
+
+def _row_names(problem: StepProblem, rows: kernel.Rows | None, active: list[int]
+               ) -> tuple[str, ...]:
+    """Names of the general rows ``active`` (indices into the rows ``C x <= e``), each once.
+
+    The certificate reports only general rows as active, so each is named by its row of
+    ``G`` (what :meth:`~dualarm_qp.step.problem.Inequalities.label` gives for such a
+    row), without naming the boxes.
+    """
+    if not active:
+        return ()
+    index = (problem.inequalities() if rows is None else rows).index
+    return tuple(dict.fromkeys(problem.row_names[j] for j in index[active].tolist()))
 
 
 def named_rows(problem: StepProblem, rows: kernel.Rows | None) -> Inequalities:

@@ -108,3 +108,29 @@ def test_certify_carries_every_field_it_does_not_decide() -> None:
     for name in carried:
         assert getattr(out, name) == getattr(claim, name)
     assert out.message == "a claim" and out.solve_time >= 2.0
+
+
+def test_the_active_rows_are_named_each_once_in_their_order() -> None:
+    """Rows that bind at the answer are named by their row of ``G`` (two rows of one
+    limit once), by the kernel's certified solve and by certify() of a claim alike;
+    rows that do not bind, and the boxes, are not named."""
+    from dualarm_qp.step.problem import StepProblem
+
+    n = 4
+    A = np.array([[1.0, 1.0, 1.0, 1.0]])
+    # Minimise |x - c|^2 on sum(x) = 1 with c = (1, 1, 0, 0): the rows x0 <= 0.2 and
+    # x1 <= 0.3 bind, x2 <= 5 does not; a box binds (x3 <= 0.1) but is not a row.
+    G = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 0]])
+    problem = StepProblem(
+        A=A, b=np.array([1.0]), weights=np.ones(n), center=np.array([1.0, 1.0, 0.0, 0.0]),
+        lower=np.full(n, -10.0), upper=np.array([10.0, 10.0, 10.0, 0.1]), G=G,
+        h=np.array([0.2, 0.3, 5.0]), n_grasp=0, row_names=("wall", "wall", "far"))
+    solved = get_solver("nullspace").solve(problem)
+    assert solved.status is Status.OPTIMAL
+    np.testing.assert_allclose(solved.x, [0.2, 0.3, 0.4, 0.1], atol=1e-12)
+    assert solved.active_rows == ("wall",)
+    claimed = certify(problem, StepSolution(x=solved.x, status=Status.OPTIMAL))
+    assert claimed.status is Status.OPTIMAL and claimed.active_rows == ("wall",)
+    free = dataclasses.replace(problem, h=np.array([5.0, 5.0, 5.0]),
+                               upper=np.full(n, 10.0))
+    assert get_solver("nullspace").solve(free).active_rows == ()
