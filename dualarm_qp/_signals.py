@@ -139,6 +139,14 @@ class InterruptHandlers:
 _ACTIVE: list[InterruptHandlers] = []
 
 
+def _restore(previous: list[tuple[signal.Signals, Any]]) -> None:
+    """Install the handlers of ``previous`` again (an outer hold's: without SA_RESTART off)."""
+    for sig, handler in previous:
+        signal.signal(sig, handler)
+        if isinstance(getattr(handler, "__self__", None), SignalHold):  # an outer hold
+            signal.siginterrupt(sig, False)
+
+
 def _requested() -> int | None:
     for h in _ACTIVE:
         if h.signum is not None:
@@ -205,13 +213,26 @@ class SignalHold:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, *exc: object) -> None:
-        for sig, previous in self._previous.items():
-            signal.signal(sig, previous)
-            if isinstance(getattr(previous, "__self__", None), SignalHold):  # an outer hold
-                signal.siginterrupt(sig, False)
-        self._previous.clear()
+        self._put_back()
         if self._deliver_on_exit or exc_type is not None:
             self.deliver()
+
+    def _put_back(self) -> None:
+        """Put the previous handlers back; a signal that comes half-way is held too.
+
+        The handlers come back one signal after the other: a signal that reaches one
+        already put back (which raises) before the others are would leave them held
+        for good, a later ``kill`` swallowed. It is caught, held like the others, and
+        every handler is put back.
+        """
+        previous = list(self._previous.items())
+        self._previous.clear()
+        try:
+            _restore(previous)
+        except KeyboardInterrupt as stop:  # Interrupted, or Python's default SIGINT
+            if self.signum is None:
+                self.signum = getattr(stop, "signum", None) or signal.SIGINT
+            _restore(previous)
 
     def deliver(self) -> None:
         """Pass the held signal, if any, to the process's handler (it may raise)."""
