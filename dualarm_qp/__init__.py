@@ -1,10 +1,11 @@
 """dualarm_qp: coordinate two robot arms carrying one object, with a sliding grasp.
 
 The names below are the public API; ``docs/api.md`` lists them with their units (SI:
-m, rad, s). Arms, surfaces, trajectories, the task, the state and the step options
-are imported with the package. The controller, the solvers and the experiments pull in
-the QP backends and SciPy, so they are imported on first use (``dualarm_qp.rollout``,
-``from dualarm_qp import get_solver``): ``import dualarm_qp`` stays light.
+m, rad, s). Only the errors are imported with the package; every other name is
+imported on first use (``dualarm_qp.rollout``, ``from dualarm_qp import puma560``), so
+``import dualarm_qp`` loads neither NumPy nor the kinematics and collision libraries
+(Pinocchio, Coal), nor the QP backends, SciPy or matplotlib: the command line's parser
+and a run's drawing process, forked as the command starts, import only what they use.
 """
 
 # No ``from __future__ import annotations`` and private aliases for the helpers: the
@@ -23,7 +24,6 @@ if "numpy" not in _sys.modules:
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 from ._lazy import lazy_names as _lazy_names
-from .collision import CollisionScene, CollisionSettings
 from .errors import (
     ConfigError,
     DualArmError,
@@ -39,28 +39,23 @@ from .errors import (
     SolverNotFoundError,
     SupportLostError,
 )
-from .geometry import Box, Capsule, sphere
-from .kinematics import (
-    DHTable,
-    RobotModelError,
-    SerialArm,
-    example_robot_arm,
-    ik_dls,
-    puma560,
-    puma560_ik,
-    urdf_arm,
-)
-from .poses import pose
-from .step.options import StepOptions
-from .step.problem import StepProblem
-from .step.state import DualArmState
-from .task.scene import DualArmTask
-from .task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
-from .task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
 
 if _TYPE_CHECKING:
+    from .collision import CollisionScene, CollisionSettings
     from .control import ControlOutput, DualArmController, RolloutResult, RunLimits, rollout
     from .experiments import Experiment, build_experiment, load_config, run_experiment
+    from .geometry import Box, Capsule, sphere
+    from .kinematics import (
+        DHTable,
+        RobotModelError,
+        SerialArm,
+        example_robot_arm,
+        ik_dls,
+        puma560,
+        puma560_ik,
+        urdf_arm,
+    )
+    from .poses import pose
     from .solvers import (
         Status,
         StepSolution,
@@ -73,12 +68,43 @@ if _TYPE_CHECKING:
     from .solvers.registry import SolverOptionError
     from .step.context import StepContext
     from .step.layout import Layout
+    from .step.options import StepOptions
     from .step.parts import Constraint, CostTerm, Equality, Limit, Quadratic, Task
+    from .step.problem import StepProblem
+    from .step.state import DualArmState
+    from .task.scene import DualArmTask
+    from .task.surfaces import CurvedBar, CylinderSurface, GraspSurface, PlaneBar
+    from .task.trajectory import LinearTrajectory, Trajectory, WaypointTrajectory
 
 __version__ = "0.1.0"
 
 #: Names imported on first access, and the subpackage each comes from.
 _LAZY = {
+    "DHTable": "kinematics",
+    "RobotModelError": "kinematics",
+    "SerialArm": "kinematics",
+    "example_robot_arm": "kinematics",
+    "ik_dls": "kinematics",
+    "puma560": "kinematics",
+    "puma560_ik": "kinematics",
+    "urdf_arm": "kinematics",
+    "pose": "poses",
+    "Box": "geometry",
+    "Capsule": "geometry",
+    "CollisionScene": "collision",
+    "CollisionSettings": "collision",
+    "sphere": "geometry",
+    "CurvedBar": "task.surfaces",
+    "CylinderSurface": "task.surfaces",
+    "DualArmTask": "task.scene",
+    "GraspSurface": "task.surfaces",
+    "LinearTrajectory": "task.trajectory",
+    "PlaneBar": "task.surfaces",
+    "Trajectory": "task.trajectory",
+    "WaypointTrajectory": "task.trajectory",
+    "DualArmState": "step.state",
+    "StepOptions": "step.options",
+    "StepProblem": "step.problem",
     "ControlOutput": "control",
     "DualArmController": "control",
     "RolloutResult": "control",

@@ -45,7 +45,12 @@ from .errors import DualArmError
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser (exposed for documentation and tests)."""
+    """Build the argument parser (exposed for documentation and tests).
+
+    It imports nothing heavy (no NumPy, Pinocchio, Coal, YAML reader or matplotlib):
+    each command imports what it uses when it runs, so that ``run`` can fork its drawing
+    process first (:mod:`dualarm_qp.experiments.figures.process`).
+    """
     p = argparse.ArgumentParser(
         prog="dualarm-qp",
         description="Coordinate two arms carrying one object with a sliding follower grasp "

@@ -46,8 +46,9 @@ def output_folder(path: str | Path) -> Path:
 def cmd_run(args: argparse.Namespace) -> int:
     """``dualarm-qp run``: one experiment from a YAML file.
 
-    The figures' process starts first: it imports matplotlib while this one imports the
-    rest and runs (:mod:`~dualarm_qp.experiments.figures.process`).
+    The figures' process starts first, before anything heavy is imported: it imports
+    matplotlib while this one imports the rest and runs
+    (:mod:`~dualarm_qp.experiments.figures.process`).
     """
     from .experiments.figures.process import FigureProcess
 

@@ -10,8 +10,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .live import DEFAULT_PORT
-from .messages import TOPICS
+from .topics import DEFAULT_PORT, TOPICS
 
 
 def serve_run(args: argparse.Namespace) -> int:

@@ -2,7 +2,7 @@
 
 :class:`LiveView` is a Foxglove WebSocket server (foxglove-sdk, protocol
 ``foxglove.sdk.v1``) on 127.0.0.1 with one channel per topic of the stream
-(:data:`~.messages.TOPICS`), each carrying the ROS 2 messages as a ROS 2 publisher
+(:data:`~.topics.TOPICS`), each carrying the ROS 2 messages as a ROS 2 publisher
 sends them (``cdr``, with ``ros2msg`` schemas): the bytes a bag holds. The Foxglove app
 connects to ``ws://127.0.0.1:PORT`` (its "Foxglove WebSocket" connection).
 
@@ -20,17 +20,13 @@ from typing import TYPE_CHECKING, Any
 
 from ..control.trace import Trace
 from ..errors import InvalidInputError
-from .messages import TOPICS, CdrMessages, Message, message_definition
+from .messages import CdrMessages, Message, message_definition
 from .stream import Sample, StreamNames
+from .topics import DEFAULT_PORT, HOST, TOPICS
 
 if TYPE_CHECKING:
     from ..experiments.config import ExperimentConfig
     from ..experiments.setup import Experiment
-
-#: The address the view is served on: this machine only.
-HOST = "127.0.0.1"
-#: Foxglove's default port.
-DEFAULT_PORT = 8765
 
 
 class LiveView:

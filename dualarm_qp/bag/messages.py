@@ -1,9 +1,10 @@
 """The stream's ROS 2 messages, serialized as ROS 2 does (CDR), without ROS.
 
 :class:`CdrMessages` turns each :class:`~.stream.Sample` into the messages of the
-stream's topics (:data:`TOPICS`), serialized with rosbags' type store of ROS 2 Jazzy:
-the bytes a ROS 2 publisher sends, which a bag stores and a Foxglove live view serves
-as they are. The timestamp of every message, and its header stamp, is the row's ``t``.
+stream's topics (:data:`~.topics.TOPICS`), serialized with rosbags' type store of ROS 2
+Jazzy: the bytes a ROS 2 publisher sends, which a bag stores and a Foxglove live view
+serves as they are. The timestamp of every message, and its header stamp, is the row's
+``t``.
 """
 
 from __future__ import annotations
@@ -18,14 +19,7 @@ import numpy as np
 
 from ..task.scene import DualArmTask
 from .stream import DIAGNOSTIC_KEYS, Sample, StreamNames, diagnostic_level, frames, quaternion_xyzw
-
-#: The stream's topics and their message types.
-TOPICS: dict[str, str] = {
-    "/joint_states": "sensor_msgs/msg/JointState",
-    "/tf": "tf2_msgs/msg/TFMessage",
-    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
-    "/dualarm/summary": "std_msgs/msg/String",
-}
+from .topics import TOPICS
 
 #: The name of every sample's diagnostic status.
 DIAGNOSTIC_NAME = "dualarm_qp: step"

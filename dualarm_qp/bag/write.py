@@ -22,8 +22,9 @@ from typing import Any
 
 from .._signals import SignalHold
 from ..errors import DualArmError, InvalidInputError
-from .messages import TOPICS, CdrMessages, Message
+from .messages import CdrMessages, Message
 from .stream import Sample, StreamNames, samples_from_columns
+from .topics import TOPICS
 
 #: The bag's folder in a run folder (the default of ``dualarm-qp bag``).
 BAG_FOLDER = "bag"

@@ -4,6 +4,9 @@ The folder is the one ``dualarm-qp run`` writes (``trajectory.csv`` with the cel
 columns after the run's, ``summary.json`` with a ``cell`` section, the plots,
 ``report.html``, ``config.yaml``), so ``animate``, ``physics`` and ``bag`` read a
 hardware log as they read a simulated run.
+
+The parser's part (:func:`add_parsers`) imports nothing heavy: the experiment's schema,
+NumPy and the cells are imported by the functions that run a command.
 """
 
 from __future__ import annotations
@@ -12,14 +15,16 @@ import argparse
 import dataclasses
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._signals import SignalHold, raise_if_interrupted
-from ..experiments.config import ExperimentConfig, load_config, safe_name
-from ..experiments.experiment import Experiment
-from ..experiments.setup import build_experiment
-from .base import Cell, CellSetupError
-from .loop import DriveResult, DriveSettings, Observer, drive
+from ..bag.topics import DEFAULT_PORT
+
+if TYPE_CHECKING:
+    from ..experiments.config import ExperimentConfig
+    from ..experiments.experiment import Experiment
+    from .base import Cell
+    from .loop import DriveResult, DriveSettings, Observer
 
 #: The cells ``drive --cell`` knows.
 CELLS = ("mujoco", "franka", "ros2")
@@ -31,6 +36,7 @@ WATCHDOG_SAMPLES = 3
 def drive_settings(cfg: ExperimentConfig, exp: Experiment, *, dry_run: bool) -> DriveSettings:
     """Return the loop's guards from the file's ``cell:`` section, in SI."""
     from ..experiments.config import ANGLE_SCALE, TIME_SCALE
+    from .loop import DriveSettings
 
     c = cfg.cell
     angle, t = ANGLE_SCALE[cfg.units.angle], TIME_SCALE[cfg.units.time]
@@ -67,6 +73,8 @@ def check_drivable(exp: Experiment, path: str) -> None:
     CellSetupError
         A sliding leader grasp, or a supporting follower (Case 2).
     """
+    from .base import CellSetupError
+
     if exp.task.leader_surface is not None:
         raise CellSetupError(f"{path}: object.leader_surface: a cell needs the leader to "
                              "grasp rigidly (the object's pose is read from the leader's "
@@ -85,6 +93,8 @@ def open_cell(kind: str, cfg: ExperimentConfig, exp: Experiment, path: str, *,
     CellSetupError
         An unknown kind, or a ``cell:`` section the back-end cannot use.
     """
+    from .base import CellSetupError
+
     if kind == "mujoco":
         from ..physics.check import arm_tau_max
         from ..physics.command import settings_for
@@ -119,6 +129,7 @@ def drive_and_write(exp: Experiment, cfg: ExperimentConfig, cell: Cell, out: Pat
         The content of ``summary.json``.
     """
     from ..experiments.run import make_summary, write_outputs
+    from .loop import drive
 
     settings = drive_settings(cfg, exp, dry_run=dry_run)
     controller = commanded(exp, cfg.cell.headroom).controller()
@@ -156,8 +167,11 @@ def _together(observers: list[Observer]) -> Observer | None:
 def cmd_drive(args: argparse.Namespace) -> int:
     """``dualarm-qp drive``: exit 0 completed, 1 failed or stopped, 130 interrupted."""
     from ..cli_commands import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, output_folder, print_error
+    from ..experiments.config import load_config, safe_name
     from ..experiments.outputs import check_unused_folder
     from ..experiments.run import OUTPUT_FILES
+    from ..experiments.setup import build_experiment
+    from .base import CellSetupError
 
     path = str(args.config)
     cfg = load_config(args.config)
@@ -226,8 +240,8 @@ def add_parsers(sub: Any) -> None:
     d.add_argument("--foxglove", action="store_true",
                    help="serve each sample live on 127.0.0.1 (Foxglove WebSocket), as "
                    "'bag' writes it")
-    d.add_argument("--port", type=int, default=8765,
-                   help="the live view's port (default 8765; 0: any free one)")
+    d.add_argument("--port", type=int, default=DEFAULT_PORT,
+                   help=f"the live view's port (default {DEFAULT_PORT}; 0: any free one)")
     d.set_defaults(func=cmd_drive)
     from .serve import add_serve_parser
 

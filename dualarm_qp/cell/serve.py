@@ -13,6 +13,9 @@ moving arm, as a real robot's client on a real-time kernel answers every tick
 only takes longer. Measured on two shared cores, a drive (Python, one step per 10 ms
 sample) against the simulator at the wall clock's pace recorded the FR3 wrists' jerk
 at up to 2 to 7 times the limit in 4 of 6 runs; at a quarter of it, 0.78 in each of 4.
+
+The parser's part (:func:`add_serve_parser`) imports nothing heavy: NumPy, the
+experiment and the simulator are imported by the functions that serve.
 """
 
 from __future__ import annotations
@@ -22,17 +25,16 @@ import math
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from ..experiments.config import load_config
-from ..experiments.setup import build_experiment
-from .base import CellSetupError
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def _yaw(T: np.ndarray) -> float:
     """Return the base's turn about the vertical [rad] (refusing a tilted base)."""
+    from .base import CellSetupError
+
     R = T[:3, :3]
     if abs(R[2, 2] - 1.0) > 1e-9:
         raise CellSetupError("franky-sim places a robot upright: a base may only be turned "
@@ -64,6 +66,8 @@ def _answered(rs: Any) -> bool:
 
 def _check_lockstep(server: Any) -> None:
     """Refuse a franky-sim whose robot servers do not say when a command came in."""
+    from .base import CellSetupError
+
     for rs in server.robot_servers:
         if not (hasattr(rs, _MODE) and hasattr(rs, _NEW)):
             raise CellSetupError("this franky-sim does not say when a robot's command came "
@@ -125,6 +129,12 @@ def serve(config: Path, *, pace: float | None = PACE, ready: Any = None) -> tupl
         How many times a moving arm was stepped without its command (its client did
         not answer within :data:`COMMAND_WAIT`).
     """
+    import numpy as np
+
+    from ..experiments.config import load_config
+    from ..experiments.setup import build_experiment
+    from .base import CellSetupError
+
     try:
         import franky_sim
         from franky_sim.mujoco_simulator import MujocoSimulator
@@ -180,6 +190,7 @@ def serve(config: Path, *, pace: float | None = PACE, ready: Any = None) -> tupl
 def cmd_serve(args: argparse.Namespace) -> int:
     """``dualarm-qp serve``: exit 130 once interrupted and the served arms are let go."""
     from ..cli_commands import EXIT_INTERRUPTED
+    from .base import CellSetupError
 
     if args.cell != "franka":
         raise CellSetupError(f"serve knows the cell 'franka' only, got {args.cell!r}")

@@ -171,6 +171,30 @@ def test_the_command_starts_the_drawing_first_and_ends_it(tmp_path, monkeypatch,
     assert figures.calls == [(out, "puma_beam_limits")] and figures.closed
 
 
+def test_the_command_starts_the_drawing_before_the_heavy_imports(tmp_path):
+    """``dualarm-qp run`` forks the drawing process right after parsing its arguments:
+    before NumPy, Pinocchio, Coal and the YAML reader are imported (the run imports them
+    while the drawing process imports matplotlib)."""
+    config = Path(__file__).resolve().parents[2] / "configs" / "puma_beam_limits.yaml"
+    code = textwrap.dedent(f"""
+        import os, sys
+        from dualarm_qp.experiments.figures.process import FigureProcess
+
+        def start():
+            heavy = ("numpy", "pinocchio", "coal", "yaml", "matplotlib")
+            print("started;", " ".join(m for m in heavy if m in sys.modules), flush=True)
+            os._exit(0)
+
+        FigureProcess.start = staticmethod(start)
+        from dualarm_qp.cli import main
+        main(["run", {str(config)!r}, "--out", {str(tmp_path / "o")!r}, "--quiet"])
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "started;"
+
+
 @pytest.mark.slow
 def test_the_drawing_process_can_start_before_the_experiment_is_imported():
     """The command starts it first thing, and it imports matplotlib while the command

@@ -161,8 +161,11 @@ def test_a_stale_kernel_is_refused(tmp_path: Path) -> None:
 
 
 def test_a_missing_kernel_says_how_to_build_it() -> None:
+    """``import dualarm_qp`` loads no kernel (its names load on first use): the first
+    name that needs it raises."""
     code = ("import sys; sys.modules['dualarm_qp._kernel'] = None\n"
-            "try:\n    import dualarm_qp\nexcept ImportError as e:\n"
+            "import dualarm_qp\n"
+            "try:\n    dualarm_qp.puma560\nexcept ImportError as e:\n"
             "    from dualarm_qp.errors import DualArmError\n"
             "    print(type(e).__name__, isinstance(e, DualArmError), e)\n")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

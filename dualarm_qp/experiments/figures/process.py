@@ -4,9 +4,10 @@ Importing matplotlib takes about as long as a whole 300-sample run, and drawing 
 run's figures one after the other about as long again. :class:`FigureProcess` takes
 both off the run's path:
 
-1. :meth:`FigureProcess.start`, called when the command starts, forks a process that
-   imports matplotlib and the figure code while the command builds and runs the
-   experiment;
+1. :meth:`FigureProcess.start`, called as soon as the command's arguments are parsed,
+   forks a process that imports matplotlib and the figure code while the command
+   imports the rest (NumPy, Pinocchio, Coal, the configuration schema: neither the
+   parser nor ``import dualarm_qp`` loads them), builds and runs the experiment;
 2. once ``trajectory.csv`` is written, calling the object (in place of
    :func:`~.run_figures.write_run_figures`) sends it the run's limits and title; it
    reads the trace and draws the figures, split between itself and one process forked
