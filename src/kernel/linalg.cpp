@@ -61,6 +61,19 @@ void apply_q(const Mat& QR, const Vec& tau, Mat& X) {
   }
 }
 
+void apply_qt(const Mat& QR, const Vec& tau, Mat& X) {
+  const Index rows = QR.rows();
+  for (Index k = 0; k < tau.size(); ++k) {  // Q^T X = H_last (... (H_1 (H_0 X)))
+    for (Index j = 0; j < X.cols(); ++j) {
+      double w = X(k, j);
+      for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
+      w *= tau(k);
+      X(k, j) -= w;
+      for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
+    }
+  }
+}
+
 Factor factor(const Mat& A) {
   const Index m = A.rows(), n = A.cols();
   Factor f;
@@ -190,11 +203,14 @@ Mat upper_solve(const Mat& R, const Mat& B) {
 }
 
 Vec qr_lstsq(const Mat& M, const Vec& r, Mat* R_out) {
-  Eigen::HouseholderQR<Mat> qr(M);
+  Mat QR = M;
+  Vec tau;
+  householder_qr(QR, tau);
   const Index d = M.cols();
-  Mat R = qr.matrixQR().topRows(d).triangularView<Eigen::Upper>();
-  Vec qtr = qr.householderQ().transpose() * r;
-  Vec t = upper_solve(R, qtr.head(d));
+  Mat R = QR.topRows(d).triangularView<Eigen::Upper>();
+  Mat qtr = r;
+  apply_qt(QR, tau, qtr);
+  Vec t = upper_solve(R, qtr.topRows(d));
   if (R_out != nullptr) *R_out = R;
   return t;
 }

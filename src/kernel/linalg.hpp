@@ -35,6 +35,8 @@ void householder_qr(Mat& M, Vec& tau);
 
 // X <- Q X for the Q of householder_qr(QR, tau) (X has QR.rows() rows).
 void apply_q(const Mat& QR, const Vec& tau, Mat& X);
+// X <- Q^T X likewise.
+void apply_qt(const Mat& QR, const Vec& tau, Mat& X);
 
 // What the exact solver and the certificate need of A: its pseudo-inverse P (n x m), a
 // basis N of its null space and its rank, decided as factor() decides it. A with full
