@@ -72,7 +72,7 @@ bool kkt_holds(const Mat& A, const Vec& b, const Basis& fa, const Mat& C, const 
     t_star = Vec::Zero(0);
   } else if (q) {
     const Mat M = C_act * Z;
-    const Factor fm = factor(M);
+    const Basis fm = basis(M);  // the rank as factor(M) decides it (QR proof, else SVD)
     t_star = fm.solve(e_act - C_act * x0);
     if (fm.nullity()) {
       const Mat RN = RZ * fm.N;

@@ -1,6 +1,7 @@
 #include "linalg.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "constants.hpp"
 
@@ -16,6 +17,61 @@ Vec Factor::solve_transposed(const Vec& g) const {
   Vec y = V.transpose() * g;
   y.array() /= sigma.array();
   return U * y;
+}
+
+void householder_qr(Mat& M, Vec& tau) {
+  const Index rows = M.rows(), cols = M.cols();
+  tau.resize(cols);
+  for (Index k = 0; k < cols; ++k) {
+    double tail = 0.0;  // |M(k+1:, k)|^2
+    for (Index i = k + 1; i < rows; ++i) tail += M(i, k) * M(i, k);
+    const double head = M(k, k);
+    if (tail <= std::numeric_limits<double>::min()) {  // nothing below: H_k = I
+      tau(k) = 0.0;
+      continue;
+    }
+    // H_k = I - tau v v^T maps column k to (beta, 0, ...): v = (1, M(k+1:, k) / (head -
+    // beta)), beta of the sign opposite to head's (no cancellation in head - beta).
+    const double beta = head >= 0.0 ? -std::sqrt(head * head + tail)
+                                     : std::sqrt(head * head + tail);
+    tau(k) = (beta - head) / beta;
+    const double scale = 1.0 / (head - beta);
+    for (Index i = k + 1; i < rows; ++i) M(i, k) *= scale;
+    M(k, k) = beta;
+    for (Index j = k + 1; j < cols; ++j) {  // H_k on the columns to the right
+      double w = M(k, j);
+      for (Index i = k + 1; i < rows; ++i) w += M(i, k) * M(i, j);
+      w *= tau(k);
+      M(k, j) -= w;
+      for (Index i = k + 1; i < rows; ++i) M(i, j) -= w * M(i, k);
+    }
+  }
+}
+
+void apply_q(const Mat& QR, const Vec& tau, Mat& X) {
+  const Index rows = QR.rows();
+  for (Index k = tau.size() - 1; k >= 0; --k) {  // Q X = H_0 (H_1 (... (H_last X)))
+    for (Index j = 0; j < X.cols(); ++j) {
+      double w = X(k, j);
+      for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
+      w *= tau(k);
+      X(k, j) -= w;
+      for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
+    }
+  }
+}
+
+void apply_qt(const Mat& QR, const Vec& tau, Mat& X) {
+  const Index rows = QR.rows();
+  for (Index k = 0; k < tau.size(); ++k) {  // Q^T X = H_last (... (H_1 (H_0 X)))
+    for (Index j = 0; j < X.cols(); ++j) {
+      double w = X(k, j);
+      for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
+      w *= tau(k);
+      X(k, j) -= w;
+      for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
+    }
+  }
 }
 
 Factor factor(const Mat& A) {
@@ -52,15 +108,22 @@ Basis basis(const Mat& A) {
     return out;
   }
   if (m <= n && A.allFinite()) {
-    const Eigen::HouseholderQR<Mat> qr(A.transpose());
-    const Mat R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+    Mat QR = A.transpose();  // A^T = Q R: R in its upper triangle, Q's reflectors below
+    Vec tau;
+    householder_qr(QR, tau);
+    const Mat R = QR.topRows(m).triangularView<Eigen::Upper>();
     if ((R.diagonal().array() != 0.0).all()) {
-      const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity(m, m));
+      Mat R_inv = Mat::Identity(m, m);
+      R.triangularView<Eigen::Upper>().solveInPlace(R_inv);
       const double lo = 1.0 / R_inv.norm(), hi = R.norm();
       if (std::isfinite(lo) && std::isfinite(hi) && lo > RANK_RTOL * hi) {
-        const Mat Q = qr.householderQ();
-        out.P = Q.leftCols(m) * R_inv.transpose();
-        out.N = Q.rightCols(n - m);
+        // P = Q [R^-T; 0] and N = Q [0; I], Q applied without being formed.
+        out.P = Mat::Zero(n, m);
+        out.P.topRows(m) = R_inv.transpose();
+        apply_q(QR, tau, out.P);
+        out.N = Mat::Zero(n, n - m);
+        out.N.bottomRows(n - m).setIdentity();
+        apply_q(QR, tau, out.N);
         out.rank = m;
         out.sigma_max = hi;
         out.qr = true;
@@ -140,11 +203,14 @@ Mat upper_solve(const Mat& R, const Mat& B) {
 }
 
 Vec qr_lstsq(const Mat& M, const Vec& r, Mat* R_out) {
-  Eigen::HouseholderQR<Mat> qr(M);
+  Mat QR = M;
+  Vec tau;
+  householder_qr(QR, tau);
   const Index d = M.cols();
-  Mat R = qr.matrixQR().topRows(d).triangularView<Eigen::Upper>();
-  Vec qtr = qr.householderQ().transpose() * r;
-  Vec t = upper_solve(R, qtr.head(d));
+  Mat R = QR.topRows(d).triangularView<Eigen::Upper>();
+  Mat qtr = r;
+  apply_qt(QR, tau, qtr);
+  Vec t = upper_solve(R, qtr.topRows(d));
   if (R_out != nullptr) *R_out = R;
   return t;
 }

@@ -26,6 +26,18 @@ struct Factor {
 
 Factor factor(const Mat& A);
 
+// Householder QR of M (rows >= cols) in place, as LAPACK's dgeqr2 and Eigen's
+// HouseholderQR compute it: R in the upper triangle, below the diagonal the reflectors
+// H_k = I - tau(k) v_k v_k^T (v_k = (0, ..., 0, 1, M(k+1:, k))), Q = H_0 H_1 ...
+// Plain loops without allocation: at the step's sizes (A^T of 13 x 12) Eigen's
+// HouseholderQR took 2.2 us against 0.7 us here, in a basis() of 5.7 us.
+void householder_qr(Mat& M, Vec& tau);
+
+// X <- Q X for the Q of householder_qr(QR, tau) (X has QR.rows() rows).
+void apply_q(const Mat& QR, const Vec& tau, Mat& X);
+// X <- Q^T X likewise.
+void apply_qt(const Mat& QR, const Vec& tau, Mat& X);
+
 // What the exact solver and the certificate need of A: its pseudo-inverse P (n x m), a
 // basis N of its null space and its rank, decided as factor() decides it. A with full
 // row rank proven by its QR factorisation (A^T = Q R; Frobenius bounds give
