@@ -1,9 +1,10 @@
 """A run's figures' empty axes, built before the run's trace comes (the drawing process).
 
 A figure's axes and their ticks are matplotlib objects of many artists each: building
-them is about a sixth of the CPU time of drawing the figures that always have the same
-axes (``grasp.png``, ``tracking.png``, ``closure.png``, and the lane axis of
-``joints.png`` and ``rates.png``, sized once the trace gives the number of joints). The
+them ahead takes 7 to 21 % of the CPU time of drawing a run's figures off the command's
+path (docs/benchmarks.md), for the figures whose axes do not depend on the trace
+(``grasp.png``, ``tracking.png``, ``closure.png``, ``clearance.png``, and the lane axis
+of ``joints.png`` and ``rates.png``, sized once the trace gives the joints). The
 drawing process (:mod:`.process`) builds them with :func:`prepare` while it waits for its
 job, that is while the command runs the experiment; each figure then takes its own
 (:func:`take`) instead of building it. A figure drawn anywhere else builds its axes when
