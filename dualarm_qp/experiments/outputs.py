@@ -20,8 +20,8 @@ from .._io import atomic_open, atomic_write_with, write_json
 from ..control.trace import Trace
 from ..errors import InvalidInputError
 
-__all__ = ["atomic_open", "atomic_write_with", "check_unused_folder", "owned_entries",
-           "remove_owned", "trace_columns", "write_json", "write_trace_csv"]
+__all__ = ["atomic_open", "atomic_write_with", "check_unused_folder", "csv_columns",
+           "owned_entries", "remove_owned", "trace_columns", "write_json", "write_trace_csv"]
 
 
 def _temp_pattern(names: Iterable[str]) -> re.Pattern[str]:
@@ -231,12 +231,11 @@ def _measured_columns(cols: dict[str, Any], trace: Trace) -> None:
     cols["torque_ratio_measured"] = trace.torque_ratio_measured
 
 
-def write_trace_csv(path: Path, trace: Trace, extra: dict[str, Any] | None = None) -> None:
-    """Write the trace, one row per sample (angles in rad, lengths in m, times in s).
+def csv_columns(trace: Trace, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Return the columns of the trace's ``trajectory.csv``, in order, SI units.
 
-    ``extra`` holds further columns (one value per row), written after the trace's own
-    (a cell's record: :mod:`dualarm_qp.cell.record`); a name the trace already has is
-    refused.
+    :func:`trace_columns`, then ``extra``, further columns (one value per row: a cell's
+    record, :mod:`dualarm_qp.cell.record`); a name the trace already has is refused.
     """
     cols = trace_columns(trace)
     for name, values in (extra or {}).items():
@@ -245,6 +244,18 @@ def write_trace_csv(path: Path, trace: Trace, extra: dict[str, Any] | None = Non
                                     f"that name, or it has {len(values)} rows, not "
                                     f"{len(trace)}")
         cols[name] = values
+    return cols
+
+
+def write_trace_csv(path: Path, trace: Trace, extra: dict[str, Any] | None = None, *,
+                    columns: dict[str, Any] | None = None) -> None:
+    """Write the trace, one row per sample (angles in rad, lengths in m, times in s).
+
+    ``extra`` holds further columns, written after the trace's own
+    (:func:`csv_columns`); ``columns``, the columns :func:`csv_columns` returned, if
+    they are at hand (``extra`` is then ignored).
+    """
+    cols = csv_columns(trace, extra) if columns is None else columns
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols.keys())

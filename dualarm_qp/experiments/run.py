@@ -25,7 +25,7 @@ from ..control.measured import record_readings
 from ..control.plant import Plant
 from ..control.rollout import RolloutResult, rollout
 from .limits_kept import limits_kept
-from .outputs import remove_owned, write_json, write_trace_csv
+from .outputs import csv_columns, remove_owned, write_json, write_trace_csv
 from .setup import Experiment
 
 #: The files a run owns in its output folder (``summary.json`` lists the others written).
@@ -310,6 +310,22 @@ def write_resolved_config(path: Path, config_file: str) -> bool:
     return True
 
 
+def _write_run_files(out: Path, exp: Experiment, result: RolloutResult, cols: dict[str, Any],
+                     *, animate: bool) -> list[str]:
+    """Write ``trajectory.csv`` (columns ``cols``), ``config.yaml`` and the animation."""
+    write_trace_csv(out / "trajectory.csv", result.trace, columns=cols)
+    written = ["trajectory.csv"]
+    if write_resolved_config(out / "config.yaml", exp.path):
+        written.append("config.yaml")  # what rebuilds the scene (dualarm-qp animate)
+    if animate and len(result.trace):
+        from ..viz.animation import ANIMATION_FILE, write_animation
+
+        write_animation(out / ANIMATION_FILE, exp.task, out / "trajectory.csv",
+                        title=f"{exp.name} ({exp.solver_name})")
+        written.append(ANIMATION_FILE)
+    return written
+
+
 def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
                   *, plots: bool = True, animate: bool = False,
                   figures: FigureWriter | None = None,
@@ -344,17 +360,25 @@ def write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: di
 def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: dict[str, Any],
                    *, plots: bool, animate: bool, figures: FigureWriter | None = None,
                    columns: dict[str, Any] | None = None) -> list[str]:
-    """Write the files of :func:`write_outputs`, ``summary.json`` last."""
-    write_trace_csv(out / "trajectory.csv", result.trace, columns)
-    written = ["trajectory.csv"]
-    if write_resolved_config(out / "config.yaml", exp.path):
-        written.append("config.yaml")  # what rebuilds the scene (dualarm-qp animate)
-    if animate and len(result.trace):
-        from ..viz.animation import ANIMATION_FILE, write_animation
+    """Write the files of :func:`write_outputs`, ``summary.json`` last.
 
-        write_animation(out / ANIMATION_FILE, exp.task, out / "trajectory.csv",
-                        title=f"{exp.name} ({exp.solver_name})")
-        written.append(ANIMATION_FILE)
+    A ``figures`` writer with a ``submit`` method (a
+    :class:`~.figures.process.FigureProcess`) is sent the trace first and draws while
+    the other files are written; it is closed (nothing of it writes any more) if one of
+    them fails.
+    """
+    cols = csv_columns(result.trace, columns)
+    submit = getattr(figures, "submit", None) if plots and len(result.trace) else None
+    if submit is not None:
+        from .figures.rundata import RunData
+
+        submit(out, exp, RunData.from_columns(cols))
+    try:
+        written = _write_run_files(out, exp, result, cols, animate=animate)
+    except BaseException:
+        if submit is not None:
+            figures.close()  # type: ignore[union-attr]  # it has submit: it has close
+        raise
     if plots and len(result.trace):
         from .html_report import REPORT_FILE, write_run_report
 

@@ -7,8 +7,10 @@ first access).
 - :mod:`.canvas`: the Agg canvas, limit lines, shaded out-of-range spans, speed axes;
 - :mod:`.rundata`: a run's ``trajectory.csv`` and the limits it had;
 - :mod:`.lanes`: the joints and joint rates, one axis per arm and one lane per joint;
+- :mod:`.lane_model`: a lane's scale (a joint against its limits) and its label;
 - :mod:`.run_figures`: the PNG figures of one run;
 - :mod:`.process`: a run's figures drawn in other processes while the run goes on;
+- :mod:`.ready`: a run's figures' axes, built by the drawing process before the trace comes;
 - :mod:`.clearance`: a run's clearance against the safety and influence distances;
 - :mod:`.compare`: one quantity of several runs (the reproduction's Figs. 5 and 6);
 - :mod:`.avoidance`: several runs' clearance and grasp travel (``dualarm-qp collisions``).

@@ -14,12 +14,15 @@ edge (the legend says so).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from matplotlib.figure import Figure
 
 from ...collision.settings import CLEARANCE_ALLOWANCE
 from .canvas import (
     LIMIT_COLOUR,
+    TICKS,
     few_ticks,
     fixed_margins,
     limit_lines,
@@ -29,6 +32,7 @@ from .canvas import (
     panel_title,
     shade_spans,
 )
+from .ready import builder, take, ticks_ahead
 from .rundata import PlotLimits, RunData
 
 #: The file name of the figure.
@@ -45,6 +49,16 @@ HEIGHT, TOP = 5.0, 0.35
 
 #: The axis stops this many influence distances up.
 TOP_PER_INFLUENCE = 3.0
+
+
+@builder("clearance")
+def _axes() -> tuple[Figure, Any]:
+    """Return the figure and its axis (built ahead by a drawing process: :mod:`.ready`)."""
+    fig = new_figure(figsize=(8, HEIGHT))
+    ax = fig.subplots()
+    few_ticks(ax)
+    ticks_ahead(ax, count=TICKS + 1)
+    return fig, ax
 
 
 def has_clearance(data: RunData) -> bool:
@@ -69,9 +83,7 @@ def clearance_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figu
     ``clearance:<column>`` for each group drawn; samples below ``d_s - allowance`` are
     shaded (``outside:clearance``).
     """
-    fig = new_figure(figsize=(8, HEIGHT))
-    ax = fig.subplots()
-    few_ticks(ax)
+    fig, ax = take("clearance")
     t = data.t
     per_m, unit = limits.units.per_m, limits.units.length
     d_s, d_i = limits.clearance if limits.clearance is not None else (np.nan, np.nan)

@@ -27,7 +27,6 @@ labels, and those were most of the figures' time).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -36,26 +35,20 @@ from matplotlib.figure import Figure
 
 from .canvas import (
     LIMIT_COLOUR,
-    FloatArray,
+    TICKS,
     few_ticks,
     fixed_margins,
     new_figure,
     outside_mask,
     outside_spans,
     panel_title,
-    tick_text,
 )
+from .lane_model import CLIP, LIMIT, Lane, range_lane, speed_lane
+from .ready import builder, take, ticks_ahead
 from .rundata import PlotLimits, RunData
 
 #: The arms, as their columns' letter, their name and their traces' colour.
 ARMS = (("l", "leader", "C2"), ("f", "follower", "C0"))
-
-#: Where a lane's limits lie: ``LIMIT`` above and below the lane's middle (a lane is
-#: one unit high).
-LIMIT = 0.33
-
-#: Values are clipped this far from the lane's middle (just inside its edge).
-CLIP = 0.48
 
 #: The background of a lane beyond its limits (within them: white).
 OUTSIDE_COLOUR = "0.93"
@@ -70,109 +63,29 @@ LABEL_WIDTH, RIGHT = 1.3, 0.2
 AXIS_WIDTH = {1: 7.6, 2: 5.0, 3: 4.2}
 
 
-@dataclass(frozen=True)
-class Lane:
-    """One joint's lane: what it draws and the values on its two limit lines.
-
-    Attributes
-    ----------
-    name : str
-        The joint's column (``"qf3"``, ``"qf_dot3"``): the artists' gids end with it.
-    label : str
-        The text beside the lane.
-    low, high : float
-        The values (display units) on the lower and the upper limit line.
-    limits : tuple of float
-        The finite limits (display units), drawn as dashed lines.
-    """
-
-    name: str
-    label: str
-    low: float
-    high: float
-    limits: tuple[float, ...]
-
-    def scale(self, values: Any, middle: float) -> FloatArray:
-        """Return ``values`` (display units) as heights in the lane centred at ``middle``."""
-        v = np.asarray(values, dtype=float)
-        y = middle + LIMIT * (2.0 * (v - self.low) / (self.high - self.low) - 1.0)
-        return np.asarray(np.clip(y, middle - CLIP, middle + CLIP))
-
-    def height(self, value: float, middle: float) -> float:
-        """Return the height of one value (display units) in the lane, unclipped."""
-        return float(middle + LIMIT * (2.0 * (value - self.low) / (self.high - self.low) - 1.0))
+def _lane_figure(columns: int) -> tuple[Figure, Any]:
+    """Return a figure of ``columns`` lane axes side by side, not yet sized."""
+    width = AXIS_WIDTH[columns]
+    fig = new_figure(figsize=(columns * (LABEL_WIDTH + width) + RIGHT, 4.0))
+    axes = fig.subplots(1, columns, squeeze=False)[0]
+    for ax in axes:
+        ax.set_facecolor(OUTSIDE_COLOUR)
+        few_ticks(ax)
+        ax.tick_params(labelsize=7)
+        ax.set_yticks([])
+        ax.set_xlabel("t [s]", fontsize=8)
+    ticks_ahead(*axes, count=TICKS + 1, which="x")
+    return fig, axes
 
 
-def _span(values: Sequence[Any], lo: float, hi: float) -> tuple[float, float]:
-    """Return the lane's ``(low, high)``: the finite limits, else the values reached."""
-    data = np.concatenate([np.asarray(v, dtype=float).ravel() for v in values])
-    data = data[np.isfinite(data)]
-    low = lo if np.isfinite(lo) else (float(data.min()) if data.size else -1.0)
-    high = hi if np.isfinite(hi) else (float(data.max()) if data.size else 1.0)
-    if np.isfinite(lo) and not np.isfinite(hi) and high <= low:
-        high = low + max(abs(low), 1.0)
-    if np.isfinite(hi) and not np.isfinite(lo) and low >= high:
-        low = high - max(abs(high), 1.0)
-    if high <= low:  # no limit and one value: a lane around it
-        pad = max(abs(low), 1.0)
-        low, high = low - pad, high + pad
-    return float(low), float(high)
+#: The figures of one lane axis built ahead (:mod:`.ready`): one for the joints, one
+#: for the rates (without acceleration or jerk limits).
+builder("lanes:joints")(lambda: _lane_figure(1))
+builder("lanes:rates")(lambda: _lane_figure(1))
 
 
-def _value(v: float, digits: int = 4) -> str:
-    """Return a value for a lane's label: ``digits`` significant digits, no exponent."""
-    return tick_text(float(f"{v:.{digits}g}"))
-
-
-def _farthest(lane: Lane, values: Sequence[Any]) -> str:
-    """Name the value clipped the farthest (a second line of the label), if any was."""
-    data = np.concatenate([np.asarray(v, dtype=float).ravel() for v in values])
-    data = data[np.isfinite(data)]
-    if not data.size:
-        return ""
-    mid = 0.5 * (lane.low + lane.high)
-    far = float(data[np.argmax(np.abs(data - mid))])
-    return f"\nreaches {_value(far, 3)}" if abs(lane.height(far, 0.0)) > CLIP else ""
-
-
-def range_lane(name: str, joint: str, values: Any, lo: float, hi: float) -> Lane:
-    """Return the lane of a joint against its range ``[lo, hi]`` (display units, or inf).
-
-    Its label: the joint (``q3``) and its range (``-45 .. 225``, ``+-160``, ``>= -45``,
-    ``no range``), then the farthest value reached when one is clipped.
-    """
-    low, high = _span([values], lo, hi)
-    if np.isfinite(lo) and np.isfinite(hi):
-        text = (f"\N{PLUS-MINUS SIGN}{_value(hi)}" if lo == -hi
-                else f"{_value(lo)} .. {_value(hi)}")
-    elif np.isfinite(lo) or np.isfinite(hi):
-        text = f">= {_value(lo)}" if np.isfinite(lo) else f"<= {_value(hi)}"
-    else:
-        text = "no range"
-    lane = Lane(name, "", low, high, tuple(v for v in (lo, hi) if np.isfinite(v)))
-    return Lane(name, f"{joint} {text}{_farthest(lane, [values])}", low, high, lane.limits)
-
-
-def speed_lane(name: str, joint: str, values: Sequence[Any], limit: float) -> Lane:
-    """Return the lane of a rate against ``+-limit`` (display units; infinite: no limit).
-
-    Its label: the joint and ``+-limit``, then the farthest value reached when one is
-    clipped. Without a limit the lane is scaled to the largest ``|value|``, and says so.
-    """
-    if np.isfinite(limit) and limit > 0:
-        lane = Lane(name, "", -limit, limit, (-limit, limit))
-        text = f"\N{PLUS-MINUS SIGN}{_value(limit)}"
-    else:
-        data = np.concatenate([np.abs(np.asarray(v, dtype=float)).ravel() for v in values])
-        peak = float(np.nanmax(data, initial=0.0)) if data.size else 0.0
-        peak = peak if np.isfinite(peak) and peak > 0 else 1.0
-        lane = Lane(name, "", -peak, peak, ())
-        text = f"no limit\nscaled to \N{PLUS-MINUS SIGN}{_value(peak, 3)}"
-    return Lane(name, f"{joint} {text}{_farthest(lane, values)}", lane.low, lane.high,
-                lane.limits)
-
-
-def lane_axes(columns: int, lanes: int, top: float, bottom: float) -> tuple[Figure, Any]:
+def lane_axes(columns: int, lanes: int, top: float, bottom: float,
+              ahead: str | None = None) -> tuple[Figure, Any]:
     """Return a figure with ``columns`` lane axes side by side, each ``lanes`` lanes high.
 
     Parameters
@@ -183,20 +96,17 @@ def lane_axes(columns: int, lanes: int, top: float, bottom: float) -> tuple[Figu
         Lanes per axis (both arms' joints).
     top, bottom : float
         Margins [in] above and below the axes.
+    ahead : str, optional
+        The figure of one axis built ahead (:func:`~.ready.take`) to use, if any.
     """
     width = AXIS_WIDTH[columns]
-    fig = new_figure(figsize=(columns * (LABEL_WIDTH + width) + RIGHT,
-                              lanes * LANE_HEIGHT + top + bottom))
-    axes = fig.subplots(1, columns, squeeze=False)[0]
+    fig, axes = take(ahead) if ahead is not None and columns == 1 else _lane_figure(columns)
+    fig.set_size_inches(columns * (LABEL_WIDTH + width) + RIGHT,
+                        lanes * LANE_HEIGHT + top + bottom)
     fixed_margins(fig, left=LABEL_WIDTH, right=RIGHT, top=top, bottom=bottom,
                   wspace=LABEL_WIDTH / width)
     for ax in axes:
-        ax.set_facecolor(OUTSIDE_COLOUR)
         ax.set_ylim(-0.5, lanes - 0.5)
-        few_ticks(ax)
-        ax.tick_params(labelsize=7)
-        ax.set_yticks([])
-        ax.set_xlabel("t [s]", fontsize=8)
     return fig, axes
 
 
@@ -303,7 +213,7 @@ def joints_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     """
     counts = _counts(data)
     lanes = max(sum(counts), 1)
-    fig, (ax,) = lane_axes(1, lanes, top=0.45, bottom=0.5)
+    fig, (ax,) = lane_axes(1, lanes, top=0.45, bottom=0.5, ahead="lanes:joints")
     t = data.t
     per_rad = limits.units.per_rad
     drawn: list[Lane] = []
@@ -397,7 +307,8 @@ def rates_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
                               ("jerk", limits.jerk_limits_enforced)) if on]
     counts = _counts(data)
     lanes = max(sum(counts), 1)
-    fig, axes = lane_axes(1 + len(blocks), lanes, top=0.7 if blocks else 0.45, bottom=0.8)
+    fig, axes = lane_axes(1 + len(blocks), lanes, top=0.7 if blocks else 0.45, bottom=0.8,
+                          ahead="lanes:rates")
     per_rad, unit = limits.units.per_rad, limits.units.angle
     _rate_lanes(axes[0], data.t, [(data.commanded_rates(arm), data.realised_rates(arm),
                                    limits.arm(arm).qd_max, f"q{arm}_dot{{}}")
@@ -435,4 +346,4 @@ def _legend(fig: Figure, limits: PlotLimits, blocks: Sequence[str]) -> None:
                frameon=False)
 
 
-__all__ = ["Lane", "joints_figure", "range_lane", "rates_figure", "speed_lane"]
+__all__ = ["CLIP", "LIMIT", "Lane", "joints_figure", "range_lane", "rates_figure", "speed_lane"]

@@ -8,12 +8,17 @@ both off the run's path:
    forks a process that imports matplotlib and the figure code while the command
    imports the rest (NumPy, Pinocchio, Coal, the configuration schema: neither the
    parser nor ``import dualarm_qp`` loads them), builds and runs the experiment;
-2. once ``trajectory.csv`` is written, calling the object (in place of
-   :func:`~.run_figures.write_run_figures`) sends it the run's limits and title; it
-   reads the trace and draws the figures, split between itself and one process forked
-   from it (one per core), each file written atomically;
-3. the command waits for them, then writes ``report.html`` and ``summary.json`` as
-   before. The files, their content and their order are the same.
+2. while it waits for its job, it builds the figures' axes (:mod:`.ready`);
+3. once the rollout is done, :meth:`FigureProcess.submit` sends it the run's limits,
+   title and trace (the columns of ``trajectory.csv``, not read back from the file); it
+   draws the figures, split between itself and one process forked from it (one per
+   core), each file written atomically, while the command writes ``trajectory.csv``
+   and ``config.yaml``;
+4. the command then calls the object (in place of
+   :func:`~.run_figures.write_run_figures`), waits for the figures, and writes
+   ``report.html`` and ``summary.json`` as before. The files, their content and their
+   order are the same. Called without :meth:`~FigureProcess.submit`, the object sends
+   the limits and title only, and the process reads ``trajectory.csv``.
 
 Where it is not used:
 
@@ -39,6 +44,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import select
 import signal
 import sys
 import threading
@@ -50,7 +56,7 @@ from ..._signals import STOP_SIGNALS
 
 if TYPE_CHECKING:
     from ..setup import Experiment
-    from .rundata import PlotLimits
+    from .rundata import PlotLimits, RunData
 
 #: What each figure costs to draw, relative to ``joints.png`` (measured), to share them
 #: between the two drawing processes.
@@ -86,15 +92,17 @@ def share(names: list[str]) -> tuple[list[str], list[str]]:
 class FigureProcess:
     """A forked process that draws one run's figures (:meth:`start` makes one).
 
-    Call it as ``figures(out, exp)`` once ``out/trajectory.csv`` is written: it returns
-    the names of the PNG files written, as :func:`~.run_figures.write_run_figures`
-    does. :meth:`close` ends it; use it as a context manager to be sure to.
+    Call it as ``figures(out, exp)`` once ``out/trajectory.csv`` is written (or after
+    :meth:`submit`): it returns the names of the PNG files written, as
+    :func:`~.run_figures.write_run_figures` does. :meth:`close` ends it; use it as a
+    context manager to be sure to.
     """
 
     def __init__(self, pid: int, jobs: BinaryIO, results: BinaryIO) -> None:
         self.pid: int | None = pid
         self._jobs = jobs
         self._results = results
+        self._sent: Path | None = None  # the run folder of the job sent (:meth:`submit`)
 
     @classmethod
     def start(cls) -> FigureProcess | None:
@@ -105,6 +113,7 @@ class FigureProcess:
         if not can_fork():
             return None
         jobs_r, jobs_w = os.pipe()
+        _widen(jobs_w)
         results_r, results_w = os.pipe()
         # No SIGINT or SIGTERM between the fork and the child's ignoring them: it would
         # run the command's handler in the child.
@@ -123,13 +132,33 @@ class FigureProcess:
         finally:
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
-    def __call__(self, out: Path, exp: Experiment) -> list[str]:
-        """Draw the figures of the run in ``out`` made with ``exp``; return their names."""
+    def submit(self, out: Path, exp: Experiment, data: RunData) -> None:
+        """Send the job of the run in ``out`` with its trace ``data``, without waiting.
+
+        The figures are then drawn while the command writes the run's other files (the
+        trace not read back from ``trajectory.csv``); calling the object waits for them.
+        Call :meth:`close` before removing files from ``out`` if the reply is not awaited.
+        """
         from .rundata import PlotLimits, run_title
 
-        limits = PlotLimits.from_experiment(exp)
         try:
-            reply = self._ask((Path(out), limits, run_title(exp)))
+            self._send((Path(out), PlotLimits.from_experiment(exp), run_title(exp), data))
+        except BaseException:
+            self.close()
+            raise
+        self._sent = Path(out)
+
+    def __call__(self, out: Path, exp: Experiment) -> list[str]:
+        """Draw the figures of the run in ``out`` made with ``exp``; return their names.
+
+        The job :meth:`submit` sent for ``out``, if it did: its reply.
+        """
+        from .rundata import PlotLimits, run_title
+
+        try:
+            if self._sent != Path(out):
+                self._send((Path(out), PlotLimits.from_experiment(exp), run_title(exp), None))
+            reply = self._reply()
         except BaseException:
             self.close()  # nothing of it may write after this
             raise
@@ -145,13 +174,21 @@ class FigureProcess:
             raise err from RuntimeError("in the figure process:\n" + text)
         return list(value)
 
-    def _ask(self, job: tuple[Path, PlotLimits, str]) -> tuple[str, Any] | None:
-        """Send the job and wait for the reply (None when the process is gone)."""
+    def _send(self, job: tuple[Path, PlotLimits, str, RunData | None]) -> None:
+        """Send the job (nothing when the process is gone: :meth:`_reply` says so)."""
         if self.pid is None:
-            return None
+            return
         try:
             pickle.dump(job, self._jobs)
             self._jobs.flush()
+        except OSError:
+            pass
+
+    def _reply(self) -> tuple[str, Any] | None:
+        """Wait for the reply to the job sent (None when the process is gone)."""
+        if self.pid is None:
+            return None
+        try:
             reply: tuple[str, Any] = pickle.load(self._results)
         except (OSError, EOFError, pickle.UnpicklingError):
             return None
@@ -183,6 +220,21 @@ class FigureProcess:
         self.close()
 
 
+#: The size [bytes] asked for the job's pipe: a trace of a few thousand samples (about
+#: 0.5 kB each) is sent without waiting for the drawing process to read it.
+PIPE_SIZE = 1 << 20
+
+
+def _widen(fd: int) -> None:
+    """Ask Linux to give the pipe ``fd`` :data:`PIPE_SIZE` bytes (left as it is if refused)."""
+    import fcntl
+
+    try:
+        fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), PIPE_SIZE)
+    except OSError:  # over the system's limit for this user: a smaller pipe works too
+        pass
+
+
 def _child(jobs: int, results: int, parents: tuple[int, int], mask: Any) -> None:
     """Run the drawing process (in the forked child); end it without returning."""
     status = 1
@@ -204,17 +256,20 @@ def _child(jobs: int, results: int, parents: tuple[int, int], mask: Any) -> None
 
 def _serve(jobs: int, results: int) -> None:
     """Import the figure code, take one job, draw it, reply."""
+    from .ready import prepare
     from .run_figures import run_figure_names, write_figures  # matplotlib: the slow part
     from .rundata import RunData
 
+    prepare(stop=lambda: bool(select.select([jobs], [], [], 0)[0]))  # until the job comes
     with os.fdopen(jobs, "rb") as pipe:
         try:
-            out, limits, title = pickle.load(pipe)
+            out, limits, title, data = pickle.load(pipe)
         except EOFError:  # the command ended, or has no figures to draw
             return
     reply: tuple[str, Any]
     try:
-        data = RunData.read(out / "trajectory.csv")
+        if data is None:  # not sent: the trace is in the run folder
+            data = RunData.read(out / "trajectory.csv")
         names = run_figure_names(data, limits)
         mine, theirs = share(names)
         if not mine:  # one share: no second process

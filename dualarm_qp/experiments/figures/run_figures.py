@@ -31,12 +31,13 @@ limits alone (no experiment): what a drawing process (:mod:`.process`) is sent.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from .canvas import (
+    TICKS,
     few_ticks,
     finite_max_abs,
     fixed_margins,
@@ -56,6 +57,7 @@ from .canvas import (
 )
 from .clearance import CLEARANCE_FIGURE, clearance_figure, has_clearance
 from .lanes import joints_figure, rates_figure
+from .ready import builder, take, ticks_ahead
 from .rundata import PlotLimits, RunData, realised_rate, run_title
 
 if TYPE_CHECKING:
@@ -70,6 +72,22 @@ RUN_FIGURES = ("joints.png", "rates.png", "grasp.png", "tracking.png", "closure.
 LOG_DECADES = 6
 
 
+def _column(height: float, rows: int) -> tuple[Figure, Any]:
+    """Return a figure ``height`` [in] high of ``rows`` axes sharing their time axis."""
+    fig = new_figure(figsize=(8, height))
+    axes = list(fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0])
+    for ax in axes:
+        few_ticks(ax)
+    shared_time(axes)
+    ticks_ahead(*axes, count=TICKS + 1)
+    return fig, (tuple(axes) if rows > 1 else axes[0])
+
+
+builder("grasp")(lambda: _column(6.0, 2))
+builder("tracking")(lambda: _column(7.5, 3))
+builder("closure")(lambda: _column(3.8, 1))
+
+
 def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     """Grasp coordinate against its range, sliding speed against its limit.
 
@@ -80,11 +98,7 @@ def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     ``grasp_leader`` column (a leader whose grasp also slides) is drawn beside the
     follower's, with ``m_leader`` and the leader's grasp range when known.
     """
-    fig = new_figure(figsize=(8, 6))
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    for ax in (ax1, ax2):
-        few_ticks(ax)
-    shared_time((ax1, ax2))
+    fig, (ax1, ax2) = take("grasp")
     t = data.t
     per_m, unit = limits.units.per_m, limits.units.length
     lo, hi = limits.grasp_range
@@ -138,11 +152,7 @@ def grasp_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
 
 def tracking_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure:
     """Leader tracking error, smallest singular values and task scale against time."""
-    fig = new_figure(figsize=(8, 7.5))
-    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
-    for ax in (ax1, ax2, ax3):
-        few_ticks(ax)
-    shared_time((ax1, ax2, ax3))
+    fig, (ax1, ax2, ax3) = take("tracking")
     t = data.t
     errors = (data.col("leader_pos_err"), data.col("leader_rot_err"))
     log_y(ax1)
@@ -199,9 +209,7 @@ def closure_figure(data: RunData, limits: PlotLimits, title: str = "") -> Figure
     Where a position-level correction ran (the paper's methods), the error of the
     integrated state before it is drawn too.
     """
-    fig = new_figure(figsize=(8, 3.8))
-    ax = fig.subplots()
-    few_ticks(ax)
+    fig, ax = take("closure")
     t = data.t
     marker = "o" if len(data) < 20 else None
     corrected = np.nanmax(data.col("correction_f"), initial=0.0) > 0.0

@@ -71,6 +71,28 @@ class RunData:
                 cols[name] = np.array([float(c) if c else np.nan for c in cells], dtype=float)
         return cls(cols)
 
+    @classmethod
+    def from_columns(cls, columns: dict[str, Any]) -> RunData:
+        """Return what :meth:`read` reads from the file these ``columns`` are written to.
+
+        ``columns``: those of :func:`~..outputs.csv_columns`. The file holds each number's
+        ``repr``, which gives it back exactly: the same values, without writing the file
+        and reading it again.
+        """
+        cols: dict[str, NDArray[Any]] = {}
+        for name, values in columns.items():
+            if name in TEXT_COLUMNS:
+                cols[name] = np.array([str(v) for v in values], dtype=str)
+                continue
+            array = np.asarray(values)
+            if array.dtype.kind not in "biuf":  # text among the numbers: read as the file is
+                array = np.array([float(v) if not isinstance(v, str) else
+                                  float(v) if v else np.nan for v in values])
+            cols[name] = array.astype(float)
+        if "t" not in cols:
+            raise InvalidInputError("a run's columns without a 't' column")
+        return cls(cols)
+
     def __len__(self) -> int:
         return int(self.columns["t"].shape[0])
 
