@@ -48,30 +48,30 @@ void householder_qr(Mat& M, Vec& tau) {
   }
 }
 
-void apply_q(const Mat& QR, const Vec& tau, Mat& X) {
+namespace {
+
+// X <- H_k X, with H_k = I - tau_k v v^T and v = (0, ..., 0, 1, QR(k+1:, k)).
+void reflect(const Mat& QR, const Vec& tau, Index k, Mat& X) {
   const Index rows = QR.rows();
-  for (Index k = tau.size() - 1; k >= 0; --k) {  // Q X = H_0 (H_1 (... (H_last X)))
-    for (Index j = 0; j < X.cols(); ++j) {
-      double w = X(k, j);
-      for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
-      w *= tau(k);
-      X(k, j) -= w;
-      for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
-    }
+  for (Index j = 0; j < X.cols(); ++j) {
+    double w = X(k, j);
+    for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
+    w *= tau(k);
+    X(k, j) -= w;
+    for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
   }
 }
 
+}  // namespace
+
+void apply_q(const Mat& QR, const Vec& tau, Mat& X) {
+  // Q X = H_0 (H_1 (... (H_last X)))
+  for (Index k = tau.size() - 1; k >= 0; --k) reflect(QR, tau, k, X);
+}
+
 void apply_qt(const Mat& QR, const Vec& tau, Mat& X) {
-  const Index rows = QR.rows();
-  for (Index k = 0; k < tau.size(); ++k) {  // Q^T X = H_last (... (H_1 (H_0 X)))
-    for (Index j = 0; j < X.cols(); ++j) {
-      double w = X(k, j);
-      for (Index i = k + 1; i < rows; ++i) w += QR(i, k) * X(i, j);
-      w *= tau(k);
-      X(k, j) -= w;
-      for (Index i = k + 1; i < rows; ++i) X(i, j) -= w * QR(i, k);
-    }
-  }
+  // Q^T X = H_last (... (H_1 (H_0 X)))
+  for (Index k = 0; k < tau.size(); ++k) reflect(QR, tau, k, X);
 }
 
 Factor factor(const Mat& A) {
