@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from .._io import write_text
 from .._signals import SignalHold, raise_if_interrupted
@@ -28,6 +28,9 @@ from .limits_kept import limits_kept
 from .outputs import csv_columns, remove_owned, write_json, write_trace_csv
 from .setup import Experiment
 
+if TYPE_CHECKING:
+    from .figures.rundata import RunData
+
 #: The files a run owns in its output folder (``summary.json`` lists the others written).
 OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "grasp.png",
                 "tracking.png", "closure.png", "clearance.png", "report.html", "config.yaml",
@@ -35,6 +38,29 @@ OUTPUT_FILES = ("summary.json", "trajectory.csv", "joints.png", "rates.png", "gr
 
 #: What writes a run's PNG figures: ``figures(out, exp)`` returns the file names.
 FigureWriter = Callable[[Path, Experiment], list[str]]
+
+
+@runtime_checkable
+class FiguresAhead(Protocol):
+    """A figure writer that takes the run's trace before the run's files are written.
+
+    What :class:`~.figures.process.FigureProcess` is: :meth:`submit` sends the job and
+    returns at once, calling the writer waits for its figures, :meth:`close` ends it
+    (nothing of it writes any more).
+    """
+
+    def __call__(self, out: Path, exp: Experiment) -> list[str]:
+        """Wait for the figures of the run in ``out``; return their file names."""
+        ...
+
+    def submit(self, out: Path, exp: Experiment, data: RunData) -> None:
+        """Send the run's job with its trace ``data``, without waiting."""
+        ...
+
+    def close(self) -> None:
+        """End the writer: nothing of it writes any more."""
+        ...
+
 
 #: What ``summary.json``'s ``status`` says.
 STATUSES = ("completed", "failed", "interrupted")
@@ -362,22 +388,22 @@ def _write_outputs(out: Path, exp: Experiment, result: RolloutResult, summary: d
                    columns: dict[str, Any] | None = None) -> list[str]:
     """Write the files of :func:`write_outputs`, ``summary.json`` last.
 
-    A ``figures`` writer with a ``submit`` method (a
-    :class:`~.figures.process.FigureProcess`) is sent the trace first and draws while
-    the other files are written; it is closed (nothing of it writes any more) if one of
-    them fails.
+    A ``figures`` writer that takes the trace ahead (:class:`FiguresAhead`) is sent it
+    first and draws while the other files are written; it is closed if one of them
+    fails.
     """
     cols = csv_columns(result.trace, columns)
-    submit = getattr(figures, "submit", None) if plots and len(result.trace) else None
-    if submit is not None:
+    ahead = (figures if plots and len(result.trace) and isinstance(figures, FiguresAhead)
+             else None)
+    if ahead is not None:
         from .figures.rundata import RunData
 
-        submit(out, exp, RunData.from_columns(cols))
+        ahead.submit(out, exp, RunData.from_columns(cols))
     try:
         written = _write_run_files(out, exp, result, cols, animate=animate)
     except BaseException:
-        if submit is not None:
-            figures.close()  # type: ignore[union-attr]  # it has submit: it has close
+        if ahead is not None:
+            ahead.close()
         raise
     if plots and len(result.trace):
         from .html_report import REPORT_FILE, write_run_report

@@ -52,7 +52,8 @@ def prepare(stop: Callable[[], bool] = lambda: False) -> None:
     for name, build in BUILDERS.items():
         if stop():
             return
-        _READY.setdefault(name, build())
+        if name not in _READY:
+            _READY[name] = build()
 
 
 def ticks_ahead(*axes: Any, count: int, which: str = "xy") -> None:

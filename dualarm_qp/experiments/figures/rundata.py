@@ -85,9 +85,9 @@ class RunData:
                 cols[name] = np.array([str(v) for v in values], dtype=str)
                 continue
             array = np.asarray(values)
-            if array.dtype.kind not in "biuf":  # text among the numbers: read as the file is
-                array = np.array([float(v) if not isinstance(v, str) else
-                                  float(v) if v else np.nan for v in values])
+            if array.dtype.kind not in "biuf":  # an empty cell among the numbers: NaN, as read
+                array = np.array([np.nan if v is None or v == "" else float(v)
+                                  for v in values])
             cols[name] = array.astype(float)
         if "t" not in cols:
             raise InvalidInputError("a run's columns without a 't' column")
