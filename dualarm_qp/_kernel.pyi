@@ -132,8 +132,9 @@ def kkt_holds(A: ArrayLike, b: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
 def certificate(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                 G: ArrayLike, h: ArrayLike, P: ArrayLike, N: ArrayLike, rank: int,
                 sigma_max: float, C: ArrayLike, e: ArrayLike, kind: ArrayLike,
-                w_diag: ArrayLike, w_full: ArrayLike, root_full: ArrayLike,
-                center: ArrayLike, x: ArrayLike, bounds: bool, eq_rtol: float,
+                index: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
+                root_full: ArrayLike, center: ArrayLike, x: ArrayLike, bounds: bool,
+                eq_rtol: float,
                 bounds_tol: float, ask_kkt: bool) -> Certificate: ...
 def solve_certified(A: ArrayLike, b: ArrayLike, lower: ArrayLike, upper: ArrayLike,
                     G: ArrayLike, h: ArrayLike, w_diag: ArrayLike, w_full: ArrayLike,
@@ -150,10 +151,16 @@ def step_kinematics(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int
 def step_errors(carry: Chain, q_carry: ArrayLike, carry_frames: Sequence[int],
                 follower: Chain, q_f: ArrayLike, follower_tool: int, T_D: ArrayLike,
                 e: _F) -> None: ...
+class PredictedErrors:
+    finite: bool
+    tracking_position: float
+    tracking_rotation: float
+    closure_position: float
+    closure_rotation: float
 def predicted_errors(carry: Chain, carry_frames: Sequence[int], follower: Chain,
                      follower_tool: int, q_l: ArrayLike, q_f: ArrayLike, sigma_f: float,
                      sigma_l: float, x: ArrayLike, col_rate: ArrayLike, dt: float,
-                     T_D: ArrayLike, e: _F) -> bool: ...
+                     T_D: ArrayLike) -> PredictedErrors: ...
 def pose_error(T_star: ArrayLike, T: ArrayLike, e: _F) -> None: ...
 def negligible(x: ArrayLike, n_l: int, n_f: int, dt: float, T_tool: ArrayLike,
                T_target: ArrayLike, length_l: float, length_f: float, budget_pos: float,

@@ -19,7 +19,6 @@ kinematics.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +40,7 @@ FloatArray = NDArray[np.float64]
 SKIP_SHARE = 0.1
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Predicted:
     """Errors expected one sample after a command.
 
@@ -148,15 +147,14 @@ class Lookahead:
             A NaN or an infinity in ``x`` or in the grasp coordinates it reaches.
         """
         carry, follower = self._carry, self.task.follower
-        e = np.empty(12)
-        if not kernel.predicted_errors(
-                carry.chain, carry.frames, follower.chain, follower.tool_frame_id,
-                state.q_l, state.q_f, state.sigma, state.sigma_leader, x, carry.columns[1],
-                dt, self.task.trajectory.pose(state.t + scale * dt), e):
+        e = kernel.predicted_errors(
+            carry.chain, carry.frames, follower.chain, follower.tool_frame_id, state.q_l,
+            state.q_f, state.sigma, state.sigma_leader, x, carry.columns[1], dt,
+            self.task.trajectory.pose(state.t + scale * dt))
+        if not e.finite:
             raise NonFiniteError("the command x or the grasp coordinates")
-        p = e.tolist()
-        return Predicted((math.hypot(*p[0:3]), math.hypot(*p[3:6])),
-                         (math.hypot(*p[6:9]), math.hypot(*p[9:12])))
+        return Predicted((e.tracking_position, e.tracking_rotation),
+                         (e.closure_position, e.closure_rotation))
 
 
 __all__ = ["Lookahead", "Predicted", "chain_length"]

@@ -13,7 +13,7 @@ from ..step.build import StepBuild
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class StepTimes:
     """Wall-clock split of one controller step [s].
 
@@ -32,7 +32,7 @@ class StepTimes:
         return self.kinematics + self.assembly + self.solve + self.verify
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class ControlOutput:
     """What one controller step commands.
 

@@ -89,7 +89,7 @@ class Tolerance:
 DEFAULT_TOLERANCE = Tolerance()
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class StepSolution:
     """Result of solving one :class:`~dualarm_qp.step.StepProblem`.
 

@@ -110,7 +110,6 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
     start = time.perf_counter()
     x = claim.x
     reading = None
-    rows = None
     if isinstance(x, np.ndarray) and x.shape == (problem.n,) and x.dtype.kind in "fiu":
         x = np.asarray(x, dtype=np.float64)
         rows = kernel.inequalities(problem.lower, problem.upper, problem.G, problem.h)
@@ -119,14 +118,13 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         reading = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
             *(problem_basis(problem).args() if ask else _NO_BASIS), rows.C, rows.e,
-            rows.kind, w_diag, w_full, root_full,
+            rows.kind, rows.index, w_diag, w_full, root_full,
             problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
-    return verdict(problem, claim, x, reading, tol, claims_bounds, start, rows)
+    return verdict(problem, claim, x, reading, tol, claims_bounds, start)
 
 
 def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: Reading | None,
-            tol: Tolerance, claims_bounds: bool, start: float,
-            rows: kernel.Rows | None = None) -> StepSolution:
+            tol: Tolerance, claims_bounds: bool, start: float) -> StepSolution:
     """Return what ``claim`` is worth from the kernel's reading of its ``x`` (the rules above).
 
     :func:`certify`'s decisions, for it and for the one kernel call that solves and
@@ -142,11 +140,9 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
         The kernel's certificate of ``x``; None for a misshaped ``x``.
     start : float
         ``time.perf_counter()`` when the certification began.
-    rows : kernel.Rows or None
-        The rows ``reading`` was made with (:func:`named_rows`), to name the active ones.
     """
     fields = verdict_fields(problem, claim.status, claim.message, x, reading, tol,
-                            claims_bounds, rows)
+                            claims_bounds)
     if fields is None:
         n = problem.n
         zeros = np.zeros(n, dtype=bool)
@@ -164,8 +160,8 @@ def verdict(problem: StepProblem, claim: StepSolution, x: FloatArray, reading: R
 
 
 def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatArray,
-                   reading: Reading | None, tol: Tolerance, claims_bounds: bool,
-                   rows: kernel.Rows | None = None) -> dict[str, Any] | None:
+                   reading: Reading | None, tol: Tolerance, claims_bounds: bool
+                   ) -> dict[str, Any] | None:
     """Return the certified fields of a claim (``status``, ``message``, its ``x``), or None.
 
     The decisions of :func:`verdict`, on the claim's parts: for a solver that makes its
@@ -200,21 +196,15 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
                 bound_violation=box, active_lower=reading.active_lower.view(np.bool_),
                 active_upper=reading.active_upper.view(np.bool_),
                 build_time=problem.build_time, message=message, verified_with=tol,
-                row_violation=row, active_rows=_row_names(problem, rows, active))
+                row_violation=row, active_rows=_row_names(problem, active))
 
 
-def _row_names(problem: StepProblem, rows: kernel.Rows | None, active: list[int]
-               ) -> tuple[str, ...]:
-    """Names of the general rows ``active`` (indices into the rows ``C x <= e``), each once.
-
-    The certificate reports only general rows as active, so each is named by its row of
-    ``G`` (what :meth:`~dualarm_qp.step.problem.Inequalities.label` gives for such a
-    row), without naming the boxes.
-    """
+def _row_names(problem: StepProblem, active: list[int]) -> tuple[str, ...]:
+    """Names of the general rows ``active`` (rows of ``G``, the certificate's), each once."""
     if not active:
         return ()
-    index = (problem.inequalities() if rows is None else rows).index
-    return tuple(dict.fromkeys(problem.row_names[j] for j in index[active].tolist()))
+    names = problem.row_names
+    return tuple(dict.fromkeys(names[j] for j in active))
 
 
 def named_rows(problem: StepProblem, rows: kernel.Rows | None) -> Inequalities:

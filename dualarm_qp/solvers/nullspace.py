@@ -104,19 +104,19 @@ class NullspaceSolver:
             return certify(problem, empty_box_answer(problem, self.name,
                                                      time.perf_counter() - start),
                            tol, claims_bounds=claims_bounds)
-        rows, reading = step.rows, step.certificate  # the rows named only when read
+        reading = step.certificate
         if code == _OPTIMAL:  # an optimum: certified in one piece, without a claim first
             fields = verdict_fields(problem, Status.OPTIMAL, "", step.x, reading, tol,
-                                    claims_bounds, rows)
+                                    claims_bounds)
             if fields is not None:
                 return StepSolution(**fields, scale=1.0,
                                     solve_time=time.perf_counter() - start,
                                     solver=self.name, extras=_extras(step))
-        claim = self._claim(problem, step, start, rows)
+        claim = self._claim(problem, step, start, step.rows)  # the rows named only if read
         if reading is None:  # not an optimum: the claim is certified as it is
             return certify(problem, claim, tol, claims_bounds=claims_bounds)
         return verdict(problem, claim, claim.x, reading, tol, claims_bounds,
-                       time.perf_counter(), rows)
+                       time.perf_counter())
 
     def _max_iter(self) -> int:
         return -1 if self.max_iter is None else self.max_iter

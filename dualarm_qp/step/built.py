@@ -22,7 +22,7 @@ from .problem import StepProblem
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class StepBuild:
     """A built step: the problem and every quantity computed on the way.
 

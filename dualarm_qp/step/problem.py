@@ -209,11 +209,13 @@ class StepProblem:
             object.__setattr__(self, "x_prev", xp)
         if not 0 <= self.n_grasp <= n:
             raise InvalidInputError(f"n_grasp must be in [0, {n}], got {self.n_grasp}")
-        self._name("names", n, "x")
-        self._name("row_names", p, "row")
-        self._name("eq_names", m, "eq")
-        self._name("lower_by", n, "")
-        self._name("upper_by", n, "")
+        if (len(self.names) != n or len(self.row_names) != p or len(self.eq_names) != m
+                or len(self.lower_by) != n or len(self.upper_by) != n):  # some not given
+            self._name("names", n, "x")
+            self._name("row_names", p, "row")
+            self._name("eq_names", m, "eq")
+            self._name("lower_by", n, "")
+            self._name("upper_by", n, "")
 
     def _name(self, field_name: str, count: int, prefix: str) -> None:
         """Check a tuple of ``count`` names, or give the default (``prefix1..``, or "")."""

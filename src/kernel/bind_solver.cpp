@@ -92,7 +92,8 @@ void bind_certificate(nb::module_& m) {
   array_property(cert, "active_lower", &C::active_lower, "(n) uint8: lower - x >= -ACTIVE_TOL.");
   array_property(cert, "active_upper", &C::active_upper, "(n) uint8: x - upper >= -ACTIVE_TOL.");
   cert.def_ro("active_rows", &C::active_rows,
-              "The rows of C of kind 0 (general) within ACTIVE_TOL of binding.");
+              "The general rows within ACTIVE_TOL of binding, as rows of G (from the rows' "
+              "index).");
 
   using A = dqk::StepAnswer;
   auto answer = nb::class_<A>(m, "StepAnswer", "The exact step (solve_nullspace's answer).");
@@ -305,21 +306,23 @@ void bind_solver(nb::module_& m) {
       [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
          const Vec& h, In P, In N, Index rank, double sigma_max,
          In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
-         const Vec& w_diag, In w_full, In root_full, const Vec& center,
+         const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index, const Vec& w_diag, In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
         const Index n = A.cols();
         require(b.size() == A.rows() && lower.size() == n && upper.size() == n &&
                     G.cols() == n && h.size() == G.rows() && C.cols() == n &&
                     e.size() == C.rows() && kind.size() == C.rows() &&
+                    index.size() == C.rows() &&
                     center.size() == n && x.size() == n,
                 "certificate: arguments of inconsistent sizes");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
         return dqk::certificate(A, b, lower, upper, G, h,
                                 ask_kkt ? basis_from(A, P, N, rank, sigma_max) : dqk::Basis{},
-                                C, e, kind, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
+                                C, e, kind, index, cost, x, bounds, eq_rtol, bounds_tol,
+                                ask_kkt);
       },
       "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "P"_a, "N"_a, "rank"_a,
-      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
+      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "index"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
       "center"_a, "x"_a, "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
       "Everything certify reads of x (a Certificate); its kkt is -1 when not asked or x "
       "breaks a limit.");

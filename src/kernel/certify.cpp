@@ -115,6 +115,7 @@ bool kkt_holds(const Mat& A, const Vec& b, const Basis& fa, const Mat& C, const 
 Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
                         const Mat& G, const Vec& h, const Basis& fa, const Mat& C,
                         const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
+                        const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index,
                         const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
                         double bounds_tol, bool ask_kkt) {
   Certificate out;
@@ -135,7 +136,8 @@ Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec&
   }
   if (G.rows()) {
     for (Index i = 0; i < C.rows(); ++i) {
-      if (kind(i) == 0 && C.row(i).dot(x) - e(i) >= -ACTIVE_TOL) out.active_rows.push_back(i);
+      if (kind(i) == 0 && C.row(i).dot(x) - e(i) >= -ACTIVE_TOL)
+        out.active_rows.push_back(static_cast<Index>(index(i)));  // its row of G
     }
   }
   const Vec d = x - cost.center;

@@ -32,7 +32,7 @@ struct Certificate {
   double objective = 0.0;  // (x - c)^T W (x - c)
   Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_lower;  // lower - x >= -ACTIVE_TOL
   Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_upper;  // x - upper >= -ACTIVE_TOL
-  std::vector<Index> active_rows;  // rows of C of kind 0 (general) within ACTIVE_TOL
+  std::vector<Index> active_rows;  // rows of G (their rows of C, of kind 0) within ACTIVE_TOL
 };
 
 // The residuals, the equality's limit, the active bounds and rows and the objective of
@@ -41,6 +41,7 @@ struct Certificate {
 Certificate certificate(const Mat& A, const Vec& b, const Vec& lower, const Vec& upper,
                         const Mat& G, const Vec& h, const Basis& fa, const Mat& C,
                         const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
+                        const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index,
                         const Cost& cost, const Vec& x, bool bounds, double eq_rtol,
                         double bounds_tol, bool ask_kkt);
 

@@ -243,11 +243,25 @@ NB_MODULE(_kernel, m) {
         "follower"_a, "q_f"_a, "follower_tool"_a, "T_D"_a, "e"_a.noconvert(),
         "step_kinematics's two pose errors into e (12), from the poses alone.");
 
+  nb::class_<dqk::PredictedErrors>(m, "PredictedErrors",
+                                   "The look-ahead's errors one sample ahead (predicted_errors).")
+      .def_ro("finite", &dqk::PredictedErrors::finite,
+              "The command and the grasp coordinates it reaches were finite (else the "
+              "errors are zero).")
+      .def_ro("tracking_position", &dqk::PredictedErrors::tracking_position,
+              "The object's position error to D(t) [m].")
+      .def_ro("tracking_rotation", &dqk::PredictedErrors::tracking_rotation,
+              "The object's rotation error to D(t) [rad].")
+      .def_ro("closure_position", &dqk::PredictedErrors::closure_position,
+              "The grasp closure's position error [m].")
+      .def_ro("closure_rotation", &dqk::PredictedErrors::closure_rotation,
+              "The grasp closure's rotation error [rad].");
   m.def("predicted_errors", &dqk::predicted_errors, "carry"_a, "carry_frames"_a,
         "follower"_a, "follower_tool"_a, "q_l"_a, "q_f"_a, "sigma_f"_a, "sigma_l"_a, "x"_a,
-        "col_rate"_a, "dt"_a, "T_D"_a, "e"_a.noconvert(),
-        "The look-ahead's step_errors one sample after the command x into e (12); False "
-        "(e unwritten) when x or a moved grasp coordinate is not finite.");
+        "col_rate"_a, "dt"_a, "T_D"_a,
+        "The look-ahead's errors one sample after the command x (a PredictedErrors: the "
+        "norms of step_errors' position and rotation parts there); not finite when x or a "
+        "moved grasp coordinate is not.");
 
   m.def(
       "ik_dls",

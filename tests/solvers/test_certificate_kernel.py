@@ -63,7 +63,7 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
     for x in points:
         c = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *f.args(), ineq.C, ineq.e, ineq.kind, w_diag, w_full, root_full,
+            *f.args(), ineq.C, ineq.e, ineq.kind, ineq.index, w_diag, w_full, root_full,
             problem.center, x, bounds, 1e-7, 1e-7, True)
         assert c.finite
         eq, box, rows, limit = c.eq, c.box, c.row, c.eq_limit
@@ -83,7 +83,9 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
         np.testing.assert_array_equal(c.active_upper.view(bool),
                                       x - problem.upper >= -ACTIVE_TOL)
         on = (ineq.kind == 0) & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
-        assert c.active_rows == np.flatnonzero(on).tolist()
+        # Named by their rows of G: the rows of C of kind 0 map to G through the index.
+        assert c.active_rows == ineq.index[on].tolist()
+        assert all(gaps[j] >= -ACTIVE_TOL for j in c.active_rows)
         meets = eq <= limit and max(box, rows) <= 1e-7
         assert c.kkt == (int(kkt_holds(problem, x, bounds=bounds)) if meets else -1)
 
@@ -93,7 +95,8 @@ def test_the_kkt_test_is_not_run_unless_asked():
     ineq = problem.inequalities()
     out = kernel.certificate(
         problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-        *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, *cost_arrays(problem),
+        *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, ineq.index,
+        *cost_arrays(problem),
         problem.center, points[0], True, 1e-7, 1e-7, False)
     assert out.kkt == -1
 
@@ -225,7 +228,7 @@ def test_the_kernel_refuses_arguments_of_inconsistent_sizes():
     with pytest.raises(ValueError, match="inconsistent sizes"):
         kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind,
+            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, ineq.index,
             *cost_arrays(problem), problem.center, np.zeros(problem.n + 1), True, 1e-7,
             1e-7, True)
     P, N, rank, sigma_max = problem_basis(problem).args()
