@@ -229,6 +229,9 @@ class CoalPairs:
     def n_pairs(self) -> int: ...
     def measure(self, pair: int, frame_a: ArrayLike, frame_b: ArrayLike
                 ) -> CapsuleProximity: ...
+    def lower_bound(self, pair: int, frame_a: ArrayLike, frame_b: ArrayLike,
+                    a0: ArrayLike, a1: ArrayLike, ra: float, b0: ArrayLike, b1: ArrayLike,
+                    rb: float) -> float: ...
 def scene_proximities(frames: ArrayLike, body_frame: Sequence[int], a_local: ArrayLike,
                       b_local: ArrayLike, r: ArrayLike, sphere: ArrayLike,
                       ia: Sequence[int], ib: Sequence[int], within: float,

@@ -29,8 +29,10 @@ come from :mod:`dualarm_qp.geometry.distance`: the closed form for capsule pairs
 compiled call places the bodies, skips the far pairs and measures the others), and coal
 for pairs with a box, measured in the same call (``src/kernel/coal_pairs.cpp``, with
 coal's own C++ library). :meth:`measure` can skip
-the pairs whose bounding spheres are already farther apart than a given distance (the
-rows only need the pairs within the influence distance).
+the pairs certainly farther apart than a given distance (the rows only need the pairs
+within the influence distance): by their bounding spheres, then by their capsules, and
+a pair with a box by the gaps between the box and the other body's capsule along the
+box's axes, before coal is called.
 """
 
 from __future__ import annotations
@@ -153,7 +155,9 @@ class CollisionScene(KernelHolder):
         self._frame_list = [start[b.owner] + max(b.link, 0) for b in self.bodies]
         # Every body as a capsule in its frame: its own, or one containing its box (the
         # box's longest axis, radius the half-diagonal of the other two): for a box the
-        # closed form then gives a lower bound, and coal the distance.
+        # closed form then gives a lower bound, the box's slabs against the other's
+        # capsule a tighter one (a flat box's capsule is far too fat), and coal the
+        # distance.
         bounds = [bounding_capsule(b.shape) for b in self.bodies]
         self._a = np.array([c[0] for c in bounds]).reshape(-1, 3)
         self._b = np.array([c[1] for c in bounds]).reshape(-1, 3)
@@ -212,9 +216,11 @@ class CollisionScene(KernelHolder):
         frames : ndarray, shape (n_l + n_f + 4, 4, 4)
             The stack of :meth:`frames` [m].
         within : float
-            Measure only the pairs that may be closer than this [m] (the others are
-            certainly farther apart: their bounding spheres, then their bounding
-            capsules, are); ``inf``: every pair.
+            Measure only the pairs that may be closer than this [m]: every pair closer
+            is listed; the others may be, or are left out when certainly farther apart
+            (their bounding spheres are, then their capsules; for a pair with a box,
+            the gaps between the other body's capsule axis and the box along the box's
+            three axes, less that capsule's radius); ``inf``: every pair.
 
         Returns
         -------

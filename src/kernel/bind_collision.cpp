@@ -155,7 +155,22 @@ void bind_collision(nb::module_& m) {
           },
           "pair"_a, "frame_a"_a, "frame_b"_a,
           "Coal's proximity of pair k, its bodies in the frames (4, 4) frame_a and "
-          "frame_b (a CapsuleProximity).");
+          "frame_b (a CapsuleProximity).")
+      .def(
+          "lower_bound",
+          [](const dqk::CoalPairs& self, size_t pair, const CArray& frame_a,
+             const CArray& frame_b, const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
+             double ra, const Eigen::Vector3d& b0, const Eigen::Vector3d& b1, double rb) {
+            const Eigen::Matrix4d T_a = c_matrix(frame_a, 4, "frame_a");
+            const Eigen::Matrix4d T_b = c_matrix(frame_b, 4, "frame_b");
+            return self.lower_bound(pair, T_a, T_b, {a0, a1, ra}, {b0, b1, rb});
+          },
+          "pair"_a, "frame_a"_a, "frame_b"_a, "a0"_a, "a1"_a, "ra"_a, "b0"_a, "b1"_a, "rb"_a,
+          "A certain lower bound [m] of pair k's signed distance (what scene_proximities "
+          "checks before coal), its bodies in the frames as for measure and contained in "
+          "the world capsules (a0, a1, ra) and (b0, b1, rb): for each body that is a box, "
+          "the gaps between the other's axis and the box along the box's axes, less the "
+          "other's radius, where that is positive; -inf where nothing is certain.");
 
   m.def(
       "scene_proximities",

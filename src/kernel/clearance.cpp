@@ -67,23 +67,24 @@ Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
   }
   out.finite = std::isfinite(out.distance.sum());
   if (exact == nullptr || !out.finite) return out;
-  // The pairs with a box: coal where the bound is below within, else dropped.
+  // The pairs with a box: coal where both bounds are below within (every one when
+  // within = inf), else dropped.
   Eigen::Index kept = 0;
   for (Eigen::Index j = 0; j < m; ++j) {
     const size_t k = static_cast<size_t>(out.pairs[static_cast<size_t>(j)]);
     if (exact->boxed(k)) {
-      if (!(out.distance[j] < within)) {
-        if (!all) continue;
-      } else {
-        const int fa = body_frame[size_t(ia[k])], fb = body_frame[size_t(ib[k])];
-        const Eigen::Matrix4d T_a = frames.block<4, 4>(4 * fa, 0);
-        const Eigen::Matrix4d T_b = frames.block<4, 4>(4 * fb, 0);
-        const CapsuleProximity p = exact->measure(k, T_a, T_b);
-        out.distance[j] = p.distance;
-        out.point_a.row(j) = p.point_a.transpose();
-        out.point_b.row(j) = p.point_b.transpose();
-        out.normal.row(j) = p.normal.transpose();
-      }
+      const int a = ia[k], b = ib[k];
+      const Eigen::Matrix4d T_a = frames.block<4, 4>(4 * body_frame[size_t(a)], 0);
+      const Eigen::Matrix4d T_b = frames.block<4, 4>(4 * body_frame[size_t(b)], 0);
+      if (!all && !(out.distance[j] < within &&
+                    exact->lower_bound(k, T_a, T_b, {A.row(a), B.row(a), r[a]},
+                                       {A.row(b), B.row(b), r[b]}) < within))
+        continue;
+      const CapsuleProximity p = exact->measure(k, T_a, T_b);
+      out.distance[j] = p.distance;
+      out.point_a.row(j) = p.point_a.transpose();
+      out.point_b.row(j) = p.point_b.transpose();
+      out.normal.row(j) = p.normal.transpose();
     }
     if (kept != j) {
       out.pairs[static_cast<size_t>(kept)] = out.pairs[static_cast<size_t>(j)];

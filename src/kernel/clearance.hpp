@@ -30,9 +30,9 @@ struct Proximities {
 // proximity, in the pairs' order. A body placed off the finite numbers makes the answer
 // not finite, whatever within (its pairs are never skipped as far). With exact (the same
 // bodies and pairs), a pair with a box (whose capsule contains the box: its distance is
-// a lower bound) is measured by coal when its capsule distance is below within, and
-// dropped otherwise (kept at its bound when within = inf, which only a non-finite
-// distance is not below; the answer is then not finite anyway).
+// a lower bound) is measured by coal when its capsule distance is below within and so
+// is the box's bound (CoalPairs::lower_bound, of the other body's capsule against the
+// box, along the box's axes), and dropped otherwise (within = inf: every one by coal).
 Proximities scene_proximities(const Eigen::Ref<const RowMat>& frames,
                               const std::vector<int>& body_frame,
                               const Eigen::Ref<const Points>& a_local,

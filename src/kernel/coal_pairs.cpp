@@ -1,6 +1,8 @@
 #include "coal_pairs.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <coal/math/transform.h>
@@ -36,22 +38,37 @@ Point fallback_normal(const Point& gap, double distance, const Point& centres) {
   return Point(0.0, 0.0, 1.0);
 }
 
+// A lower bound of the distance from the capsule c to the box of pose T (world) and
+// half sizes h, when the bound is positive (CoalPairs::lower_bound), else -inf: the
+// gaps between their intervals along the box's axes, less c's radius.
+double slab_bound(const Eigen::Matrix4d& T, const Point& h, const WorldCapsule& c) {
+  const auto R = T.block<3, 3>(0, 0);
+  const Point o = T.block<3, 1>(0, 3);
+  const Point l0 = R.transpose() * (c.p0 - o), l1 = R.transpose() * (c.p1 - o);
+  const Point gap = (l0.cwiseMin(l1) - h).cwiseMax(-h - l0.cwiseMax(l1)).cwiseMax(0.0);
+  const double apart = gap.norm() - c.r;
+  return apart > 0.0 ? apart : -std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 CoalPairs::CoalPairs(const std::vector<int>& kinds, const Eigen::Ref<const Points>& params,
                      const Eigen::Ref<const RowMat>& local, const std::vector<int>& ia,
                      const std::vector<int>& ib, const std::vector<bool>& boxed,
                      double gjk_tol, double epa_tol)
-    : ia_(ia), ib_(ib) {
+    : kinds_(kinds), ia_(ia), ib_(ib) {
   const auto nb = static_cast<Eigen::Index>(kinds.size());
   if (params.rows() != nb || local.rows() != 4 * nb || local.cols() != 4 ||
       ia.size() != ib.size() || boxed.size() != ia.size())
     throw std::invalid_argument("CoalPairs: arrays of inconsistent shapes");
   geoms_.reserve(kinds.size());
   local_.reserve(kinds.size());
+  half_.reserve(kinds.size());
   for (Eigen::Index i = 0; i < nb; ++i) {
-    geoms_.push_back(geometry(kinds[static_cast<size_t>(i)], params.row(i).transpose()));
+    const int kind = kinds[static_cast<size_t>(i)];
+    geoms_.push_back(geometry(kind, params.row(i).transpose()));
     local_.emplace_back(local.block<4, 4>(4 * i, 0));
+    half_.push_back(kind == COAL_BOX ? Point(0.5 * params.row(i).transpose()) : Point::Zero());
   }
   request_.gjk_tolerance = gjk_tol;
   request_.epa_tolerance = epa_tol;
@@ -92,6 +109,19 @@ CapsuleProximity CoalPairs::measure(size_t pair, const Eigen::Matrix4d& frame_a,
     out.normal = normal / length;
   }
   return out;
+}
+
+double CoalPairs::lower_bound(size_t pair, const Eigen::Matrix4d& frame_a,
+                              const Eigen::Matrix4d& frame_b, const WorldCapsule& a,
+                              const WorldCapsule& b) const {
+  if (pair >= solvers_.size() || !solvers_[pair])
+    throw std::invalid_argument("CoalPairs: not a pair with a box");
+  const size_t ia = size_t(ia_[pair]), ib = size_t(ib_[pair]);
+  double bound = -std::numeric_limits<double>::infinity();
+  if (kinds_[ia] == COAL_BOX) bound = slab_bound(frame_a * local_[ia], half_[ia], b);
+  if (kinds_[ib] == COAL_BOX)
+    bound = std::max(bound, slab_bound(frame_b * local_[ib], half_[ib], a));
+  return bound;
 }
 
 }  // namespace dqk

@@ -19,6 +19,12 @@ namespace dqk {
 // axis centred on its origin, or a sphere of (radius).
 enum CoalKind : int { COAL_NONE = 0, COAL_BOX = 1, COAL_CAPSULE = 2, COAL_SPHERE = 3 };
 
+// A capsule in the world: the segment [p0, p1] swept by a ball of radius r [m].
+struct WorldCapsule {
+  Point p0, p1;
+  double r;
+};
+
 // The bodies' coal geometries and one coal solver per pair that has a box. Not to be
 // used from two threads at once: coal's solver keeps a mutable state (its GJK solver)
 // behind a const call; the bindings hold the GIL, and must keep holding it.
@@ -45,9 +51,24 @@ class CoalPairs {
   CapsuleProximity measure(size_t pair, const Eigen::Matrix4d& frame_a,
                            const Eigen::Matrix4d& frame_b) const;
 
+  // A certain lower bound of pair k's signed distance, its bodies posed as by measure
+  // and contained in the capsules a and b (in the world: a capsule's own, a box's
+  // containing one). For each body that is a box, the other's segment in the box's frame
+  // spans an interval along each box axis j, g_j beyond the box's [-h_j, h_j] (0 where
+  // they overlap): every point of the segment is at least |g| from the box, so when |g|
+  // exceeds the other's radius the pair is apart, by at least |g| minus that radius
+  // (else nothing is certain: they may overlap by any depth, -inf). The larger of the
+  // two when both are boxes; -inf when neither is. Exact, while they are apart, for a
+  // sphere or a capsule along one of the box's axes against the box.
+  double lower_bound(size_t pair, const Eigen::Matrix4d& frame_a,
+                     const Eigen::Matrix4d& frame_b, const WorldCapsule& a,
+                     const WorldCapsule& b) const;
+
  private:
   std::vector<std::shared_ptr<coal::CollisionGeometry>> geoms_;
   std::vector<Eigen::Matrix4d> local_;
+  std::vector<int> kinds_;
+  std::vector<Point> half_;  // a box's half sizes [m] (zero for the other kinds)
   std::vector<int> ia_, ib_;
   std::vector<std::unique_ptr<coal::ComputeDistance>> solvers_;  // null: a capsule pair
   coal::DistanceRequest request_;

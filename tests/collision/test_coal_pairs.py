@@ -6,9 +6,10 @@
 * a body posed in its frame by a local pose: the same to rounding (the pose product is
   the kernel's own);
 * the scene's measure is the rule stated in :meth:`CollisionScene.measure`, written out
-  here with the capsule-only measure and coal's Python API: every pair with a box whose
-  capsule bound is below ``within`` is coal's, the others with a box are dropped (kept
-  at their bound when ``within`` is infinite);
+  here with the capsule-only measure, the box's slabs in numpy and coal's Python API:
+  every pair with a box whose capsule bound and slab bound are both below ``within`` is
+  coal's, the others with a box are dropped (every one is coal's when ``within`` is
+  infinite);
 * a non-finite frame is a :class:`NonFiniteError`, inconsistent arrays and unknown
   kinds are errors, and a kernel built with another coal is refused at import.
 """
@@ -128,6 +129,23 @@ def scene_setup():
     return exp, builder, limit
 
 
+def _slab_bound(scene, frames: np.ndarray, box: int, other: int) -> float:
+    """The box's slab bound of a pair [m] (``CoalPairs.lower_bound``), in numpy.
+
+    The gaps of the other body's capsule from the box along the box's axes, less its
+    radius: a lower bound of their distance where positive (else -inf).
+    """
+    shape = scene.bodies[box].shape
+    T = frames[scene._frame_list[box]] @ shape.pose
+    F = frames[scene._frame_list[other]]
+    ends = [T[:3, :3].T @ (F[:3, :3] @ e + F[:3, 3] - T[:3, 3])
+            for e in (scene._a[other], scene._b[other])]
+    lo, hi, h = np.minimum(*ends), np.maximum(*ends), shape.half_size
+    apart = float(np.linalg.norm(np.maximum(np.maximum(lo - h, -h - hi), 0.0)))
+    apart -= scene._r[other]
+    return apart if apart > 0.0 else -np.inf
+
+
 def _written_out(scene, frames: np.ndarray, within: float) -> tuple[np.ndarray, Proximities]:
     """The rule of :meth:`CollisionScene.measure`, with coal's Python API for the boxes."""
     near = kernel.scene_proximities(
@@ -140,16 +158,17 @@ def _written_out(scene, frames: np.ndarray, within: float) -> tuple[np.ndarray, 
         pair = scene.pairs[k]
         bodies = (scene.bodies[pair.a], scene.bodies[pair.b])
         if any(isinstance(b.shape, Box) for b in bodies):
-            if not d < within:
-                if np.isfinite(within):
-                    continue
-            else:
-                placed = []
-                for body, index in zip(bodies, (pair.a, pair.b), strict=True):
-                    geom, local = coal_shape(body.shape)
-                    placed += [geom, frames[scene._frame_list[index]] @ local]
-                one = coal_proximity(*placed)
-                d, pa, pb, n = one.distance, one.point_a, one.point_b, one.normal
+            slabs = [_slab_bound(scene, frames, i, j)
+                     for i, j in ((pair.a, pair.b), (pair.b, pair.a))
+                     if isinstance(scene.bodies[i].shape, Box)]
+            if np.isfinite(within) and not max([d, *slabs]) < within:
+                continue
+            placed = []
+            for body, index in zip(bodies, (pair.a, pair.b), strict=True):
+                geom, local = coal_shape(body.shape)
+                placed += [geom, frames[scene._frame_list[index]] @ local]
+            one = coal_proximity(*placed)
+            d, pa, pb, n = one.distance, one.point_a, one.point_b, one.normal
         out_pairs.append(k)
         out.append((d, pa, pb, n))
     return np.array(out_pairs), Proximities(np.array([o[0] for o in out]),
