@@ -23,10 +23,14 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
   const Index h = points.rows();
   if (h < 1 || static_cast<Index>(free.size()) != h)
     throw std::invalid_argument("split_operator: one free-twist block per hand");
+  // A hand's free twists: 6 x k with k <= 6 (fixed-size storage, no allocation).
+  using Free = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6>;
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
   for (const Mat& T : free) {
-    if (T.rows() != 6) throw std::invalid_argument("split_operator: free twists are 6 x k");
+    if (T.rows() != 6 || T.cols() > 6)
+      throw std::invalid_argument("split_operator: free twists are 6 x k, k <= 6");
     if (!T.allFinite()) throw std::invalid_argument("split_operator: a free twist is not finite");
-    if (T.cols() > 0 && Eigen::FullPivLU<Mat>(T).rank() < T.cols())
+    if (T.cols() > 0 && Eigen::FullPivLU<Free>(Free(T)).rank() < T.cols())
       throw std::invalid_argument("split_operator: a hand's free twists are not independent");
   }
   if (!points.allFinite() || !centre.allFinite() || !std::isfinite(mass))
@@ -35,28 +39,32 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
   const Eigen::Vector3d about = points.row(0).transpose();
   const double gap = h > 1 ? (points.row(0) - points.row(1)).norm() : 0.0;
   const double L = gap > 1e-9 ? gap : fallback_length;
-  Vec u(6);
+  // The balance is 6 x 6 whatever the number of hands: fixed-size matrices (no allocation).
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Mat63 = Eigen::Matrix<double, 6, 3>;
+  Eigen::Matrix<double, 6, 1> u;
   u << 1.0, 1.0, 1.0, L, L, L;
   Mat MP(6, 6 * h);
   for (Index i = 0; i < h; ++i) {
-    Mat M = Mat::Identity(6, 6);  // S A_i U = [I 0; [p_i - about]x / L  I]
+    Mat6 M = Mat6::Identity();  // S A_i U = [I 0; [p_i - about]x / L  I]
     M.block<3, 3>(3, 0) = skew((points.row(i).transpose() - about) / L);
-    const Mat T = u.asDiagonal() * free[static_cast<size_t>(i)];  // U T_i
+    const Free T = u.asDiagonal() * free[static_cast<size_t>(i)];  // U T_i
     if (T.cols() > 0) {  // M P_i, P_i = I - T (T^T T)^-1 T^T
-      const Mat MT = M * T;
-      M -= MT * (T.transpose() * T).partialPivLu().solve(T.transpose());
+      const Free MT = M * T;
+      const Small TtT = T.transpose() * T;
+      M -= MT * TtT.partialPivLu().solve(T.transpose());
     }
     MP.middleCols(6 * i, 6) = M;
   }
-  const Mat N = MP * MP.transpose();
+  const Mat6 N = MP * MP.transpose();
   // b = S (-mass [g; (c - about) x g]), per unit g
-  Mat B(6, 3);
+  Mat63 B;
   B.topRows<3>() = Eigen::Matrix3d::Identity();
   B.bottomRows<3>() = skew(centre - about);
   B = (-mass) * (u.cwiseInverse().asDiagonal() * B);
   // The eigenvalues alone decide; the eigenvectors (the same eigenvalues, to the bit) only
   // where the balance spans fewer than 6 directions.
-  Eigen::SelfAdjointEigenSolver<Mat> eig(N, Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Mat6> eig(N, Eigen::EigenvaluesOnly);
   if (eig.info() != Eigen::Success)
     throw std::invalid_argument("split_operator: the balance matrix's eigenvalues failed");
   Mat scaled;
@@ -66,8 +74,8 @@ Mat split_operator(const Points& points, const std::vector<Mat>& free,
     eig.compute(N, Eigen::ComputeEigenvectors);
     if (eig.info() != Eigen::Success)
       throw std::invalid_argument("split_operator: the balance matrix's eigenvectors failed");
-    const Vec& lam = eig.eigenvalues();
-    Mat VtB = eig.eigenvectors().transpose() * B;
+    const auto& lam = eig.eigenvalues();
+    Mat63 VtB = eig.eigenvectors().transpose() * B;
     for (Index k = 0; k < 6; ++k) {
       if (lam[k] > rcond_min * lam[5])
         VtB.row(k) /= lam[k];

@@ -1,7 +1,6 @@
 #include "statics.hpp"
 
 #include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/kinematics.hpp>
 #include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -59,12 +58,17 @@ void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec
   const pin::JointIndex joint = model.frames[f_id].parentJoint;
   std::vector<pin::Force> fext(static_cast<std::size_t>(model.njoints), pin::Force::Zero());
   fext[joint] = data.oMi[joint].actInv(at_origin);
-  tau = pin::computeStaticTorque(model, data, q, fext);
-  if (!derivatives) return;
+  if (!derivatives) {
+    tau = pin::computeStaticTorque(model, data, q, fext);
+    return;
+  }
+  // One pass for the torques, their derivatives and the joints' Jacobians: the derivatives'
+  // backward pass leaves the static torques in data.tau and its forward pass the joints'
+  // world Jacobians in data.J (what computeJointJacobians fills, by the same products).
   Eigen::MatrixXd dq = Eigen::MatrixXd::Zero(n, n);
   pin::computeStaticTorqueDerivatives(model, data, q, fext, dq);
+  tau = data.tau;
   pin::Data::Matrix6x Jf = pin::Data::Matrix6x::Zero(6, n);
-  pin::computeJointJacobians(model, data, q);
   pin::getFrameJacobian(model, data, f_id, pin::LOCAL_WORLD_ALIGNED, Jf);
   // A world-fixed force does not turn with the body: column j gains
   // -J^T [omega_j x f_w; omega_j x m_w] = J^T [f_w x omega_j; m_w x omega_j]. Its point
