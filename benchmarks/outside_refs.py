@@ -687,17 +687,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--compare", type=int, default=200,
                     help="rollout states on which pink's velocity is compared with ours")
     ap.add_argument("--json", type=Path, default=None)
-    ap.add_argument("--only", choices=["torque"], default=None,
-                    help="measure one section only")
+    ap.add_argument("--only", choices=["torque", "wall"], default=None,
+                    help="measure one section only (8: torque rows, 9: the user's wall)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")  # qpsolvers' sparse-conversion notices for osqp
     logging.getLogger().setLevel(logging.ERROR)  # pink's out-of-limit notices
     n = args.samples
     out: dict[str, Any] = {"machine_before": machine_info(), "samples": n}
-    if args.only == "torque":
-        res = torque_step("ur5_pair_heavy_bar", n)
-        out["torque_step"] = res
-        print_torque(res)
+    if args.only is not None:
+        if args.only == "torque":
+            res = torque_step("ur5_pair_heavy_bar", n)
+            out["torque_step"] = res
+            print_torque(res)
+        else:
+            res = own_limit_step(n)
+            out["own_limit_step"] = res
+            own = res["  the wall's constraint(ctx) call"]["median_us"]
+            print(f"the step with the wall / without: {res['ratio with / without']:.3f}x "
+                  f"(medians {res['step with the wall']['median_us']:.1f} us and "
+                  f"{res['step without it (same states)']['median_us']:.1f} us; the wall's "
+                  f"own call {own:.1f} us)")
         if args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps(out, indent=2) + "\n")
