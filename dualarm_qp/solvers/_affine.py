@@ -25,6 +25,7 @@ rounding (about 1e-15 relative) of the cut-off.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -210,44 +211,56 @@ class NullBasis:
     largest singular value. When ``A``'s QR factorisation ``A^T = Q R`` proves full row
     rank (Frobenius bounds: ``sigma_min >= 1 / |R^-1|_F > RANK_RTOL |R|_F >= RANK_RTOL
     sigma_max``), the basis comes from it: ``P = Q_1 R^-T`` and ``N = Q_2``, at a
-    fifth of an SVD's cost. Any other ``A`` (near-singular, rank-deficient, more rows
-    than columns) takes :func:`factor`'s SVD.
+    fifth of an SVD's cost; ``P`` is kept factored there (``Q``'s reflectors and
+    ``R^-1``) and formed only when read. Any other ``A`` (near-singular,
+    rank-deficient, more rows than columns) takes :func:`factor`'s SVD.
 
     Attributes
     ----------
-    P : ndarray, shape (n, m)
-        The (truncated) pseudo-inverse of ``A``: ``P b`` is the minimum-norm
-        least-squares solution of ``A x = b``.
-    N : ndarray, shape (n, n - rank)
-        Orthonormal basis of the numerical null space of ``A``.
-    rank : int
-        Numerical rank of ``A``.
-    sigma_max : float
-        Largest singular value (SVD path) or its Frobenius bound (QR path) [units of A].
-    qr : bool
-        Whether the QR path proved full row rank.
+    kernel : kernel.Basis
+        The kernel's basis, which the kernel's functions take as it is (so that every
+        path computes ``P b`` the same way, to the bit).
     """
 
-    P: FloatArray
-    N: FloatArray
-    rank: int
-    sigma_max: float
-    qr: bool
+    kernel: Any
+
+    @property
+    def P(self) -> FloatArray:
+        """``(n, m)``: the (truncated) pseudo-inverse of ``A``, formed when read.
+
+        ``P b`` is the minimum-norm least-squares solution of ``A x = b``.
+        """
+        return np.asarray(self.kernel.P)
+
+    @property
+    def N(self) -> FloatArray:
+        """``(n, n - rank)``: an orthonormal basis of the numerical null space of ``A``."""
+        return np.asarray(self.kernel.N)
+
+    @property
+    def rank(self) -> int:
+        """Numerical rank of ``A``."""
+        return int(self.kernel.rank)
+
+    @property
+    def sigma_max(self) -> float:
+        """Largest singular value (SVD path) or its Frobenius bound (QR path) [units of A]."""
+        return float(self.kernel.sigma_max)
+
+    @property
+    def qr(self) -> bool:
+        """Whether the QR path proved full row rank."""
+        return bool(self.kernel.qr)
 
     @property
     def nullity(self) -> int:
         """Numerical null-space dimension ``n - rank``."""
-        return int(self.N.shape[1])
-
-    def args(self) -> tuple[FloatArray, FloatArray, int, float]:
-        """``(P, N, rank, sigma_max)``, as the kernel's functions take the basis."""
-        return self.P, self.N, self.rank, self.sigma_max
+        return int(self.kernel.N.shape[1])
 
 
 def null_basis(A: FloatArray) -> NullBasis:
     """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
-    f = kernel.basis(np.ascontiguousarray(A, dtype=np.float64))
-    return NullBasis(f.P, f.N, f.rank, f.sigma_max, f.qr)
+    return NullBasis(kernel.basis(np.ascontiguousarray(A, dtype=np.float64)))
 
 
 def problem_basis(problem: StepProblem) -> NullBasis:

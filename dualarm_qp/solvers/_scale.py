@@ -128,7 +128,8 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
         return TaskScale(None, None, problem.empty_bounds())
     A = problem.A
     f = problem_basis(problem)  # the exact solver's, shared
-    x_b, x_d = f.P @ base, f.P @ direction
+    P = f.P
+    x_b, x_d = P @ base, P @ direction
     s_lo, s_hi = 0.0, float(cap)
     rank_limited = False
     if f.rank < problem.m:

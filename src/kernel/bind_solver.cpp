@@ -55,7 +55,8 @@ void bind_geometry_results(nb::module_& m) {
 
   auto basis = nb::class_<dqk::Basis>(
       m, "Basis", "What the exact solver and the certificate need of A (basis's answer).");
-  array_property(basis, "P", &dqk::Basis::P, "(n, m): the pseudo-inverse of A.");
+  basis.def_prop_ro("P", [](const dqk::Basis& f) { return f.pinv(); },
+                    "(n, m): the pseudo-inverse of A (formed when read).");
   array_property(basis, "N", &dqk::Basis::N, "(n, n - rank): a basis of A's null space.");
   basis.def_ro("rank", &dqk::Basis::rank, "A's numerical rank.")
       .def_ro("sigma_max", &dqk::Basis::sigma_max,
@@ -225,17 +226,16 @@ void bind_solver(nb::module_& m) {
 
   m.def(
       "solve_nullspace",
-      [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
+      [](In A, const Vec& b, const dqk::Basis& basis, In C, const Vec& e,
          const Vec& w_diag, In w_full, In root_full, const Vec& center, double feas_tol,
          Index max_iter) {
         require(b.size() == A.rows() && C.cols() == A.cols() && e.size() == C.rows() &&
                     center.size() == A.cols(),
                 "solve_nullspace: arguments of inconsistent sizes");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
-        return dqk::solve_nullspace(A, b, basis_from(A, P, N, rank, sigma_max), C, e, cost,
-                                    feas_tol, max_iter);
+        return dqk::solve_nullspace(A, b, basis_of(A, basis), C, e, cost, feas_tol, max_iter);
       },
-      "A"_a, "b"_a, "P"_a, "N"_a, "rank"_a, "sigma_max"_a, "C"_a, "e"_a, "w_diag"_a,
+      "A"_a, "b"_a, "basis"_a, "C"_a, "e"_a, "w_diag"_a,
       "w_full"_a, "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a,
       "The exact step on A's basis (P, N, rank, sigma_max): a StepAnswer.");
 
@@ -287,24 +287,23 @@ void bind_solver(nb::module_& m) {
 
   m.def(
       "kkt_holds",
-      [](In A, const Vec& b, In P, In N, Index rank, double sigma_max, In C, const Vec& e,
+      [](In A, const Vec& b, const dqk::Basis& basis, In C, const Vec& e,
          const Vec& w_diag, In w_full, In root_full, const Vec& center, const Vec& x,
          bool bounds) {
         require(b.size() == A.rows() && C.cols() == A.cols() && e.size() == C.rows() &&
                     center.size() == A.cols() && x.size() == A.cols(),
                 "kkt_holds: arguments of inconsistent sizes");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
-        return dqk::kkt_holds(A, b, basis_from(A, P, N, rank, sigma_max), C, e, cost, x,
-                              bounds);
+        return dqk::kkt_holds(A, b, basis_of(A, basis), C, e, cost, x, bounds);
       },
-      "A"_a, "b"_a, "P"_a, "N"_a, "rank"_a, "sigma_max"_a, "C"_a, "e"_a, "w_diag"_a,
+      "A"_a, "b"_a, "basis"_a, "C"_a, "e"_a, "w_diag"_a,
       "w_full"_a, "root_full"_a, "center"_a, "x"_a, "bounds"_a,
       "Whether x is the step's minimiser (the KKT test of certify).");
 
   m.def(
       "certificate",
       [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
-         const Vec& h, In P, In N, Index rank, double sigma_max,
+         const Vec& h, const dqk::Basis* basis,
          In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
          const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index, const Vec& w_diag, In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
@@ -315,14 +314,13 @@ void bind_solver(nb::module_& m) {
                     index.size() == C.rows() &&
                     center.size() == n && x.size() == n,
                 "certificate: arguments of inconsistent sizes");
+        require(!ask_kkt || basis != nullptr, "certificate: the KKT test needs A's basis");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
         return dqk::certificate(A, b, lower, upper, G, h,
-                                ask_kkt ? basis_from(A, P, N, rank, sigma_max) : dqk::Basis{},
-                                C, e, kind, index, cost, x, bounds, eq_rtol, bounds_tol,
-                                ask_kkt);
+                                ask_kkt ? basis_of(A, *basis) : dqk::Basis{}, C, e, kind,
+                                index, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
       },
-      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "P"_a, "N"_a, "rank"_a,
-      "sigma_max"_a, "C"_a, "e"_a, "kind"_a, "index"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
+      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "basis"_a.none(), "C"_a, "e"_a, "kind"_a, "index"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
       "center"_a, "x"_a, "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
       "Everything certify reads of x (a Certificate); its kkt is -1 when not asked or x "
       "breaks a limit.");

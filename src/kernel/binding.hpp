@@ -190,17 +190,9 @@ inline PointsMap points(const CArray& a, const char* name) {
   return PointsMap(a.data(), static_cast<Index>(a.shape(0)), 3);
 }
 
-// A basis of A as Python holds it: (P, N, rank, sigma_max, qr).
-inline dqk::Basis basis_from(const In& A, const Mat& P, const Mat& N, Index rank,
-                              double sigma_max) {
-  require(P.rows() == A.cols() && P.cols() == A.rows() && N.rows() == A.cols() &&
-              rank >= 0 && rank + N.cols() == A.cols(),
-          "the basis (P, N, rank) does not belong to A's shape");
-  dqk::Basis f;
-  f.P = P;
-  f.N = N;
-  f.rank = rank;
-  f.sigma_max = sigma_max;
+// A basis (basis(A)'s answer) checked against the A it is used with.
+inline const dqk::Basis& basis_of(const In& A, const dqk::Basis& f) {
+  require(f.fits(A.rows(), A.cols()), "the basis does not belong to A's shape");
   return f;
 }
 

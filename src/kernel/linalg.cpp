@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "constants.hpp"
 
@@ -99,11 +100,45 @@ Factor factor(const Mat& A) {
   return f;
 }
 
+Vec Basis::solve(const Vec& b) const {
+  if (!qr) return P_ * b;
+  // P b = Q [R^-T b; 0]
+  const Index m = R_inv_.rows();
+  Mat y = Mat::Zero(QR_.rows(), 1);
+  y.topRows(m) = R_inv_.transpose() * b;
+  apply_q(QR_, tau_, y);
+  return y.col(0);
+}
+
+Mat Basis::pinv() const {
+  if (!qr) return P_;
+  // P = Q [R^-T; 0]
+  const Index m = R_inv_.rows();
+  Mat P = Mat::Zero(QR_.rows(), m);
+  P.topRows(m) = R_inv_.transpose();
+  apply_q(QR_, tau_, P);
+  return P;
+}
+
+void Basis::set_pinv(Mat P) {
+  m_ = P.cols();
+  P_ = std::move(P);
+  qr = false;
+}
+
+void Basis::set_factors(Mat QR, Vec tau, Mat R_inv) {
+  m_ = R_inv.rows();
+  QR_ = std::move(QR);
+  tau_ = std::move(tau);
+  R_inv_ = std::move(R_inv);
+  qr = true;
+}
+
 Basis basis(const Mat& A) {
   const Index m = A.rows(), n = A.cols();
   Basis out;
   if (m == 0 || n == 0) {
-    out.P = Mat::Zero(n, m);
+    out.set_pinv(Mat::Zero(n, m));
     out.N = Mat::Identity(n, n);
     return out;
   }
@@ -117,22 +152,19 @@ Basis basis(const Mat& A) {
       R.triangularView<Eigen::Upper>().solveInPlace(R_inv);
       const double lo = 1.0 / R_inv.norm(), hi = R.norm();
       if (std::isfinite(lo) && std::isfinite(hi) && lo > RANK_RTOL * hi) {
-        // P = Q [R^-T; 0] and N = Q [0; I], Q applied without being formed.
-        out.P = Mat::Zero(n, m);
-        out.P.topRows(m) = R_inv.transpose();
-        apply_q(QR, tau, out.P);
+        // N = Q [0; I], Q applied without being formed; P = Q [R^-T; 0] kept factored.
         out.N = Mat::Zero(n, n - m);
         out.N.bottomRows(n - m).setIdentity();
         apply_q(QR, tau, out.N);
         out.rank = m;
         out.sigma_max = hi;
-        out.qr = true;
+        out.set_factors(std::move(QR), std::move(tau), std::move(R_inv));
         return out;
       }
     }
   }
   const Factor f = factor(A);
-  out.P = f.V * f.sigma.cwiseInverse().asDiagonal() * f.U.transpose();
+  out.set_pinv(f.V * f.sigma.cwiseInverse().asDiagonal() * f.U.transpose());
   out.N = f.N;
   out.rank = f.rank();
   out.sigma_max = f.rank() ? f.sigma(0) : 0.0;

@@ -44,14 +44,31 @@ void apply_qt(const Mat& QR, const Vec& tau, Mat& X);
 // sigma_min >= 1 / |R^-1|_F > RANK_RTOL |R|_F >= RANK_RTOL sigma_max) takes the QR
 // path: P = Q_1 R^-T, N = Q_2. Any other A (wider than tall, near-singular, rank
 // deficient) takes the SVD of factor().
+//
+// On the QR path P is kept factored (the reflectors of Q and R^-1): solve(b) applies
+// them to b, and P itself is formed only when asked (pinv()), which the step never does.
 struct Basis {
-  Mat P;
   Mat N;
   Index rank = 0;
   double sigma_max = 0.0;  // the SVD's largest singular value; |R|_F on the QR path
   bool qr = false;         // which path was taken
   Index nullity() const { return N.cols(); }
-  Vec solve(const Vec& b) const { return P * b; }  // minimum-norm least squares
+  Index equations() const { return m_; }  // A's rows
+  // Whether this is a basis of an A of that shape (the kernel's functions check it).
+  bool fits(Index rows, Index cols) const {
+    return m_ == rows && N.rows() == cols && rank >= 0 && rank + N.cols() == cols;
+  }
+  Vec solve(const Vec& b) const;  // P b: the minimum-norm least-squares solution
+  Mat pinv() const;               // P (n x m), formed
+  void set_pinv(Mat P);           // P given as a matrix (the SVD path, or from Python)
+  // The QR path: A^T = Q R with Q's reflectors in QR (below its diagonal) and tau.
+  void set_factors(Mat QR, Vec tau, Mat R_inv);
+
+ private:
+  Mat P_;             // P, given (empty on the QR path)
+  Mat QR_, R_inv_;    // the QR path's factors
+  Vec tau_;
+  Index m_ = 0;
 };
 
 Basis basis(const Mat& A);

@@ -63,7 +63,7 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
     for x in points:
         c = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *f.args(), ineq.C, ineq.e, ineq.kind, ineq.index, w_diag, w_full, root_full,
+            f.kernel, ineq.C, ineq.e, ineq.kind, ineq.index, w_diag, w_full, root_full,
             problem.center, x, bounds, 1e-7, 1e-7, True)
         assert c.finite
         eq, box, rows, limit = c.eq, c.box, c.row, c.eq_limit
@@ -95,7 +95,7 @@ def test_the_kkt_test_is_not_run_unless_asked():
     ineq = problem.inequalities()
     out = kernel.certificate(
         problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-        *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, ineq.index,
+        problem_basis(problem).kernel, ineq.C, ineq.e, ineq.kind, ineq.index,
         *cost_arrays(problem),
         problem.center, points[0], True, 1e-7, 1e-7, False)
     assert out.kkt == -1
@@ -228,10 +228,15 @@ def test_the_kernel_refuses_arguments_of_inconsistent_sizes():
     with pytest.raises(ValueError, match="inconsistent sizes"):
         kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            *problem_basis(problem).args(), ineq.C, ineq.e, ineq.kind, ineq.index,
+            problem_basis(problem).kernel, ineq.C, ineq.e, ineq.kind, ineq.index,
             *cost_arrays(problem), problem.center, np.zeros(problem.n + 1), True, 1e-7,
             1e-7, True)
-    P, N, rank, sigma_max = problem_basis(problem).args()
+    other = kernel.basis(np.ones((problem.m + 1, problem.n)))  # of an A with one more row
     with pytest.raises(ValueError, match="basis"):
-        kernel.kkt_holds(problem.A, problem.b, P[:-1], N, rank, sigma_max, ineq.C, ineq.e,
+        kernel.kkt_holds(problem.A, problem.b, other, ineq.C, ineq.e,
                          *cost_arrays(problem), problem.center, points[0], True)
+    with pytest.raises(ValueError, match="basis"):  # the KKT test without a basis
+        kernel.certificate(
+            problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, None,
+            ineq.C, ineq.e, ineq.kind, ineq.index, *cost_arrays(problem), problem.center,
+            points[0], True, 1e-7, 1e-7, True)
