@@ -11,7 +11,8 @@ namespace dqk {
 struct Chain::Impl {
   pinocchio::Model model;
   pinocchio::Data data;
-  Impl() : model(), data(model) {}
+  pinocchio::Data ahead;  // poses_at's workspace (the chain's kinematics stay in data)
+  Impl() : model(), data(model), ahead(model) {}
 };
 
 }  // namespace dqk

@@ -79,6 +79,7 @@ Chain::Chain(const std::vector<int>& parents, const std::vector<int>& kinds, con
                               0, se3_at(frame_placements, f), pin::OP_FRAME));
   }
   impl_->data = pin::Data(model);
+  impl_->ahead = pin::Data(model);
   q_ = Eigen::VectorXd::Zero(model.nq);
 }
 
@@ -167,6 +168,23 @@ void Chain::frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) co
   for (std::size_t k = 0; k < frames.size(); ++k)
     T.middleRows<4>(4 * static_cast<Eigen::Index>(k)) =
         impl_->data.oMf[static_cast<std::size_t>(frames[k])].toHomogeneousMatrix();
+}
+
+void Chain::poses_at(const Eigen::VectorXd& q, const std::vector<int>& frames,
+                     Eigen::Ref<RowMat> T) const {
+  if (q.size() != nq())
+    throw std::invalid_argument("q has " + std::to_string(q.size()) + " entries, the chain " +
+                                std::to_string(nq()) + " joints");
+  if (T.rows() != 4 * static_cast<Eigen::Index>(frames.size()) || T.cols() != 4)
+    throw std::invalid_argument("T must be (4k, 4) for k frames");
+  for (int f : frames) check_frame(f);
+  pin::Data& ahead = impl_->ahead;
+  // The same products as update's pass (oMi, then each frame's oMf): the same poses.
+  pin::forwardKinematics(impl_->model, ahead, q);
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    T.middleRows<4>(4 * static_cast<Eigen::Index>(k)) =
+        pin::updateFramePlacement(impl_->model, ahead, static_cast<pin::FrameIndex>(frames[k]))
+            .toHomogeneousMatrix();
 }
 
 void Chain::frame_jacobian(int f, Eigen::Ref<RowMat> J) const {

@@ -69,6 +69,11 @@ class Chain {
   // outputs are the caller's arrays: returning fresh ones costs more than the kinematics.
   void compute(const Eigen::VectorXd& q, const std::vector<int>& pose_frames,
                const std::vector<int>& jac_frames, Eigen::Ref<RowMat> T, Eigen::Ref<RowMat> J);
+  // The world poses of frames at q into T (4k x 4), forward kinematics only, in a
+  // workspace of their own: the chain's kinematics (update's: q(), frame_poses,
+  // frame_jacobian) stay those of its last update. What the look-ahead asks.
+  void poses_at(const Eigen::VectorXd& q, const std::vector<int>& frames,
+                Eigen::Ref<RowMat> T) const;
   // After update: the world poses of frames into T (4k x 4), the Jacobian of frame f
   // into J (6 x nq).
   void frame_poses(const std::vector<int>& frames, Eigen::Ref<RowMat> T) const;

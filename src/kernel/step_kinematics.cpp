@@ -44,11 +44,10 @@ void step_errors(Chain& carry, const Eigen::VectorXd& q_carry,
   if (carry_frames.size() != 3 || e.size() != 12) {
     throw std::invalid_argument("step_errors: three carry frames, e (12)");
   }
-  RowMat T(16, 4), no_J(0, carry.nq()), no_J_f(0, follower.nq());
-  const std::vector<int> none;
-  carry.compute(q_carry, carry_frames, none, T.topRows(12), no_J);
+  RowMat T(16, 4);
+  carry.poses_at(q_carry, carry_frames, T.topRows(12));
   const std::vector<int> tool{follower_tool};
-  follower.compute(q_f, tool, none, T.bottomRows(4), no_J_f);
+  follower.poses_at(q_f, tool, T.bottomRows(4));
   pose_error(T_D, T.middleRows(4, 4), e.head(6));
   pose_error(T.middleRows(8, 4), T.bottomRows(4), e.tail(6));
 }

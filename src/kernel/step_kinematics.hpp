@@ -26,8 +26,9 @@ void step_kinematics(Chain& carry, const Eigen::VectorXd& q_carry,
                      Eigen::Ref<RowMat> J_f, Eigen::Ref<Eigen::VectorXd> e,
                      Eigen::Ref<Eigen::VectorXd> sv);
 
-// The same two pose errors into e (12) from the poses alone (no Jacobians): the
-// look-ahead's prediction at the next sample (dualarm_qp/control/lookahead.py).
+// The same two pose errors into e (12) from the poses alone (no Jacobians, Chain::poses_at:
+// the chains' kinematics stay those of their last update): the look-ahead's prediction at
+// the next sample (dualarm_qp/control/lookahead.py).
 void step_errors(Chain& carry, const Eigen::VectorXd& q_carry,
                  const std::vector<int>& carry_frames, Chain& follower,
                  const Eigen::VectorXd& q_f, int follower_tool, const Pose& T_D,
