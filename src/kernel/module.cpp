@@ -176,17 +176,10 @@ NB_MODULE(_kernel, m) {
            "T"_a.noconvert(), "J"_a.noconvert(),
            "update(q); then the poses of pose_frames into T (4k, 4) and the Jacobians of "
            "jac_frames into J (6m, nq), C-contiguous float64 arrays.")
-      .def(
-          "poses",
-          [](dqk::Chain& chain, const Eigen::VectorXd& q, const std::vector<int>& frames,
-             Eigen::Ref<dqk::RowMat> T) {
-            for (int f : frames) chain.check_frame(f);
-            chain.update(q);
-            chain.frame_poses(frames, T);
-          },
-          "q"_a, "frames"_a, "T"_a.noconvert(),
-          "update(q); then the poses of frames into T (4k, 4), a C-contiguous float64 "
-          "array (compute without Jacobians).")
+      .def("poses", &dqk::Chain::poses_at, "q"_a, "frames"_a, "T"_a.noconvert(),
+           "The poses of frames at q into T (4k, 4), a C-contiguous float64 array: forward "
+           "kinematics alone, in a workspace of their own (the chain's kinematics, q and "
+           "updates stay those of its last update).")
       .def("frame_poses", &dqk::Chain::frame_poses, "frames"_a, "T"_a.noconvert(),
            "The poses of frames at the last update into T (4k, 4).")
       .def("frame_jacobian", &dqk::Chain::frame_jacobian, "frame"_a, "J"_a.noconvert(),

@@ -106,6 +106,37 @@ def test_every_frame_of_the_model_is_the_same(name: str) -> None:
                                atol=1e-12)
 
 
+@pytest.mark.parametrize("name", list(ARMS))
+def test_poses_at_other_joints_leave_the_chains_kinematics(name: str) -> None:
+    """``Chain.poses`` (what ``fk``, the support line and the look-ahead ask) computes the
+    poses at other joints by forward kinematics alone, in a workspace of its own: the same
+    poses as an update to the bit, and the chain keeps its joints, its update count, its
+    poses and its Jacobians."""
+    arm = arm_named(name)
+    chain = compiled_chain(arm.model)
+    rng = np.random.default_rng(5)
+    q_step, q_other = rng.uniform(-1.0, 1.0, (2, chain.nq))
+    frames = list(range(chain.nframes))
+    chain.update(q_step)
+    before_T = np.empty((4 * len(frames), 4))
+    chain.frame_poses(frames, before_T)
+    before_J = np.empty((6, chain.nq))
+    chain.frame_jacobian(frames[-1], before_J)
+    count = chain.updates
+    T = np.empty((4 * len(frames), 4))
+    chain.poses(q_other, frames, T)
+    assert chain.updates == count and np.array_equal(chain.q, q_step)
+    after_T = np.empty_like(before_T)
+    chain.frame_poses(frames, after_T)
+    after_J = np.empty_like(before_J)
+    chain.frame_jacobian(frames[-1], after_J)
+    assert np.array_equal(after_T, before_T) and np.array_equal(after_J, before_J)
+    chain.update(q_other)  # what an update gives at q_other: the same poses, to the bit
+    want = np.empty_like(T)
+    chain.frame_poses(frames, want)
+    assert np.array_equal(T, want)
+
+
 def test_base_and_tool_edits_reach_the_kernel() -> None:
     rng = np.random.default_rng(3)
     arm = puma560()
