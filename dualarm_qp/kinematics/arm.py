@@ -208,8 +208,10 @@ class SerialArm:
     def chain(self) -> Any:
         """The kernel's copy of :attr:`model` (``dualarm_qp._kernel.Chain``).
 
-        Every method of the arm computes there; it holds the kinematics of the last call
-        (see :class:`~dualarm_qp.step.context.ArmKinematics`).
+        Every method of the arm computes there. It holds the kinematics of its last update
+        (a step's, or the arm's Jacobian methods'); :meth:`fk` and :meth:`link_frames`
+        compute in a workspace of their own and leave them (see
+        :class:`~dualarm_qp.step.context.ArmKinematics`).
         """
         return self._chain
 

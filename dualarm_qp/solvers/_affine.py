@@ -218,8 +218,9 @@ class NullBasis:
     Attributes
     ----------
     kernel : kernel.Basis
-        The kernel's basis, which the kernel's functions take as it is (so that every
-        path computes ``P b`` the same way, to the bit).
+        The kernel's basis, which the kernel's functions take as it is (so that the
+        exact solver's two paths compute ``P b`` the same way, to the bit). It does not
+        pickle: a basis is made again from ``A`` where it is needed.
     """
 
     kernel: Any

@@ -127,7 +127,7 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     if problem.has_empty_box():
         return TaskScale(None, None, problem.empty_bounds())
     A = problem.A
-    f = problem_basis(problem)  # the exact solver's, shared
+    f = problem_basis(problem)  # the exact solver's basis of A (P formed here)
     P = f.P
     x_b, x_d = P @ base, P @ direction
     s_lo, s_hi = 0.0, float(cap)

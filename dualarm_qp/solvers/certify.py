@@ -211,8 +211,8 @@ def named_rows(problem: StepProblem, rows: kernel.Rows | None) -> Inequalities:
     """Return ``problem``'s inequalities with their names, made from the kernel's ``rows``.
 
     A solver hands on the kernel's rows (``kernel.inequalities``'s or
-    ``kernel.solve_certified``'s) and they are named here only when a message or the
-    active rows need their names; None: the problem's own
+    ``kernel.solve_certified``'s) and they are named here only when a message needs
+    their names; None: the problem's own
     (:meth:`~dualarm_qp.step.StepProblem.inequalities`).
     """
     if rows is None:

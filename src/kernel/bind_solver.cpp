@@ -237,7 +237,7 @@ void bind_solver(nb::module_& m) {
       },
       "A"_a, "b"_a, "basis"_a, "C"_a, "e"_a, "w_diag"_a,
       "w_full"_a, "root_full"_a, "center"_a, "feas_tol"_a, "max_iter"_a,
-      "The exact step on A's basis (P, N, rank, sigma_max): a StepAnswer.");
+      "The exact step on A's basis (basis(A)'s answer): a StepAnswer.");
 
   m.def(
       "solve_certified",
@@ -305,7 +305,8 @@ void bind_solver(nb::module_& m) {
       [](In A, const Vec& b, const Vec& lower, const Vec& upper, In G,
          const Vec& h, const dqk::Basis* basis,
          In C, const Vec& e, const Eigen::Matrix<std::int8_t, Eigen::Dynamic, 1>& kind,
-         const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index, const Vec& w_diag, In w_full, In root_full, const Vec& center,
+         const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>& index, const Vec& w_diag,
+         In w_full, In root_full, const Vec& center,
          const Vec& x, bool bounds, double eq_rtol, double bounds_tol, bool ask_kkt) {
         const Index n = A.cols();
         require(b.size() == A.rows() && lower.size() == n && upper.size() == n &&
@@ -315,13 +316,17 @@ void bind_solver(nb::module_& m) {
                     center.size() == n && x.size() == n,
                 "certificate: arguments of inconsistent sizes");
         require(!ask_kkt || basis != nullptr, "certificate: the KKT test needs A's basis");
+        for (Index i = 0; i < kind.size(); ++i)
+          require(kind(i) != 0 || (index(i) >= 0 && index(i) < G.rows()),
+                  "certificate: a general row's index is a row of G");
         const dqk::Cost cost = cost_of(w_diag, w_full, root_full, center);
-        return dqk::certificate(A, b, lower, upper, G, h,
-                                ask_kkt ? basis_of(A, *basis) : dqk::Basis{}, C, e, kind,
-                                index, cost, x, bounds, eq_rtol, bounds_tol, ask_kkt);
+        static const dqk::Basis none;  // not read: no KKT test asked
+        const dqk::Basis& fa = ask_kkt ? basis_of(A, *basis) : none;
+        return dqk::certificate(A, b, lower, upper, G, h, fa, C, e, kind, index, cost, x,
+                                bounds, eq_rtol, bounds_tol, ask_kkt);
       },
-      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "basis"_a.none(), "C"_a, "e"_a, "kind"_a, "index"_a, "w_diag"_a, "w_full"_a, "root_full"_a,
-      "center"_a, "x"_a, "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
+      "A"_a, "b"_a, "lower"_a, "upper"_a, "G"_a, "h"_a, "basis"_a.none(), "C"_a, "e"_a,
+      "kind"_a, "index"_a, "w_diag"_a, "w_full"_a, "root_full"_a, "center"_a, "x"_a, "bounds"_a, "eq_rtol"_a, "bounds_tol"_a, "ask_kkt"_a,
       "Everything certify reads of x (a Certificate); its kkt is -1 when not asked or x "
       "breaks a limit.");
 

@@ -16,8 +16,8 @@ CertifiedStep solve_certified(const Mat& A, const Vec& b, const Vec& lower, cons
   out.answer = solve_nullspace(A, b, out.basis, out.rows.C, out.rows.e, cost, feas_tol, max_iter);
   if (out.answer.code == StepCode::optimal) {
     out.cert = certificate(A, b, lower, upper, G, h, out.basis, out.rows.C, out.rows.e,
-                           out.rows.kind, out.rows.index, cost, out.answer.x, bounds, eq_rtol, bounds_tol,
-                           true);
+                           out.rows.kind, out.rows.index, cost, out.answer.x, bounds, eq_rtol,
+                           bounds_tol, true);
     out.certified = true;
   }
   return out;

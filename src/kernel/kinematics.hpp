@@ -71,7 +71,8 @@ class Chain {
                const std::vector<int>& jac_frames, Eigen::Ref<RowMat> T, Eigen::Ref<RowMat> J);
   // The world poses of frames at q into T (4k x 4), forward kinematics only, in a
   // workspace of their own: the chain's kinematics (update's: q(), frame_poses,
-  // frame_jacobian) stay those of its last update. What the look-ahead asks.
+  // frame_jacobian) stay those of its last update. What the look-ahead asks. Writes that
+  // workspace: not to be called from two threads at once (the bindings hold the GIL).
   void poses_at(const Eigen::VectorXd& q, const std::vector<int>& frames,
                 Eigen::Ref<RowMat> T) const;
   // After update: the world poses of frames into T (4k x 4), the Jacobian of frame f

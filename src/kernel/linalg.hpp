@@ -60,7 +60,7 @@ struct Basis {
   }
   Vec solve(const Vec& b) const;  // P b: the minimum-norm least-squares solution
   Mat pinv() const;               // P (n x m), formed
-  void set_pinv(Mat P);           // P given as a matrix (the SVD path, or from Python)
+  void set_pinv(Mat P);           // P given as a matrix (the SVD path)
   // The QR path: A^T = Q R with Q's reflectors in QR (below its diagonal) and tau.
   void set_factors(Mat QR, Vec tau, Mat R_inv);
 

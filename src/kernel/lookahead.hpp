@@ -26,8 +26,8 @@ struct PredictedErrors {
 // leader's at n_l + 1, CarryModel.columns) and returns the norms of step_errors' errors at
 // those poses against T_D (not finite when x or a moved grasp coordinate is not). Every
 // sum is a product then a sum, rounded as numpy rounds `q + dt * x` (the file is compiled
-// without fused multiply-adds); each norm is std::hypot of its three components, as
-// Python's math.hypot.
+// without fused multiply-adds); each norm is std::hypot of its three components (Python's
+// math.hypot, by another algorithm, may differ from it in the last place or two).
 PredictedErrors predicted_errors(Chain& carry, const std::vector<int>& carry_frames,
                                  Chain& follower, int follower_tool, const Eigen::VectorXd& q_l,
                                  const Eigen::VectorXd& q_f, double sigma_f, double sigma_l,

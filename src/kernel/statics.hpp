@@ -23,7 +23,9 @@ void set_gravity(Chain& chain, const Eigen::Vector3d& g);
 // `point`; none: the frame's origin p), into tau (nq): tau = g(q) + J(q)^T [f; m_p] with
 // J the frame's Jacobian and m_p = m + (point - p) x f the moment moved to p. With
 // derivatives: d tau / d q with the wrench and `point` fixed in the world into dtau
-// (nq x nq) and J (LOCAL_WORLD_ALIGNED, [v; w]) into J (6 x nq).
+// (nq x nq) and J (LOCAL_WORLD_ALIGNED, [v; w]) into J (6 x nq); tau then comes from the
+// derivatives' pass (world frame), which may differ in the last bits from tau without
+// derivatives (Pinocchio's computeStaticTorque, joint frames).
 void static_torques(Chain& chain, const Eigen::VectorXd& q, int frame, const Vec6& wrench,
                     const std::optional<Eigen::Vector3d>& point,
                     Eigen::Ref<Eigen::VectorXd> tau, bool derivatives, Eigen::Ref<RowMat> dtau,

@@ -240,3 +240,23 @@ def test_the_kernel_refuses_arguments_of_inconsistent_sizes():
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h, None,
             ineq.C, ineq.e, ineq.kind, ineq.index, *cost_arrays(problem), problem.center,
             points[0], True, 1e-7, 1e-7, True)
+
+
+def test_the_kernel_refuses_a_general_row_named_by_no_row_of_g() -> None:
+    """The certificate names its active general rows by their rows of ``G`` (the rows'
+    index): an index outside ``G`` is refused, never read as another row's name."""
+    n = 3
+    problem = StepProblem(A=np.zeros((0, n)), b=np.zeros(0), weights=np.ones(n),
+                          center=np.zeros(n), lower=np.full(n, -1.0), upper=np.full(n, 1.0),
+                          G=np.eye(2, n), h=np.array([0.5, 0.5]), n_grasp=0)
+    ineq = problem.inequalities()
+    general = np.flatnonzero(ineq.kind == 0)
+    assert general.size == 2
+    for wrong in (-1, problem.p):
+        bad = ineq.index.copy()
+        bad[general[0]] = wrong
+        with pytest.raises(ValueError, match="row of G"):
+            kernel.certificate(
+                problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
+                None, ineq.C, ineq.e, ineq.kind, bad, *cost_arrays(problem), problem.center,
+                np.zeros(n), True, 1e-7, 1e-7, False)
