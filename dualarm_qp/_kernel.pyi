@@ -33,6 +33,7 @@ class Basis:
     P: _F
     N: _F
     rank: int
+    nullity: int
     sigma_max: float
     qr: bool
 

@@ -25,7 +25,6 @@ rounding (about 1e-15 relative) of the cut-off.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -203,9 +202,8 @@ def least_distance_eq(problem: StepProblem, E: FloatArray, r: FloatArray
     return x, f.solve_transposed(problem.gradient(x))
 
 
-@dataclass(frozen=True, slots=True)
-class NullBasis:
-    """What the exact solver and the certificate need of ``A`` (m x n).
+def null_basis(A: FloatArray) -> kernel.Basis:
+    """Return what the exact solver and the certificate need of ``A`` (m x n): a basis.
 
     The rank is decided as :func:`factor` decides it, at :data:`RANK_RTOL` of the
     largest singular value. When ``A``'s QR factorisation ``A^T = Q R`` proves full row
@@ -215,56 +213,19 @@ class NullBasis:
     ``R^-1``) and formed only when read. Any other ``A`` (near-singular,
     rank-deficient, more rows than columns) takes :func:`factor`'s SVD.
 
-    Attributes
-    ----------
-    kernel : kernel.Basis
-        The kernel's basis, which the kernel's functions take as it is (so that the
-        exact solver's two paths compute ``P b`` the same way, to the bit). It does not
-        pickle: a basis is made again from ``A`` where it is needed.
+    The answer (a ``kernel.Basis``) has ``P`` (n, m), the (truncated) pseudo-inverse
+    (``P b`` is the minimum-norm least-squares solution of ``A x = b``), formed when
+    read; ``N`` (n, n - rank), an orthonormal basis of the numerical null space; ``rank``;
+    ``nullity``; ``sigma_max``, the largest singular value (SVD path) or its Frobenius
+    bound (QR path) [units of A]; ``qr``, whether the QR path proved full row rank. The
+    kernel's functions take it as it is, so that the exact solver's two paths compute
+    ``P b`` the same way, to the bit. It does not pickle: a basis is made again from
+    ``A`` where it is needed.
     """
-
-    kernel: Any
-
-    @property
-    def P(self) -> FloatArray:
-        """``(n, m)``: the (truncated) pseudo-inverse of ``A``, formed when read.
-
-        ``P b`` is the minimum-norm least-squares solution of ``A x = b``.
-        """
-        return np.asarray(self.kernel.P)
-
-    @property
-    def N(self) -> FloatArray:
-        """``(n, n - rank)``: an orthonormal basis of the numerical null space of ``A``."""
-        return np.asarray(self.kernel.N)
-
-    @property
-    def rank(self) -> int:
-        """Numerical rank of ``A``."""
-        return int(self.kernel.rank)
-
-    @property
-    def sigma_max(self) -> float:
-        """Largest singular value (SVD path) or its Frobenius bound (QR path) [units of A]."""
-        return float(self.kernel.sigma_max)
-
-    @property
-    def qr(self) -> bool:
-        """Whether the QR path proved full row rank."""
-        return bool(self.kernel.qr)
-
-    @property
-    def nullity(self) -> int:
-        """Numerical null-space dimension ``n - rank``."""
-        return int(self.kernel.N.shape[1])
+    return kernel.basis(np.ascontiguousarray(A, dtype=np.float64))
 
 
-def null_basis(A: FloatArray) -> NullBasis:
-    """:class:`NullBasis` of ``A`` (the kernel's ``basis``)."""
-    return NullBasis(kernel.basis(np.ascontiguousarray(A, dtype=np.float64)))
-
-
-def problem_basis(problem: StepProblem) -> NullBasis:
+def problem_basis(problem: StepProblem) -> kernel.Basis:
     """:func:`null_basis` of ``problem.A``."""
     return null_basis(problem.A)
 

@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 
 from .._compiled import kernel
 from ..step.problem import StepProblem
-from ._affine import CONSISTENCY_TOL, NullBasis, problem_basis
+from ._affine import CONSISTENCY_TOL, problem_basis
 
 FloatArray = NDArray[np.float64]
 
@@ -166,7 +166,7 @@ def max_scale(problem: StepProblem, base: FloatArray, direction: FloatArray,
     return TaskScale(s, x, blocking, rank_limited=rank_limited)
 
 
-def _size(f: NullBasis, x: FloatArray) -> float:
+def _size(f: kernel.Basis, x: FloatArray) -> float:
     """``sigma_max |x|``: the scale of ``A x`` (a rank-deficient ``A``: the SVD's sigma)."""
     return f.sigma_max * float(np.abs(x).max(initial=0.0)) if f.rank else 0.0
 

@@ -117,7 +117,7 @@ def certify(problem: StepProblem, claim: StepSolution, tol: Tolerance = DEFAULT_
         ask = claim.status is Status.OPTIMAL  # only an optimum needs A's basis (KKT test)
         reading = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            problem_basis(problem).kernel if ask else None, rows.C, rows.e,
+            problem_basis(problem) if ask else None, rows.C, rows.e,
             rows.kind, rows.index, w_diag, w_full, root_full,
             problem.center, x, claims_bounds, tol.equality, tol.bounds, ask)
     return verdict(problem, claim, x, reading, tol, claims_bounds, start)
@@ -276,7 +276,7 @@ def kkt_holds(problem: StepProblem, x: FloatArray, *, bounds: bool = True) -> bo
     """
     ineq = problem.inequalities()
     w_diag, w_full, root_full = cost_arrays(problem)
-    return bool(kernel.kkt_holds(problem.A, problem.b, problem_basis(problem).kernel,
+    return bool(kernel.kkt_holds(problem.A, problem.b, problem_basis(problem),
                                  ineq.C, ineq.e, w_diag, w_full, root_full, problem.center,
                                  x, bounds))
 

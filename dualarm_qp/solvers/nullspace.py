@@ -78,7 +78,7 @@ class NullspaceSolver:
         rows = kernel.inequalities(problem.lower, problem.upper, problem.G, problem.h)
         w_diag, w_full, root_full = cost_arrays(problem)
         answer = kernel.solve_nullspace(
-            problem.A, problem.b, problem_basis(problem).kernel, rows.C, rows.e, w_diag,
+            problem.A, problem.b, problem_basis(problem), rows.C, rows.e, w_diag,
             w_full, root_full, problem.center, self.feasibility_tol, self._max_iter())
         return self._claim(problem, answer, start, rows)
 

@@ -39,12 +39,8 @@ def _numbers(value: Any, what: str) -> FloatArray:
 def _rows(G: Any, h: Any, names: tuple[str, ...], n: int, what: str
           ) -> tuple[FloatArray, FloatArray, list[str]]:
     """Rows ``G x <= h`` checked: ``G`` (p, n) finite, ``h`` (p,) without NaN, p names."""
-    G_k = _numbers(G, f"the rows of {what}")
-    h_k = _numbers(h, f"the rows of {what}")
-    if G_k.ndim < 2:  # one row given flat (or a single number)
-        G_k = G_k.reshape(1, -1)
-    if h_k.ndim == 0:
-        h_k = h_k.reshape(1)
+    G_k = np.atleast_2d(_numbers(G, f"the rows of {what}"))
+    h_k = np.atleast_1d(_numbers(h, f"the rows of {what}"))
     if h_k.ndim != 1 or G_k.shape != (h_k.shape[0], n):
         raise ShapeError(f"the rows of {what}", (h_k.shape[0] if h_k.ndim == 1 else -1, n),
                          G_k.shape)

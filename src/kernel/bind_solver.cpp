@@ -59,6 +59,7 @@ void bind_geometry_results(nb::module_& m) {
                     "(n, m): the pseudo-inverse of A (formed when read).");
   array_property(basis, "N", &dqk::Basis::N, "(n, n - rank): a basis of A's null space.");
   basis.def_ro("rank", &dqk::Basis::rank, "A's numerical rank.")
+      .def_prop_ro("nullity", &dqk::Basis::nullity, "n - rank: the null space's dimension.")
       .def_ro("sigma_max", &dqk::Basis::sigma_max,
               "A's largest singular value (SVD path) or its bound |R|_F (QR path).")
       .def_ro("qr", &dqk::Basis::qr, "Whether the QR path proved full row rank.");

@@ -63,7 +63,7 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
     for x in points:
         c = kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            f.kernel, ineq.C, ineq.e, ineq.kind, ineq.index, w_diag, w_full, root_full,
+            f, ineq.C, ineq.e, ineq.kind, ineq.index, w_diag, w_full, root_full,
             problem.center, x, bounds, 1e-7, 1e-7, True)
         assert c.finite
         eq, box, rows, limit = c.eq, c.box, c.row, c.eq_limit
@@ -95,7 +95,7 @@ def test_the_kkt_test_is_not_run_unless_asked():
     ineq = problem.inequalities()
     out = kernel.certificate(
         problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-        problem_basis(problem).kernel, ineq.C, ineq.e, ineq.kind, ineq.index,
+        problem_basis(problem), ineq.C, ineq.e, ineq.kind, ineq.index,
         *cost_arrays(problem),
         problem.center, points[0], True, 1e-7, 1e-7, False)
     assert out.kkt == -1
@@ -228,7 +228,7 @@ def test_the_kernel_refuses_arguments_of_inconsistent_sizes():
     with pytest.raises(ValueError, match="inconsistent sizes"):
         kernel.certificate(
             problem.A, problem.b, problem.lower, problem.upper, problem.G, problem.h,
-            problem_basis(problem).kernel, ineq.C, ineq.e, ineq.kind, ineq.index,
+            problem_basis(problem), ineq.C, ineq.e, ineq.kind, ineq.index,
             *cost_arrays(problem), problem.center, np.zeros(problem.n + 1), True, 1e-7,
             1e-7, True)
     other = kernel.basis(np.ones((problem.m + 1, problem.n)))  # of an A with one more row
