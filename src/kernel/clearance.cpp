@@ -139,8 +139,26 @@ RowMat damper_rows(const Chain& leader, const Chain& follower,
   for (Eigen::Index c = 0; c < n_grasp; ++c) object_cols[size_t(n_l + c)] = grasp_start + c;
   const RowMat J_obj = J_object;
   RowMat G = RowMat::Zero(k, n);
-  RowMat J_leader(6, leader.nq()), J_follower(6, follower.nq());
+  // Each arm link's Jacobian and origin once, however many rows it is in (a link near
+  // the shelf and the other arm is in several).
+  struct Link {
+    int owner, frame;
+    RowMat J;
+    Point origin;
+  };
+  std::vector<Link> links;
+  links.reserve(owners.size());
   Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T;
+  const auto link = [&](int owner, int frame) -> const Link& {
+    for (const Link& l : links)
+      if (l.owner == owner && l.frame == frame) return l;
+    const Chain& chain = owner == LEADER ? leader : follower;
+    Link& l = links.emplace_back(Link{owner, frame, RowMat(6, chain.nq()), Point()});
+    chain.frame_jacobian(frame, l.J);
+    chain.frame_poses({frame}, T);
+    l.origin = T.block<3, 1>(0, 3);
+    return l;
+  };
   for (Eigen::Index row = 0; row < k; ++row) {
     const Point nrm = normal.row(row).transpose();
     for (int side = 0; side < 2; ++side) {
@@ -150,13 +168,9 @@ RowMat damper_rows(const Chain& leader, const Chain& follower,
       switch (owners[i]) {
         case LEADER:
         case FOLLOWER: {
-          const bool lead = owners[i] == LEADER;
-          const Chain& chain = lead ? leader : follower;
-          RowMat& J = lead ? J_leader : J_follower;
-          chain.frame_jacobian(frames[i], J);
-          chain.frame_poses({frames[i]}, T);
-          add_body(G, row, J, T.block<3, 1>(0, 3), p, nrm, sign,
-                   lead ? leader_cols : follower_cols);
+          const Link& l = link(owners[i], frames[i]);
+          add_body(G, row, l.J, l.origin, p, nrm, sign,
+                   owners[i] == LEADER ? leader_cols : follower_cols);
           break;
         }
         case OBJECT:
