@@ -56,8 +56,8 @@ class Certificate:
     eq_limit: float
     kkt: int
     objective: float
-    active_lower: NDArray[np.uint8]
-    active_upper: NDArray[np.uint8]
+    active_lower: NDArray[np.bool_]
+    active_upper: NDArray[np.bool_]
     active_rows: list[int]
 
 class StepAnswer:

@@ -288,8 +288,8 @@ class DualArmController:
         solved = time.perf_counter()
         solution = self._solved(build)
         guarded = time.perf_counter()
-        solution = self._guarded(build, solution, scale_max)
-        out = self._applied(build, solution, scale_max, StepTimes(
+        solution, command = self._guarded(build, solution, scale_max)
+        out = self._applied(build, solution, command, scale_max, StepTimes(
             build.kinematics_time, build.assembly_time, guarded - solved,
             time.perf_counter() - guarded))
         if self.on_step is not None:
@@ -308,21 +308,30 @@ class DualArmController:
                 f"{sv_l:.3g}, follower {sv_f:.3g})", conflicts=err.conflicts) from None
 
     def _guarded(self, build: StepBuild, solution: StepSolution, scale_max: float
-                 ) -> StepSolution:
-        """Keep the answer within the error budget, or escape a collapsed step."""
+                 ) -> tuple[StepSolution, FloatArray]:
+        """Keep the answer within the error budget, or escape a collapsed step.
+
+        Returns the answer and its command: its ``x`` clipped to the box when the solver
+        claims hard limits (:func:`_inside`), else its ``x``.
+        """
+        problem = build.problem
+        command = _inside(solution.x, problem) if self._hard_bounds else solution.x
         la = self._lookahead
         if la is not None and solution.status.usable and solution.scale > 0.0 \
                 and scale_max > 0.0:
-            solution = self._within_budget(la, build, solution, scale_max)
+            slower = self._within_budget(la, build, solution, command, scale_max)
+            if slower is not solution:
+                solution, command = slower, _inside(slower.x, problem)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
-            solution = self._escaped(build, solution, self._escape)
-        return solution
+            solution = self._escaped(build, solution, command, self._escape)
+            command = _inside(solution.x, problem)
+        return solution, command
 
-    def _applied(self, build: StepBuild, solution: StepSolution, scale_max: float,
-                 times: StepTimes) -> ControlOutput:
-        """Return the command of ``solution``, clipped to the box, kept as the last applied."""
+    def _applied(self, build: StepBuild, solution: StepSolution, command: FloatArray,
+                 scale_max: float, times: StepTimes) -> ControlOutput:
+        """Return ``command``, the rates of ``solution`` (:meth:`_guarded`), as applied."""
         problem = build.problem
         status = solution.status
         if (status is Status.OPTIMAL or status is Status.FEASIBLE) and build.recovers:
@@ -334,12 +343,7 @@ class DualArmController:
             usable_x = solution.eq_residual <= equality_limit(problem, self.tolerance)
         else:
             usable_x = status.usable
-        if not usable_x:
-            x = np.zeros(problem.n)
-        elif self._hard_bounds:
-            x = _inside(solution.x, problem)
-        else:
-            x = solution.x
+        x = command if usable_x else np.zeros(problem.n)
         self._x_prev = x if usable_x else None
         if usable_x:
             self._x_applied_prev, self._x_applied = self._x_applied, x
@@ -350,10 +354,10 @@ class DualArmController:
                              times=times, applied=usable_x)
 
     def _within_budget(self, la: Lookahead, build: StepBuild, solution: StepSolution,
-                       scale_max: float) -> StepSolution:
+                       command: FloatArray, scale_max: float) -> StepSolution:
         """Slow the task until the errors predicted at the next sample fit the budget.
 
-        Returns ``solution`` when the prediction of its command (its ``x`` clipped to
+        Returns ``solution`` when the prediction of its ``command`` (its ``x`` clipped to
         the box, what would be applied) fits (or is negligible by the bound), else the
         solve of the task scaled by the first halving of the scale whose prediction
         fits, or the one with the smallest prediction (status SCALED).
@@ -361,10 +365,9 @@ class DualArmController:
         dt = self.options.dt
         problem = build.problem
         state = build.context.state
-        build_x = _inside(solution.x, problem)
-        if la.negligible(build, build_x, dt):
+        if la.negligible(build, command, dt):
             return solution
-        pred = la.predict_checked(state, build_x, scale_max * solution.scale, dt)
+        pred = la.predict_checked(state, command, scale_max * solution.scale, dt)
         share = pred.share(la.budget)
         if share <= 1.0:
             return solution
@@ -394,9 +397,9 @@ class DualArmController:
                 break
         return best
 
-    def _escaped(self, build: StepBuild, solution: StepSolution, threshold: float
-                 ) -> StepSolution:
-        """Return the escape move from a collapsed step (:mod:`.escape`), or ``solution``."""
+    def _escaped(self, build: StepBuild, solution: StepSolution, command: FloatArray,
+                 threshold: float) -> StepSolution:
+        """Return the escape move from a collapsed ``command`` (:mod:`.escape`), or ``solution``."""
         lay = self._builder.layout
         state = build.context.state
         task = self.task
@@ -407,7 +410,7 @@ class DualArmController:
         problem = build.problem
         budget = (self._lookahead.budget[0] if self._lookahead is not None
                   else DEFAULT_ESCAPE_BUDGET)
-        esc = escape_move(problem, _inside(solution.x, problem), arms, threshold,
+        esc = escape_move(problem, command, arms, threshold,
                           self.options.dt, budget)
         if esc is None:
             return solution

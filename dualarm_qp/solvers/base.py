@@ -61,10 +61,13 @@ class Status(str, enum.Enum):
     @property
     def usable(self) -> bool:
         """Whether ``x`` may be integrated."""
-        # Identity tests: ``in`` on a tuple compares str-enum members as strings, slowly.
-        return (self is Status.OPTIMAL or self is Status.FEASIBLE or self is Status.SCALED
-                or self is Status.RELAXED or self is Status.RECOVERING
-                or self is Status.ESCAPING)
+        return self in _USABLE
+
+
+#: The statuses whose ``x`` may be integrated (a set: a hash and an identity test, where
+#: naming each member on the class costs 0.1 us in Python 3.11).
+_USABLE = frozenset({Status.OPTIMAL, Status.FEASIBLE, Status.SCALED, Status.RELAXED,
+                     Status.RECOVERING, Status.ESCAPING})
 
 
 @dataclass(frozen=True)

@@ -193,8 +193,8 @@ def verdict_fields(problem: StepProblem, status: Status, message: str, x: FloatA
                 "the optimality certificate (KKT) does not confirm the claimed optimum")
     active = reading.active_rows
     return dict(x=x, status=status, objective=reading.objective, eq_residual=eq,
-                bound_violation=box, active_lower=reading.active_lower.view(np.bool_),
-                active_upper=reading.active_upper.view(np.bool_),
+                bound_violation=box, active_lower=reading.active_lower,
+                active_upper=reading.active_upper,
                 build_time=problem.build_time, message=message, verified_with=tol,
                 row_violation=row, active_rows=_row_names(problem, active))
 

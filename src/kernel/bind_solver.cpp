@@ -91,8 +91,8 @@ void bind_certificate(nb::module_& m) {
       .def_ro("kkt", &C::kkt, "The KKT test: -1 not asked (or x breaks a limit), 0 fails, 1 "
                               "holds.")
       .def_ro("objective", &C::objective, "(x - c)^T W (x - c).");
-  array_property(cert, "active_lower", &C::active_lower, "(n) uint8: lower - x >= -ACTIVE_TOL.");
-  array_property(cert, "active_upper", &C::active_upper, "(n) uint8: x - upper >= -ACTIVE_TOL.");
+  array_property(cert, "active_lower", &C::active_lower, "(n) bool: lower - x >= -ACTIVE_TOL.");
+  array_property(cert, "active_upper", &C::active_upper, "(n) bool: x - upper >= -ACTIVE_TOL.");
   cert.def_ro("active_rows", &C::active_rows,
               "The general rows within ACTIVE_TOL of binding, as rows of G (from the rows' "
               "index).");

@@ -30,8 +30,8 @@ struct Certificate {
   double eq_limit = 0.0;  // eq_rtol * max(1, max |b|)
   int kkt = -1;  // -1 not asked (or x breaks a limit), 0 fails, 1 holds
   double objective = 0.0;  // (x - c)^T W (x - c)
-  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_lower;  // lower - x >= -ACTIVE_TOL
-  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> active_upper;  // x - upper >= -ACTIVE_TOL
+  Eigen::Matrix<bool, Eigen::Dynamic, 1> active_lower;  // lower - x >= -ACTIVE_TOL
+  Eigen::Matrix<bool, Eigen::Dynamic, 1> active_upper;  // x - upper >= -ACTIVE_TOL
   std::vector<Index> active_rows;  // rows of G (their rows of C, of kind 0) within ACTIVE_TOL
 };
 

@@ -78,10 +78,9 @@ def test_the_compiled_certificate_equals_its_definitions(seed, bounds):
         assert limit == 1e-7 * max(1.0, float(np.abs(problem.b).max(initial=0.0)))
         d = x - problem.center
         assert c.objective == pytest.approx(float(d @ W @ d), rel=1e-12)
-        np.testing.assert_array_equal(c.active_lower.view(bool),
-                                      problem.lower - x >= -ACTIVE_TOL)
-        np.testing.assert_array_equal(c.active_upper.view(bool),
-                                      x - problem.upper >= -ACTIVE_TOL)
+        assert c.active_lower.dtype == c.active_upper.dtype == np.bool_
+        np.testing.assert_array_equal(c.active_lower, problem.lower - x >= -ACTIVE_TOL)
+        np.testing.assert_array_equal(c.active_upper, x - problem.upper >= -ACTIVE_TOL)
         on = (ineq.kind == 0) & (ineq.C @ x - ineq.e >= -ACTIVE_TOL)
         # Named by their rows of G: the rows of C of kind 0 map to G through the index.
         assert c.active_rows == ineq.index[on].tolist()

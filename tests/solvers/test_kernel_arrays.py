@@ -66,7 +66,7 @@ def test_a_nested_struct_keeps_its_result_alive() -> None:
     del step
     gc.collect()
     assert (basis.rank, basis.N.shape, rows.C.shape) == (2, (3, 1), (6, 3))
-    assert certificate.kkt == 1 and certificate.active_upper.tolist() == [1, 1, 0]
+    assert certificate.kkt == 1 and certificate.active_upper.tolist() == [True, True, False]
     beyond = kernel.solve_certified(A, 3.0 * b, -np.ones(3), np.ones(3), no_rows,
                                     np.zeros(0), np.ones(3), no_cost, no_cost, np.zeros(3),
                                     1e-10, -1, True, 1e-9, 1e-7)
