@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Equality:
     """Rows ``A x = b`` of a task.
 
@@ -56,7 +56,7 @@ class Equality:
     names: tuple[str, ...] = ()
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Quadratic:
     """A cost term ``(x - center)^T W (x - center)``.
 
@@ -72,7 +72,7 @@ class Quadratic:
     center: Any
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Constraint:
     """What a limit asks of ``x``: boxes and/or rows.
 
