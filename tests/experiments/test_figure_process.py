@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -49,6 +50,19 @@ def wait_for(predicate, timeout: float = 10.0) -> bool:
     return True
 
 
+def start_drawing() -> FigureProcess:
+    """A drawing process, started once the threads an earlier test left have ended.
+
+    The process forks from one thread only (``can_fork``); a test run in one process
+    may still be ending a thread of the test before (a run's progress or writer).
+    """
+    assert wait_for(lambda: threading.active_count() == 1), [
+        t.name for t in threading.enumerate()]
+    figures = FigureProcess.start()
+    assert figures is not None
+    return figures
+
+
 def test_the_figures_are_shared_between_two_processes_by_cost():
     one, two = share(list(RUN_FIGURES))
     assert sorted(one + two) == sorted(RUN_FIGURES)
@@ -65,8 +79,7 @@ def test_the_figures_are_shared_between_two_processes_by_cost():
 @forking
 def test_the_drawing_processes_draw_what_the_run_would(tmp_path):
     exp = short_limits_experiment(tmp_path)
-    with FigureProcess.start() as figures:
-        assert figures is not None
+    with start_drawing() as figures:
         pgid = figures.pid
         forked = run_experiment(exp, tmp_path / "forked", progress=False, figures=figures)
     here = run_experiment(exp, tmp_path / "here", progress=False)
@@ -83,8 +96,7 @@ def test_the_drawing_processes_draw_what_the_run_would(tmp_path):
 @forking
 def test_an_error_while_drawing_is_raised_in_the_run(tmp_path):
     exp = short_limits_experiment(tmp_path)
-    figures = FigureProcess.start()
-    assert figures is not None
+    figures = start_drawing()
     pgid = figures.pid
     with pytest.raises(FileNotFoundError, match=r"trajectory\.csv") as caught:
         figures(tmp_path / "empty", exp)  # no trajectory.csv to draw
@@ -96,8 +108,7 @@ def test_an_error_while_drawing_is_raised_in_the_run(tmp_path):
 @forking
 def test_a_drawing_process_that_died_is_replaced_by_the_run(tmp_path):
     exp = short_limits_experiment(tmp_path)
-    figures = FigureProcess.start()
-    assert figures is not None
+    figures = start_drawing()
     os.killpg(figures.pid, signal.SIGKILL)
     outcome = run_experiment(exp, tmp_path / "o", progress=False, figures=figures)
     for name in RUN_FIGURES:
@@ -114,8 +125,7 @@ def test_the_drawing_processes_leave_interrupts_to_the_command(tmp_path):
     drawing processes are in a group of their own, and ignore SIGINT and SIGTERM
     anyway; the command decides (it finishes writing its set, figures included)."""
     exp = short_limits_experiment(tmp_path)
-    with FigureProcess.start() as figures:
-        assert figures is not None
+    with start_drawing() as figures:
         assert os.getpgid(figures.pid) == figures.pid != os.getpgid(0)
         time.sleep(0.2)  # past the fork: its own handlers are in place
         for sig in (signal.SIGINT, signal.SIGTERM):
