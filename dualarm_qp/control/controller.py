@@ -325,8 +325,9 @@ class DualArmController:
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
-            solution = self._escaped(build, solution, command, self._escape)
-            command = _inside(solution.x, problem)
+            escaped = self._escaped(build, solution, command, self._escape)
+            if escaped is not solution:
+                solution, command = escaped, _inside(escaped.x, problem)
         return solution, command
 
     def _applied(self, build: StepBuild, solution: StepSolution, command: FloatArray,

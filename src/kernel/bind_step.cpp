@@ -45,7 +45,8 @@ Value taken(nb::object answer, nb::handle self, const dqk::Context& ctx, const c
   if (!nb::isinstance<Value>(answer)) {
     // The converters' module, looked up at the first Python part's answer and kept (an
     // import statement's lookup is about 0.5 us, measured from Python, on every answer
-    // of every Python part); never released, as the interpreter keeps its modules.
+    // of every Python part); its reference is never given back, as the interpreter
+    // keeps its modules to the end.
     static const nb::handle converters =
         nb::module_::import_("dualarm_qp.step.python_parts").release();
     nb::object name = nb::getattr(self, "name", nb::str(Py_TYPE(self.ptr())->tp_name));

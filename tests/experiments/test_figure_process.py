@@ -53,8 +53,8 @@ def wait_for(predicate, timeout: float = 10.0) -> bool:
 def start_drawing() -> FigureProcess:
     """A drawing process, started once the threads an earlier test left have ended.
 
-    The process forks from one thread only (``can_fork``); a test run in one process
-    may still be ending a thread of the test before (a run's progress or writer).
+    The process forks from one thread only (``can_fork``); in a test run in one process
+    a thread of a test before may still be ending (tqdm's monitor of a progress bar).
     """
     assert wait_for(lambda: threading.active_count() == 1), [
         t.name for t in threading.enumerate()]
