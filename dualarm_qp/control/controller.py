@@ -319,9 +319,7 @@ class DualArmController:
         la = self._lookahead
         if la is not None and solution.status.usable and solution.scale > 0.0 \
                 and scale_max > 0.0:
-            slower = self._within_budget(la, build, solution, command, scale_max)
-            if slower is not solution:
-                solution, command = slower, _inside(slower.x, problem)
+            solution, command = self._within_budget(la, build, solution, command, scale_max)
         if (self._escape is not None and solution.status is Status.SCALED
                 and solution.scale < COLLAPSED_SCALE
                 and min(build.sigma_min) < self._escape):
@@ -355,24 +353,26 @@ class DualArmController:
                              times=times, applied=usable_x)
 
     def _within_budget(self, la: Lookahead, build: StepBuild, solution: StepSolution,
-                       command: FloatArray, scale_max: float) -> StepSolution:
+                       command: FloatArray, scale_max: float
+                       ) -> tuple[StepSolution, FloatArray]:
         """Slow the task until the errors predicted at the next sample fit the budget.
 
-        Returns ``solution`` when the prediction of its ``command`` (its ``x`` clipped to
-        the box, what would be applied) fits (or is negligible by the bound), else the
-        solve of the task scaled by the first halving of the scale whose prediction
-        fits, or the one with the smallest prediction (status SCALED).
+        Returns ``solution`` and ``command`` when the prediction of its ``command`` (its
+        ``x`` clipped to the box, what would be applied) fits (or is negligible by the
+        bound), else the solve of the task scaled by the first halving of the scale whose
+        prediction fits, or the one with the smallest prediction (status SCALED), with
+        its command.
         """
         dt = self.options.dt
         problem = build.problem
         state = build.context.state
         if la.negligible(build, command, dt):
-            return solution
+            return solution, command
         pred = la.predict_checked(state, command, scale_max * solution.scale, dt)
         share = pred.share(la.budget)
         if share <= 1.0:
-            return solution
-        best, best_share = solution, share
+            return solution, command
+        best, best_command, best_share = solution, command, share
         factor = solution.scale
         for _ in range(BUDGET_HALVINGS):
             factor *= 0.5
@@ -388,6 +388,7 @@ class DualArmController:
             scale = factor * trial.scale
             trial_share = la.predict_checked(state, x, scale_max * scale, dt).share(la.budget)
             if trial_share < best_share:
+                best_command = x
                 best, best_share = replace(
                     trial, status=Status.SCALED, scale=scale,
                     message=(f"task scaled to {scale:.6g}: at full scale the step would "
@@ -396,7 +397,7 @@ class DualArmController:
                              "sample")), trial_share
             if trial_share <= 1.0:
                 break
-        return best
+        return best, best_command
 
     def _escaped(self, build: StepBuild, solution: StepSolution, command: FloatArray,
                  threshold: float) -> StepSolution:
